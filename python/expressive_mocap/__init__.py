@@ -1,0 +1,32 @@
+"""expressive-mocap: find, measure and edit the expressive part of human motion capture.
+
+Quaternions are x, y, z, w; arrays are float64 ``[F, J, ...]`` (frames, joints); Y is up;
+lengths are in the file's units. See the README for the conventions table.
+"""
+
+from .backend import get_backend, rust_available, set_backend, use_backend
+from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
+from .errors import BVHError, MocapError
+from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
+from .motion import Motion, Skeleton
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BVHError",
+    "MocapError",
+    "Motion",
+    "Skeleton",
+    "__version__",
+    "bvh_bytes",
+    "euler_to_quat",
+    "forward_kinematics",
+    "get_backend",
+    "quat_to_euler",
+    "read_bvh",
+    "read_bvh_many",
+    "rust_available",
+    "set_backend",
+    "use_backend",
+    "write_bvh",
+]

@@ -1,0 +1,24 @@
+"""The package's exceptions: one base, and one for malformed BVH files."""
+
+from __future__ import annotations
+
+import os
+
+
+class MocapError(ValueError):
+    """Base class of every error expressive-mocap raises on bad input."""
+
+
+class BVHError(MocapError):
+    """A BVH file that cannot be read. Names the file, the line (1-based) and what was expected.
+
+    Attributes: ``source`` (path or a description such as ``<bytes>``), ``line`` (int or None),
+    ``reason`` (the message without the location).
+    """
+
+    def __init__(self, source: str | os.PathLike, line: int | None, reason: str):
+        self.source = str(source)
+        self.line = line
+        self.reason = reason
+        where = f"{self.source}, line {line}" if line is not None else self.source
+        super().__init__(f"{where}: {reason}")

@@ -1,0 +1,66 @@
+"""Public entry points of the kernels: coerce arguments, then call the backend in use.
+
+Each function runs the Rust kernel or its NumPy twin (see :mod:`expressive_mocap.backend`);
+both take and return float64 arrays. Leading batch dimensions are folded into frames.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .backend import kernels
+from .rotations import axes_of
+
+
+def _f64(name: str, array, last: int) -> np.ndarray:
+    array = np.ascontiguousarray(array, dtype=np.float64)
+    if array.ndim < 2 or array.shape[-1] != last:
+        raise ValueError(f"argument `{name}`: expected shape [..., J, {last}], got {list(array.shape)}")
+    return array
+
+
+def _orders(orders, joints: int) -> np.ndarray:
+    """Orders as a ``[J, 3]`` uint8 array from one order ("ZXY") or one per joint."""
+    if isinstance(orders, str):
+        orders = [orders] * joints
+    axes = np.array([axes_of(o) if isinstance(o, str) else o for o in orders], dtype=np.uint8)
+    if axes.shape != (joints, 3):
+        raise ValueError(f"argument `orders`: expected one order or {joints} orders, got {axes.shape[0]}")
+    return axes
+
+
+def euler_to_quat(angles, orders) -> np.ndarray:
+    """Euler angles ``[..., J, 3]`` in degrees -> unit quaternions ``[..., J, 4]`` (x, y, z, w).
+
+    ``orders``: one order such as ``"ZXY"`` (the BVH channel order, intrinsic, first channel
+    outermost, like SciPy's upper-case orders) or a sequence of ``J`` orders.
+    """
+    angles = _f64("angles", angles, 3)
+    batch = angles.shape[:-2]
+    flat = angles.reshape(-1, *angles.shape[-2:])
+    return kernels().euler_to_quat(flat, _orders(orders, angles.shape[-2])).reshape(*batch, angles.shape[-2], 4)
+
+
+def quat_to_euler(quats, orders) -> np.ndarray:
+    """Unit quaternions ``[..., J, 4]`` (x, y, z, w) -> Euler angles ``[..., J, 3]`` in degrees.
+
+    The middle angle lies in [-90, 90]; at gimbal lock the third angle is 0.
+    """
+    quats = _f64("quats", quats, 4)
+    batch = quats.shape[:-2]
+    flat = quats.reshape(-1, *quats.shape[-2:])
+    return kernels().quat_to_euler(flat, _orders(orders, quats.shape[-2])).reshape(*batch, quats.shape[-2], 3)
+
+
+def forward_kinematics(rotations, translations, parents) -> tuple[np.ndarray, np.ndarray]:
+    """World rotations ``[F, J, 4]`` and positions ``[F, J, 3]`` from local ones.
+
+    ``rotations [F, J, 4]`` (x, y, z, w) and ``translations [F, J, 3]`` are relative to each
+    joint's parent; ``parents [J]`` lists each joint after its parent, roots as -1.
+    """
+    rotations = _f64("rotations", rotations, 4)
+    translations = _f64("translations", translations, 3)
+    parents = np.ascontiguousarray(parents, dtype=np.int64)
+    if parents.ndim != 1:
+        raise ValueError(f"argument `parents`: expected shape [J], got {list(parents.shape)}")
+    return kernels().forward_kinematics(rotations, translations, parents)

@@ -1,0 +1,302 @@
+"""The data model: a :class:`Skeleton` (hierarchy, rest offsets, BVH channel layout) and a
+:class:`Motion` (a skeleton, a frame time, local rotations and translations per frame).
+
+Conventions: quaternions x, y, z, w; ``rotations [F, J, 4]`` and ``translations [F, J, 3]`` are
+local to each joint's parent; a translation is the joint's rest offset, with the components
+replaced by the position channels wherever the joint has them (root included). Y is up, lengths
+are in the file's units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Sequence
+
+import numpy as np
+
+from . import kernels, quat
+from .errors import MocapError
+from .rotations import AXES, ORDERS, axes_of, order_name
+
+POSITION_CHANNELS = tuple(f"{a}position" for a in AXES)
+ROTATION_CHANNELS = tuple(f"{a}rotation" for a in AXES)
+_CANONICAL = {c.lower(): c for c in POSITION_CHANNELS + ROTATION_CHANNELS}
+
+
+def canonical_channel(name: str) -> str:
+    """``"xROTATION"`` -> ``"Xrotation"``; raises for anything that is not one of the six BVH channels."""
+    try:
+        return _CANONICAL[name.lower()]
+    except KeyError:
+        raise MocapError(f"unknown channel {name!r}: expected one of {', '.join(_CANONICAL.values())}") from None
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class Skeleton:
+    """A joint hierarchy with its BVH channel layout, enough to write a file back as it came.
+
+    ``names[j]``, ``parents[j]`` (-1 for the root; parents come before children, depth first),
+    ``offsets[j]`` (rest offset from the parent), ``channels[j]`` (channel names in file order,
+    e.g. ``("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")``),
+    ``end_sites`` (``(joint, offset)`` pairs, the BVH End Sites, which are not joints).
+    """
+
+    names: tuple[str, ...]
+    parents: np.ndarray
+    offsets: np.ndarray
+    channels: tuple[tuple[str, ...], ...]
+    end_sites: tuple[tuple[int, tuple[float, float, float]], ...] = field(default=())
+
+    def __post_init__(self):
+        names = tuple(str(n) for n in self.names)
+        parents = np.array(self.parents, dtype=np.int64).reshape(-1)
+        offsets = np.array(self.offsets, dtype=np.float64)
+        channels = tuple(tuple(canonical_channel(c) for c in cs) for cs in self.channels)
+        joints = len(names)
+        if joints == 0:
+            raise MocapError("a skeleton needs at least one joint")
+        if len(parents) != joints or offsets.shape != (joints, 3) or len(channels) != joints:
+            raise MocapError(
+                f"skeleton parts disagree: {joints} names, {len(parents)} parents, offsets {list(offsets.shape)}, {len(channels)} channel lists"
+            )
+        if len(set(names)) != joints:
+            duplicate = next(n for n in names if names.count(n) > 1)
+            raise MocapError(f"joint name {duplicate!r} appears more than once")
+        if parents[0] != -1 or (parents[1:] < 0).any():
+            raise MocapError("a skeleton has exactly one root, the first joint (parent -1)")
+        if (parents[1:] >= np.arange(1, joints)).any():
+            raise MocapError("every joint must come after its parent")
+        if not np.isfinite(offsets).all():
+            raise MocapError("joint offsets must be finite")
+        for j, cs in enumerate(channels):
+            if len(set(cs)) != len(cs):
+                raise MocapError(f"joint {names[j]!r} lists a channel twice: {' '.join(cs)}")
+        end_sites = tuple((int(j), tuple(float(v) for v in off)) for j, off in self.end_sites)
+        for j, _ in end_sites:
+            if not 0 <= j < joints:
+                raise MocapError(f"End Site attached to joint {j}, but there are {joints} joints")
+        object.__setattr__(self, "names", names)
+        object.__setattr__(self, "parents", _frozen(parents))
+        object.__setattr__(self, "offsets", _frozen(offsets))
+        object.__setattr__(self, "channels", channels)
+        object.__setattr__(self, "end_sites", end_sites)
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.names)
+
+    @cached_property
+    def n_channels(self) -> int:
+        """Numbers per frame in the MOTION block."""
+        return sum(len(cs) for cs in self.channels)
+
+    def index(self, name: str) -> int:
+        """Index of the joint called ``name``."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise MocapError(f"no joint named {name!r}; joints are: {', '.join(self.names)}") from None
+
+    def rotation_order(self, joint: int) -> str:
+        """The joint's Euler order as written (e.g. ``"ZXY"``); axes without a channel follow
+        in X, Y, Z order (their angle is always 0); ``"XYZ"`` for a joint without rotations."""
+        written = [c[0] for c in self.channels[joint] if c in ROTATION_CHANNELS]
+        return "".join(written + [a for a in AXES if a not in written])
+
+    @cached_property
+    def euler_orders(self) -> np.ndarray:
+        """``[J, 3]`` uint8 axis indices of every joint's rotation order."""
+        return _frozen(np.array([axes_of(self.rotation_order(j)) for j in range(self.n_joints)], dtype=np.uint8))
+
+    @cached_property
+    def _columns(self) -> tuple[np.ndarray, np.ndarray]:
+        """Column of each rotation angle ``[J, 3]`` (in rotation-order position) and of each
+        position component ``[J, 3]`` (x, y, z) in a frame's values; -1 where there is none."""
+        rot = np.full((self.n_joints, 3), -1, dtype=np.intp)
+        pos = np.full((self.n_joints, 3), -1, dtype=np.intp)
+        column = 0
+        for j, cs in enumerate(self.channels):
+            order = self.rotation_order(j)
+            for c in cs:
+                if c in ROTATION_CHANNELS:
+                    rot[j, order.index(c[0])] = column
+                else:
+                    pos[j, AXES.index(c[0])] = column
+                column += 1
+        return _frozen(rot), _frozen(pos)
+
+    def decode(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``."""
+        rot_cols, pos_cols = self._columns
+        # A trailing zero column lets missing channels (-1) read as 0.
+        padded = np.concatenate([values, np.zeros((len(values), 1))], axis=1)
+        rotations = kernels.euler_to_quat(padded[:, rot_cols], self.euler_orders)
+        translations = np.where(pos_cols >= 0, padded[:, pos_cols], self.offsets)
+        return rotations, translations
+
+    def encode(self, rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:
+        """Local rotations and translations -> channel values ``[F, C]`` (the inverse of :meth:`decode`)."""
+        rot_cols, pos_cols = self._columns
+        angles = kernels.quat_to_euler(rotations, self.euler_orders)
+        values = np.zeros((len(rotations), self.n_channels))
+        values[:, rot_cols[rot_cols >= 0]] = angles[:, rot_cols >= 0]
+        values[:, pos_cols[pos_cols >= 0]] = translations[:, pos_cols >= 0]
+        return values
+
+    def with_rotation_order(self, order: str) -> Skeleton:
+        """The same skeleton with every joint's rotation channels written in ``order``
+        (joints with some rotation channels get all three, where the first one stood)."""
+        order = order_name(axes_of(order))
+        channels = []
+        for cs in self.channels:
+            first = next((i for i, c in enumerate(cs) if c in ROTATION_CHANNELS), None)
+            if first is None:
+                channels.append(cs)
+                continue
+            kept = [c for c in cs if c not in ROTATION_CHANNELS]
+            position = sum(1 for c in cs[:first] if c not in ROTATION_CHANNELS)
+            channels.append(tuple(kept[:position]) + tuple(f"{a}rotation" for a in order) + tuple(kept[position:]))
+        return Skeleton(self.names, self.parents, self.offsets, tuple(channels), self.end_sites)
+
+    def scaled(self, factor: float) -> Skeleton:
+        """The same skeleton with every length multiplied by ``factor``."""
+        sites = tuple((j, tuple(np.multiply(off, factor))) for j, off in self.end_sites)
+        return Skeleton(self.names, self.parents, self.offsets * factor, self.channels, sites)
+
+    def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """World positions of the joints ``[J, 3]`` and End Sites ``[E, 3]`` in the rest pose
+        (identity rotations, offsets only)."""
+        identity = np.zeros((1, self.n_joints, 4))
+        identity[..., 3] = 1.0
+        _, positions = kernels.forward_kinematics(identity, self.offsets[None], self.parents)
+        joints = positions[0]
+        sites = np.array([joints[j] + off for j, off in self.end_sites]).reshape(-1, 3)
+        return joints, sites
+
+    def rest_height(self) -> float:
+        """Vertical (Y) extent of the rest pose, End Sites included."""
+        joints, sites = self.rest_positions()
+        y = np.concatenate([joints[:, 1], sites[:, 1]])
+        return float(y.max() - y.min())
+
+    def channel_layout(self) -> str:
+        """A one-line summary such as ``22 joints x 6 (Xposition Yposition ... Yrotation)``."""
+        layouts: dict[tuple[str, ...], int] = {}
+        for cs in self.channels:
+            layouts[cs] = layouts.get(cs, 0) + 1
+        return "; ".join(f"{n} joint{'s' if n > 1 else ''} x {len(cs)} ({' '.join(cs) or 'none'})" for cs, n in layouts.items())
+
+
+class Motion:
+    """A skeleton in motion: local ``rotations [F, J, 4]`` (x, y, z, w, unit) and
+    ``translations [F, J, 3]`` per frame, ``frame_time`` seconds apart.
+
+    Index it with a slice or frame indices to get a shorter motion: ``motion[30:90]``.
+    """
+
+    def __init__(self, skeleton: Skeleton, rotations, translations, frame_time: float):
+        rotations = np.ascontiguousarray(rotations, dtype=np.float64)
+        translations = np.ascontiguousarray(translations, dtype=np.float64)
+        joints = skeleton.n_joints
+        if rotations.ndim != 3 or rotations.shape[1:] != (joints, 4):
+            raise MocapError(f"rotations: expected shape [F, {joints}, 4], got {list(rotations.shape)}")
+        if translations.shape != rotations.shape[:2] + (3,):
+            raise MocapError(f"translations: expected shape [{len(rotations)}, {joints}, 3], got {list(translations.shape)}")
+        if not (np.isfinite(frame_time) and frame_time > 0):
+            raise MocapError(f"frame_time must be a positive number of seconds, got {frame_time}")
+        self.skeleton = skeleton
+        self.rotations = rotations
+        self.translations = translations
+        self.frame_time = float(frame_time)
+
+    def __repr__(self) -> str:
+        return f"Motion({self.n_frames} frames at {self.fps:g} fps, {self.skeleton.n_joints} joints)"
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.rotations)
+
+    @property
+    def fps(self) -> float:
+        return 1.0 / self.frame_time
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first frame to the last."""
+        return max(self.n_frames - 1, 0) * self.frame_time
+
+    def __len__(self) -> int:
+        return self.n_frames
+
+    def __getitem__(self, frames) -> Motion:
+        if isinstance(frames, (int, np.integer)):
+            frames = [frames]
+        return Motion(self.skeleton, self.rotations[frames], self.translations[frames], self.frame_time)
+
+    @classmethod
+    def from_euler(cls, skeleton: Skeleton, angles, translations=None, frame_time: float = 1 / 30, order: str | Sequence[str] | None = None) -> Motion:
+        """A motion from Euler angles ``[F, J, 3]`` in degrees, in each joint's own rotation
+        order (or ``order``); ``translations`` default to the rest offsets."""
+        angles = np.asarray(angles, dtype=np.float64)
+        orders = skeleton.euler_orders if order is None else order
+        rotations = kernels.euler_to_quat(angles, orders)
+        if translations is None:
+            translations = np.broadcast_to(skeleton.offsets, angles.shape[:2] + (3,))
+        return cls(skeleton, rotations, translations, frame_time)
+
+    def to_euler(self, order: str | Sequence[str] | None = None) -> np.ndarray:
+        """Euler angles ``[F, J, 3]`` in degrees, in each joint's own rotation order (or ``order``)."""
+        return kernels.quat_to_euler(self.rotations, self.skeleton.euler_orders if order is None else order)
+
+    def fk(self) -> tuple[np.ndarray, np.ndarray]:
+        """World rotations ``[F, J, 4]`` and positions ``[F, J, 3]`` of every joint."""
+        return kernels.forward_kinematics(self.rotations, self.translations, self.skeleton.parents)
+
+    def positions(self) -> np.ndarray:
+        """World positions ``[F, J, 3]`` of every joint, in file units."""
+        return self.fk()[1]
+
+    def channel_values(self) -> np.ndarray:
+        """The BVH channel values ``[F, C]`` of every frame, in the skeleton's layout."""
+        return self.skeleton.encode(self.rotations, self.translations)
+
+    def resample(self, fps: float | None = None, n_frames: int | None = None) -> Motion:
+        """The same movement sampled at ``fps`` frames a second, or with ``n_frames`` frames over the
+        same duration: slerp for rotations, linear for translations."""
+        if (fps is None) == (n_frames is None):
+            raise MocapError("resample: give exactly one of fps or n_frames")
+        if self.n_frames < 2:
+            raise MocapError("resample: a motion needs at least 2 frames")
+        if fps is not None:
+            if not (np.isfinite(fps) and fps > 0):
+                raise MocapError(f"resample: fps must be positive, got {fps}")
+            new_time = 1.0 / fps
+            n_frames = int(np.floor(self.duration / new_time + 1e-9)) + 1
+        else:
+            if n_frames < 2:
+                raise MocapError(f"resample: n_frames must be at least 2, got {n_frames}")
+            new_time = self.duration / (n_frames - 1)
+        position = np.minimum(np.arange(n_frames) * new_time / self.frame_time, self.n_frames - 1)
+        i0 = np.minimum(np.floor(position).astype(int), self.n_frames - 2)
+        t = (position - i0)[:, None]
+        rotations = quat.slerp(self.rotations[i0], self.rotations[i0 + 1], t)
+        t3 = t[..., None]
+        translations = (1 - t3) * self.translations[i0] + t3 * self.translations[i0 + 1]
+        return Motion(self.skeleton, rotations, translations, new_time)
+
+    def scaled(self, factor: float) -> Motion:
+        """The same motion with every length (offsets, translations) multiplied by ``factor``."""
+        return Motion(self.skeleton.scaled(factor), self.rotations, self.translations * factor, self.frame_time)
+
+    def with_rotation_order(self, order: str) -> Motion:
+        """The same motion, to be written with every joint's rotation channels in ``order``."""
+        return Motion(self.skeleton.with_rotation_order(order), self.rotations, self.translations, self.frame_time)
+
+
+__all__ = ["Motion", "Skeleton", "ORDERS", "POSITION_CHANNELS", "ROTATION_CHANNELS", "canonical_channel"]

@@ -1,0 +1,25 @@
+"""Pure-NumPy twins of every Rust kernel, with the same names and signatures as
+``expressive_mocap._core``. They are the fallback without the extension, the reference in
+parity tests and the baseline in benchmarks: written for clarity first, vectorised over frames.
+
+Conventions (shared with the Rust kernels): quaternions are unit, stored x, y, z, w; ``q1 * q2``
+rotates by ``q2`` then ``q1``; an Euler order is three axis indices (0 = X, 1 = Y, 2 = Z) as
+written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in degrees.
+"""
+
+from .fk import forward_kinematics
+from .motion_block import ParseError, format_motion_block, parse_motion_block, parse_motion_blocks
+from .rotations import euler_to_quat, quat_to_euler
+
+num_threads = 1
+
+__all__ = [
+    "ParseError",
+    "euler_to_quat",
+    "format_motion_block",
+    "forward_kinematics",
+    "num_threads",
+    "parse_motion_block",
+    "parse_motion_blocks",
+    "quat_to_euler",
+]

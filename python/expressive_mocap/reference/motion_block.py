@@ -1,0 +1,95 @@
+"""Twin of ``rust/parse.rs`` and ``rust/format.rs``: the MOTION number block as text <-> array.
+
+The fast path is ``np.loadtxt``; when it fails (or the counts do not match) a line-by-line
+scan finds the first bad line and reports it exactly as the Rust kernel does.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import warnings
+
+import numpy as np
+
+
+class ParseError(ValueError):
+    """A malformed MOTION block; ``args`` are ``(message, 0-based line within the block)``."""
+
+
+def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> np.ndarray:
+    """Parse ``frames`` lines of ``channels`` finite numbers from ``data[start:]`` -> ``[frames, channels]``."""
+    if channels < 1:
+        raise ValueError("argument `channels`: must be at least 1")
+    if start > len(data):
+        raise ValueError("argument `start`: past the end of `data`")
+    block = data[start:]
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # loadtxt warns on an empty block; counts are checked below
+            values = np.loadtxt(io.BytesIO(block), dtype=np.float64, ndmin=2, comments=None)
+    except ValueError:
+        values = None
+    if values is None or values.shape != (frames, channels) or not np.isfinite(values).all():
+        if frames == 0 and values is not None and values.size == 0:
+            return np.zeros((0, channels))
+        _raise_first_problem(block, frames, channels)
+    return values
+
+
+def parse_motion_blocks(blocks: list) -> list:
+    """Parse many blocks; one array or one ``ParseError`` instance per ``(data, start, frames, channels)``."""
+    results = []
+    for data, start, frames, channels in blocks:
+        try:
+            results.append(parse_motion_block(data, start, frames, channels))
+        except ParseError as error:
+            results.append(error)
+    return results
+
+
+def _raise_first_problem(block: bytes, frames: int, channels: int) -> None:
+    lines = block.split(b"\n")
+    found = 0
+    for index, line in enumerate(lines):
+        tokens = line.split()
+        if not tokens:
+            continue
+        for token in tokens:
+            shown = token[:40].decode("utf-8", "replace") + ("…" if len(token) > 40 else "")
+            try:
+                value = float(token)
+            except ValueError:
+                raise ParseError(f'"{shown}" is not a number', index) from None
+            if not math.isfinite(value):
+                raise ParseError(f'"{shown}" is not a finite number (NaN and infinity are not allowed)', index)
+        if len(tokens) != channels:
+            raise ParseError(f"expected {channels} values (the CHANNELS of the hierarchy), found {len(tokens)}", index)
+        if found == frames:
+            raise ParseError(f"more frame lines than Frames says ({frames})", index)
+        found += 1
+    if found < frames:
+        # Point at the last line of the block, where the missing frames should have been.
+        line_count = len(lines) - 1 if block.endswith(b"\n") else len(lines)
+        raise ParseError(f"truncated MOTION block: Frames says {frames}, but only {found} frame lines follow", max(line_count - 1, 0))
+    raise ParseError("the MOTION block could not be parsed", 0)
+
+
+def format_motion_block(values: np.ndarray, decimals: int | None = None) -> bytes:
+    """Text of ``values [F, C]``, one frame a line; ``decimals=None`` is the shortest exact text."""
+    values = np.asarray(values, dtype=np.float64)
+    if values.ndim != 2 or values.shape[1] == 0:
+        raise ValueError(f"argument `values`: expected shape [F, C] with C >= 1, got {list(values.shape)}")
+    bad = np.argwhere(~np.isfinite(values))
+    if len(bad):
+        f, c = bad[0]
+        raise ValueError(f"argument `values`: frame {f}, channel {c} is {values[f, c]}")
+    out = io.StringIO()
+    if decimals is None:
+        values = values + 0.0  # -0.0 -> 0.0, as the Rust kernel writes it
+        for row in values.tolist():
+            out.write(" ".join(np.format_float_positional(v, trim="-") for v in row))
+            out.write("\n")
+    else:
+        np.savetxt(out, values, fmt=f"%.{int(decimals)}f", delimiter=" ")
+    return out.getvalue().encode("ascii")

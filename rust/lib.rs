@@ -1,0 +1,11 @@
+//! Hot loops of expressive-mocap. Pure kernels on slices; `py` (feature "python") adapts
+//! them to NumPy. Every kernel has a NumPy twin in `expressive_mocap.reference`.
+
+pub mod error;
+pub mod fk;
+pub mod format;
+pub mod parse;
+pub mod rotations;
+
+#[cfg(feature = "python")]
+mod py;
