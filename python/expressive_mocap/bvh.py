@@ -128,7 +128,10 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
 
     open_joint(root_line, -1)
     while stack:
-        token, line = tokens.next("'}' closing the joint " + repr(names[stack[-1]] if isinstance(stack[-1], int) else "End Site"))
+        if tokens.peek() is None:
+            joint = next(j for j in reversed(stack) if isinstance(j, int))
+            raise tokens.error(tokens.last_line, f"unbalanced braces: the '{{' of joint {names[joint]!r} at line {opened_at[joint]} is never closed")
+        token, line = tokens.next("'}'")
         word = token.lower()
         top = stack[-1]
         if token == "}":
@@ -170,8 +173,6 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
             stack.append(("site", len(end_sites) - 1))
         elif word == "root":
             raise tokens.error(line, "several ROOT hierarchies in one file are not supported (a ROOT inside a joint)")
-        elif word == "motion":
-            raise tokens.error(line, f"unbalanced braces: the '{{' of joint {names[top]!r} at line {opened_at[top]} is never closed")
         else:
             raise tokens.error(line, f"expected OFFSET, CHANNELS, JOINT, End Site or '}}', found {token!r}")
 

@@ -1,0 +1,102 @@
+"""Shared fixtures: the synthetic test files, the Bandai-Namco data (skipped with a reason
+when absent, a failure under CI=true), both kernel backends, and an independent SciPy
+reference for decoding BVH channels."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import expressive_mocap as em
+
+DATA = Path(__file__).parent / "data"
+REPO = Path(__file__).resolve().parent.parent
+SHARED_DATA = REPO.parent / "shared" / "data"
+CACHE = Path(os.environ.get("EXPRESSIVE_MOCAP_DATA_CACHE", Path.home() / ".cache" / "motion-data"))
+
+BACKENDS = ["numpy"] + (["rust"] if em.rust_available() else [])
+
+
+@pytest.fixture(params=BACKENDS)
+def backend(request):
+    """Run the test once per available kernel backend."""
+    with em.use_backend(request.param):
+        yield request.param
+
+
+@pytest.fixture
+def mixed_path() -> Path:
+    """A small hand-written file: six rotation orders, 0-6 channels, position channels after
+    rotations, End Sites, a ':' and a space in joint names, exponents."""
+    return DATA / "mixed_orders.bvh"
+
+
+def _unpacked_dataset() -> Path | None:
+    unpack = SHARED_DATA / "unpack"
+    if not unpack.exists():
+        return None
+    result = subprocess.run([str(unpack), str(CACHE)], capture_output=True, text=True, check=True)
+    return Path(result.stdout.strip().splitlines()[-1])
+
+
+def _dataset_dir(number: int) -> Path:
+    dataset = _unpacked_dataset()
+    if dataset is None:
+        reason = f"the Bandai-Namco archives are not at {SHARED_DATA} (they come with the project's shared/ folder)"
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"CI=true but {reason}")
+        pytest.skip(reason)
+    return dataset / f"Bandai-Namco-Research-Motiondataset-{number}" / "data"
+
+
+@pytest.fixture(scope="session")
+def bandai2_dir() -> Path:
+    """dataset-2 clips (unpacked once into ~/.cache/motion-data)."""
+    return _dataset_dir(2)
+
+
+@pytest.fixture(scope="session")
+def bandai1_dir() -> Path:
+    """dataset-1 clips."""
+    return _dataset_dir(1)
+
+
+def bvh_values(path: Path) -> np.ndarray:
+    """The MOTION numbers of a file, read with plain NumPy (independent of the package)."""
+    text = Path(path).read_text()
+    block = text.split("Frame Time:", 1)[1].split("\n", 1)[1]
+    return np.loadtxt(block.splitlines(), ndmin=2)
+
+
+def scipy_positions(skeleton: em.Skeleton, values: np.ndarray) -> np.ndarray:
+    """World joint positions from channel values, composed with SciPy: per joint the rotation
+    channels in written order (intrinsic, upper case), position channels replacing the offset
+    components they name, parent x child."""
+    frames = len(values)
+    world_rot: list[Rotation] = []
+    world_pos = np.zeros((frames, skeleton.n_joints, 3))
+    column = 0
+    for j, channels in enumerate(skeleton.channels):
+        offset = np.tile(skeleton.offsets[j], (frames, 1))
+        axes, angles = "", []
+        for name in channels:
+            if name.endswith("rotation"):
+                axes += name[0]
+                angles.append(values[:, column])
+            else:
+                offset[:, "XYZ".index(name[0])] = values[:, column]
+            column += 1
+        local = Rotation.from_euler(axes, np.stack(angles, 1), degrees=True) if axes else Rotation.identity(frames)
+        parent = skeleton.parents[j]
+        if parent < 0:
+            world_rot.append(local)
+            world_pos[:, j] = offset
+        else:
+            world_rot.append(world_rot[parent] * local)
+            world_pos[:, j] = world_pos[:, parent] + world_rot[parent].apply(offset)
+    return world_pos
