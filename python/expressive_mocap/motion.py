@@ -277,7 +277,8 @@ class Motion:
             if not (np.isfinite(fps) and fps > 0):
                 raise MocapError(f"resample: fps must be positive, got {fps}")
             new_time = 1.0 / fps
-            n_frames = int(np.floor(self.duration / new_time + 1e-9)) + 1
+            # Files round the frame time (0.0333333 for 1/30 s): allow a hundredth of a frame.
+            n_frames = int(np.floor(self.duration / new_time + 0.01)) + 1
         else:
             if n_frames < 2:
                 raise MocapError(f"resample: n_frames must be at least 2, got {n_frames}")

@@ -67,3 +67,12 @@ def slerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
     wa = np.where(near, 1.0 - t, np.sin((1.0 - t) * angle) / safe)
     wb = np.where(near, t, np.sin(t * angle) / safe)
     return normalize(wa * a + wb * b)
+
+
+def about(axis: str, degrees) -> np.ndarray:
+    """Rotations ``[..., 4]`` by ``degrees`` about the ``axis`` "X", "Y" or "Z"."""
+    half = np.radians(np.asarray(degrees, dtype=np.float64)) / 2
+    q = np.zeros(half.shape + (4,))
+    q[..., "XYZ".index(axis)] = np.sin(half)
+    q[..., 3] = np.cos(half)
+    return q

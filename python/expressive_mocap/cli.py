@@ -1,0 +1,185 @@
+"""The ``expressive-mocap`` command: a thin layer over the package's functions.
+
+Bad input ends the command with a one-line message on stderr and a non-zero exit, never a
+traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__, backend
+from .bvh import read_bvh, write_bvh
+from .errors import MocapError
+from .io import atomic_write
+from .motion import Motion
+from .rotations import ORDERS
+
+PROG = "expressive-mocap"
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage mistake is one line (and exit status 2), like every other error."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _positive(kind):
+    def parse(text: str):
+        value = kind(text)
+        if not value > 0:
+            raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+        return value
+
+    parse.__name__ = kind.__name__
+    return parse
+
+
+def cmd_info(args) -> int:
+    failures = 0
+    for path in args.files:
+        try:
+            motion = read_bvh(path)
+        except MocapError as error:
+            print(f"{PROG}: error: {error}", file=sys.stderr)
+            failures += 1
+            continue
+        skeleton = motion.skeleton
+        print(f"{path}")
+        print(f"  joints    {skeleton.n_joints} (+{len(skeleton.end_sites)} End Sites), root {skeleton.names[0]}")
+        print(f"  frames    {motion.n_frames} at {motion.fps:.6g} fps (frame time {motion.frame_time:.7g} s)")
+        print(f"  duration  {motion.duration:.3f} s")
+        print(f"  channels  {skeleton.n_channels} a frame: {skeleton.channel_layout()}")
+        print(f"  rest pose height {skeleton.rest_height():.4g} (file units, Y extent incl. End Sites)")
+    return 1 if failures else 0
+
+
+def cmd_positions(args) -> int:
+    motion = read_bvh(args.file)
+    rotations, positions = motion.fk()
+    buffer = io.BytesIO()
+    np.savez(
+        buffer,
+        positions=positions,
+        rotations=rotations,
+        joints=np.array(motion.skeleton.names),
+        parents=motion.skeleton.parents,
+        frame_time=np.float64(motion.frame_time),
+    )
+    atomic_write(args.output, buffer.getvalue())
+    print(f"wrote {args.output}: positions and rotations of {motion.skeleton.n_joints} joints x {motion.n_frames} frames (world, x,y,z,w)")
+    return 0
+
+
+def cmd_convert(args) -> int:
+    motion = read_bvh(args.input)
+    if args.fps:
+        motion = motion.resample(fps=args.fps)
+    if args.scale:
+        motion = motion.scaled(args.scale)
+    if args.order:
+        motion = motion.with_rotation_order(args.order)
+    write_bvh(motion, args.output, decimals=args.decimals)
+    print(f"wrote {args.output}: {motion.n_frames} frames at {motion.fps:.6g} fps")
+    return 0
+
+
+def cmd_render(args) -> int:
+    from .render import render
+
+    motions = [read_bvh(path) for path in args.files]
+    if args.start or args.end:
+        motions = [m[args.start : args.end] for m in motions]
+    options = {"poses": args.poses} if args.output.lower().endswith(".png") else {}
+    render(motions, args.output, titles=[Path(p).stem for p in args.files], view=args.view, **options)
+    print(f"wrote {args.output}")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    from .demo import procedural_walk
+    from .render import render
+
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    print(f"expressive-mocap {__version__}, kernels: {backend.get_backend()}")
+    walk = procedural_walk(seconds=args.seconds, speed=args.speed)
+    bvh_path = out / "walk.bvh"
+    write_bvh(walk, bvh_path)
+    again = read_bvh(bvh_path)
+    drift = float(np.abs(again.positions() - walk.positions()).max())
+    print(f"procedural walk at {args.speed} m/s: {walk.n_frames} frames, {walk.skeleton.n_joints} joints -> {bvh_path}")
+    cmd_info(argparse.Namespace(files=[str(bvh_path)]))
+    print(f"  read back: largest joint position difference {drift:.2e} cm")
+    positions = again.positions()
+    step = positions[-1, 0] - positions[0, 0]
+    print(f"  travelled {np.linalg.norm(step[[0, 2]]) / 100:.2f} m in {again.duration:.2f} s")
+    render([again], out / "walk.png", titles=["procedural walk"])
+    render([again[: int(again.fps * 1.5)]], out / "walk.gif", titles=["procedural walk"])
+    print(f"pictures: {out / 'walk.png'}, {out / 'walk.gif'}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog=PROG, description="Find, measure and edit the expressive part of motion capture (BVH files).")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("--backend", choices=backend.BACKENDS, help=f"kernels to use (default: ${backend.ENV_VAR} or auto = Rust when built)")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser, required=True)
+
+    p = commands.add_parser("info", help="joints, frames, fps, duration, channel layout and rest height of BVH files")
+    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files")
+    p.set_defaults(run=cmd_info)
+
+    p = commands.add_parser("positions", help="world positions and rotations of every joint, to an .npz file")
+    p.add_argument("file", metavar="FILE", help="BVH file")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.npz", help="arrays positions [F,J,3], rotations [F,J,4] (x,y,z,w), joints, parents, frame_time")
+    p.set_defaults(run=cmd_positions)
+
+    p = commands.add_parser("convert", help="rewrite a BVH file, optionally resampled, scaled or in another rotation order")
+    p.add_argument("input", metavar="IN", help="BVH file")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write (atomically)")
+    p.add_argument("--fps", type=_positive(float), help="resample to this frame rate (slerp)")
+    p.add_argument("--scale", type=_positive(float), help="multiply every length, e.g. 0.01 for cm to m")
+    p.add_argument("--order", type=str.upper, choices=ORDERS, help="write every joint's rotation channels in this order")
+    p.add_argument("--decimals", type=int, help="digits after the point (default: the shortest text that reads back exactly)")
+    p.set_defaults(run=cmd_convert)
+
+    p = commands.add_parser("render", help="stick figures side by side: poses as PNG or an animated GIF")
+    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files, one panel each")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.png|OUT.gif", help="picture to write")
+    p.add_argument("--view", choices=["side", "front"], default="side", help="camera (default: side)")
+    p.add_argument("--poses", type=_positive(int), default=8, help="poses per panel in a PNG (default: 8)")
+    p.add_argument("--start", type=int, default=0, help="first frame (default: 0)")
+    p.add_argument("--end", type=int, help="frame to stop before (default: the end)")
+    p.set_defaults(run=cmd_render)
+
+    p = commands.add_parser("demo", help="generate a procedural walk (no download), write, read and draw it")
+    p.add_argument("-o", "--output", default="expressive-mocap-demo", metavar="DIR", help="folder for the outputs (default: ./expressive-mocap-demo)")
+    p.add_argument("--speed", type=_positive(float), default=1.2, help="walking speed in m/s (default: 1.2)")
+    p.add_argument("--seconds", type=_positive(float), default=4.0, help="length of the walk (default: 4)")
+    p.set_defaults(run=cmd_demo)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        if args.backend:
+            backend.set_backend(args.backend)
+        return args.run(args)
+    except (MocapError, OSError) as error:
+        print(f"{PROG}: error: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,156 @@
+"""Stick-figure pictures of motions, side by side: a PNG of poses or an animated GIF.
+
+Orthographic views with Y up: ``"side"`` looks along -X (Z to the right), ``"front"`` looks
+along -Z (X to the left, as a mirror would show the actor). Panels share one scale.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .errors import MocapError
+from .io import atomic_write
+from .motion import Motion
+
+_VIEWS = {"side": (2, 1), "front": (0, 1)}
+
+
+def _segments(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+    """World positions of bone ends ``[F, B, 2, 3]`` (joint to parent, End Site to its joint)."""
+    positions = motion.positions()
+    world_rot, _ = motion.fk()
+    parents = motion.skeleton.parents
+    children = np.flatnonzero(parents >= 0)
+    if np.count_nonzero(parents == 0) == 1:
+        # A root with one child is a reference node (often on the floor), not a bone end.
+        children = children[parents[children] != 0]
+    bones = np.stack([positions[:, parents[children]], positions[:, children]], axis=2)
+    sites = [(j, off) for j, off in motion.skeleton.end_sites if np.linalg.norm(off) > 0]
+    if sites:
+        from .quat import rotate
+
+        joints = np.array([j for j, _ in sites])
+        tips = positions[:, joints] + rotate(world_rot[:, joints], np.array([off for _, off in sites]))
+        bones = np.concatenate([bones, np.stack([positions[:, joints], tips], axis=2)], axis=1)
+    return bones, positions
+
+
+def _project(points: np.ndarray, view: str) -> np.ndarray:
+    horizontal, vertical = _VIEWS[view]
+    sign = -1.0 if view == "front" else 1.0
+    return np.stack([sign * points[..., horizontal], points[..., vertical]], axis=-1)
+
+
+def _figure(panels: int, width: float = 3.2, height: float = 4.0):
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, no display needed
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, panels, figsize=(width * panels, height), squeeze=False)
+    for ax in axes[0]:
+        ax.set_aspect("equal")
+        ax.axis("off")
+    return plt, fig, axes[0]
+
+
+def _check(motions: Sequence[Motion], titles: Sequence[str] | None, view: str) -> list[str]:
+    if not motions:
+        raise MocapError("nothing to render: give at least one motion")
+    if view not in _VIEWS:
+        raise MocapError(f"view must be one of {', '.join(_VIEWS)}, got {view!r}")
+    titles = list(titles) if titles is not None else [""] * len(motions)
+    if len(titles) != len(motions):
+        raise MocapError(f"{len(titles)} titles for {len(motions)} motions")
+    return titles
+
+
+def render_poses(
+    motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, poses: int = 8, view: str = "side"
+) -> None:
+    """PNG with one panel per motion, each showing ``poses`` evenly spaced frames where they
+    happened (a chronophotograph: a walk spreads along its path), older poses lighter."""
+    titles = _check(motions, titles, view)
+    all_bones = [_segments(motion)[0] for motion in motions]
+    spans = [np.ptp(_project(b.reshape(-1, 3), view), axis=0) for b in all_bones]
+    width = float(np.clip(max(x / max(y, 1e-9) for x, y in spans) * 3.0, 2.5, 10.0))
+    plt, fig, axes = _figure(len(motions), width=width, height=3.4)
+    for ax, motion, bones, title in zip(axes, motions, all_bones, titles):
+        frames = np.linspace(0, motion.n_frames - 1, min(poses, motion.n_frames)).round().astype(int)
+        for k, f in enumerate(frames):
+            shade = 0.25 + 0.75 * (k + 1) / len(frames)
+            for a, b in _project(bones[f], view):
+                ax.plot([a[0], b[0]], [a[1], b[1]], color=plt.cm.viridis(1 - shade), lw=1.6, solid_capstyle="round")
+        ground = _project(bones.reshape(-1, 3), view)
+        ax.axhline(0.0, color="0.7", lw=0.8)
+        ax.set_xlim(ground[:, 0].min() - 10, ground[:, 0].max() + 10)
+        ax.set_title(title, fontsize=10)
+    _save(fig, plt, path)
+
+
+def render_animation(
+    motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", fps: float | None = None
+) -> None:
+    """Animated GIF, one panel per motion, the camera following each root horizontally.
+    Motions are played frame by frame in step; shorter ones hold their last pose."""
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    titles = _check(motions, titles, view)
+    plt, fig, axes = _figure(len(motions))
+    projected = []
+    for motion in motions:
+        bones, positions = _segments(motion)
+        flat = _project(bones, view)
+        centre = _project(positions[:, 0], view)[:, 0]
+        flat[..., 0] -= centre[:, None, None]
+        projected.append(flat)
+    extent = max(np.abs(p[..., 0]).max() for p in projected) + 5
+    top = max(p[..., 1].max() for p in projected) + 5
+    lines = []
+    for ax, flat, title in zip(axes, projected, titles):
+        ax.set_xlim(-extent, extent)
+        ax.set_ylim(min(0.0, min(p[..., 1].min() for p in projected)) - 5, top)
+        ax.axhline(0.0, color="0.7", lw=0.8)
+        ax.set_title(title, fontsize=10)
+        lines.append([ax.plot([], [], color="tab:blue", lw=2)[0] for _ in range(flat.shape[1])])
+    frames = max(len(p) for p in projected)
+
+    def draw(f: int):
+        for flat, panel in zip(projected, lines):
+            for (a, b), line in zip(flat[min(f, len(flat) - 1)], panel):
+                line.set_data([a[0], b[0]], [a[1], b[1]])
+        return [line for panel in lines for line in panel]
+
+    rate = fps or motions[0].fps
+    animation = FuncAnimation(fig, draw, frames=frames, blit=True)
+    # PillowWriter needs a file name: render into a scratch folder, then write atomically.
+    with tempfile.TemporaryDirectory() as scratch:
+        scratch_file = os.path.join(scratch, "animation.gif")
+        animation.save(scratch_file, writer=PillowWriter(fps=min(rate, 50)))
+        data = Path(scratch_file).read_bytes()
+    plt.close(fig)
+    atomic_write(path, data)
+
+
+def render(motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", **options) -> None:
+    """Render to ``path``: a GIF animation if it ends in ``.gif``, otherwise a PNG of poses."""
+    if str(path).lower().endswith(".gif"):
+        render_animation(motions, path, titles, view, **options)
+    elif str(path).lower().endswith(".png"):
+        render_poses(motions, path, titles, view=view, **options)
+    else:
+        raise MocapError(f"render: the output must end in .png or .gif, got {path}")
+
+
+def _save(fig, plt, path: str | os.PathLike) -> None:
+    buffer = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buffer, format="png", dpi=110)
+    plt.close(fig)
+    atomic_write(path, buffer.getvalue())

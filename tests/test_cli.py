@@ -1,0 +1,98 @@
+"""The command line as a user runs it: real output files, one-line errors, no tracebacks."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap.cli import main
+
+
+def run(*args):
+    """Run the installed command in a subprocess, as a user would."""
+    return subprocess.run([sys.executable, "-m", "expressive_mocap.cli", *map(str, args)], capture_output=True, text=True)
+
+
+def test_info_reports_layout_and_rest_height(mixed_path, capsys):
+    assert main(["info", str(mixed_path)]) == 0
+    out = capsys.readouterr().out
+    assert "9 (+3 End Sites)" in out and "4 at 30 fps" in out
+    assert "1 joint x 0 (none)" in out and "1 joint x 2 (Yposition Xrotation)" in out
+    height = em.read_bvh(mixed_path).skeleton.rest_height()
+    assert f"rest pose height {height:.4g}" in out
+
+
+def test_positions_npz_matches_fk(tmp_path, mixed_path):
+    out = tmp_path / "p.npz"
+    assert main(["positions", str(mixed_path), "-o", str(out)]) == 0
+    motion = em.read_bvh(mixed_path)
+    with np.load(out, allow_pickle=False) as saved:
+        world_rot, world_pos = motion.fk()
+        np.testing.assert_array_equal(saved["positions"], world_pos)
+        np.testing.assert_array_equal(saved["rotations"], world_rot)
+        assert saved["joints"].tolist() == list(motion.skeleton.names)
+        assert saved["parents"].tolist() == motion.skeleton.parents.tolist()
+        assert saved["positions"].shape == (4, 9, 3)
+
+
+def test_convert_resamples_scales_and_reorders(tmp_path, mixed_path):
+    out = tmp_path / "c.bvh"
+    assert main(["convert", str(mixed_path), "-o", str(out), "--fps", "60", "--scale", "0.01", "--order", "xyz"]) == 0
+    original, converted = em.read_bvh(mixed_path), em.read_bvh(out)
+    assert converted.fps == pytest.approx(60.0) and converted.n_frames == 7
+    assert "Xrotation Yrotation Zrotation" in out.read_text()
+    np.testing.assert_allclose(converted.positions()[::2], original.positions() * 0.01, atol=1e-9)
+
+
+def test_render_writes_png_and_gif(tmp_path, mixed_path):
+    for name in ["r.png", "r.gif"]:
+        assert main(["render", str(mixed_path), str(mixed_path), "-o", str(tmp_path / name)]) == 0
+    assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "r.gif").read_bytes()[:3] == b"GIF"
+
+
+def test_demo_runs_without_data(tmp_path):
+    result = run("demo", "-o", tmp_path / "demo")
+    assert result.returncode == 0, result.stderr
+    walk = em.read_bvh(tmp_path / "demo" / "walk.bvh")
+    assert walk.skeleton.n_joints == 22 and walk.n_frames == 121
+    # Feet on the floor, and the walk travels about speed x duration.
+    positions = walk.positions()
+    assert positions[:, [16, 17, 20, 21], 1].min() == pytest.approx(2.0)
+    assert np.linalg.norm(positions[-1, 0, [0, 2]] - positions[0, 0, [0, 2]]) == pytest.approx(480.0, rel=0.02)
+    assert (tmp_path / "demo" / "walk.png").exists() and (tmp_path / "demo" / "walk.gif").exists()
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["info", "missing.bvh"], "cannot read"),
+        (["convert", "BROKEN", "-o", "x.bvh"], "line"),
+        (["convert", "GOOD", "-o", "no/such/folder/x.bvh"], "does not exist"),
+        (["convert", "GOOD", "-o", "x.bvh", "--fps", "-3"], "must be positive"),
+        (["convert", "GOOD", "-o", "x.bvh", "--order", "XXY"], "invalid choice"),
+        (["positions", "GOOD"], "required"),
+        (["render", "GOOD", "-o", "x.jpg"], ".png or .gif"),
+        (["frobnicate"], "invalid choice"),
+    ],
+)
+def test_bad_input_is_one_line_and_nonzero(tmp_path, mixed_path, args, words):
+    broken = tmp_path / "broken.bvh"
+    broken.write_bytes(mixed_path.read_bytes().replace(b"93.0", b"9x3"))
+    args = [str(mixed_path) if a == "GOOD" else str(broken) if a == "BROKEN" else a for a in args]
+    result = subprocess.run([sys.executable, "-m", "expressive_mocap.cli", *args], capture_output=True, text=True, cwd=tmp_path)
+    assert result.returncode != 0
+    assert "Traceback" not in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert words in result.stderr
+    assert not (tmp_path / "x.bvh").exists()
+
+
+def test_help_reads_well():
+    result = run("--help")
+    assert result.returncode == 0
+    for command in ["info", "positions", "convert", "render", "demo"]:
+        assert command in result.stdout
+    assert "--order" in run("convert", "--help").stdout
