@@ -1,6 +1,7 @@
 """BVH reading and writing: every source kind, layouts, round trips, editing operations."""
 
 import io
+import os
 
 import numpy as np
 import pytest
@@ -69,6 +70,9 @@ def test_exact_round_trip(tmp_path, mixed_path, backend):
     # Channel values come back too: positions exactly, angles as the same rotations.
     np.testing.assert_allclose(again.channel_values()[:, :3], bvh_values(mixed_path)[:, :3], rtol=0, atol=0)
     assert list(tmp_path.iterdir()) == [tmp_path / "out.bvh"]  # no temporary file left behind
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "out.bvh").stat().st_mode & 0o777 == 0o666 & ~umask  # as open() would make it
 
 
 def test_fixed_decimals_round_trip_within_1e6_relative(tmp_path, mixed_path):

@@ -47,17 +47,19 @@ def _project(points: np.ndarray, view: str) -> np.ndarray:
     return np.stack([sign * points[..., horizontal], points[..., vertical]], axis=-1)
 
 
-def _figure(panels: int, width: float = 3.2, height: float = 4.0):
+def _figure(panels: int, width: float = 3.2, height: float = 4.0, stacked: bool = False):
+    """A row of panels, or a column when each panel is much wider than tall."""
     import matplotlib
 
     matplotlib.use("Agg")  # files only, no display needed
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, panels, figsize=(width * panels, height), squeeze=False)
-    for ax in axes[0]:
+    shape, size = ((panels, 1), (width, height * panels)) if stacked else ((1, panels), (width * panels, height))
+    fig, axes = plt.subplots(*shape, figsize=size, squeeze=False)
+    for ax in axes.flat:
         ax.set_aspect("equal")
         ax.axis("off")
-    return plt, fig, axes[0]
+    return plt, fig, list(axes.flat)
 
 
 def _check(motions: Sequence[Motion], titles: Sequence[str] | None, view: str) -> list[str]:
@@ -79,8 +81,9 @@ def render_poses(
     titles = _check(motions, titles, view)
     all_bones = [_segments(motion)[0] for motion in motions]
     spans = [np.ptp(_project(b.reshape(-1, 3), view), axis=0) for b in all_bones]
-    width = float(np.clip(max(x / max(y, 1e-9) for x, y in spans) * 3.0, 2.5, 10.0))
-    plt, fig, axes = _figure(len(motions), width=width, height=3.4)
+    aspect = max(x / max(y, 1e-9) for x, y in spans)
+    width = float(np.clip(aspect * 2.6, 2.5, 14.0))
+    plt, fig, axes = _figure(len(motions), width=width, height=2.8, stacked=aspect > 2.5)
     for ax, motion, bones, title in zip(axes, motions, all_bones, titles):
         frames = np.linspace(0, motion.n_frames - 1, min(poses, motion.n_frames)).round().astype(int)
         for k, f in enumerate(frames):
@@ -151,6 +154,6 @@ def render(motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[
 def _save(fig, plt, path: str | os.PathLike) -> None:
     buffer = io.BytesIO()
     fig.tight_layout()
-    fig.savefig(buffer, format="png", dpi=110)
+    fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
     atomic_write(path, buffer.getvalue())

@@ -1,0 +1,42 @@
+"""Redraw the README's pictures: python benches/make_figures.py [--data DIR]
+
+The real-clip pictures use the Bandai-Namco-Research-Motiondataset (CC BY-NC 4.0), unpacked
+from ../shared/data with its `unpack` script when --data is not given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+from pathlib import Path
+
+import expressive_mocap as em
+from expressive_mocap.demo import procedural_walk
+from expressive_mocap.render import render
+
+HERE = Path(__file__).resolve().parent
+
+
+def dataset_dir(given: str | None) -> Path:
+    if given:
+        return Path(given)
+    unpack = HERE.parent.parent / "shared" / "data" / "unpack"
+    out = subprocess.run([str(unpack), str(Path.home() / ".cache" / "motion-data")], capture_output=True, text=True, check=True)
+    return Path(out.stdout.strip()) / "Bandai-Namco-Research-Motiondataset-2" / "data"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", help="folder of dataset-2 BVH files")
+    args = parser.parse_args()
+    out = HERE / "figures"
+    out.mkdir(exist_ok=True)
+    render([procedural_walk()], out / "demo_walk.png", titles=["procedural walk (demo)"])
+    data = dataset_dir(args.data)
+    walks = [em.read_bvh(data / f"dataset-2_walk_{style}_001.bvh") for style in ("normal", "exhausted")]
+    render(walks, out / "bandai_walks.png", titles=["walk, normal", "walk, exhausted"], poses=6)
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
