@@ -1,0 +1,30 @@
+"""Type stubs of the Rust extension. Every function has a NumPy twin of the same name and
+signature in ``expressive_mocap.reference``; call them through ``expressive_mocap.kernels``."""
+
+import numpy as np
+import numpy.typing as npt
+
+F64 = npt.NDArray[np.float64]
+
+num_threads: int
+
+class ParseError(ValueError):
+    """A malformed MOTION block; ``args`` are ``(message, 0-based line within the block)``."""
+
+def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> F64:
+    """Parse ``frames`` lines of ``channels`` finite numbers from ``data[start:]`` -> ``[frames, channels]``."""
+
+def parse_motion_blocks(blocks: list[tuple[bytes, int, int, int]]) -> list[F64 | ParseError]:
+    """Parse many blocks in parallel; one array or one ``ParseError`` per ``(data, start, frames, channels)``."""
+
+def euler_to_quat(angles: F64, orders: npt.NDArray[np.uint8]) -> F64:
+    """Euler angles ``[F, J, 3]`` (degrees) and orders ``[J, 3]`` (axis indices) -> quaternions ``[F, J, 4]``."""
+
+def quat_to_euler(quats: F64, orders: npt.NDArray[np.uint8]) -> F64:
+    """Quaternions ``[F, J, 4]`` (x, y, z, w) -> Euler angles ``[F, J, 3]`` in degrees."""
+
+def forward_kinematics(rotations: F64, translations: F64, parents: npt.NDArray[np.int64]) -> tuple[F64, F64]:
+    """World rotations ``[F, J, 4]`` and positions ``[F, J, 3]`` from local ones and ``parents [J]``."""
+
+def format_motion_block(values: F64, decimals: int | None = None) -> bytes:
+    """Text of the MOTION block for ``values [F, C]``; ``decimals=None`` is the shortest exact text."""
