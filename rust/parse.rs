@@ -21,7 +21,11 @@ const PARALLEL_BLOCK_BYTES: usize = 1 << 20;
 /// fewer or more than `frames` frames.
 pub fn parse_motion_block(block: &[u8], frames: usize, channels: usize) -> Result<Vec<f64>> {
     if channels == 0 {
-        return Err(KernelError::argument("channels", "must be at least 1"));
+        // Frame lines of a skeleton without channels are blank.
+        return match block.split(|&b| b == b'\n').position(|l| !is_blank(l)) {
+            None => Ok(Vec::new()),
+            Some(line) => Err(KernelError::Parse { line, message: "expected 0 values (the hierarchy has no CHANNELS)".into() }),
+        };
     }
     let chunks = split_at_lines(block, if block.len() > PARALLEL_BLOCK_BYTES { rayon::current_num_threads() * 4 } else { 1 });
     let parsed: Vec<Result<Chunk>> = if chunks.len() > 1 {
@@ -127,23 +131,30 @@ fn parse_chunk(chunk: &[u8], channels: usize) -> Result<Chunk> {
 /// Append every whitespace-separated number of `line` to `out`.
 fn parse_line(line: &[u8], out: &mut Vec<f64>) -> std::result::Result<(), String> {
     let mut i = 0;
-    while i < line.len() {
-        if line[i].is_ascii_whitespace() {
-            i += 1;
-            continue;
-        }
-        let start = i;
-        while i < line.len() && !line[i].is_ascii_whitespace() {
+    loop {
+        while i < line.len() && line[i].is_ascii_whitespace() {
             i += 1;
         }
-        let token = &line[start..i];
-        match fast_float2::parse::<f64, _>(token) {
-            Ok(v) if v.is_finite() => out.push(v),
-            Ok(_) => return Err(format!("{:?} is not a finite number (NaN and infinity are not allowed)", show(token))),
-            Err(_) => return Err(format!("{:?} is not a number", show(token))),
+        if i == line.len() {
+            return Ok(());
+        }
+        let rest = &line[i..];
+        // The number must be the whole token: what follows it is whitespace or the line's end.
+        match fast_float2::parse_partial::<f64, _>(rest) {
+            Ok((v, used)) if rest.get(used).is_none_or(u8::is_ascii_whitespace) => {
+                if !v.is_finite() {
+                    return Err(format!("{:?} is not a finite number (NaN and infinity are not allowed)", show(token_at(rest))));
+                }
+                out.push(v);
+                i += used;
+            }
+            _ => return Err(format!("{:?} is not a number", show(token_at(rest)))),
         }
     }
-    Ok(())
+}
+
+fn token_at(rest: &[u8]) -> &[u8] {
+    &rest[..rest.iter().position(u8::is_ascii_whitespace).unwrap_or(rest.len())]
 }
 
 fn show(token: &[u8]) -> String {

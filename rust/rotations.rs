@@ -126,7 +126,8 @@ pub(crate) fn zip_frames<F>(src: &[f64], src_stride: usize, dst: &mut [f64], dst
 where
     F: Fn((&[f64], &mut [f64])) + Sync + Send,
 {
-    if src.len() / src_stride.max(1) * (src_stride / 3).max(1) >= PARALLEL_MIN_ITEMS {
+    // About three values a joint: parallel once there are PARALLEL_MIN_ITEMS joint-frames.
+    if src.len() >= 3 * PARALLEL_MIN_ITEMS {
         src.par_chunks(src_stride).zip(dst.par_chunks_mut(dst_stride)).with_min_len(64).for_each(per_frame);
     } else {
         src.chunks(src_stride).zip(dst.chunks_mut(dst_stride)).for_each(per_frame);

@@ -138,3 +138,17 @@ def test_real_clips_round_trip(tmp_path, bandai2_dir, bandai1_dir, backend):
         values = bvh_values(path)
         position_columns = [i for i, c in enumerate(c for cs in motion.skeleton.channels for c in cs) if c.endswith("position")]
         np.testing.assert_allclose(motion.channel_values()[:, position_columns], values[:, position_columns], rtol=1e-12, atol=1e-12)
+
+
+def test_files_sharing_a_hierarchy_shape_keep_their_own_offsets(mixed_path, backend):
+    # The second file differs only in OFFSET numbers: it reuses the cached shape.
+    text = mixed_path.read_bytes()
+    other = text.replace(b"OFFSET 0.0 12.0 0.0", b"OFFSET 0.5 13.0 -1.0").replace(b"OFFSET 8.0 0.0 0.0", b"OFFSET 7.0 1.0 0.0")
+    first, second = em.read_bvh(text), em.read_bvh(other)
+    np.testing.assert_array_equal(second.skeleton.offsets[2], [0.5, 13.0, -1.0])
+    assert second.skeleton.end_sites[1] == (5, (7.0, 1.0, 0.0))
+    np.testing.assert_array_equal(first.skeleton.offsets[2], [0.0, 12.0, 0.0])
+    assert first.skeleton.end_sites[1] == (5, (8.0, 0.0, 0.0))
+    # A bad number in a cached shape still gets the full parser's error and line.
+    with pytest.raises(em.BVHError, match="line 12: expected an OFFSET value"):
+        em.read_bvh(text.replace(b"OFFSET 0.0 12.0 0.0", b"OFFSET 0.0 nan 0.0"))

@@ -19,11 +19,13 @@ import numpy as np
 from .backend import PARSE_ERRORS, kernels
 from .errors import BVHError, MocapError
 from .io import atomic_write
-from .motion import Motion, Skeleton, canonical_channel
+from .motion import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton, canonical_channels
 
 Source = Union[str, os.PathLike, bytes, bytearray, memoryview, BinaryIO]
 
 _TOKEN = re.compile(r"[{}]|[^\s{}]+")
+_KEYWORDS = frozenset(["}", "OFFSET", "CHANNELS", "JOINT", "ROOT"])  # already in upper case
+_CHANNEL_NAMES = frozenset(c.lower() for c in POSITION_CHANNELS + ROTATION_CHANNELS)
 _MOTION = re.compile(rb"^[ \t]*MOTION[ \t]*\r?$", re.MULTILINE | re.IGNORECASE)
 _FRAMES = re.compile(rb"[ \t]*Frames[ \t]*:[ \t]*(\S*)[ \t]*\r?$", re.IGNORECASE)
 _FRAME_TIME = re.compile(rb"[ \t]*Frame[ \t]+Time[ \t]*:[ \t]*(\S*)[ \t]*\r?$", re.IGNORECASE)
@@ -61,62 +63,82 @@ class _Tokens:
 
     def __init__(self, text: str, name: str):
         self.name = name
-        self.items = [(t, n) for n, line in enumerate(text.split("\n"), 1) for t in _TOKEN.findall(line)]
+        self.words: list[str] = []
+        self.lines: list[int] = []
+        for number, line in enumerate(text.split("\n"), 1):
+            found = _TOKEN.findall(line)
+            self.words += found
+            self.lines += [number] * len(found)
         self.pos = 0
         self.last_line = text.count("\n") + 1
 
     def error(self, line: int | None, reason: str) -> BVHError:
         return BVHError(self.name, line, reason)
 
-    def peek(self) -> tuple[str, int] | None:
-        return self.items[self.pos] if self.pos < len(self.items) else None
+    def done(self) -> bool:
+        return self.pos >= len(self.words)
 
     def next(self, expected: str) -> tuple[str, int]:
-        item = self.peek()
-        if item is None:
+        pos = self.pos
+        if pos >= len(self.words):
             raise self.error(self.last_line, f"unexpected end of the header: expected {expected}")
-        self.pos += 1
-        return item
+        self.pos = pos + 1
+        return self.words[pos], self.lines[pos]
 
     def expect(self, word: str) -> int:
         token, line = self.next(repr(word))
-        if token.lower() != word.lower():
+        if token != word and token.lower() != word.lower():
             raise self.error(line, f"expected {word!r}, found {token!r}")
         return line
 
-    def number(self, what: str) -> float:
-        token, line = self.next(what)
+    def numbers(self, count: int, what: str) -> list[float]:
+        start = self.pos
+        if start + count > len(self.words):
+            self.pos = len(self.words)
+            self.next(what)  # raises the end-of-header error
+        self.pos = start + count
         try:
-            value = float(token)
+            values = [float(w) for w in self.words[start : start + count]]
+            if all(math.isfinite(v) for v in values):
+                return values
         except ValueError:
-            raise self.error(line, f"expected {what}, found {token!r}") from None
-        if not math.isfinite(value):
-            raise self.error(line, f"expected {what} (a finite number), found {token!r}")
-        return value
+            pass
+        for k in range(start, start + count):  # error path: name the bad token
+            token, line = self.words[k], self.lines[k]
+            try:
+                bad = not math.isfinite(float(token))
+            except ValueError:
+                bad = True
+            if bad:
+                raise self.error(line, f"expected {what} (a finite number), found {token!r}")
+        raise AssertionError("unreachable")
 
     def name_on_line(self, keyword_line: int, what: str) -> str:
         """The rest of the keyword's line up to '{' (names may contain spaces or ':')."""
-        words = []
-        while (item := self.peek()) is not None and item[1] == keyword_line and item[0] != "{":
-            words.append(item[0])
-            self.pos += 1
-        if not words:
+        start = pos = self.pos
+        words, lines = self.words, self.lines
+        while pos < len(words) and lines[pos] == keyword_line and words[pos] != "{":
+            pos += 1
+        if pos == start:
             raise self.error(keyword_line, f"expected the name of the {what}")
-        return " ".join(words)
+        self.pos = pos
+        return words[start] if pos == start + 1 else " ".join(words[start:pos])
 
 
-def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
+def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
+    """The skeleton, and the owner of each OFFSET in file order (joint j, or -1 - k for End Site k)."""
     names: list[str] = []
     parents: list[int] = []
     offsets: list[list[float] | None] = []
     channels: list[tuple[str, ...] | None] = []
     end_sites: list[tuple[int, list[float] | None]] = []
     opened_at: list[int] = []  # line of each joint's '{', for unbalanced-brace errors
+    offset_owners: list[int] = []
 
     tokens.expect("HIERARCHY")
     root_line = tokens.expect("ROOT")
-    # Stack of open blocks: a joint index, or ("site", index into end_sites).
-    stack: list = []
+    # Stack of open blocks: a joint index, or -1 - (index into end_sites) for an End Site.
+    stack: list[int] = []
 
     def open_joint(keyword_line: int, parent: int) -> None:
         names.append(tokens.name_on_line(keyword_line, "joint"))
@@ -128,80 +150,117 @@ def _parse_hierarchy(tokens: _Tokens) -> Skeleton:
 
     open_joint(root_line, -1)
     while stack:
-        if tokens.peek() is None:
-            joint = next(j for j in reversed(stack) if isinstance(j, int))
+        if tokens.done():
+            joint = next(j for j in reversed(stack) if j >= 0)
             raise tokens.error(tokens.last_line, f"unbalanced braces: the '{{' of joint {names[joint]!r} at line {opened_at[joint]} is never closed")
         token, line = tokens.next("'}'")
-        word = token.lower()
         top = stack[-1]
-        if token == "}":
-            if isinstance(top, int) and offsets[top] is None:
+        word = token if token in _KEYWORDS else token.upper()
+        if word == "}":
+            if top >= 0 and offsets[top] is None:
                 raise tokens.error(line, f"joint {names[top]!r} has no OFFSET")
-            if isinstance(top, tuple) and end_sites[top[1]][1] is None:
+            if top < 0 and end_sites[-1 - top][1] is None:
                 raise tokens.error(line, "End Site has no OFFSET")
             stack.pop()
-        elif isinstance(top, tuple):
-            if word != "offset" or end_sites[top[1]][1] is not None:
+        elif top < 0:
+            if word != "OFFSET" or end_sites[-1 - top][1] is not None:
                 raise tokens.error(line, f"expected OFFSET or '}}' in an End Site, found {token!r}")
-            end_sites[top[1]] = (end_sites[top[1]][0], [tokens.number("an OFFSET value") for _ in range(3)])
-        elif word == "offset":
+            end_sites[-1 - top] = (end_sites[-1 - top][0], tokens.numbers(3, "an OFFSET value"))
+            offset_owners.append(top)
+        elif word == "OFFSET":
             if offsets[top] is not None:
                 raise tokens.error(line, f"joint {names[top]!r} has a second OFFSET")
-            offsets[top] = [tokens.number("an OFFSET value") for _ in range(3)]
-        elif word == "channels":
+            offsets[top] = tokens.numbers(3, "an OFFSET value")
+            offset_owners.append(top)
+        elif word == "CHANNELS":
             if channels[top] is not None:
                 raise tokens.error(line, f"joint {names[top]!r} has a second CHANNELS line")
             count_token, count_line = tokens.next("the number of channels")
             if not count_token.isdigit() or int(count_token) > 6:
                 raise tokens.error(count_line, f"expected a channel count from 0 to 6, found {count_token!r}")
-            listed = []
-            for _ in range(int(count_token)):
-                name, name_line = tokens.next("a channel name")
-                try:
-                    listed.append(canonical_channel(name))
-                except MocapError as error:
-                    raise tokens.error(name_line, str(error)) from None
+            listed = tuple(tokens.words[tokens.pos : tokens.pos + int(count_token)])
+            if len(listed) < int(count_token):
+                tokens.pos = len(tokens.words)
+                tokens.next("a channel name")  # raises the end-of-header error
+            tokens.pos += len(listed)
+            try:
+                channels[top] = canonical_channels(listed)
+            except MocapError as error:
+                bad = next(k for k, n in enumerate(listed) if n.lower() not in _CHANNEL_NAMES)
+                raise tokens.error(tokens.lines[tokens.pos - len(listed) + bad], str(error)) from None
             if len(set(listed)) != len(listed):
                 raise tokens.error(line, f"joint {names[top]!r} lists a channel twice: {' '.join(listed)}")
-            channels[top] = tuple(listed)
-        elif word == "joint":
+        elif word == "JOINT":
             open_joint(line, top)
-        elif word == "end":
+        elif word == "END":
             tokens.expect("Site")
             end_sites.append((top, None))
             tokens.expect("{")
-            stack.append(("site", len(end_sites) - 1))
-        elif word == "root":
+            stack.append(-len(end_sites))
+        elif word == "ROOT":
             raise tokens.error(line, "several ROOT hierarchies in one file are not supported (a ROOT inside a joint)")
         else:
             raise tokens.error(line, f"expected OFFSET, CHANNELS, JOINT, End Site or '}}', found {token!r}")
 
-    if (item := tokens.peek()) is not None:
-        token, line = item
-        if token.lower() == "root":
+    if not tokens.done():
+        token, line = tokens.next("MOTION")
+        if token.upper() == "ROOT":
             raise tokens.error(line, "several ROOT hierarchies in one file are not supported: only the first ROOT can be read")
         if token == "}":
             raise tokens.error(line, "unbalanced braces: this '}' closes nothing")
         raise tokens.error(line, f"expected MOTION after the hierarchy, found {token!r}")
-    return Skeleton(
+    skeleton = Skeleton(
         names=tuple(names),
         parents=np.array(parents),
         offsets=np.array(offsets, dtype=np.float64),
         channels=tuple(c or () for c in channels),
         end_sites=tuple((j, tuple(off)) for j, off in end_sites),
     )
+    return skeleton, offset_owners
+
+
+# Archives repeat one hierarchy with different numbers (Bandai-Namco's Hips offset changes from
+# clip to clip). A hierarchy is cached under its text with the OFFSET numbers cut out; a file of
+# the same shape then only converts its numbers. Anything unusual takes the full parse, whose
+# errors name the line.
+_OFFSET_NUMBERS = re.compile(r"(?<=OFFSET)[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)(?=[ \t]*\r?$)", re.MULTILINE)
+_SHAPES: dict[tuple[str, ...], tuple[Skeleton, np.ndarray, np.ndarray]] = {}
+_MAX_SHAPES = 64
+
+
+def _skeleton(text: str, name: str) -> Skeleton:
+    parts = _OFFSET_NUMBERS.split(text)
+    shape = tuple(parts[0::4])
+    cached = _SHAPES.get(shape)
+    if cached is not None:
+        template, joint_rows, site_rows = cached
+        try:
+            offsets = np.array([parts[1::4], parts[2::4], parts[3::4]], dtype=np.float64).T
+        except ValueError:
+            offsets = None
+        if offsets is not None and np.isfinite(offsets).all():
+            return template.with_offsets(offsets[joint_rows], offsets[site_rows])
+    skeleton, owners = _parse_hierarchy(_Tokens(text, name))
+    if len(owners) == len(shape) - 1:  # every OFFSET was cut out: the shape says it all
+        owners = np.array(owners)
+        joint_rows, site_rows = np.flatnonzero(owners >= 0), np.flatnonzero(owners < 0)
+        if len(_SHAPES) >= _MAX_SHAPES:
+            _SHAPES.clear()
+        _SHAPES[shape] = (skeleton, joint_rows[np.argsort(owners[joint_rows])], site_rows[np.argsort(-1 - owners[site_rows])])
+    return skeleton
 
 
 def _check_text(data: bytes, name: str) -> None:
-    if not data.strip():
-        raise BVHError(name, None, "the file is empty: expected a BVH file starting with HIERARCHY")
+    """Refuse empty and binary files early, looking at the first few kilobytes only."""
     head = data[:4096]
+    start = len(head) - len(head.lstrip())
+    if start == len(head) and not data[len(head) :].strip():
+        raise BVHError(name, None, "the file is empty: expected a BVH file starting with HIERARCHY")
     if b"\0" in head:
         raise BVHError(name, None, f"binary data (a NUL byte at offset {head.index(0)}): not a BVH text file")
-    if not data.lstrip()[:9].upper().startswith(b"HIERARCHY"):
-        first = data.lstrip().split(b"\n", 1)[0][:40].decode("utf-8", "replace")
-        line = data[: len(data) - len(data.lstrip())].count(b"\n") + 1
-        raise BVHError(name, line, f"expected 'HIERARCHY' at the start of a BVH file, found {first!r}")
+    if not head[start : start + 9].upper().startswith(b"HIERARCHY"):
+        first = head[start:].split(b"\n", 1)[0][:40].decode("utf-8", "replace")
+        raise BVHError(name, head.count(b"\n", 0, start) + 1, f"expected 'HIERARCHY' at the start of a BVH file, found {first!r}")
 
 
 def _line_at(data: bytes, offset: int) -> int:
@@ -227,7 +286,7 @@ def _parse_header(data: bytes, name: str) -> _Header:
         text = data[:hierarchy_end].decode("utf-8")
     except UnicodeDecodeError as error:
         raise BVHError(name, _line_at(data, error.start), "bytes that are not UTF-8 text: not a BVH text file") from None
-    skeleton = _parse_hierarchy(_Tokens(text, name))
+    skeleton = _skeleton(text, name)
     if motion is None:
         raise BVHError(name, text.count("\n") + 1, "missing MOTION section after the hierarchy")
 
@@ -256,11 +315,6 @@ def _parse_header(data: bytes, name: str) -> _Header:
     return _Header(skeleton, int(frames_text), frame_time, min(position, len(data)), time_line + 1)
 
 
-def _motion_from(header: _Header, values: np.ndarray) -> Motion:
-    rotations, translations = header.skeleton.decode(values)
-    return Motion(header.skeleton, rotations, translations, header.frame_time)
-
-
 def _block_error(name: str, header: _Header, error: Exception) -> BVHError:
     message, line_in_block = error.args
     return BVHError(name, header.block_line + line_in_block, message)
@@ -272,28 +326,20 @@ def read_bvh(source: Source) -> Motion:
     Raises :class:`~expressive_mocap.errors.BVHError` (naming the file and line) on malformed
     input: rotations come out as unit quaternions, translations as offsets or position channels.
     """
-    data, name = _load(source)
-    header = _parse_header(data, name)
-    if header.skeleton.n_channels == 0:
-        values = np.zeros((header.frames, 0))
-    else:
-        try:
-            values = kernels().parse_motion_block(data, header.block_start, header.frames, header.skeleton.n_channels)
-        except PARSE_ERRORS as error:
-            raise _block_error(name, header, error) from None
-    return _motion_from(header, values)
+    return read_bvh_many([source])[0]
 
 
 def read_bvh_many(sources: Iterable[Source], errors: str = "raise") -> list:
-    """Read many files; the number blocks are parsed in parallel (Rust) across files.
+    """Read many files; their number blocks are parsed and decoded in parallel (Rust).
 
-    ``errors="raise"`` raises the first file's :class:`BVHError`; ``errors="return"`` puts the
-    error in that file's place in the returned list instead.
+    ``errors="raise"`` raises the first bad file's :class:`BVHError`; ``errors="return"`` puts
+    the error in that file's place in the returned list instead.
     """
     if errors not in ("raise", "return"):
         raise MocapError(f"errors must be 'raise' or 'return', got {errors!r}")
     results: list = []
-    pending = []  # (index in results, name, header, data)
+    pending = []  # (index in results, name, header)
+    blocks = []
     for source in sources:
         try:
             data, name = _load(source)
@@ -303,22 +349,19 @@ def read_bvh_many(sources: Iterable[Source], errors: str = "raise") -> list:
                 raise
             results.append(error)
             continue
-        pending.append((len(results), name, header, data))
+        skeleton = header.skeleton
+        pending.append((len(results), name, header))
+        blocks.append((data, header.block_start, header.frames, skeleton.n_channels, *skeleton.layout(), skeleton.offsets))
         results.append(None)
-    to_parse = [p for p in pending if p[2].skeleton.n_channels > 0]
-    blocks = [(data, h.block_start, h.frames, h.skeleton.n_channels) for _, _, h, data in to_parse]
-    parsed = kernels().parse_motion_blocks(blocks) if blocks else []
-    for index, name, header, _ in pending:
-        if header.skeleton.n_channels == 0:
-            results[index] = _motion_from(header, np.zeros((header.frames, 0)))
-    for (index, name, header, _), values in zip(to_parse, parsed):
-        if isinstance(values, Exception):
-            error = _block_error(name, header, values)
+    decoded = kernels().read_motion_blocks(blocks) if blocks else []
+    for (index, name, header), result in zip(pending, decoded):
+        if isinstance(result, PARSE_ERRORS):
+            result = _block_error(name, header, result)
             if errors == "raise":
-                raise error
-            results[index] = error
-        else:
-            results[index] = _motion_from(header, values)
+                raise result
+            results[index] = result
+            continue
+        results[index] = Motion(header.skeleton, *result, header.frame_time)
     return results
 
 

@@ -64,3 +64,20 @@ def forward_kinematics(rotations, translations, parents) -> tuple[np.ndarray, np
     if parents.ndim != 1:
         raise ValueError(f"argument `parents`: expected shape [J], got {list(parents.shape)}")
     return kernels().forward_kinematics(rotations, translations, parents)
+
+
+def decode_channels(values, rotation_columns, orders, position_columns, offsets) -> tuple[np.ndarray, np.ndarray]:
+    """BVH channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``.
+
+    The layout arrays are those of :meth:`Skeleton.layout`; ``offsets [J, 3]`` are the rest offsets.
+    """
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    if values.ndim != 2:
+        raise ValueError(f"argument `values`: expected shape [F, C], got {list(values.shape)}")
+    return kernels().decode_channels(
+        values,
+        np.ascontiguousarray(rotation_columns, dtype=np.int64),
+        np.ascontiguousarray(orders, dtype=np.uint8),
+        np.ascontiguousarray(position_columns, dtype=np.int64),
+        np.ascontiguousarray(offsets, dtype=np.float64),
+    )

@@ -10,7 +10,7 @@ are in the file's units.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Sequence
 
 import numpy as np
@@ -32,9 +32,39 @@ def canonical_channel(name: str) -> str:
         raise MocapError(f"unknown channel {name!r}: expected one of {', '.join(_CANONICAL.values())}") from None
 
 
+@lru_cache(maxsize=1024)
+def canonical_channels(names: tuple[str, ...]) -> tuple[str, ...]:
+    """:func:`canonical_channel` of each name (cached: files repeat a few channel lists)."""
+    return tuple(canonical_channel(n) for n in names)
+
+
 def _frozen(array: np.ndarray) -> np.ndarray:
     array.setflags(write=False)
     return array
+
+
+def _rotation_order(channels: tuple[str, ...]) -> str:
+    written = [c[0] for c in channels if c in ROTATION_CHANNELS]
+    return "".join(written + [a for a in AXES if a not in written])
+
+
+@lru_cache(maxsize=256)
+def _layout(channels: tuple[tuple[str, ...], ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """See :meth:`Skeleton.layout`. Cached: archives share a handful of channel layouts."""
+    rot = np.full((len(channels), 3), -1, dtype=np.int64)
+    pos = np.full((len(channels), 3), -1, dtype=np.int64)
+    orders = np.zeros((len(channels), 3), dtype=np.uint8)
+    column = 0
+    for j, cs in enumerate(channels):
+        order = _rotation_order(cs)
+        orders[j] = axes_of(order)
+        for c in cs:
+            if c in ROTATION_CHANNELS:
+                rot[j, order.index(c[0])] = column
+            else:
+                pos[j, AXES.index(c[0])] = column
+            column += 1
+    return _frozen(rot), _frozen(orders), _frozen(pos)
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,7 +87,7 @@ class Skeleton:
         names = tuple(str(n) for n in self.names)
         parents = np.array(self.parents, dtype=np.int64).reshape(-1)
         offsets = np.array(self.offsets, dtype=np.float64)
-        channels = tuple(tuple(canonical_channel(c) for c in cs) for cs in self.channels)
+        channels = tuple(canonical_channels(tuple(cs)) for cs in self.channels)
         joints = len(names)
         if joints == 0:
             raise MocapError("a skeleton needs at least one joint")
@@ -106,48 +136,31 @@ class Skeleton:
     def rotation_order(self, joint: int) -> str:
         """The joint's Euler order as written (e.g. ``"ZXY"``); axes without a channel follow
         in X, Y, Z order (their angle is always 0); ``"XYZ"`` for a joint without rotations."""
-        written = [c[0] for c in self.channels[joint] if c in ROTATION_CHANNELS]
-        return "".join(written + [a for a in AXES if a not in written])
+        return _rotation_order(self.channels[joint])
 
-    @cached_property
+    @property
     def euler_orders(self) -> np.ndarray:
         """``[J, 3]`` uint8 axis indices of every joint's rotation order."""
-        return _frozen(np.array([axes_of(self.rotation_order(j)) for j in range(self.n_joints)], dtype=np.uint8))
-
-    @cached_property
-    def _columns(self) -> tuple[np.ndarray, np.ndarray]:
-        """Column of each rotation angle ``[J, 3]`` (in rotation-order position) and of each
-        position component ``[J, 3]`` (x, y, z) in a frame's values; -1 where there is none."""
-        rot = np.full((self.n_joints, 3), -1, dtype=np.intp)
-        pos = np.full((self.n_joints, 3), -1, dtype=np.intp)
-        column = 0
-        for j, cs in enumerate(self.channels):
-            order = self.rotation_order(j)
-            for c in cs:
-                if c in ROTATION_CHANNELS:
-                    rot[j, order.index(c[0])] = column
-                else:
-                    pos[j, AXES.index(c[0])] = column
-                column += 1
-        return _frozen(rot), _frozen(pos)
+        return _layout(self.channels)[1]
 
     def decode(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``."""
-        rot_cols, pos_cols = self._columns
-        # A trailing zero column lets missing channels (-1) read as 0.
-        padded = np.concatenate([values, np.zeros((len(values), 1))], axis=1)
-        rotations = kernels.euler_to_quat(padded[:, rot_cols], self.euler_orders)
-        translations = np.where(pos_cols >= 0, padded[:, pos_cols], self.offsets)
-        return rotations, translations
+        return kernels.decode_channels(values, *_layout(self.channels), self.offsets)
 
     def encode(self, rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:
         """Local rotations and translations -> channel values ``[F, C]`` (the inverse of :meth:`decode`)."""
-        rot_cols, pos_cols = self._columns
-        angles = kernels.quat_to_euler(rotations, self.euler_orders)
+        rot_cols, orders, pos_cols = _layout(self.channels)
+        angles = kernels.quat_to_euler(rotations, orders)
         values = np.zeros((len(rotations), self.n_channels))
         values[:, rot_cols[rot_cols >= 0]] = angles[:, rot_cols >= 0]
         values[:, pos_cols[pos_cols >= 0]] = translations[:, pos_cols >= 0]
         return values
+
+    def layout(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where each joint's numbers sit in a frame of channel values: ``rotation_columns
+        [J, 3]`` (column of each angle, in the joint's order; -1 where there is no channel),
+        ``orders [J, 3]`` (axis indices) and ``position_columns [J, 3]`` (x, y, z; -1: none)."""
+        return _layout(self.channels)
 
     def with_rotation_order(self, order: str) -> Skeleton:
         """The same skeleton with every joint's rotation channels written in ``order``
@@ -163,6 +176,21 @@ class Skeleton:
             position = sum(1 for c in cs[:first] if c not in ROTATION_CHANNELS)
             channels.append(tuple(kept[:position]) + tuple(f"{a}rotation" for a in order) + tuple(kept[position:]))
         return Skeleton(self.names, self.parents, self.offsets, tuple(channels), self.end_sites)
+
+    def with_offsets(self, offsets, end_site_offsets) -> Skeleton:
+        """The same hierarchy and channels with other rest offsets: joints ``[J, 3]``, End Sites ``[E, 3]``."""
+        offsets = np.array(offsets, dtype=np.float64)
+        site_offsets = np.array(end_site_offsets, dtype=np.float64).reshape(-1, 3)
+        if offsets.shape != self.offsets.shape or len(site_offsets) != len(self.end_sites):
+            raise MocapError(f"with_offsets: expected {list(self.offsets.shape)} joint and {len(self.end_sites)} End Site offsets")
+        if not (np.isfinite(offsets).all() and np.isfinite(site_offsets).all()):
+            raise MocapError("joint offsets must be finite")
+        # The structure is unchanged and was checked when this skeleton was made.
+        copy = object.__new__(Skeleton)
+        copy.__dict__.update(self.__dict__)
+        object.__setattr__(copy, "offsets", _frozen(offsets))
+        object.__setattr__(copy, "end_sites", tuple((j, tuple(off)) for (j, _), off in zip(self.end_sites, site_offsets.tolist())))
+        return copy
 
     def scaled(self, factor: float) -> Skeleton:
         """The same skeleton with every length multiplied by ``factor``."""
@@ -300,4 +328,4 @@ class Motion:
         return Motion(self.skeleton.with_rotation_order(order), self.rotations, self.translations, self.frame_time)
 
 
-__all__ = ["Motion", "Skeleton", "ORDERS", "POSITION_CHANNELS", "ROTATION_CHANNELS", "canonical_channel"]
+__all__ = ["Motion", "Skeleton", "ORDERS", "POSITION_CHANNELS", "ROTATION_CHANNELS", "canonical_channel", "canonical_channels"]

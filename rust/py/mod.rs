@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
 use crate::error::KernelError;
+use crate::decode::ChannelLayout;
 use crate::rotations::Order;
 
 create_exception!(_core, ParseError, PyValueError, "A malformed MOTION block; args are (message, 0-based line within the block).");
@@ -50,31 +51,95 @@ fn parse_motion_block<'py>(
     Ok(array.into_pyarray(py))
 }
 
-/// Parse many MOTION blocks at once, in parallel across blocks.
+/// The arrays of a channel layout, borrowed from NumPy.
+type LayoutArrays<'py> = (PyReadonlyArray2<'py, i64>, PyReadonlyArray2<'py, u8>, PyReadonlyArray2<'py, i64>, PyReadonlyArray2<'py, f64>);
+
+struct OwnedLayout {
+    channels: usize,
+    rotation_columns: Vec<i64>,
+    orders: Vec<Order>,
+    position_columns: Vec<i64>,
+    offsets: Vec<f64>,
+}
+
+impl OwnedLayout {
+    fn new(channels: usize, arrays: &LayoutArrays<'_>) -> PyResult<Self> {
+        let (rotation_columns, orders, position_columns, offsets) = arrays;
+        Ok(Self {
+            channels,
+            rotation_columns: rotation_columns.as_slice()?.to_vec(),
+            orders: orders_from(orders)?,
+            position_columns: position_columns.as_slice()?.to_vec(),
+            offsets: offsets.as_slice()?.to_vec(),
+        })
+    }
+
+    fn view(&self) -> ChannelLayout<'_> {
+        ChannelLayout {
+            channels: self.channels,
+            rotation_columns: &self.rotation_columns,
+            orders: &self.orders,
+            position_columns: &self.position_columns,
+            offsets: &self.offsets,
+        }
+    }
+}
+
+fn motion_arrays(py: Python<'_>, frames: usize, joints: usize, (rot, trans): (Vec<f64>, Vec<f64>)) -> PyResult<Py<PyAny>> {
+    let rot = array3(rot, (frames, joints, 4))?.into_pyarray(py);
+    let trans = array3(trans, (frames, joints, 3))?.into_pyarray(py);
+    Ok((rot, trans).into_pyobject(py)?.into_any().unbind())
+}
+
+/// Channel values [F, C] to local rotations [F, J, 4] and translations [F, J, 3].
 ///
-/// `blocks` is a list of (data, start, frames, channels); returns one array or one
-/// `ParseError` instance per block, so one bad file does not hide the others.
+/// `rotation_columns` [J, 3] (column of each angle in the joint's order, -1 = none),
+/// `orders` [J, 3], `position_columns` [J, 3] (x, y, z; -1 keeps the offset), `offsets` [J, 3].
 #[pyfunction]
-fn parse_motion_blocks<'py>(py: Python<'py>, blocks: Vec<(Bound<'py, PyBytes>, usize, usize, usize)>) -> PyResult<Vec<Py<PyAny>>> {
+fn decode_channels<'py>(
+    py: Python<'py>,
+    values: PyReadonlyArray2<'py, f64>,
+    rotation_columns: PyReadonlyArray2<'py, i64>,
+    orders: PyReadonlyArray2<'py, u8>,
+    position_columns: PyReadonlyArray2<'py, i64>,
+    offsets: PyReadonlyArray2<'py, f64>,
+) -> PyResult<Py<PyAny>> {
+    let (frames, channels) = (values.shape()[0], values.shape()[1]);
+    let layout = OwnedLayout::new(channels, &(rotation_columns, orders, position_columns, offsets))?;
+    let slice = values.as_slice()?;
+    let decoded = py.detach(|| crate::decode::decode_channels(slice, frames, &layout.view())).map_err(to_py)?;
+    motion_arrays(py, frames, layout.orders.len(), decoded)
+}
+
+/// Parse and decode many MOTION blocks, in parallel across blocks.
+///
+/// `blocks` holds (data, start, frames, channels, rotation_columns, orders, position_columns,
+/// offsets); returns per block a (rotations, translations) pair or a `ParseError` instance.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn read_motion_blocks<'py>(
+    py: Python<'py>,
+    blocks: Vec<(Bound<'py, PyBytes>, usize, usize, usize, PyReadonlyArray2<'py, i64>, PyReadonlyArray2<'py, u8>, PyReadonlyArray2<'py, i64>, PyReadonlyArray2<'py, f64>)>,
+) -> PyResult<Vec<Py<PyAny>>> {
     use rayon::prelude::*;
-    let views: Vec<(&[u8], usize, usize, usize)> = blocks.iter().map(|(d, s, f, c)| (d.as_bytes(), *s, *f, *c)).collect();
-    let results: Vec<Result<Vec<f64>, KernelError>> = py.detach(|| {
-        views
-            .par_iter()
-            .map(|&(bytes, start, frames, channels)| match bytes.get(start..) {
-                Some(block) => crate::parse::parse_motion_block(block, frames, channels),
-                None => Err(KernelError::argument("start", "past the end of `data`")),
+    let mut jobs = Vec::with_capacity(blocks.len());
+    for (data, start, frames, channels, rc, or, pc, off) in &blocks {
+        jobs.push((data.as_bytes(), *start, *frames, OwnedLayout::new(*channels, &(rc.clone(), or.clone(), pc.clone(), off.clone()))?));
+    }
+    let results: Vec<Result<(Vec<f64>, Vec<f64>), KernelError>> = py.detach(|| {
+        jobs.par_iter()
+            .map(|(bytes, start, frames, layout)| {
+                let block = bytes.get(*start..).ok_or_else(|| KernelError::argument("start", "past the end of `data`"))?;
+                let values = crate::parse::parse_motion_block(block, *frames, layout.channels)?;
+                crate::decode::decode_channels(&values, *frames, &layout.view())
             })
             .collect()
     });
     results
         .into_iter()
-        .zip(views)
-        .map(|(result, (_, _, frames, channels))| match result {
-            Ok(values) => {
-                let array = Array2::from_shape_vec((frames, channels), values).map_err(|e| PyValueError::new_err(e.to_string()))?;
-                Ok(array.into_pyarray(py).into_any().unbind())
-            }
+        .zip(&jobs)
+        .map(|(result, (_, _, frames, layout))| match result {
+            Ok(decoded) => motion_arrays(py, *frames, layout.orders.len(), decoded),
             Err(error) => Ok(to_py(error).into_value(py).into_any()),
         })
         .collect()
@@ -142,7 +207,8 @@ fn format_motion_block<'py>(py: Python<'py>, values: PyReadonlyArray2<'py, f64>,
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ParseError", m.py().get_type::<ParseError>())?;
     m.add_function(wrap_pyfunction!(parse_motion_block, m)?)?;
-    m.add_function(wrap_pyfunction!(parse_motion_blocks, m)?)?;
+    m.add_function(wrap_pyfunction!(decode_channels, m)?)?;
+    m.add_function(wrap_pyfunction!(read_motion_blocks, m)?)?;
     m.add_function(wrap_pyfunction!(euler_to_quat, m)?)?;
     m.add_function(wrap_pyfunction!(quat_to_euler, m)?)?;
     m.add_function(wrap_pyfunction!(forward_kinematics, m)?)?;

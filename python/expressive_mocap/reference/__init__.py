@@ -8,18 +8,19 @@ written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in de
 """
 
 from .fk import forward_kinematics
-from .motion_block import ParseError, format_motion_block, parse_motion_block, parse_motion_blocks
+from .motion_block import ParseError, decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
 from .rotations import euler_to_quat, quat_to_euler
 
 num_threads = 1
 
 __all__ = [
     "ParseError",
+    "decode_channels",
     "euler_to_quat",
     "format_motion_block",
     "forward_kinematics",
     "num_threads",
     "parse_motion_block",
-    "parse_motion_blocks",
+    "read_motion_blocks",
     "quat_to_euler",
 ]

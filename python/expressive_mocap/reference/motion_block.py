@@ -12,6 +12,8 @@ import warnings
 
 import numpy as np
 
+from .rotations import euler_to_quat
+
 
 class ParseError(ValueError):
     """A malformed MOTION block; ``args`` are ``(message, 0-based line within the block)``."""
@@ -19,11 +21,15 @@ class ParseError(ValueError):
 
 def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> np.ndarray:
     """Parse ``frames`` lines of ``channels`` finite numbers from ``data[start:]`` -> ``[frames, channels]``."""
-    if channels < 1:
-        raise ValueError("argument `channels`: must be at least 1")
     if start > len(data):
         raise ValueError("argument `start`: past the end of `data`")
     block = data[start:]
+    if channels == 0:
+        # Frame lines of a skeleton without channels are blank.
+        for index, line in enumerate(block.split(b"\n")):
+            if line.strip():
+                raise ParseError("expected 0 values (the hierarchy has no CHANNELS)", index)
+        return np.zeros((frames, 0))
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # loadtxt warns on an empty block; counts are checked below
@@ -37,12 +43,31 @@ def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> n
     return values
 
 
-def parse_motion_blocks(blocks: list) -> list:
-    """Parse many blocks; one array or one ``ParseError`` instance per ``(data, start, frames, channels)``."""
+def decode_channels(values, rotation_columns, orders, position_columns, offsets) -> tuple[np.ndarray, np.ndarray]:
+    """Channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``.
+
+    ``rotation_columns [J, 3]``: column of each angle in the joint's order (-1: none, angle 0);
+    ``orders [J, 3]``; ``position_columns [J, 3]``: column of x, y, z (-1 keeps the offset);
+    ``offsets [J, 3]``.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    for name, columns in (("rotation_columns", rotation_columns), ("position_columns", position_columns)):
+        if columns.shape != offsets.shape or ((columns < -1) | (columns >= values.shape[1])).any():
+            raise ValueError(f"argument `{name}`: expected [J, 3] columns in -1..{values.shape[1] - 1}")
+    # A trailing zero column lets missing channels (-1) read as 0.
+    padded = np.concatenate([values, np.zeros((len(values), 1))], axis=1)
+    rotations = euler_to_quat(padded[:, rotation_columns], orders)
+    translations = np.where(position_columns >= 0, padded[:, position_columns], offsets)
+    return rotations, translations
+
+
+def read_motion_blocks(blocks: list) -> list:
+    """Parse and decode many blocks: per ``(data, start, frames, channels, rotation_columns,
+    orders, position_columns, offsets)`` a ``(rotations, translations)`` pair or a ``ParseError``."""
     results = []
-    for data, start, frames, channels in blocks:
+    for data, start, frames, channels, *layout in blocks:
         try:
-            results.append(parse_motion_block(data, start, frames, channels))
+            results.append(decode_channels(parse_motion_block(data, start, frames, channels), *layout))
         except ParseError as error:
             results.append(error)
     return results
