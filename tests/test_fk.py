@@ -66,3 +66,12 @@ def test_parents_and_shapes_are_checked(backend):
         em.forward_kinematics(q, np.zeros((2, 2, 3)), [-1, 0])
     with pytest.raises(ValueError, match="rotations"):
         em.forward_kinematics(np.zeros((1, 2, 3)), t, [-1, 0])
+
+
+def test_many_clips_at_once_match_one_by_one(backend, mixed_path):
+    motion = em.read_bvh(mixed_path)
+    clips = [motion, motion[1:3], motion.resample(n_frames=40)]
+    for clip, (world_rot, world_pos) in zip(clips, em.forward_kinematics_many(clips)):
+        expected_rot, expected_pos = clip.fk()
+        np.testing.assert_array_equal(world_pos, expected_pos)
+        np.testing.assert_array_equal(world_rot, expected_rot)

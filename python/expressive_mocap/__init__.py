@@ -7,7 +7,7 @@ lengths are in the file's units. See the README for the conventions table.
 from .backend import get_backend, rust_available, set_backend, use_backend
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .errors import BVHError, MocapError
-from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
+from .kernels import euler_to_quat, forward_kinematics, forward_kinematics_many, quat_to_euler
 from .motion import Motion, Skeleton
 
 __version__ = "0.1.0"
@@ -21,6 +21,7 @@ __all__ = [
     "bvh_bytes",
     "euler_to_quat",
     "forward_kinematics",
+    "forward_kinematics_many",
     "get_backend",
     "quat_to_euler",
     "read_bvh",

@@ -14,8 +14,12 @@ class ParseError(ValueError):
 def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> F64:
     """Parse ``frames`` lines of ``channels`` finite numbers from ``data[start:]`` -> ``[frames, channels]``."""
 
-def parse_motion_blocks(blocks: list[tuple[bytes, int, int, int]]) -> list[F64 | ParseError]:
-    """Parse many blocks in parallel; one array or one ``ParseError`` per ``(data, start, frames, channels)``."""
+def decode_channels(values: F64, rotation_columns: npt.NDArray[np.int64], orders: npt.NDArray[np.uint8], position_columns: npt.NDArray[np.int64], offsets: F64) -> tuple[F64, F64]:
+    """Channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``."""
+
+def read_motion_blocks(blocks: list[tuple]) -> list[tuple[F64, F64] | ParseError]:
+    """Parse and decode many blocks in parallel: per ``(data, start, frames, channels, rotation_columns,
+    orders, position_columns, offsets)`` a ``(rotations, translations)`` pair or a ``ParseError``."""
 
 def euler_to_quat(angles: F64, orders: npt.NDArray[np.uint8]) -> F64:
     """Euler angles ``[F, J, 3]`` (degrees) and orders ``[J, 3]`` (axis indices) -> quaternions ``[F, J, 4]``."""
@@ -25,6 +29,9 @@ def quat_to_euler(quats: F64, orders: npt.NDArray[np.uint8]) -> F64:
 
 def forward_kinematics(rotations: F64, translations: F64, parents: npt.NDArray[np.int64]) -> tuple[F64, F64]:
     """World rotations ``[F, J, 4]`` and positions ``[F, J, 3]`` from local ones and ``parents [J]``."""
+
+def forward_kinematics_many(clips: list[tuple[F64, F64, npt.NDArray[np.int64]]]) -> list[tuple[F64, F64]]:
+    """Forward kinematics of many ``(rotations, translations, parents)`` clips, in parallel across clips."""
 
 def format_motion_block(values: F64, decimals: int | None = None) -> bytes:
     """Text of the MOTION block for ``values [F, C]``; ``decimals=None`` is the shortest exact text."""

@@ -1,7 +1,7 @@
 """Reading and writing BVH files.
 
 The header (hierarchy, Frames, Frame Time) is parsed here; the MOTION number block, most of a
-file's bytes, by the kernel ``parse_motion_block`` (Rust, or its NumPy twin). Every problem is a
+file's bytes, by the kernel ``read_motion_blocks`` (Rust, or its NumPy twin). Every problem is a
 :class:`~expressive_mocap.errors.BVHError` naming the file, the line and what was expected.
 """
 

@@ -66,6 +66,13 @@ def forward_kinematics(rotations, translations, parents) -> tuple[np.ndarray, np
     return kernels().forward_kinematics(rotations, translations, parents)
 
 
+def forward_kinematics_many(motions) -> list[tuple[np.ndarray, np.ndarray]]:
+    """World rotations and positions of many motions at once (in parallel across motions with
+    the Rust kernels: the way to run FK over an archive of short clips)."""
+    clips = [(m.rotations, m.translations, np.ascontiguousarray(m.skeleton.parents, dtype=np.int64)) for m in motions]
+    return kernels().forward_kinematics_many(clips)
+
+
 def decode_channels(values, rotation_columns, orders, position_columns, offsets) -> tuple[np.ndarray, np.ndarray]:
     """BVH channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``.
 

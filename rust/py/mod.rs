@@ -193,6 +193,36 @@ fn forward_kinematics<'py>(
     Ok((array3(world_rot, (rs[0], joints, 4))?.into_pyarray(py), array3(world_pos, (rs[0], joints, 3))?.into_pyarray(py)))
 }
 
+/// Forward kinematics of many clips, in parallel across clips: `clips` holds
+/// (rotations [F, J, 4], translations [F, J, 3], parents [J]) triples; returns a
+/// (world rotations, world positions) pair per clip.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn forward_kinematics_many<'py>(
+    py: Python<'py>,
+    clips: Vec<(PyReadonlyArray3<'py, f64>, PyReadonlyArray3<'py, f64>, PyReadonlyArray1<'py, i64>)>,
+) -> PyResult<Vec<Py<PyAny>>> {
+    use rayon::prelude::*;
+    let mut jobs = Vec::with_capacity(clips.len());
+    for (index, (rotations, translations, parents)) in clips.iter().enumerate() {
+        let (rs, ts) = (rotations.shape(), translations.shape());
+        let joints = parents.len();
+        if rs[1..] != [joints, 4] || ts != [rs[0], joints, 3] {
+            return Err(PyValueError::new_err(format!(
+                "argument `clips`: clip {index} has rotations {rs:?} and translations {ts:?} for {joints} parents, expected [F, {joints}, 4] and [F, {joints}, 3]"
+            )));
+        }
+        jobs.push((rotations.as_slice()?, translations.as_slice()?, parents.as_slice()?, rs[0]));
+    }
+    let results: Vec<Result<(Vec<f64>, Vec<f64>), KernelError>> =
+        py.detach(|| jobs.par_iter().map(|(r, t, p, _)| crate::fk::forward_kinematics(r, t, p)).collect());
+    results
+        .into_iter()
+        .zip(&jobs)
+        .map(|(result, (_, _, parents, frames))| motion_arrays(py, *frames, parents.len(), result.map_err(to_py)?))
+        .collect()
+}
+
 /// Text of the MOTION number block for `values` [F, C]; `decimals` None = shortest exact.
 #[pyfunction]
 #[pyo3(signature = (values, decimals=None))]
@@ -212,6 +242,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(euler_to_quat, m)?)?;
     m.add_function(wrap_pyfunction!(quat_to_euler, m)?)?;
     m.add_function(wrap_pyfunction!(forward_kinematics, m)?)?;
+    m.add_function(wrap_pyfunction!(forward_kinematics_many, m)?)?;
     m.add_function(wrap_pyfunction!(format_motion_block, m)?)?;
     m.add("num_threads", rayon::current_num_threads())?;
     Ok(())

@@ -28,3 +28,8 @@ def forward_kinematics(rotations: np.ndarray, translations: np.ndarray, parents:
             world_rot[:, j] = quat.mul(world_rot[:, p], rotations[:, j])
             world_pos[:, j] = world_pos[:, p] + quat.rotate(world_rot[:, p], translations[:, j])
     return world_rot, world_pos
+
+
+def forward_kinematics_many(clips: list) -> list:
+    """:func:`forward_kinematics` of each ``(rotations, translations, parents)`` triple."""
+    return [forward_kinematics(*clip) for clip in clips]
