@@ -3,6 +3,7 @@
 use glam::DQuat;
 
 use crate::error::{KernelError, Result};
+use crate::parse::{parse_frames, FrameSink};
 use rayon::prelude::*;
 
 use crate::rotations::{check_orders, euler_to_quat_one, Order, PARALLEL_MIN_ITEMS};
@@ -27,6 +28,9 @@ impl ChannelLayout<'_> {
     /// `KernelError::Argument` naming the inconsistent part.
     pub fn check(&self) -> Result<()> {
         let joints = self.orders.len();
+        if joints == 0 {
+            return Err(KernelError::argument("orders", "a skeleton needs at least one joint"));
+        }
         check_orders(self.orders)?;
         for (name, part) in [("rotation_columns", self.rotation_columns), ("position_columns", self.position_columns)] {
             if part.len() != 3 * joints {
@@ -42,8 +46,27 @@ impl ChannelLayout<'_> {
         Ok(())
     }
 
-    fn joints(&self) -> usize {
+    pub fn joints(&self) -> usize {
         self.orders.len()
+    }
+}
+
+impl FrameSink for ChannelLayout<'_> {
+    fn widths(&self) -> (usize, usize) {
+        (4 * self.joints(), 3 * self.joints())
+    }
+
+    /// Decode one frame of channel values into its rotations and translations.
+    fn emit(&self, frame: &[f64], rotations: &mut [f64], translations: &mut [f64]) {
+        let value = |column: i64| if column < 0 { 0.0 } else { frame[column as usize] };
+        for (j, order) in self.orders.iter().enumerate() {
+            let c = &self.rotation_columns[3 * j..3 * j + 3];
+            let q: DQuat = euler_to_quat_one([value(c[0]), value(c[1]), value(c[2])], *order);
+            q.write_to_slice(&mut rotations[4 * j..4 * j + 4]);
+        }
+        for (i, (&column, &offset)) in self.position_columns.iter().zip(self.offsets).enumerate() {
+            translations[i] = if column < 0 { offset } else { frame[column as usize] };
+        }
     }
 }
 
@@ -54,33 +77,32 @@ impl ChannelLayout<'_> {
 /// `frames x channels` numbers.
 pub fn decode_channels(values: &[f64], frames: usize, layout: &ChannelLayout) -> Result<(Vec<f64>, Vec<f64>)> {
     layout.check()?;
-    let joints = layout.joints();
-    if joints == 0 {
-        return Err(KernelError::argument("orders", "a skeleton needs at least one joint"));
-    }
     if values.len() != frames * layout.channels {
         return Err(KernelError::argument("values", format!("expected {frames} x {} values, got {}", layout.channels, values.len())));
     }
-    let mut rotations = vec![0.0; frames * joints * 4];
-    let mut translations = vec![0.0; frames * joints * 3];
+    let (w0, w1) = layout.widths();
+    let mut rotations = vec![0.0; frames * w0];
+    let mut translations = vec![0.0; frames * w1];
     let decode_frame = |(f, (rot, trans)): (usize, (&mut [f64], &mut [f64]))| {
-        let frame = &values[f * layout.channels..(f + 1) * layout.channels];
-        let value = |column: i64| if column < 0 { 0.0 } else { frame[column as usize] };
-        for (j, order) in layout.orders.iter().enumerate() {
-            let c = &layout.rotation_columns[3 * j..3 * j + 3];
-            let q: DQuat = euler_to_quat_one([value(c[0]), value(c[1]), value(c[2])], *order);
-            q.write_to_slice(&mut rot[4 * j..4 * j + 4]);
-        }
-        for (i, (&column, &offset)) in layout.position_columns.iter().zip(layout.offsets).enumerate() {
-            trans[i] = if column < 0 { offset } else { frame[column as usize] };
-        }
+        layout.emit(&values[f * layout.channels..(f + 1) * layout.channels], rot, trans);
     };
-    if frames * joints >= PARALLEL_MIN_ITEMS {
-        rotations.par_chunks_mut(4 * joints).zip(translations.par_chunks_mut(3 * joints)).enumerate().with_min_len(32).for_each(decode_frame);
+    if frames * layout.joints() >= PARALLEL_MIN_ITEMS {
+        rotations.par_chunks_mut(w0).zip(translations.par_chunks_mut(w1)).enumerate().with_min_len(32).for_each(decode_frame);
     } else {
-        rotations.chunks_mut(4 * joints).zip(translations.chunks_mut(3 * joints)).enumerate().for_each(decode_frame);
+        rotations.chunks_mut(w0).zip(translations.chunks_mut(w1)).enumerate().for_each(decode_frame);
     }
     Ok((rotations, translations))
+}
+
+/// Parse a MOTION number block and decode it in one pass: rotations `[F, J, 4]` and
+/// translations `[F, J, 3]`, with no array of raw channel values in between.
+///
+/// # Errors
+/// `KernelError::Argument` for an inconsistent layout; `KernelError::Parse` as
+/// [`crate::parse::parse_frames`].
+pub fn read_motion_block(block: &[u8], frames: usize, layout: &ChannelLayout) -> Result<(Vec<f64>, Vec<f64>)> {
+    layout.check()?;
+    parse_frames(block, frames, layout.channels, layout)
 }
 
 #[cfg(test)]

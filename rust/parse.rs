@@ -1,7 +1,9 @@
 //! Parsing the MOTION number block of a BVH file: one frame per line, `channels` numbers a line.
 //!
-//! This is most of a BVH file's bytes, so it is the one part of reading done in Rust.
-//! Large blocks are split at line boundaries and parsed on several threads.
+//! This is most of a BVH file's bytes, so it is the one part of reading done in Rust. Each
+//! parsed frame goes straight to a [`FrameSink`] (e.g. decoding into rotations), so no array of
+//! raw channel values is ever built. Large blocks are split at line boundaries and parsed on
+//! several threads, each writing its own frames of the output.
 
 use rayon::prelude::*;
 
@@ -10,56 +12,97 @@ use crate::error::{KernelError, Result};
 /// Blocks larger than this are split into chunks parsed in parallel.
 const PARALLEL_BLOCK_BYTES: usize = 1 << 20;
 
+/// Where parsed frames go: each frame's `channels` values become `widths().0` numbers of the
+/// first output and `widths().1` of the second.
+pub trait FrameSink: Sync {
+    fn widths(&self) -> (usize, usize);
+    fn emit(&self, values: &[f64], first: &mut [f64], second: &mut [f64]);
+}
+
+/// Keeps the values as they are: one output of `channels` numbers a frame.
+struct Values(usize);
+
+impl FrameSink for Values {
+    fn widths(&self) -> (usize, usize) {
+        (self.0, 0)
+    }
+
+    fn emit(&self, values: &[f64], first: &mut [f64], _: &mut [f64]) {
+        first.copy_from_slice(values);
+    }
+}
+
 /// Parse `frames` lines of `channels` finite numbers each from `block`.
 ///
 /// Blank lines (whitespace only) are skipped, so trailing newlines and CRLF endings are fine.
 /// Returns the values frame-major, `frames * channels` long.
 ///
 /// # Errors
-/// `KernelError::Parse` naming the 0-based line within `block` when a token is not a number,
-/// a number is NaN or infinite, a line has the wrong number of values, or the block holds
-/// fewer or more than `frames` frames.
+/// As [`parse_frames`].
 pub fn parse_motion_block(block: &[u8], frames: usize, channels: usize) -> Result<Vec<f64>> {
-    if channels == 0 {
-        // Frame lines of a skeleton without channels are blank.
-        return match block.split(|&b| b == b'\n').position(|l| !is_blank(l)) {
-            None => Ok(Vec::new()),
-            Some(line) => Err(KernelError::Parse { line, message: "expected 0 values (the hierarchy has no CHANNELS)".into() }),
-        };
-    }
-    let chunks = split_at_lines(block, if block.len() > PARALLEL_BLOCK_BYTES { rayon::current_num_threads() * 4 } else { 1 });
-    let parsed: Vec<Result<Chunk>> = if chunks.len() > 1 {
-        chunks.par_iter().map(|c| parse_chunk(c, channels)).collect()
-    } else {
-        chunks.iter().map(|c| parse_chunk(c, channels)).collect()
-    };
+    Ok(parse_frames(block, frames, channels, &Values(channels))?.0)
+}
 
-    let mut values = Vec::with_capacity(frames.saturating_mul(channels).min(block.len() / 2 + channels));
-    let mut lines_before = 0;
-    let mut frames_found = 0;
-    for (chunk, result) in chunks.iter().zip(parsed) {
-        let chunk_result = result.map_err(|e| shift_line(e, lines_before))?;
-        if frames_found + chunk_result.frames > frames {
-            return Err(too_many_frames(block, frames));
+/// Parse `frames` frame lines of `channels` numbers and pass each frame to `sink`, which fills
+/// `frames x widths` of the two returned outputs.
+///
+/// # Errors
+/// `KernelError::Parse` naming the 0-based line within `block` of the first problem: a token
+/// that is not a number, a NaN or infinite number, a line with the wrong number of values, a
+/// frame line beyond `frames`, or (at the last line) fewer than `frames` frame lines.
+pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, sink: &S) -> Result<(Vec<f64>, Vec<f64>)> {
+    let (w0, w1) = sink.widths();
+    if channels == 0 {
+        // A skeleton without channels has blank frame lines; every frame decodes the same.
+        if let Some(line) = block.split(|&b| b == b'\n').position(|l| !is_blank(l)) {
+            return Err(KernelError::Parse { line, message: "expected 0 values (the hierarchy has no CHANNELS)".into() });
         }
-        frames_found += chunk_result.frames;
-        values.extend_from_slice(&chunk_result.values);
-        lines_before += count_lines(chunk);
+        let (mut first, mut second) = (vec![0.0; frames * w0], vec![0.0; frames * w1]);
+        for f in 0..frames {
+            sink.emit(&[], &mut first[f * w0..(f + 1) * w0], &mut second[f * w1..(f + 1) * w1]);
+        }
+        return Ok((first, second));
     }
-    if frames_found < frames {
+    let parallel = block.len() > PARALLEL_BLOCK_BYTES;
+    let chunks = split_at_lines(block, if parallel { rayon::current_num_threads() * 4 } else { 1 });
+    let counts: Vec<(usize, usize)> = if parallel { chunks.par_iter().map(|c| count_lines(c)).collect() } else { chunks.iter().map(|c| count_lines(c)).collect() };
+    let total: usize = counts.iter().map(|&(frame_lines, _)| frame_lines).sum();
+    let usable = total.min(frames);
+
+    // Give each chunk its frames of the outputs (the frames past `usable` are not parsed).
+    let mut first = vec![0.0; usable * w0];
+    let mut second = vec![0.0; usable * w1];
+    let mut jobs = Vec::with_capacity(chunks.len());
+    let (mut rest0, mut rest1) = (first.as_mut_slice(), second.as_mut_slice());
+    let (mut frames_before, mut lines_before) = (0, 0);
+    for (chunk, &(frame_lines, lines)) in chunks.iter().zip(&counts) {
+        let take = frame_lines.min(usable - frames_before);
+        let (out0, tail0) = rest0.split_at_mut(take * w0);
+        let (out1, tail1) = rest1.split_at_mut(take * w1);
+        (rest0, rest1) = (tail0, tail1);
+        jobs.push((*chunk, lines_before, take, out0, out1));
+        frames_before += take;
+        lines_before += lines;
+    }
+    let parse = |(chunk, first_line, take, out0, out1): (&[u8], usize, usize, &mut [f64], &mut [f64])| {
+        parse_chunk(chunk, channels, take, sink, out0, out1).map_err(|(line, message)| KernelError::Parse { line: first_line + line, message })
+    };
+    let results: Vec<Result<()>> = if parallel { jobs.into_par_iter().map(parse).collect() } else { jobs.into_iter().map(parse).collect() };
+    // The first problem in line order wins: chunks are in line order.
+    results.into_iter().collect::<Result<Vec<()>>>()?;
+
+    if total > frames {
+        return Err(too_many_frames(block, frames));
+    }
+    if total < frames {
         // Point at the last line of the block, where the missing frames should have been.
         let last_line = lines_before + usize::from(!block.is_empty() && !block.ends_with(b"\n"));
         return Err(KernelError::Parse {
             line: last_line.saturating_sub(1),
-            message: format!("truncated MOTION block: Frames says {frames}, but only {frames_found} frame lines follow"),
+            message: format!("truncated MOTION block: Frames says {frames}, but only {total} frame lines follow"),
         });
     }
-    Ok(values)
-}
-
-struct Chunk {
-    values: Vec<f64>,
-    frames: usize,
+    Ok((first, second))
 }
 
 /// Split into about `parts` pieces, each ending just after a newline (the last at the end).
@@ -81,25 +124,21 @@ fn split_at_lines(block: &[u8], parts: usize) -> Vec<&[u8]> {
     pieces
 }
 
-fn count_lines(chunk: &[u8]) -> usize {
-    chunk.iter().filter(|&&b| b == b'\n').count()
-}
-
-fn shift_line(error: KernelError, lines_before: usize) -> KernelError {
-    match error {
-        KernelError::Parse { line, message } => KernelError::Parse { line: line + lines_before, message },
-        other => other,
+/// Frame lines (not blank) and newlines in a chunk.
+fn count_lines(chunk: &[u8]) -> (usize, usize) {
+    let mut frame_lines = 0;
+    let mut lines = 0;
+    for line in chunk.split(|&b| b == b'\n') {
+        frame_lines += usize::from(!is_blank(line));
+        lines += 1;
     }
+    // `split` yields one more piece than there are newlines.
+    (frame_lines, lines - 1)
 }
 
 /// Error path only: find the line of frame `frames + 1`.
 fn too_many_frames(block: &[u8], frames: usize) -> KernelError {
-    let line = block
-        .split(|&b| b == b'\n')
-        .enumerate()
-        .filter(|(_, l)| !is_blank(l))
-        .nth(frames)
-        .map_or(0, |(i, _)| i);
+    let line = block.split(|&b| b == b'\n').enumerate().filter(|(_, l)| !is_blank(l)).nth(frames).map_or(0, |(i, _)| i);
     KernelError::Parse { line, message: format!("more frame lines than Frames says ({frames})") }
 }
 
@@ -107,25 +146,27 @@ fn is_blank(line: &[u8]) -> bool {
     line.iter().all(u8::is_ascii_whitespace)
 }
 
-fn parse_chunk(chunk: &[u8], channels: usize) -> Result<Chunk> {
-    let mut values = Vec::with_capacity(chunk.len() / 6);
-    let mut frames = 0;
+/// Parse the first `take` frame lines of a chunk into the sink; errors carry the chunk's line index.
+fn parse_chunk<S: FrameSink>(chunk: &[u8], channels: usize, take: usize, sink: &S, out0: &mut [f64], out1: &mut [f64]) -> std::result::Result<(), (usize, String)> {
+    let (w0, w1) = sink.widths();
+    let mut values = Vec::with_capacity(channels);
+    let mut frame = 0;
     for (line_index, line) in chunk.split(|&b| b == b'\n').enumerate() {
-        let before = values.len();
-        parse_line(line, &mut values).map_err(|message| KernelError::Parse { line: line_index, message })?;
-        let found = values.len() - before;
-        if found == 0 {
+        if frame == take {
+            break;
+        }
+        values.clear();
+        parse_line(line, &mut values).map_err(|message| (line_index, message))?;
+        if values.is_empty() {
             continue;
         }
-        if found != channels {
-            return Err(KernelError::Parse {
-                line: line_index,
-                message: format!("expected {channels} values (the CHANNELS of the hierarchy), found {found}"),
-            });
+        if values.len() != channels {
+            return Err((line_index, format!("expected {channels} values (the CHANNELS of the hierarchy), found {}", values.len())));
         }
-        frames += 1;
+        sink.emit(&values, &mut out0[frame * w0..(frame + 1) * w0], &mut out1[frame * w1..(frame + 1) * w1]);
+        frame += 1;
     }
-    Ok(Chunk { values, frames })
+    Ok(())
 }
 
 /// Append every whitespace-separated number of `line` to `out`.
@@ -159,7 +200,11 @@ fn token_at(rest: &[u8]) -> &[u8] {
 
 fn show(token: &[u8]) -> String {
     let text = String::from_utf8_lossy(&token[..token.len().min(40)]).into_owned();
-    if token.len() > 40 { text + "…" } else { text }
+    if token.len() > 40 {
+        text + "…"
+    } else {
+        text
+    }
 }
 
 #[cfg(test)]
@@ -176,14 +221,22 @@ mod tests {
     fn names_the_line_of_a_bad_token() {
         let e = parse_motion_block(b"1 2\n3 x\n", 2, 2).unwrap_err();
         assert!(matches!(e, KernelError::Parse { line: 1, .. }), "{e:?}");
+        let e = parse_motion_block(b"1 2\n3 4x\n", 2, 2).unwrap_err();
+        assert!(matches!(e, KernelError::Parse { line: 1, .. }), "{e:?}");
     }
 
     #[test]
     fn rejects_nan_wrong_counts_and_truncation() {
         assert!(matches!(parse_motion_block(b"1 nan\n", 1, 2), Err(KernelError::Parse { line: 0, .. })));
         assert!(matches!(parse_motion_block(b"1 2\n3\n", 2, 2), Err(KernelError::Parse { line: 1, .. })));
-        assert!(matches!(parse_motion_block(b"1 2\n", 2, 2), Err(KernelError::Parse { .. })));
+        assert!(matches!(parse_motion_block(b"1 2\n", 2, 2), Err(KernelError::Parse { line: 0, .. })));
         assert!(matches!(parse_motion_block(b"1 2\n3 4\n", 1, 2), Err(KernelError::Parse { line: 1, .. })));
+    }
+
+    #[test]
+    fn no_channels_means_blank_frame_lines() {
+        assert_eq!(parse_motion_block(b"\n\n", 2, 0).unwrap(), Vec::<f64>::new());
+        assert!(matches!(parse_motion_block(b"\n1\n", 2, 0), Err(KernelError::Parse { line: 1, .. })));
     }
 
     #[test]
@@ -191,13 +244,19 @@ mod tests {
         let mut text = String::new();
         for f in 0..60_000 {
             text.push_str(&format!("{f} {}.25 -1e-3\n", f * 2));
+            if f % 1000 == 0 {
+                text.push('\n'); // blank lines shift frame and line numbers apart
+            }
         }
         assert!(text.len() > PARALLEL_BLOCK_BYTES);
         let v = parse_motion_block(text.as_bytes(), 60_000, 3).unwrap();
         assert_eq!(v.len(), 180_000);
         assert_eq!(v[3 * 59_999], 59_999.0);
+        let lines = text.lines().count();
         text.push_str("1 2 oops\n");
         let e = parse_motion_block(text.as_bytes(), 60_001, 3).unwrap_err();
-        assert!(matches!(e, KernelError::Parse { line: 60_000, .. }), "{e:?}");
+        assert_eq!(e, KernelError::Parse { line: lines, message: "\"oops\" is not a number".into() });
+        let e = parse_motion_block(text.as_bytes(), 59_000, 3).unwrap_err();
+        assert!(matches!(e, KernelError::Parse { line, .. } if line == 59_000 + 59), "{e:?}");
     }
 }

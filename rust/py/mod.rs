@@ -130,8 +130,7 @@ fn read_motion_blocks<'py>(
         jobs.par_iter()
             .map(|(bytes, start, frames, layout)| {
                 let block = bytes.get(*start..).ok_or_else(|| KernelError::argument("start", "past the end of `data`"))?;
-                let values = crate::parse::parse_motion_block(block, *frames, layout.channels)?;
-                crate::decode::decode_channels(&values, *frames, &layout.view())
+                crate::decode::read_motion_block(block, *frames, &layout.view())
             })
             .collect()
     });
