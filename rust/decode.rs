@@ -46,6 +46,7 @@ impl ChannelLayout<'_> {
         Ok(())
     }
 
+    #[must_use]
     pub fn joints(&self) -> usize {
         self.orders.len()
     }

@@ -6,6 +6,9 @@ use rayon::prelude::*;
 use crate::error::{KernelError, Result};
 use crate::rotations::PARALLEL_MIN_ITEMS;
 
+/// One frame's local rotations and translations, and its world rotations and positions.
+type FrameSlices<'a> = (((&'a [f64], &'a [f64]), &'a mut [f64]), &'a mut [f64]);
+
 /// Check that `parents` lists every joint after its parent (roots are -1).
 ///
 /// # Errors
@@ -42,7 +45,7 @@ pub fn forward_kinematics(rotations: &[f64], translations: &[f64], parents: &[i6
     }
     let mut world_rotations = vec![0.0; rotations.len()];
     let mut world_positions = vec![0.0; translations.len()];
-    let frame = |(((rot, trans), out_rot), out_pos): (((&[f64], &[f64]), &mut [f64]), &mut [f64])| {
+    let frame = |(((rot, trans), out_rot), out_pos): FrameSlices| {
         fk_frame(rot, trans, parents, out_rot, out_pos);
     };
     let inputs = rotations.chunks(4 * joints).zip(translations.chunks(3 * joints));

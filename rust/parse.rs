@@ -208,7 +208,10 @@ fn show(token: &[u8]) -> String {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)] // parsed values are exact
 mod tests {
+    use std::fmt::Write;
+
     use super::*;
 
     #[test]
@@ -243,7 +246,7 @@ mod tests {
     fn parallel_chunks_agree_with_serial_and_count_lines_across_chunks() {
         let mut text = String::new();
         for f in 0..60_000 {
-            text.push_str(&format!("{f} {}.25 -1e-3\n", f * 2));
+            let _ = writeln!(text, "{f} {}.25 -1e-3", f * 2);
             if f % 1000 == 0 {
                 text.push('\n'); // blank lines shift frame and line numbers apart
             }

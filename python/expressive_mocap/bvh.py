@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import re
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO, Iterable, Union
@@ -329,40 +330,60 @@ def read_bvh(source: Source) -> Motion:
     return read_bvh_many([source])[0]
 
 
-def read_bvh_many(sources: Iterable[Source], errors: str = "raise") -> list:
+def read_bvh_many(sources: Iterable[Source], errors: str = "raise", batch_bytes: int = 32 << 20) -> list:
     """Read many files; their number blocks are parsed and decoded in parallel (Rust).
 
-    ``errors="raise"`` raises the first bad file's :class:`BVHError`; ``errors="return"`` puts
-    the error in that file's place in the returned list instead.
+    Files are taken in batches of about ``batch_bytes``: while the kernels work on one batch
+    (without the GIL), the next one is read and its headers parsed, and a batch's bytes are
+    dropped once decoded. ``errors="raise"`` raises the first bad file's :class:`BVHError`;
+    ``errors="return"`` puts the error in that file's place in the returned list instead.
     """
     if errors not in ("raise", "return"):
         raise MocapError(f"errors must be 'raise' or 'return', got {errors!r}")
     results: list = []
-    pending = []  # (index in results, name, header)
-    blocks = []
+    with ThreadPoolExecutor(max_workers=1) as decoder:
+        running = None
+        for batch in _batches(sources, batch_bytes, results):
+            if running is not None:
+                _collect(*running, results)
+            blocks = [(data, h.block_start, h.frames, h.skeleton.n_channels, *h.skeleton.layout(), h.skeleton.offsets) for _, _, h, data in batch]
+            running = (batch, decoder.submit(kernels().read_motion_blocks, blocks))
+        if running is not None:
+            _collect(*running, results)
+    if errors == "raise":
+        first_error = next((r for r in results if isinstance(r, BVHError)), None)
+        if first_error is not None:
+            raise first_error
+    return results
+
+
+def _batches(sources: Iterable[Source], batch_bytes: int, results: list):
+    """Load sources and parse their headers, yielding ``(index, name, header, data)`` batches;
+    a source that fails here gets its BVHError in ``results`` at once."""
+    batch, size = [], 0
     for source in sources:
         try:
             data, name = _load(source)
             header = _parse_header(data, name)
         except BVHError as error:
-            if errors == "raise":
-                raise
             results.append(error)
             continue
-        skeleton = header.skeleton
-        pending.append((len(results), name, header))
-        blocks.append((data, header.block_start, header.frames, skeleton.n_channels, *skeleton.layout(), skeleton.offsets))
+        batch.append((len(results), name, header, data))
         results.append(None)
-    decoded = kernels().read_motion_blocks(blocks) if blocks else []
-    for (index, name, header), result in zip(pending, decoded):
+        size += len(data)
+        if size >= batch_bytes:
+            yield batch
+            batch, size = [], 0
+    if batch:
+        yield batch
+
+
+def _collect(batch: list, decoded: Future, results: list) -> None:
+    for (index, name, header, _), result in zip(batch, decoded.result()):
         if isinstance(result, PARSE_ERRORS):
-            result = _block_error(name, header, result)
-            if errors == "raise":
-                raise result
-            results[index] = result
-            continue
-        results[index] = Motion(header.skeleton, *result, header.frame_time)
-    return results
+            results[index] = _block_error(name, header, result)
+        else:
+            results[index] = Motion(header.skeleton, *result, header.frame_time)
 
 
 def _number(value: float, decimals: int | None) -> str:
