@@ -1,0 +1,72 @@
+"""The Rust kernels release the GIL: other Python threads run meanwhile, and kernels called
+from several threads at once give the same results as serial calls."""
+
+import sys
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import expressive_mocap as em
+
+pytestmark = pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+
+
+def big_motion_arrays(frames=40_000, joints=22):
+    rng = np.random.default_rng(0)
+    rotations = Rotation.random(frames * joints, random_state=1).as_quat().reshape(frames, joints, 4)
+    translations = rng.normal(size=(frames, joints, 3))
+    parents = np.array([-1] + [int(rng.integers(0, j)) for j in range(1, joints)])
+    return rotations, translations, parents
+
+
+def test_python_threads_run_inside_a_kernel_call():
+    from expressive_mocap import _core
+
+    rotations, translations, parents = big_motion_arrays(frames=100_000)
+    calls = []  # (start, end) of each kernel call, timed in the worker
+    done = threading.Event()
+
+    def worker():
+        for _ in range(3):
+            start = time.perf_counter()
+            _core.forward_kinematics(rotations, translations, parents)
+            calls.append((start, time.perf_counter()))
+        done.set()
+
+    previous = sys.getswitchinterval()
+    sys.setswitchinterval(1e-3)
+    try:
+        thread = threading.Thread(target=worker)
+        thread.start()
+        ticks = []
+        while not done.is_set():
+            ticks.append(time.perf_counter())  # the main thread can only do this holding the GIL
+        thread.join()
+    finally:
+        sys.setswitchinterval(previous)
+    ticks = np.array(ticks)
+    # Near a call's ends the worker may be waiting for the GIL (a few switch intervals); inside,
+    # a kernel that held the GIL would leave no tick at all (checked with builtin sum(): 0).
+    margin = 0.005
+    inside = [np.count_nonzero((ticks > a + margin) & (ticks < b - margin)) for a, b in calls if b - a > 4 * margin]
+    assert inside and min(inside) > 0, (inside, [b - a for a, b in calls])
+
+
+def test_concurrent_calls_match_serial_calls(mixed_path):
+    rotations, translations, parents = big_motion_arrays(frames=3000)
+    with em.use_backend("rust"):
+        serial = em.forward_kinematics(rotations, translations, parents)
+        text = mixed_path.read_bytes()
+        serial_read = em.read_bvh(text)
+        with ThreadPoolExecutor(4) as pool:
+            fks = list(pool.map(lambda _: em.forward_kinematics(rotations, translations, parents), range(8)))
+            reads = list(pool.map(lambda _: em.read_bvh(text), range(8)))
+    for world_rot, world_pos in fks:
+        np.testing.assert_array_equal(world_rot, serial[0])
+        np.testing.assert_array_equal(world_pos, serial[1])
+    for motion in reads:
+        np.testing.assert_array_equal(motion.rotations, serial_read.rotations)
