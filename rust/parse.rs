@@ -54,7 +54,7 @@ pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, 
     let (w0, w1) = sink.widths();
     if channels == 0 {
         // A skeleton without channels has blank frame lines; every frame decodes the same.
-        if let Some(line) = block.split(|&b| b == b'\n').position(|l| !is_blank(l)) {
+        if let Some(line) = lines(block).position(|l| !is_blank(l)) {
             return Err(KernelError::Parse { line, message: "expected 0 values (the hierarchy has no CHANNELS)".into() });
         }
         let (mut first, mut second) = (vec![0.0; frames * w0], vec![0.0; frames * w1]);
@@ -63,44 +63,59 @@ pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, 
         }
         return Ok((first, second));
     }
-    let parallel = block.len() > PARALLEL_BLOCK_BYTES;
-    let chunks = split_at_lines(block, if parallel { rayon::current_num_threads() * 4 } else { 1 });
-    let counts: Vec<(usize, usize)> = if parallel { chunks.par_iter().map(|c| count_lines(c)).collect() } else { chunks.iter().map(|c| count_lines(c)).collect() };
+    if block.len() > PARALLEL_BLOCK_BYTES {
+        return parse_in_parallel(block, frames, channels, sink);
+    }
+    // A frame line takes at least 2 bytes a value ("0 0 ... 0\n"): never allocate more frames
+    // than the block can hold, whatever Frames claims.
+    let room = frames.min(block.len() / (2 * channels) + 1);
+    let (mut first, mut second) = (vec![0.0; room * w0], vec![0.0; room * w1]);
+    let end = parse_chunk(block, channels, room, sink, &mut first, &mut second).map_err(|(line, message)| KernelError::Parse { line, message })?;
+    if end.frames < frames {
+        return Err(truncated(block, frames, end.frames));
+    }
+    if lines(&block[end.offset..]).any(|l| !is_blank(l)) {
+        return Err(too_many_frames(block, frames));
+    }
+    Ok((first, second))
+}
+
+/// A large block: count frame lines per chunk first, so each chunk knows which frames of the
+/// outputs are its own, then parse the chunks on all threads.
+fn parse_in_parallel<S: FrameSink>(block: &[u8], frames: usize, channels: usize, sink: &S) -> Result<(Vec<f64>, Vec<f64>)> {
+    let (w0, w1) = sink.widths();
+    let chunks = split_at_lines(block, rayon::current_num_threads() * 4);
+    let counts: Vec<(usize, usize)> = chunks.par_iter().map(|c| count_lines(c)).collect();
     let total: usize = counts.iter().map(|&(frame_lines, _)| frame_lines).sum();
     let usable = total.min(frames);
 
-    // Give each chunk its frames of the outputs (the frames past `usable` are not parsed).
     let mut first = vec![0.0; usable * w0];
     let mut second = vec![0.0; usable * w1];
     let mut jobs = Vec::with_capacity(chunks.len());
     let (mut rest0, mut rest1) = (first.as_mut_slice(), second.as_mut_slice());
     let (mut frames_before, mut lines_before) = (0, 0);
-    for (chunk, &(frame_lines, lines)) in chunks.iter().zip(&counts) {
+    for (chunk, &(frame_lines, newlines)) in chunks.iter().zip(&counts) {
         let take = frame_lines.min(usable - frames_before);
         let (out0, tail0) = rest0.split_at_mut(take * w0);
         let (out1, tail1) = rest1.split_at_mut(take * w1);
         (rest0, rest1) = (tail0, tail1);
         jobs.push((*chunk, lines_before, take, out0, out1));
         frames_before += take;
-        lines_before += lines;
+        lines_before += newlines;
     }
-    let parse = |(chunk, first_line, take, out0, out1): (&[u8], usize, usize, &mut [f64], &mut [f64])| {
-        parse_chunk(chunk, channels, take, sink, out0, out1).map_err(|(line, message)| KernelError::Parse { line: first_line + line, message })
-    };
-    let results: Vec<Result<()>> = if parallel { jobs.into_par_iter().map(parse).collect() } else { jobs.into_iter().map(parse).collect() };
+    let results: Vec<Result<ChunkEnd>> = jobs
+        .into_par_iter()
+        .map(|(chunk, first_line, take, out0, out1)| {
+            parse_chunk(chunk, channels, take, sink, out0, out1).map_err(|(line, message)| KernelError::Parse { line: first_line + line, message })
+        })
+        .collect();
     // The first problem in line order wins: chunks are in line order.
-    results.into_iter().collect::<Result<Vec<()>>>()?;
-
+    results.into_iter().collect::<Result<Vec<ChunkEnd>>>()?;
     if total > frames {
         return Err(too_many_frames(block, frames));
     }
     if total < frames {
-        // Point at the last line of the block, where the missing frames should have been.
-        let last_line = lines_before + usize::from(!block.is_empty() && !block.ends_with(b"\n"));
-        return Err(KernelError::Parse {
-            line: last_line.saturating_sub(1),
-            message: format!("truncated MOTION block: Frames says {frames}, but only {total} frame lines follow"),
-        });
+        return Err(truncated(block, frames, total));
     }
     Ok((first, second))
 }
@@ -111,7 +126,7 @@ fn split_at_lines(block: &[u8], parts: usize) -> Vec<&[u8]> {
     let mut pieces = Vec::with_capacity(parts);
     let mut rest = block;
     while rest.len() > target {
-        match rest[target..].iter().position(|&b| b == b'\n') {
+        match memchr::memchr(b'\n', &rest[target..]) {
             Some(nl) => {
                 let (head, tail) = rest.split_at(target + nl + 1);
                 pieces.push(head);
@@ -124,21 +139,37 @@ fn split_at_lines(block: &[u8], parts: usize) -> Vec<&[u8]> {
     pieces
 }
 
-/// Frame lines (not blank) and newlines in a chunk.
-fn count_lines(chunk: &[u8]) -> (usize, usize) {
-    let mut frame_lines = 0;
-    let mut lines = 0;
-    for line in chunk.split(|&b| b == b'\n') {
-        frame_lines += usize::from(!is_blank(line));
-        lines += 1;
-    }
-    // `split` yields one more piece than there are newlines.
-    (frame_lines, lines - 1)
+/// The lines of `bytes`, split at '\n' (SIMD search: this runs over whole blocks).
+fn lines(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
+    let mut start = 0;
+    memchr::memchr_iter(b'\n', bytes)
+        .chain(std::iter::once(bytes.len()))
+        .map(move |end| {
+            let line = &bytes[start..end];
+            start = end + 1;
+            line
+        })
 }
 
-/// Error path only: find the line of frame `frames + 1`.
+/// Frame lines (not blank) and newlines in a chunk.
+fn count_lines(chunk: &[u8]) -> (usize, usize) {
+    let frame_lines = lines(chunk).filter(|l| !is_blank(l)).count();
+    (frame_lines, memchr::memchr_iter(b'\n', chunk).count())
+}
+
+/// Error: fewer frame lines than `Frames` says. Points at the block's last line.
+fn truncated(block: &[u8], frames: usize, found: usize) -> KernelError {
+    let newlines = memchr::memchr_iter(b'\n', block).count();
+    let last_line = newlines + usize::from(!block.is_empty() && !block.ends_with(b"\n"));
+    KernelError::Parse {
+        line: last_line.saturating_sub(1),
+        message: format!("truncated MOTION block: Frames says {frames}, but only {found} frame lines follow"),
+    }
+}
+
+/// Error: more frame lines than `Frames` says. Points at frame `frames + 1`.
 fn too_many_frames(block: &[u8], frames: usize) -> KernelError {
-    let line = block.split(|&b| b == b'\n').enumerate().filter(|(_, l)| !is_blank(l)).nth(frames).map_or(0, |(i, _)| i);
+    let line = lines(block).enumerate().filter(|(_, l)| !is_blank(l)).nth(frames).map_or(0, |(i, _)| i);
     KernelError::Parse { line, message: format!("more frame lines than Frames says ({frames})") }
 }
 
@@ -146,52 +177,59 @@ fn is_blank(line: &[u8]) -> bool {
     line.iter().all(u8::is_ascii_whitespace)
 }
 
-/// Parse the first `take` frame lines of a chunk into the sink; errors carry the chunk's line index.
-fn parse_chunk<S: FrameSink>(chunk: &[u8], channels: usize, take: usize, sink: &S, out0: &mut [f64], out1: &mut [f64]) -> std::result::Result<(), (usize, String)> {
-    let (w0, w1) = sink.widths();
-    let mut values = Vec::with_capacity(channels);
-    let mut frame = 0;
-    for (line_index, line) in chunk.split(|&b| b == b'\n').enumerate() {
-        if frame == take {
-            break;
-        }
-        values.clear();
-        parse_line(line, &mut values).map_err(|message| (line_index, message))?;
-        if values.is_empty() {
-            continue;
-        }
-        if values.len() != channels {
-            return Err((line_index, format!("expected {channels} values (the CHANNELS of the hierarchy), found {}", values.len())));
-        }
-        sink.emit(&values, &mut out0[frame * w0..(frame + 1) * w0], &mut out1[frame * w1..(frame + 1) * w1]);
-        frame += 1;
-    }
-    Ok(())
+/// Where a chunk's parse stopped: frames parsed, and the byte just after the last one's line.
+struct ChunkEnd {
+    frames: usize,
+    offset: usize,
 }
 
-/// Append every whitespace-separated number of `line` to `out`.
-fn parse_line(line: &[u8], out: &mut Vec<f64>) -> std::result::Result<(), String> {
-    let mut i = 0;
-    loop {
-        while i < line.len() && line[i].is_ascii_whitespace() {
-            i += 1;
-        }
-        if i == line.len() {
-            return Ok(());
-        }
-        let rest = &line[i..];
-        // The number must be the whole token: what follows it is whitespace or the line's end.
-        match fast_float2::parse_partial::<f64, _>(rest) {
-            Ok((v, used)) if rest.get(used).is_none_or(u8::is_ascii_whitespace) => {
-                if !v.is_finite() {
-                    return Err(format!("{:?} is not a finite number (NaN and infinity are not allowed)", show(token_at(rest))));
-                }
-                out.push(v);
-                i += used;
+/// Parse up to `take` frame lines of a chunk into the sink, in one pass over its bytes.
+/// Errors carry the line index within the chunk.
+fn parse_chunk<S: FrameSink>(
+    chunk: &[u8],
+    channels: usize,
+    take: usize,
+    sink: &S,
+    out0: &mut [f64],
+    out1: &mut [f64],
+) -> std::result::Result<ChunkEnd, (usize, String)> {
+    let (w0, w1) = sink.widths();
+    let mut values = Vec::with_capacity(channels);
+    let (mut i, mut line, mut frame) = (0, 0, 0);
+    while frame < take && i < chunk.len() {
+        values.clear();
+        // One line: numbers separated by blanks, up to '\n' or the end.
+        loop {
+            while i < chunk.len() && chunk[i] != b'\n' && chunk[i].is_ascii_whitespace() {
+                i += 1;
             }
-            _ => return Err(format!("{:?} is not a number", show(token_at(rest)))),
+            if i == chunk.len() || chunk[i] == b'\n' {
+                i += 1;
+                break;
+            }
+            let rest = &chunk[i..];
+            // The number must be the whole token: what follows it is whitespace or the end.
+            match fast_float2::parse_partial::<f64, _>(rest) {
+                Ok((v, used)) if rest.get(used).is_none_or(u8::is_ascii_whitespace) => {
+                    if !v.is_finite() {
+                        return Err((line, format!("{:?} is not a finite number (NaN and infinity are not allowed)", show(token_at(rest)))));
+                    }
+                    values.push(v);
+                    i += used;
+                }
+                _ => return Err((line, format!("{:?} is not a number", show(token_at(rest))))),
+            }
         }
+        if !values.is_empty() {
+            if values.len() != channels {
+                return Err((line, format!("expected {channels} values (the CHANNELS of the hierarchy), found {}", values.len())));
+            }
+            sink.emit(&values, &mut out0[frame * w0..(frame + 1) * w0], &mut out1[frame * w1..(frame + 1) * w1]);
+            frame += 1;
+        }
+        line += 1;
     }
+    Ok(ChunkEnd { frames: frame, offset: i.min(chunk.len()) })
 }
 
 fn token_at(rest: &[u8]) -> &[u8] {

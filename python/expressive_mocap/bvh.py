@@ -327,7 +327,12 @@ def read_bvh(source: Source) -> Motion:
     Raises :class:`~expressive_mocap.errors.BVHError` (naming the file and line) on malformed
     input: rotations come out as unit quaternions, translations as offsets or position channels.
     """
-    return read_bvh_many([source])[0]
+    data, name = _load(source)
+    results: list = [None]
+    _collect(batch := [(0, name, _parse_header(data, name), data)], _decode(batch), results)
+    if isinstance(results[0], BVHError):
+        raise results[0]
+    return results[0]
 
 
 def read_bvh_many(sources: Iterable[Source], errors: str = "raise", batch_bytes: int = 32 << 20) -> list:
@@ -346,8 +351,7 @@ def read_bvh_many(sources: Iterable[Source], errors: str = "raise", batch_bytes:
         for batch in _batches(sources, batch_bytes, results):
             if running is not None:
                 _collect(*running, results)
-            blocks = [(data, h.block_start, h.frames, h.skeleton.n_channels, *h.skeleton.layout(), h.skeleton.offsets) for _, _, h, data in batch]
-            running = (batch, decoder.submit(kernels().read_motion_blocks, blocks))
+            running = (batch, decoder.submit(_decode, batch))
         if running is not None:
             _collect(*running, results)
     if errors == "raise":
@@ -378,8 +382,17 @@ def _batches(sources: Iterable[Source], batch_bytes: int, results: list):
         yield batch
 
 
-def _collect(batch: list, decoded: Future, results: list) -> None:
-    for (index, name, header, _), result in zip(batch, decoded.result()):
+def _decode(batch: list) -> list:
+    """The kernel's (rotations, translations) or ParseError for each file of a batch."""
+    blocks = [(data, h.block_start, h.frames, h.skeleton.n_channels, *h.skeleton.layout(), h.skeleton.offsets) for _, _, h, data in batch]
+    return kernels().read_motion_blocks(blocks)
+
+
+def _collect(batch: list, decoded: Future | list, results: list) -> None:
+    """Put each file's Motion, or its BVHError, in its place in ``results``."""
+    if isinstance(decoded, Future):
+        decoded = decoded.result()
+    for (index, name, header, _), result in zip(batch, decoded):
         if isinstance(result, PARSE_ERRORS):
             results[index] = _block_error(name, header, result)
         else:
