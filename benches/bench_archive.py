@@ -21,7 +21,6 @@ The repository never contains it: ``--data DIR`` or ``../shared/data/unpack``.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import cProfile
 import datetime
 import gc
@@ -100,6 +99,18 @@ def machine() -> dict:
     }
 
 
+def package_fingerprint() -> str:
+    """A hash of the installed package's files (Python and the built extension): compared at the
+    start and end of a run, since the package may be rebuilt while a long run is going."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    for path in sorted(Path(em.__file__).parent.rglob("*")):
+        if path.suffix in (".py", ".so", ".pyd"):
+            digest.update(path.name.encode() + path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
 # ----------------------------------------------------------------------------- our measurements
 
 
@@ -137,40 +148,41 @@ def fk_all(motions, backend: str):
         return [m.fk() for m in progress(motions, f"{backend} fk")]
 
 
-def fk_one_call(motions):
-    """Diagnostic, not public API: the Rust FK kernel once on all clips stacked (one skeleton),
-    to show what parallelism across clips would give (most clips are below the kernel's
-    parallel threshold of 16,384 joint-frames, so per-clip calls run on one core)."""
-    parents = motions[0].skeleton.parents
-    if any(not np.array_equal(m.skeleton.parents, parents) for m in motions):
-        return None
-    rotations = np.concatenate([m.rotations for m in motions])
-    translations = np.concatenate([m.translations for m in motions])
-    seconds, _ = timed(em.backend._core.forward_kinematics, rotations, translations, parents)
-    return seconds
+HAS_FK_MANY = hasattr(em, "forward_kinematics_many")
+
+
+def fk_many(motions, backend: str):
+    """``em.forward_kinematics_many``: one call for all clips, parallel across clips in Rust
+    (most clips are below the per-clip kernel's parallel threshold of 16,384 joint-frames)."""
+    with em.use_backend(backend):
+        return em.forward_kinematics_many(motions)
 
 
 def reader_breakdown(paths) -> tuple[list, str]:
     """Where ``read_bvh_many`` spends its time: the reader's helpers and kernels that exist in
-    this version are wrapped with timers for one call (calls inside a timed call are shown as
-    "of which"); the rest of the call is Python glue. Then a cProfile of the same call."""
+    this version are wrapped with timers for one call (a call made inside a timed call, in the
+    same thread, is shown as "of which"). Steps in different threads may overlap."""
+    import threading
+
     from expressive_mocap import bvh as B
 
     core = em.backend._core
     spots = [
         (B, "_load", "read the files (Python)"),
         (B, "_parse_header", "header: hierarchy, Frames, Frame Time (Python)"),
-        (core, "parse_motion_blocks", "MOTION numbers: `parse_motion_blocks` (Rust, parallel across files)"),
+        (B, "_decode", "kernel call with its arguments (`_decode`, in the decoder thread)"),
+        (B, "_collect", "wait for a batch's kernels, then build Motions (`_collect`, main thread)"),
         (core, "read_motion_blocks", "MOTION numbers + decode: `read_motion_blocks` (Rust, parallel across files)"),
-        (B, "_motion_from", "decode to quaternions + translations, Motion (`_motion_from`)"),
-        (core, "euler_to_quat", "`euler_to_quat` kernel (Rust)"),
         (em.Motion, "__init__", "`Motion.__init__` checks"),
     ]
     spent: dict[tuple, float] = {}
-    stack: list[str] = []
+    local = threading.local()
+    captured: dict = {}
 
     def wrap(fn, label):
         def timed_fn(*a, **kw):
+            captured.setdefault(label, a)
+            stack = local.__dict__.setdefault("stack", [])
             key = (label, stack[-1] if stack else None)
             stack.append(label)
             t0 = time.perf_counter()
@@ -190,13 +202,39 @@ def reader_breakdown(paths) -> tuple[list, str]:
     finally:
         for owner, name, fn in saved:
             setattr(owner, name, fn)
-    rows = [("whole `read_bvh_many` call (with the timers)", total)]
+
+    def children(parent, depth):
+        out = []
+        for (label, p), seconds in sorted(spent.items(), key=lambda kv: -kv[1]):
+            if p == parent:
+                out.append(("  " * depth + ("of which " if depth else "") + label, seconds))
+                out += children(label, depth + 1)
+        return out
+
+    rows = [("whole `read_bvh_many` call (with the timers)", total)] + children(None, 0)
     top = sum(v for (label, parent), v in spent.items() if parent is None)
-    for (label, parent), seconds in sorted(spent.items(), key=lambda kv: kv[1] if kv[0][1] is None else -1, reverse=True):
-        if parent is None:
-            rows.append((label, seconds))
-            rows += [(f"  of which {l}", v) for (l, p), v in spent.items() if p == label]
-    rows.append(("other Python glue in `read_bvh_many` (the rest)", total - top))
+    if top <= total:
+        rows.append(("other Python glue in `read_bvh_many` (the rest)", total - top))
+    else:
+        rows.append((f"(the steps above overlap: threads run concurrently; their sum exceeds the call by {top - total:.3f} s)", top - total))
+    # Split the fused Rust call: the number parsing alone, on exactly the inputs it was given.
+    fused_label = labels["read_motion_blocks"]
+    if fused_label in captured:
+        try:
+            blocks = [tuple(b[:4]) for b in captured[fused_label][0]]  # the first batch's blocks
+            from concurrent.futures import ThreadPoolExecutor
+
+            with em.use_backend("rust"):
+                fused, _ = timed(core.read_motion_blocks, captured[fused_label][0])
+                # One block a call; the kernel releases the GIL, so the threads run in parallel.
+                with ThreadPoolExecutor(core.num_threads) as pool:
+                    parse_only, _ = timed(lambda: list(pool.map(lambda b: core.parse_motion_block(*b), blocks)))
+            size = sum(len(b[0]) - b[1] for b in blocks)
+            rows.append((f"split of the Rust call on its first batch ({len(blocks)} files, {size / MB:.0f} MB, called again alone):", fused))
+            rows.append(("  parsing the numbers only (the parse kernel on the same blocks, same threads)", parse_only))
+            rows.append(("  the rest: Euler->quaternion, translations, output arrays", fused - parse_only))
+        except (TypeError, ValueError, IndexError) as error:
+            log(f"could not split read_motion_blocks: {error}")
     # A cProfile of the whole call, to name the Python functions behind those times.
     profile = cProfile.Profile()
     gc.collect()
@@ -211,7 +249,7 @@ def reader_breakdown(paths) -> tuple[list, str]:
 
 
 def peer_read(name: str, path: str):
-    """Load one file with a peer, as its users would (see /work/shared/PEERS.md)."""
+    """Load one file with a peer, as its users would (see ../shared/PEERS.md)."""
     if name == "pymotion":
         from pymotion.io.bvh import BVH
 
@@ -311,7 +349,7 @@ def child_main(kind: str, paths_file: str) -> None:
         r1, t1 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
         # CPU and page faults of a first read in a fresh process: all its memory is new.
         result.update(read_user_s=r1.ru_utime - r0.ru_utime, read_sys_s=r1.ru_stime - r0.ru_stime, read_minflt=r1.ru_minflt - r0.ru_minflt)
-        fk = fk_all(motions, backend) if kind != "rust-read" else []
+        fk = [] if kind == "rust-read" else fk_many(motions, backend) if HAS_FK_MANY else fk_all(motions, backend)
         t2 = time.perf_counter()
         result.update(read_s=t1 - t0, fk_s=t2 - t1, kept="motions and FK outputs" if fk else "motions")
         result["joint_frames"] = sum(m.n_frames * m.skeleton.n_joints for m in motions)
@@ -355,7 +393,7 @@ def run_child(kind: str, paths_file: str) -> dict | None:
 
 def measure_read_and_fk(paths, rounds: int) -> tuple[dict, list]:
     """Rounds of read and FK, the implementations' order rotated each round (drift hits all)."""
-    times: dict[str, list] = {k: [] for k in ("floor", "rust_many", "rust_loop", "numpy_read", "rust_fk", "numpy_fk", "rust_fk_one_call")}
+    times: dict[str, list] = {k: [] for k in ("floor", "rust_many", "rust_loop", "numpy_read", "rust_fk", "numpy_fk", "rust_fk_many", "numpy_fk_many")}
     motions = None
     for r in range(rounds):
         order = ["floor", "rust_many", "rust_loop", "numpy_read"]
@@ -372,14 +410,13 @@ def measure_read_and_fk(paths, rounds: int) -> tuple[dict, list]:
                 motions = motions_step
             del motions_step
         # FK on the motions just read by read_bvh_many; outputs dropped right away.
-        fk_order = ["rust_fk", "numpy_fk"] if r % 2 == 0 else ["numpy_fk", "rust_fk"]
+        fk_order = ["rust_fk", "numpy_fk"] + (["rust_fk_many", "numpy_fk_many"] if HAS_FK_MANY else [])
+        fk_order = fk_order[r % len(fk_order) :] + fk_order[: r % len(fk_order)]
         for step in fk_order:
-            seconds, out = timed(fk_all, motions, "rust" if step == "rust_fk" else "numpy")
+            fn = fk_many if step.endswith("_many") else fk_all
+            seconds, out = timed(fn, motions, step.split("_")[0])
             times[step].append(seconds)
             del out
-        one = fk_one_call(motions)
-        if one is not None:
-            times["rust_fk_one_call"].append(one)
         log(f"round {r + 1}/{rounds}: " + ", ".join(f"{k} {v[-1]:.3f}s" for k, v in times.items() if v))
     return times, motions
 
@@ -461,21 +498,26 @@ def measure_end_to_end(paths_file: str, conv_file: str | None, peers) -> dict:
         ours = [o["total_s"] for o in ours if o]
         return other["total_s"] / statistics.mean(ours) if other and ours else None
 
+    def ours(file: str, key: str = "rust"):
+        # Ours is cheap: 3 runs a slot, the median one counts, so one disturbed run does not.
+        results = [r for r in (run("rust", file, key) for _ in range(3)) if r]
+        return sorted(results, key=lambda r: r["total_s"])[len(results) // 2] if results else None
+
     ratios = {}
     run("rust-read", paths_file)  # memory of reading alone
-    before = run("rust", paths_file)
+    before = ours(paths_file)
     numpy_run = run("numpy", paths_file)
-    after = run("rust", paths_file)
+    after = ours(paths_file)
     ratios["numpy"] = ratio(numpy_run, before, after)
     for name in peers:
         if name == "pybvh":
-            conv_before = run("rust", conv_file, "rust-converted")
+            conv_before = ours(conv_file, "rust-converted")
             peer = run("pybvh", conv_file)
-            ratios[name] = ratio(peer, conv_before, run("rust", conv_file, "rust-converted"))
+            ratios[name] = ratio(peer, conv_before, ours(conv_file, "rust-converted"))
         else:
             before = after
             peer = run(name, paths_file)
-            after = run("rust", paths_file)
+            after = ours(paths_file)
             ratios[name] = ratio(peer, before, after)
     return {"runs": runs, "ratios": {k: v for k, v in ratios.items() if v is not None}, "failed": failed}
 
@@ -525,6 +567,8 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         "every other implementation; page cache warm; peers single-threaded, ours on 2 threads",
         f"- {CITATION}\n",
     ]
+    if info.get("changed"):
+        out.append("**Warning: the package's files changed during this run (rebuilt or edited): the figures mix versions; run again.**\n")
     if e2e and e2e["failed"]:
         out.append(f"**Child runs that failed (see stderr): {', '.join(e2e['failed'])}.**\n")
 
@@ -552,20 +596,24 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     out.append(md_table(["implementation", "wall s", "MB/s", "frames/s", "ratio / notes"], rows) + "\n")
 
     out.append("## 2. Forward kinematics of every frame of every clip (same loaded motions)\n")
-    rows = [
-        ["**ours, Rust: `m.fk()` per clip**", f"{t['rust_fk']:.3f}", f"{joint_frames / t['rust_fk'] / 1e6:.1f} M",
-         f"{ratio_median(times['numpy_fk'], times['rust_fk']):.1f}x faster than the NumPy twin"],
-        ["ours, NumPy twin: `m.fk()` per clip", f"{t['numpy_fk']:.3f}", f"{joint_frames / t['numpy_fk'] / 1e6:.1f} M", "1.0x"],
-    ]
-    if times["rust_fk_one_call"]:
-        rows.append(["(diagnostic, not public API) the Rust FK kernel once on all clips stacked", f"{t['rust_fk_one_call']:.3f}",
-                     f"{joint_frames / t['rust_fk_one_call'] / 1e6:.1f} M", f"{ratio_median(times['rust_fk'], times['rust_fk_one_call']):.1f}x faster than per-clip calls"])
+
+    def fk_row(label, key, vs=""):
+        return [label, f"{t[key]:.3f}", f"{joint_frames / t[key] / 1e6:.1f} M", vs]
+
+    rows = []
+    if times["rust_fk_many"]:
+        rows.append(fk_row("**ours, Rust: `em.forward_kinematics_many(motions)`**", "rust_fk_many",
+                           f"{ratio_median(times['numpy_fk_many'], times['rust_fk_many']):.1f}x faster than the NumPy twin"))
+    rows.append(fk_row("ours, Rust: `m.fk()` per clip", "rust_fk", f"{ratio_median(times['numpy_fk'], times['rust_fk']):.1f}x faster than the NumPy twin"))
+    if times["numpy_fk_many"]:
+        rows.append(fk_row("ours, NumPy twin: `em.forward_kinematics_many(motions)`", "numpy_fk_many", "1.0x"))
+    rows.append(fk_row("ours, NumPy twin: `m.fk()` per clip", "numpy_fk", "1.0x"))
     for name in args.peers:
         key = "rust-converted" if name == "pybvh" else "rust"
         if name in runs and key in runs:
             r, ours = runs[name][0], child_median(key, "fk_s")
             rows.append([f"{PEER_LABEL[name]}{', converted clips' if name == 'pybvh' else ''} (1 run)", f"{r['fk_s']:.3f}",
-                         f"{r['joint_frames'] / r['fk_s'] / 1e6:.2f} M", f"{r['fk_s'] / ours:.0f}x ours' time"])
+                         f"{r['joint_frames'] / r['fk_s'] / 1e6:.2f} M", f"{r['fk_s'] / ours:.0f}x ours' time in a fresh process"])
     out.append(md_table(["implementation", "wall s", "joint-frames/s", "ratio"], rows) + "\n")
 
     if runs:
@@ -576,7 +624,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
                    f"parent's peak, which survives exec), interpreter and imports included (about {base / MB:.0f} MB before reading).\n")
         labels = {
             "rust-read": "ours, Rust, read only (keeps the motions)",
-            "rust": "**ours, Rust** (keeps motions and FK outputs)",
+            "rust": "**ours, Rust**: `read_bvh_many` + " + ("`forward_kinematics_many`" if HAS_FK_MANY else "`m.fk()`") + " (keeps motions and FK outputs)",
             "numpy": "ours, NumPy twin (keeps motions and FK outputs)",
             "rust-converted": "ours, Rust, converted clips (keeps motions and FK outputs)",
         }
@@ -600,7 +648,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     if breakdown:
         out.append("## 5. Where our reader's time goes (one `read_bvh_many` call, Rust backend, warm process)\n")
         whole = breakdown[0][1]
-        out.append(md_table(["step", "s", "share"], [[l.replace("  ", "&nbsp;&nbsp;&nbsp;"), f"{v:.3f}", f"{v / whole:.0%}"] for l, v in breakdown]) + "\n")
+        out.append(md_table(["step", "s", "share of the call"], [[l.replace("  ", "&nbsp;&nbsp;&nbsp;"), f"{v:.3f}", "" if l.startswith(("split", "  parsing", "  the rest")) else f"{v / whole:.0%}"] for l, v in breakdown]) + "\n")
         out.append("cProfile of one more call (profiling inflates the Python parts):\n\n```\n"
                    + "\n".join(l.rstrip() for l in profile_text.strip().splitlines() if l.strip())[:4000] + "\n```\n")
 
@@ -614,11 +662,17 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     if "rust" in runs:
         v = child_median("rust", "read_s")
         target("... the same, first call in a fresh process", v, v < 1.5, f"{v:.2f} s")
-    target("FK of everything < 0.2 s (`m.fk()` per clip)", t["rust_fk"], t["rust_fk"] < 0.2, f"{t['rust_fk']:.3f} s")
+    fk_key, fk_api = ("rust_fk_many", "`forward_kinematics_many`") if times["rust_fk_many"] else ("rust_fk", "`m.fk()` per clip")
+    target(f"FK of everything < 0.2 s ({fk_api})", t[fk_key], t[fk_key] < 0.2, f"{t[fk_key]:.3f} s")
+    if fk_key != "rust_fk":
+        target("... the same with `m.fk()` per clip", t["rust_fk"], t["rust_fk"] < 0.2, f"{t['rust_fk']:.3f} s")
     r = ratio_median(times["numpy_read"], times["rust_many"])
-    target("Rust >= 3x the NumPy twin on reading", r, r >= 3, f"{r:.1f}x")
-    r = ratio_median(times["numpy_fk"], times["rust_fk"])
-    target("Rust >= 20x the NumPy twin on FK", r, r >= 20, f"{r:.1f}x")
+    target("Rust >= 3x the NumPy twin on reading (`read_bvh_many`)", r, r >= 3, f"{r:.1f}x")
+    r = ratio_median(times["numpy_" + fk_key[5:]], times[fk_key])
+    target(f"Rust >= 20x the NumPy twin on FK ({fk_api})", r, r >= 20, f"{r:.1f}x")
+    if fk_key != "rust_fk":
+        r = ratio_median(times["numpy_fk"], times["rust_fk"])
+        target("... the same with `m.fk()` per clip", r, r >= 20, f"{r:.1f}x")
     for name, goal in (("pymotion", 20), ("pybvh", 3)):
         r = ratios.get(name)
         target(f"end-to-end >= {goal}x faster than {PEER_LABEL[name]}", r, r is not None and r >= goal, f"{r:.1f}x" if r else "not run")
@@ -653,9 +707,10 @@ def main() -> None:
     if unknown := set(args.peers) - set(PEERS):
         parser.error(f"unknown peers {sorted(unknown)}; choose from {', '.join(PEERS)}")
     if not em.rust_available():
-        raise SystemExit("the Rust extension is not built: cd /work/main && pip install -e .")
+        raise SystemExit("the Rust extension is not built: pip install . (from the repository root)")
     started, t_start = datetime.datetime.now(), time.perf_counter()
     info = machine()
+    fingerprint = package_fingerprint()
     folder = find_data(args.data)
     paths = sorted(str(p) for p in folder.glob("*.bvh"))[: args.limit]
     log(f"{len(paths)} clips in {folder}")
@@ -692,6 +747,9 @@ def main() -> None:
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
+    if package_fingerprint() != fingerprint:
+        info["changed"] = True
+        log("WARNING: the package's files changed during the run: the figures mix versions")
     text = report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_stats, started, time.perf_counter() - t_start)
     print(text)
     Path(args.out).write_text(text)

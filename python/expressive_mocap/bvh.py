@@ -220,16 +220,20 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
     return skeleton, offset_owners
 
 
-# Archives repeat one hierarchy with different numbers (Bandai-Namco's Hips offset changes from
-# clip to clip). A hierarchy is cached under its text with the OFFSET numbers cut out; a file of
-# the same shape then only converts its numbers. Anything unusual takes the full parse, whose
-# errors name the line.
+# Archives repeat a few hierarchies, some with different numbers (Bandai-Namco's Hips offset
+# changes from clip to clip). A hierarchy is cached under its exact text, and under its text with
+# the OFFSET numbers cut out: a file of a known shape then only converts its numbers. Anything
+# unusual takes the full parse, whose errors name the line.
 _OFFSET_NUMBERS = re.compile(r"(?<=OFFSET)[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)(?=[ \t]*\r?$)", re.MULTILINE)
 _SHAPES: dict[tuple[str, ...], tuple[Skeleton, np.ndarray, np.ndarray]] = {}
+_HIERARCHIES: dict[str, Skeleton] = {}
 _MAX_SHAPES = 64
 
 
 def _skeleton(text: str, name: str) -> Skeleton:
+    exact = _HIERARCHIES.get(text)
+    if exact is not None:
+        return exact
     parts = _OFFSET_NUMBERS.split(text)
     shape = tuple(parts[0::4])
     cached = _SHAPES.get(shape)
@@ -240,7 +244,7 @@ def _skeleton(text: str, name: str) -> Skeleton:
         except ValueError:
             offsets = None
         if offsets is not None and np.isfinite(offsets).all():
-            return template.with_offsets(offsets[joint_rows], offsets[site_rows])
+            return _remember(text, template.with_offsets(offsets[joint_rows], offsets[site_rows]))
     skeleton, owners = _parse_hierarchy(_Tokens(text, name))
     if len(owners) == len(shape) - 1:  # every OFFSET was cut out: the shape says it all
         owners = np.array(owners)
@@ -248,6 +252,14 @@ def _skeleton(text: str, name: str) -> Skeleton:
         if len(_SHAPES) >= _MAX_SHAPES:
             _SHAPES.clear()
         _SHAPES[shape] = (skeleton, joint_rows[np.argsort(owners[joint_rows])], site_rows[np.argsort(-1 - owners[site_rows])])
+    return _remember(text, skeleton)
+
+
+def _remember(text: str, skeleton: Skeleton) -> Skeleton:
+    """Keep the skeleton of this exact hierarchy text: many clips share one (skeletons are immutable)."""
+    if len(_HIERARCHIES) >= _MAX_SHAPES:
+        _HIERARCHIES.clear()
+    _HIERARCHIES[text] = skeleton
     return skeleton
 
 
