@@ -2,9 +2,13 @@
 //! them to NumPy. Every kernel has a NumPy twin in `expressive_mocap.reference`.
 
 pub mod decode;
+pub mod decouple;
 pub mod error;
+pub mod features;
 pub mod fk;
+pub mod footsteps;
 pub mod format;
+pub mod mlp;
 pub mod parse;
 pub mod rotations;
 

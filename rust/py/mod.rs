@@ -8,6 +8,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
 use crate::error::KernelError;
+mod decouple;
+mod features;
+mod mlp;
+
 use crate::decode::ChannelLayout;
 use crate::rotations::Order;
 
@@ -244,5 +248,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(forward_kinematics_many, m)?)?;
     m.add_function(wrap_pyfunction!(format_motion_block, m)?)?;
     m.add("num_threads", rayon::current_num_threads())?;
+    features::register(m)?;
+    mlp::register(m)?;
+    decouple::register(m)?;
     Ok(())
 }

@@ -1,0 +1,1 @@
+//! Per-joint algebra of decoupling: expressive component, activity index, filtering, recomposition.

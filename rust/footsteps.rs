@@ -1,0 +1,1 @@
+//! Foot contacts (Lee et al. 2002) with a temporal-continuity filter.

@@ -1,0 +1,1 @@
+//! Batched inference of small multilayer perceptrons (dense layers, tanh or linear).
