@@ -88,3 +88,25 @@ def decode_channels(values, rotation_columns, orders, position_columns, offsets)
         np.ascontiguousarray(position_columns, dtype=np.int64),
         np.ascontiguousarray(offsets, dtype=np.float64),
     )
+
+
+def decouple_rotations(original, body, gain: float = 2.0, exponent: float = 4.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Split local rotations ``original [F, J, 4]`` given body-mechanics rotations ``body``:
+    ``E = O B^-1``; activity ``A = clip((tanh(angle(E)) * gain)^exponent, 0, 1)`` ``[F, J]``;
+    filtered expressive component ``E* = E^A``; recovered body mechanics ``B' = E*^-1 O``.
+    Returns ``(E*, B', A)``; ``E* * B' = O`` exactly."""
+    original, body = _f64("original", original, 4), _f64("body", body, 4)
+    batch = original.shape[:-1]
+    e, b, a = kernels().decouple_rotations(_frames(original), _frames(body), float(gain), float(exponent))
+    return e.reshape(original.shape), b.reshape(original.shape), a.reshape(batch)
+
+
+def compose_rotations(expressive, body, scale: float = 1.0) -> np.ndarray:
+    """``expressive^scale * body`` for rotations ``[F, J, 4]`` (modulation of expressiveness)."""
+    expressive, body = _f64("expressive", expressive, 4), _f64("body", body, 4)
+    return kernels().compose_rotations(_frames(expressive), _frames(body), float(scale)).reshape(body.shape)
+
+
+def _frames(array: np.ndarray) -> np.ndarray:
+    """``[..., J, k]`` as ``[F, J, k]``, all leading dimensions folded into frames."""
+    return array.reshape(-1, *array.shape[-2:])

@@ -76,3 +76,18 @@ def about(axis: str, degrees) -> np.ndarray:
     q[..., "XYZ".index(axis)] = np.sin(half)
     q[..., 3] = np.cos(half)
     return q
+
+
+def angle(q: np.ndarray) -> np.ndarray:
+    """Rotation angles ``[...]`` in ``[0, pi]`` of unit quaternions ``[..., 4]``."""
+    return 2.0 * np.arctan2(np.linalg.norm(q[..., :3], axis=-1), np.abs(q[..., 3]))
+
+
+def power(q: np.ndarray, s) -> np.ndarray:
+    """``q^s``: the rotation about the same axis by ``s`` times the angle (``s`` broadcasts to ``[...]``)."""
+    q = np.where(q[..., 3:] < 0, -q, q)  # w >= 0: angle in [0, pi], q^0 = identity
+    sin_half = np.linalg.norm(q[..., :3], axis=-1, keepdims=True)
+    half = np.arctan2(sin_half, q[..., 3:]) * np.asarray(s, dtype=np.float64)[..., None]
+    axis = q[..., :3] / np.where(sin_half < 1e-15, 1.0, sin_half)
+    out = np.concatenate([axis * np.sin(half), np.cos(half)], axis=-1)
+    return np.where(sin_half < 1e-15, np.array([0.0, 0.0, 0.0, 1.0]), out)

@@ -7,6 +7,7 @@ rotates by ``q2`` then ``q1``; an Euler order is three axis indices (0 = X, 1 = 
 written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in degrees.
 """
 
+from .decouple import compose_rotations, decouple_rotations
 from .fk import forward_kinematics, forward_kinematics_many
 from .motion_block import ParseError, decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
 from .rotations import euler_to_quat, quat_to_euler
@@ -15,7 +16,9 @@ num_threads = 1
 
 __all__ = [
     "ParseError",
+    "compose_rotations",
     "decode_channels",
+    "decouple_rotations",
     "euler_to_quat",
     "format_motion_block",
     "forward_kinematics",

@@ -1,0 +1,160 @@
+"""Decoupling expressiveness from body mechanics (Boehs et al.; METHODS.md part 2) and its
+applications: modulation, source mixing, asynchronous blending.
+
+A body-mechanics model is anything with ``predict(motion) -> rotations [F, J, 4]``: the local
+rotations a neutral performer would have at each frame given the motion's dynamics (root and
+hips copied from the motion). The shipped one is :class:`expressive_mocap.model.BodyModel`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from . import quat
+from .errors import MocapError
+from .kernels import compose_rotations, decouple_rotations
+from .motion import Motion
+
+GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
+EXPONENT = 4.0  # b
+
+
+class BodyMechanicsModel(Protocol):
+    def predict(self, motion: Motion) -> np.ndarray:
+        """Body-mechanics local rotations ``[F, J, 4]`` for ``motion``."""
+
+
+@dataclass(frozen=True)
+class Decomposition:
+    """``original`` split into filtered expressive rotations ``expressive`` (E*, ``[F, J, 4]``,
+    identity where nothing expressive happens) and body-mechanics rotations ``body`` (B'), with
+    the per-joint ``activity`` ``[F, J]`` in [0, 1]; ``E* * B' = O`` exactly."""
+
+    original: Motion
+    expressive: np.ndarray
+    body: np.ndarray
+    activity: np.ndarray
+
+    def body_motion(self) -> Motion:
+        """The body-mechanics component as a motion (translations and root trajectory of the original)."""
+        return self._with_rotations(self.body)
+
+    def expressive_motion(self) -> Motion:
+        """The expressive component made visible: E* laid on the clip's mean body-mechanics
+        pose (a neutral stance), root and hips following the original."""
+        mean_body = quat.normalize(np.mean(_same_hemisphere(self.body), axis=0))
+        return self._with_rotations(quat.mul(self.expressive, mean_body[None]))
+
+    def recompose(self, scale: float = 1.0) -> Motion:
+        """``E*^scale * B'``: 1 gives back the original, 0 the body mechanics, 1.5 150% expressiveness."""
+        return self._with_rotations(compose_rotations(self.expressive, self.body, scale))
+
+    def _with_rotations(self, rotations: np.ndarray) -> Motion:
+        o = self.original
+        return Motion(o.skeleton, rotations, o.translations, o.frame_time)
+
+
+def _same_hemisphere(rotations: np.ndarray) -> np.ndarray:
+    """Flip quaternions ``[F, J, 4]`` onto the hemisphere of each joint's first frame, so they can be averaged."""
+    signs = np.sign(np.sum(rotations * rotations[:1], axis=-1, keepdims=True))
+    return rotations * np.where(signs == 0, 1.0, signs)
+
+
+def decompose(motion: Motion, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT) -> Decomposition:
+    """Split ``motion`` into expressive and body-mechanics components with ``model``."""
+    predicted = np.asarray(model.predict(motion), dtype=np.float64)
+    if predicted.shape != motion.rotations.shape:
+        raise MocapError(f"the model predicted rotations {list(predicted.shape)} for a motion of {list(motion.rotations.shape)}")
+    expressive, body, activity = decouple_rotations(motion.rotations, predicted, gain, exponent)
+    return Decomposition(motion, expressive, body, activity)
+
+
+def modulate(motion: Motion, scale: float, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT) -> Motion:
+    """The motion with its expressiveness scaled: ``O_s = E*^s B'`` (1 = unchanged, 0 = body mechanics only)."""
+    return decompose(motion, model, gain, exponent).recompose(scale)
+
+
+def _check_same_skeleton(a: Motion, b: Motion, what: str) -> None:
+    if a.skeleton.names != b.skeleton.names:
+        raise MocapError(f"{what}: the two motions have different skeletons ({a.skeleton.n_joints} and {b.skeleton.n_joints} joints, or other names)")
+
+
+def _aligned(rotations: np.ndarray, frames: int, align: str, offset: int) -> np.ndarray:
+    """``rotations [F, J, 4]`` on a timeline of ``frames`` frames: frame by frame from ``offset``
+    (holding the last frame), or resampled (slerp) to that length."""
+    if align == "index":
+        index = np.clip(np.arange(frames) + offset, 0, len(rotations) - 1)
+        return rotations[index]
+    if align == "resample":
+        if len(rotations) < 2 or frames < 2:
+            return rotations[np.zeros(frames, dtype=int)]
+        position = np.linspace(0, len(rotations) - 1, frames)
+        i0 = np.minimum(position.astype(int), len(rotations) - 2)
+        return quat.slerp(rotations[i0], rotations[i0 + 1], (position - i0)[:, None])
+    raise MocapError(f"align must be 'index' or 'resample', got {align!r}")
+
+
+def mix(body_source: Motion, expressive_source: Motion, model: BodyMechanicsModel, align: str = "index", offset: int = 0,
+        gain: float = GAIN, exponent: float = EXPONENT) -> Motion:
+    """The body mechanics (and root trajectory) of ``body_source`` with the expressive component
+    of ``expressive_source``: ``E*_Y B'_X``. The expressive source is aligned to the body source
+    frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``)."""
+    _check_same_skeleton(body_source, expressive_source, "mix")
+    body = decompose(body_source, model, gain, exponent)
+    expressive = decompose(expressive_source, model, gain, exponent).expressive
+    rotations = compose_rotations(_aligned(expressive, body_source.n_frames, align, offset), body.body)
+    return Motion(body_source.skeleton, rotations, body_source.translations, body_source.frame_time)
+
+
+def _weights(frames: int, window: tuple[int, int]) -> np.ndarray:
+    """Smoothstep from 0 before ``window[0]`` to 1 from ``window[1]`` on; an empty window is a step."""
+    start, end = window
+    if end < start:
+        raise MocapError(f"a window must not end before it starts, got {start}:{end}")
+    t = np.arange(frames, dtype=np.float64)
+    if end == start:
+        return (t >= start).astype(np.float64)
+    x = np.clip((t - start) / (end - start), 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def _on_timeline(motion: Motion, start: int, frames: int) -> np.ndarray:
+    """Frame indices of ``motion`` placed from output frame ``start`` (held at both ends)."""
+    return np.clip(np.arange(frames) - start, 0, motion.n_frames - 1)
+
+
+def blend(first: Motion, second: Motion, model: BodyMechanicsModel | None, body_window: tuple[int, int],
+          expressive_window: tuple[int, int] | None = None, gain: float = GAIN, exponent: float = EXPONENT) -> Motion:
+    """Blend from ``first`` to ``second``, body mechanics over ``body_window`` and the expressive
+    component over ``expressive_window`` (output frames ``(start, end)``; slerp with smoothstep
+    weights). ``second`` starts at the earlier window's start; its root trajectory is moved so
+    that it continues ``first``'s at the start of the body window. Without a model (or without an
+    expressive window) this is the naive blend: whole poses over ``body_window``."""
+    _check_same_skeleton(first, second, "blend")
+    windows = [body_window] + ([expressive_window] if expressive_window is not None else [])
+    start = min(w[0] for w in windows)
+    frames = start + second.n_frames
+    i, j = _on_timeline(first, 0, frames), _on_timeline(second, start, frames)
+    body_weights = _weights(frames, body_window)
+
+    if model is None or expressive_window is None:
+        rotations = quat.slerp(first.rotations[i], second.rotations[j], body_weights[:, None])
+    else:
+        a, b = decompose(first, model, gain, exponent), decompose(second, model, gain, exponent)
+        body = quat.slerp(a.body[i], b.body[j], body_weights[:, None])
+        expressive = quat.slerp(a.expressive[i], b.expressive[j], _weights(frames, expressive_window)[:, None])
+        rotations = compose_rotations(expressive, body)
+
+    # Translations: the second motion's root moved (on the floor plane) to continue the first's.
+    root = int(np.flatnonzero(first.skeleton.parents < 0)[0])
+    anchor = min(body_window[0], frames - 1)
+    shift = first.translations[i[anchor], root] - second.translations[j[anchor], root]
+    shift[1] = 0.0  # keep heights
+    second_translations = second.translations[j].copy()
+    second_translations[:, root] += shift
+    w = body_weights[:, None, None]
+    translations = (1 - w) * first.translations[i] + w * second_translations
+    return Motion(first.skeleton, rotations, translations, first.frame_time)

@@ -1,0 +1,33 @@
+"""Twin of ``rust/decouple.rs``: the per-joint algebra of decoupling, in NumPy."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import quat
+
+
+def _check(name: str, first: np.ndarray, second: np.ndarray) -> None:
+    if first.ndim != 3 or first.shape[-1] != 4 or first.shape != second.shape:
+        raise ValueError(f"argument `{name}`: expected shape {list(first.shape)} (quaternions [F, J, 4]), got {list(second.shape)}")
+
+
+def decouple_rotations(original: np.ndarray, body: np.ndarray, gain: float = 2.0, exponent: float = 4.0):
+    """``E = O B^-1``, ``A = clip((tanh(angle(E)) gain)^exponent, 0, 1)``, ``E* = E^A``,
+    ``B' = E*^-1 O``: returns ``(E*, B', A)``."""
+    _check("body", original, body)
+    for name, value in (("gain", gain), ("exponent", exponent)):
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"argument `{name}`: must be a positive number, got {value}")
+    expressive = quat.mul(original, quat.conjugate(body))
+    activity = np.clip((np.tanh(quat.angle(expressive)) * gain) ** exponent, 0.0, 1.0)
+    filtered = quat.power(expressive, activity)
+    return filtered, quat.mul(quat.conjugate(filtered), original), activity
+
+
+def compose_rotations(expressive: np.ndarray, body: np.ndarray, scale: float = 1.0) -> np.ndarray:
+    """``expressive^scale * body``."""
+    _check("expressive", body, expressive)
+    if not np.isfinite(scale):
+        raise ValueError(f"argument `scale`: must be a finite number, got {scale}")
+    return quat.mul(expressive if scale == 1.0 else quat.power(expressive, scale), body)

@@ -1,0 +1,126 @@
+"""Decoupling algebra and its applications: the invariants of METHODS.md section 3 that need
+no trained model (any body-mechanics predictor must satisfy them), and Rust/NumPy parity."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import expressive_mocap as em
+from expressive_mocap import decouple as dc
+from expressive_mocap import quat, reference
+from expressive_mocap.demo import procedural_walk
+from expressive_mocap.kernels import compose_rotations, decouple_rotations
+
+
+class SmoothingModel:
+    """A stand-in body-mechanics model: each joint's rotation averaged over +-5 frames (leaves
+    the slow part as 'body mechanics', the fast residue as 'expressive'); root and hips copied."""
+
+    def predict(self, motion):
+        rotations = dc._same_hemisphere(motion.rotations)
+        kernel = np.ones(11) / 11
+        padded = np.pad(rotations, ((5, 5), (0, 0), (0, 0)), mode="edge")
+        smooth = np.apply_along_axis(lambda x: np.convolve(x, kernel, mode="valid"), 0, padded)
+        smooth = quat.normalize(smooth)
+        smooth[:, :2] = motion.rotations[:, :2]
+        return smooth
+
+
+MODEL = SmoothingModel()
+
+
+def same_rotation(a, b):
+    return np.abs(np.sum(a * b, axis=-1))
+
+
+@pytest.fixture(scope="module")
+def walk():
+    return procedural_walk(seconds=2.0)
+
+
+def test_compose_of_decompose_is_the_original(backend, walk):
+    parts = dc.decompose(walk, MODEL)
+    np.testing.assert_allclose(same_rotation(parts.recompose(1.0).rotations, walk.rotations), 1.0, atol=1e-12)
+    np.testing.assert_allclose(parts.recompose(1.0).positions(), walk.positions(), atol=1e-6)
+    assert parts.activity.min() >= 0.0 and parts.activity.max() <= 1.0
+    # Root and hips belong to the body mechanics: no expressive rotation there.
+    np.testing.assert_allclose(parts.expressive[:, :2, 3], 1.0)
+
+
+def test_modulation_by_one_is_identity_and_by_zero_the_body(backend, walk):
+    np.testing.assert_allclose(same_rotation(dc.modulate(walk, 1.0, MODEL).rotations, walk.rotations), 1.0, atol=1e-12)
+    parts = dc.decompose(walk, MODEL)
+    np.testing.assert_allclose(same_rotation(dc.modulate(walk, 0.0, MODEL).rotations, parts.body), 1.0, atol=1e-12)
+    # 150% expressiveness turns each joint 1.5 times as far from the body mechanics.
+    more = dc.modulate(walk, 1.5, MODEL).rotations
+    e_more = quat.mul(more, quat.conjugate(parts.body))
+    np.testing.assert_allclose(quat.angle(e_more), 1.5 * quat.angle(parts.expressive), atol=1e-9)
+
+
+def test_mixing_a_motion_with_itself_is_the_identity(backend, walk):
+    for align in ["index", "resample"]:
+        mixed = dc.mix(walk, walk, MODEL, align=align)
+        np.testing.assert_allclose(same_rotation(mixed.rotations, walk.rotations), 1.0, atol=1e-12)
+        np.testing.assert_array_equal(mixed.translations, walk.translations)
+
+
+def test_blend_with_empty_windows_is_a_cut(walk):
+    other = procedural_walk(seconds=1.5, speed=0.6)
+    for model, windows in [(MODEL, ((20, 20), (20, 20))), (None, ((20, 20), None))]:
+        out = dc.blend(walk, other, model, *windows)
+        assert out.n_frames == 20 + other.n_frames
+        np.testing.assert_allclose(same_rotation(out.rotations[:20], walk.rotations[:20]), 1.0, atol=1e-12)
+        np.testing.assert_allclose(same_rotation(out.rotations[20:], other.rotations), 1.0, atol=1e-12)
+    # The second motion's root continues the first's at the cut (on the floor plane).
+    np.testing.assert_allclose(out.translations[20, 0, [0, 2]], walk.translations[20, 0, [0, 2]])
+
+
+def test_asynchronous_blend_moves_each_component_in_its_own_window(walk):
+    other = procedural_walk(seconds=1.5, speed=0.6)
+    out = dc.blend(walk, other, MODEL, body_window=(10, 30), expressive_window=(40, 50))
+    a, b = dc.decompose(walk, MODEL), dc.decompose(other, MODEL)
+    frames = np.arange(out.n_frames)
+    i, j = np.minimum(frames, walk.n_frames - 1), np.clip(frames - 10, 0, other.n_frames - 1)
+    body = quat.slerp(a.body[i], b.body[j], dc._weights(out.n_frames, (10, 30))[:, None])
+    expressive = quat.mul(out.rotations, quat.conjugate(body))
+    # The expressive part is the first motion's until its window opens, the second's after it closes.
+    np.testing.assert_allclose(same_rotation(expressive[:40], a.expressive[i[:40]]), 1.0, atol=1e-9)
+    np.testing.assert_allclose(same_rotation(expressive[50:], b.expressive[j[50:]]), 1.0, atol=1e-9)
+
+
+def test_mix_refuses_other_skeletons(walk, mixed_path):
+    with pytest.raises(em.MocapError, match="different skeletons"):
+        dc.mix(walk, em.read_bvh(mixed_path), MODEL)
+
+
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+def test_rust_matches_numpy_twin():
+    from expressive_mocap import _core
+
+    original = Rotation.random(3000, random_state=3).as_quat().reshape(150, 20, 4)
+    noise = Rotation.from_rotvec(np.random.default_rng(4).normal(scale=0.4, size=(3000, 3)))
+    body = (Rotation.from_quat(original.reshape(-1, 4)) * noise).as_quat().reshape(150, 20, 4)
+    for rust, twin in zip(_core.decouple_rotations(original, body, 2.0, 4.0), reference.decouple_rotations(original, body, 2.0, 4.0)):
+        np.testing.assert_allclose(rust, twin, atol=1e-12)
+    np.testing.assert_allclose(_core.compose_rotations(original, body, 0.7), reference.compose_rotations(original, body, 0.7), atol=1e-12)
+
+
+def test_activity_index_formula(backend):
+    # E = rotation by a about an axis: A = clip((tanh(a) * g)^b, 0, 1).
+    angles = np.radians([0.0, 5.0, 15.0, 30.0, 90.0])
+    original = Rotation.from_rotvec(np.outer(angles, [0, 0, 1])).as_quat()[None]
+    body = np.tile([0.0, 0, 0, 1], (1, 5, 1))
+    expressive, recovered, activity = decouple_rotations(original, body, 2.0, 4.0)
+    np.testing.assert_allclose(activity[0], np.clip((np.tanh(angles) * 2) ** 4, 0, 1), atol=1e-12)
+    np.testing.assert_allclose(quat.angle(expressive[0]), angles * activity[0], atol=1e-12)
+    np.testing.assert_allclose(same_rotation(compose_rotations(expressive, recovered), original), 1.0, atol=1e-12)
+
+
+def test_bad_arguments(backend):
+    q = np.tile([0.0, 0, 0, 1], (2, 3, 1))
+    with pytest.raises(ValueError, match="body"):
+        decouple_rotations(q, q[:1])
+    with pytest.raises(ValueError, match="gain"):
+        decouple_rotations(q, q, gain=-1.0)
+    with pytest.raises(ValueError, match="scale"):
+        compose_rotations(q, q, scale=np.inf)
