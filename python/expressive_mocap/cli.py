@@ -126,6 +126,99 @@ def cmd_demo(args) -> int:
     return 0
 
 
+def _model(args):
+    """The body-mechanics model of --model (default: the shipped one), calibrated with
+    --calibrate NEUTRAL... when given."""
+    from .model import BodyModel
+
+    model = BodyModel.load(args.model)
+    if getattr(args, "calibrate", None):
+        model = model.calibrated([read_bvh(path) for path in args.calibrate])
+    return model
+
+
+def _window(text: str) -> tuple[int, int]:
+    """``"A:B"`` -> ``(A, B)`` output frames."""
+    try:
+        start, end = (int(part) for part in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected START:END frames, got {text!r}") from None
+    if start < 0 or end < start:
+        raise argparse.ArgumentTypeError(f"expected 0 <= START <= END, got {text!r}")
+    return start, end
+
+
+def cmd_decouple(args) -> int:
+    from .decouple import decompose
+
+    motion = read_bvh(args.input)
+    parts = decompose(motion, _model(args), args.gain, args.exponent)
+    prefix = str(args.output)
+    write_bvh(parts.body_motion(), prefix + "_body.bvh")
+    write_bvh(parts.expressive_motion(), prefix + "_expressive.bvh")
+    names = motion.skeleton.names
+    table = io.StringIO()
+    np.savetxt(table, parts.activity, fmt="%.5f", delimiter=",", header=",".join(names), comments="")
+    atomic_write(prefix + "_activity.csv", table.getvalue().encode())
+    print(f"wrote {prefix}_body.bvh, {prefix}_expressive.bvh (E* on the mean body pose), {prefix}_activity.csv")
+    print("mean activity per joint (0 = body mechanics only, 1 = fully expressive):")
+    for name, value in zip(names, parts.activity.mean(axis=0)):
+        print(f"  {name:<16} {value:6.3f} {'#' * int(round(value * 40))}")
+    return 0
+
+
+def cmd_modulate(args) -> int:
+    from .decouple import modulate
+
+    out = modulate(read_bvh(args.input), args.scale, _model(args), args.gain, args.exponent)
+    write_bvh(out, args.output)
+    print(f"wrote {args.output}: expressiveness x {args.scale:g}")
+    return 0
+
+
+def cmd_mix(args) -> int:
+    from .decouple import mix
+
+    out = mix(read_bvh(args.body), read_bvh(args.expressive), _model(args), args.align, args.offset, args.gain, args.exponent)
+    write_bvh(out, args.output)
+    print(f"wrote {args.output}: body mechanics of {args.body}, expressiveness of {args.expressive}")
+    return 0
+
+
+def cmd_blend(args) -> int:
+    from .decouple import blend
+
+    first, second = read_bvh(args.first), read_bvh(args.second)
+    if args.naive:
+        out = blend(first, second, None, args.body_window)
+    else:
+        out = blend(first, second, _model(args), args.body_window, args.expressive_window or args.body_window, args.gain, args.exponent)
+    write_bvh(out, args.output)
+    print(f"wrote {args.output}: {out.n_frames} frames")
+    return 0
+
+
+def cmd_calibrate(args) -> int:
+    from .model import BodyModel
+
+    model = BodyModel.load(args.model).calibrated([read_bvh(path) for path in args.neutral])
+    model.save(args.output)
+    angles = model.calibration_angles()
+    largest = sorted(angles.items(), key=lambda kv: -kv[1])[:5]
+    print(f"wrote {args.output}: the model calibrated on {len(args.neutral)} neutral clip(s); largest corrections:")
+    for name, degrees in largest:
+        print(f"  {name:<16} {degrees:6.1f} degrees")
+    return 0
+
+
+def _add_model_options(p, calibrate: bool = True) -> None:
+    p.add_argument("--model", metavar="MODEL.npz", help="body-mechanics model (default: the shipped one, trained on Bandai-Namco neutral locomotion)")
+    if calibrate:
+        p.add_argument("--calibrate", nargs="+", metavar="NEUTRAL", help="neutral clips of the same actor/session: calibrate the model to them first")
+    p.add_argument("--gain", type=_positive(float), default=2.0, help="g of the activity index clip((tanh(a) g)^b, 0, 1) (default 2)")
+    p.add_argument("--exponent", type=_positive(float), default=4.0, help="b of the activity index (default 4)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog=PROG, description="Find, measure and edit the expressive part of motion capture (BVH files).")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
@@ -158,6 +251,44 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--start", type=int, default=0, help="first frame (default: 0)")
     p.add_argument("--end", type=int, help="frame to stop before (default: the end)")
     p.set_defaults(run=cmd_render)
+
+    p = commands.add_parser("decouple", help="split a motion into body mechanics and expressiveness (BVH + activity per joint)")
+    p.add_argument("input", metavar="IN", help="BVH file (the model's skeleton)")
+    p.add_argument("-o", "--output", required=True, metavar="PREFIX", help="writes PREFIX_body.bvh, PREFIX_expressive.bvh, PREFIX_activity.csv")
+    _add_model_options(p)
+    p.set_defaults(run=cmd_decouple)
+
+    p = commands.add_parser("modulate", help="scale the expressiveness of a motion (1 = unchanged, 0 = body mechanics only)")
+    p.add_argument("input", metavar="IN", help="BVH file")
+    p.add_argument("--scale", type=float, required=True, help="expressiveness factor, e.g. 0.5 or 1.5")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
+    _add_model_options(p)
+    p.set_defaults(run=cmd_modulate)
+
+    p = commands.add_parser("mix", help="body mechanics of one motion with the expressiveness of another")
+    p.add_argument("--body", required=True, metavar="X.bvh", help="source of the body mechanics and root trajectory")
+    p.add_argument("--expressive", required=True, metavar="Y.bvh", help="source of the expressive component")
+    p.add_argument("--align", choices=["index", "resample"], default="index", help="Y frame by frame (holding its last frame) or resampled to X's length (default: index)")
+    p.add_argument("--offset", type=int, default=0, help="with --align index: Y frame used at X frame 0 (default 0)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
+    _add_model_options(p)
+    p.set_defaults(run=cmd_mix)
+
+    p = commands.add_parser("blend", help="blend from one motion to another, body mechanics and expressiveness on their own windows")
+    p.add_argument("first", metavar="P", help="BVH file to blend from")
+    p.add_argument("second", metavar="Q", help="BVH file to blend to (starts at the earlier window's start)")
+    p.add_argument("--body-window", type=_window, required=True, metavar="A:B", help="output frames over which the body mechanics go from P to Q")
+    p.add_argument("--expressive-window", type=_window, metavar="C:D", help="output frames over which the expressiveness goes from P to Q (default: the body window)")
+    p.add_argument("--naive", action="store_true", help="blend whole poses over the body window (no decoupling), for comparison")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
+    _add_model_options(p)
+    p.set_defaults(run=cmd_blend)
+
+    p = commands.add_parser("calibrate", help="calibrate the body-mechanics model to an actor or capture session")
+    p.add_argument("neutral", nargs="+", metavar="NEUTRAL", help="neutral clips (walks, runs, standing) of that actor/session")
+    p.add_argument("-o", "--output", required=True, metavar="CAL.npz", help="the calibrated model, for --model")
+    p.add_argument("--model", metavar="MODEL.npz", help="model to calibrate (default: the shipped one)")
+    p.set_defaults(run=cmd_calibrate)
 
     p = commands.add_parser("demo", help="generate a procedural walk (no download), write, read and draw it")
     p.add_argument("-o", "--output", default="expressive-mocap-demo", metavar="DIR", help="folder for the outputs (default: ./expressive-mocap-demo)")
