@@ -7,16 +7,21 @@ rotates by ``q2`` then ``q1``; an Euler order is three axis indices (0 = X, 1 = 
 written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in degrees.
 """
 
+from .features import dynamic_features
 from .fk import forward_kinematics, forward_kinematics_many
 from .motion_block import ParseError, decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
+from .footsteps import air_time, foot_contacts
 from .rotations import euler_to_quat, quat_to_euler
 
 num_threads = 1
 
 __all__ = [
     "ParseError",
+    "air_time",
     "decode_channels",
+    "dynamic_features",
     "euler_to_quat",
+    "foot_contacts",
     "format_motion_block",
     "forward_kinematics",
     "forward_kinematics_many",
