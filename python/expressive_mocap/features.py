@@ -159,7 +159,7 @@ def contact_intervals(contacts, frame_time: float) -> list:
         raise MocapError(f"argument `contacts`: expected shape [F] or [F, S], got {list(contacts.shape)}")
     edges = np.diff(np.r_[0, contacts.astype(np.int8), 0])
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
-    return [ContactInterval(int(a), int(b), (b - a + 1) * frame_time) for a, b in zip(starts, ends)]
+    return [ContactInterval(int(a), int(b), float((b - a + 1) * frame_time)) for a, b in zip(starts, ends)]
 
 
 def footstrikes(contacts) -> np.ndarray:
