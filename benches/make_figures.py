@@ -12,7 +12,8 @@ from pathlib import Path
 
 import expressive_mocap as em
 from expressive_mocap.demo import procedural_walk
-from expressive_mocap.render import render
+from expressive_mocap.features import cadence, foot_contacts
+from expressive_mocap.render import plot_contacts, render
 
 HERE = Path(__file__).resolve().parent
 
@@ -35,7 +36,14 @@ def main() -> None:
     data = dataset_dir(args.data)
     walks = [em.read_bvh(data / f"dataset-2_walk_{style}_001.bvh") for style in ("normal", "exhausted")]
     render(walks, out / "bandai_walks.png", titles=["walk, normal", "walk, exhausted"], poses=6)
+    contacts_figure(walks[0], out / "bandai_walk_contacts.png")
     print(f"wrote {out}")
+
+
+def contacts_figure(walk: em.Motion, path: Path) -> None:
+    contacts = foot_contacts(walk)
+    title = f"dataset-2_walk_normal_001: foot contacts, {cadence(contacts, walk.frame_time):.2f} steps/s (Bandai-Namco, CC BY-NC 4.0)"
+    plot_contacts(contacts, walk.frame_time, path, title=title)
 
 
 if __name__ == "__main__":

@@ -100,3 +100,26 @@ def scipy_positions(skeleton: em.Skeleton, values: np.ndarray) -> np.ndarray:
             world_rot.append(world_rot[parent] * local)
             world_pos[:, j] = world_pos[:, parent] + world_rot[parent].apply(offset)
     return world_pos
+
+
+def stick_walker(hips, left_foot, right_foot, fps: float = 30.0, prefix: str = "") -> em.Motion:
+    """A 9-joint CMU-named figure (``prefix`` e.g. "mixamorig:") whose hips and ankles go
+    exactly where told: ``hips``, ``left_foot``, ``right_foot`` are world positions ``[F, 3]``
+    (cm). Rotations are identity; the toes sit 10 cm ahead of the ankles at the same height.
+    Facing +Z, left is +X; rest hips 90 cm above the origin, spine-to-head chain 50 cm: the
+    actor is 140 cm tall."""
+    names = ["Hips", "Spine", "Head", "LeftUpLeg", "LeftFoot", "LeftToeBase", "RightUpLeg", "RightFoot", "RightToeBase"]
+    parents = [-1, 0, 1, 0, 3, 4, 0, 6, 7]
+    offsets = np.array(
+        [[0, 90, 0], [0, 20, 0], [0, 30, 0], [10, -5, 0], [0, -80, 0], [0, 0, 10], [-10, -5, 0], [0, -80, 0], [0, 0, 10]], dtype=float
+    )
+    six = ("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")
+    skeleton = em.Skeleton(tuple(prefix + n for n in names), parents, offsets, (six,) * len(names))
+    hips = np.asarray(hips, dtype=float)
+    translations = np.broadcast_to(offsets, (len(hips), len(names), 3)).copy()
+    translations[:, 0] = hips
+    translations[:, 4] = np.asarray(left_foot, dtype=float) - hips - offsets[3]
+    translations[:, 7] = np.asarray(right_foot, dtype=float) - hips - offsets[6]
+    rotations = np.zeros((len(hips), len(names), 4))
+    rotations[..., 3] = 1.0
+    return em.Motion(skeleton, rotations, translations, 1.0 / fps)

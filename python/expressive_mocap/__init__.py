@@ -7,19 +7,27 @@ lengths are in the file's units. See the README for the conventions table.
 from .backend import get_backend, rust_available, set_backend, use_backend
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .errors import BVHError, MocapError
+from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts
 from .kernels import euler_to_quat, forward_kinematics, forward_kinematics_many, quat_to_euler
 from .motion import Motion, Skeleton
+from .roles import JointRoles, actor_height
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BVHError",
+    "FEATURE_NAMES",
+    "JointRoles",
     "MocapError",
     "Motion",
     "Skeleton",
     "__version__",
+    "actor_height",
     "bvh_bytes",
+    "contact_intervals",
+    "dynamic_features",
     "euler_to_quat",
+    "foot_contacts",
     "forward_kinematics",
     "forward_kinematics_many",
     "get_backend",

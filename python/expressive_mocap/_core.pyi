@@ -35,3 +35,16 @@ def forward_kinematics_many(clips: list[tuple[F64, F64, npt.NDArray[np.int64]]])
 
 def format_motion_block(values: F64, decimals: int | None = None) -> bytes:
     """Text of the MOTION block for ``values [F, C]``; ``decimals=None`` is the shortest exact text."""
+
+def foot_contacts(feet: F64, frame_time: float, floor: float, height_threshold: float, speed_threshold: float, min_frames: int, causal: bool) -> npt.NDArray[np.bool_]:
+    """Contacts ``bool [F, S]`` from world positions ``feet [F, S, P, 3]`` (P points a foot: ankle, toe);
+    thresholds in file units (speed per second); runs shorter than ``min_frames`` filtered (offline or causal hold)."""
+
+def air_time(contacts: npt.NDArray[np.bool_], frame_time: float) -> F64:
+    """Seconds since each foot last left contact ``[F, S]`` from ``contacts bool [F, S]``."""
+
+def dynamic_features(
+    points: F64, thighs: F64, contacts: npt.NDArray[np.bool_], reference: F64, frame_time: float, height: float, hips_rest_height: float, floor: float, window: int
+) -> F64:
+    """The 19 features ``[F, 19]`` from ``points [F, 3, 3]`` (hips, left and right upper leg, world), ``thighs [F, 2, 4]``
+    (local), ``contacts bool [F, 2]`` and the thighs' hemisphere ``reference [2, 4]``."""

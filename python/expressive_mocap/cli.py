@@ -102,6 +102,44 @@ def cmd_render(args) -> int:
     return 0
 
 
+def cmd_footsteps(args) -> int:
+    from .features import cadence, contact_intervals, default_floor, foot_contacts, footstrikes
+    from .roles import JointRoles, actor_height
+
+    motion = read_bvh(args.file)
+    roles = JointRoles.find(motion.skeleton)
+    names = roles.names(motion.skeleton)
+    height = actor_height(motion.skeleton, roles)
+    floor = args.floor if args.floor is not None else (0.0 if args.causal else default_floor(motion.positions(), roles))
+    contacts = foot_contacts(
+        motion, roles, floor=floor, causal=args.causal, height_threshold=args.height_threshold, speed_threshold=args.speed_threshold
+    )
+    dt = motion.frame_time
+    print(f"{args.file}: {motion.n_frames} frames at {motion.fps:.6g} fps ({motion.duration:.2f} s)")
+    print(f"  actor height {height:.4g}, floor at {floor:.4g} (file units)")
+    print(
+        f"  contact: height < {args.height_threshold:g} x height = {args.height_threshold * height:.3g} and "
+        f"speed < {args.speed_threshold:g} x height/s = {args.speed_threshold * height:.3g}/s, "
+        f"{'causal hold' if args.causal else 'offline filter'} of 0.1 s"
+    )
+    for side, intervals in zip(("left", "right"), contact_intervals(contacts, dt)):
+        print(f"{side} foot ({names[f'{side}_foot']}, {names[f'{side}_toe']}): {len(intervals)} contact{'s' * (len(intervals) != 1)}")
+        for i in intervals:
+            print(f"  frames {i.start:5d}-{i.end:<5d} {i.start * dt:8.3f}-{(i.end + 1) * dt:.3f} s  ({i.seconds:.3f} s)")
+    strikes = footstrikes(contacts)
+    steps_per_second = cadence(contacts, dt)
+    left = int(np.count_nonzero(strikes[:, 1] == 0))
+    rate = f"cadence {steps_per_second:.2f} steps/s" if np.isfinite(steps_per_second) else "cadence: too few steps"
+    print(f"summary: {len(strikes)} steps ({left} left, {len(strikes) - left} right), {rate}")
+    if args.plot:
+        from .render import plot_contacts
+
+        title = f"{Path(args.file).name}: foot contacts ({len(strikes)} steps, {rate})"
+        plot_contacts(contacts, dt, args.plot, title=title)
+        print(f"wrote {args.plot}")
+    return 0
+
+
 def cmd_demo(args) -> int:
     from .demo import procedural_walk
     from .render import render
@@ -289,6 +327,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, metavar="CAL.npz", help="the calibrated model, for --model")
     p.add_argument("--model", metavar="MODEL.npz", help="model to calibrate (default: the shipped one)")
     p.set_defaults(run=cmd_calibrate)
+
+    p = commands.add_parser(
+        "footsteps",
+        help="foot contacts of a walk: contact intervals per foot, step count and cadence, optionally a gait diagram",
+        description="Foot contacts after Lee et al. 2002: a foot (ankle or toe) touches when it is both low and slow; "
+        "contacts and flights shorter than 0.1 s are absorbed (offline) or held off (--causal). "
+        "Prints each foot's contact intervals in frames and seconds, then the steps and the cadence.",
+    )
+    p.add_argument("file", metavar="FILE", help="BVH file (joints found by name: Bandai-Namco, CMU or Mixamo)")
+    p.add_argument("--plot", metavar="OUT.png", help="also write a gait diagram: one row per foot, a bar per contact")
+    p.add_argument("--causal", action="store_true", help="streaming detector: frame t sees frames <= t only (hold filter, floor 0)")
+    p.add_argument("--height-threshold", type=_positive(float), default=0.05, metavar="X", help="contact below X x actor height above the floor (default: 0.05)")
+    p.add_argument("--speed-threshold", type=_positive(float), default=0.5, metavar="X", help="contact below X x actor height per second (default: 0.5)")
+    p.add_argument("--floor", type=float, metavar="Y", help="floor height in file units (default: 5th percentile of toe heights; 0 with --causal)")
+    p.set_defaults(run=cmd_footsteps)
 
     p = commands.add_parser("demo", help="generate a procedural walk (no download), write, read and draw it")
     p.add_argument("-o", "--output", default="expressive-mocap-demo", metavar="DIR", help="folder for the outputs (default: ./expressive-mocap-demo)")

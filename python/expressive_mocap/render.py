@@ -157,3 +157,42 @@ def _save(fig, plt, path: str | os.PathLike) -> None:
     fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
     atomic_write(path, buffer.getvalue())
+
+
+def plot_contacts(
+    contacts: np.ndarray, frame_time: float, path: str | os.PathLike, title: str = "", labels: Sequence[str] = ("left foot", "right foot")
+) -> None:
+    """A gait diagram PNG: one row per foot (``contacts bool [F, S]``, rows top to bottom in
+    ``labels`` order), a bar for each contact, time in seconds along the bottom."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, no display needed
+    import matplotlib.pyplot as plt
+
+    from .features import contact_intervals
+
+    contacts = np.asarray(contacts, dtype=bool)
+    if contacts.ndim != 2 or contacts.shape[1] != len(labels):
+        raise MocapError(f"plot_contacts: expected contacts [F, {len(labels)}], got {list(contacts.shape)}")
+    duration = len(contacts) * frame_time
+    fig, ax = plt.subplots(figsize=(float(np.clip(2.0 + 1.1 * duration, 6.0, 16.0)), 0.55 * len(labels) + 1.3))
+    colours = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
+    for row, intervals in enumerate(contact_intervals(contacts, frame_time)):
+        y = len(labels) - 1 - row
+        # A frame stands for the frame_time that starts at it, so bars join up with no gaps.
+        spans = [(i.start * frame_time, i.seconds) for i in intervals]
+        ax.broken_barh(spans, (y - 0.35, 0.7), color=colours[row % len(colours)])
+    ax.set_yticks(range(len(labels)), list(reversed(labels)))
+    ax.set_xlim(0.0, duration)
+    ax.set_ylim(-0.6, len(labels) - 0.4)
+    ax.set_xlabel("time (s)")
+    if duration <= 30:
+        from matplotlib.ticker import MultipleLocator
+
+        ax.xaxis.set_major_locator(MultipleLocator(1.0))  # a grid line a second: steps are countable
+    ax.grid(axis="x", color="0.85", lw=0.6)
+    ax.set_axisbelow(True)
+    for side in ("top", "right"):
+        ax.spines[side].set_visible(False)
+    ax.set_title(title, fontsize=10, loc="left")
+    _save(fig, plt, path)

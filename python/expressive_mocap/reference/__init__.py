@@ -8,18 +8,23 @@ written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in de
 """
 
 from .decouple import compose_rotations, decouple_rotations
+from .features import dynamic_features
 from .fk import forward_kinematics, forward_kinematics_many
 from .motion_block import ParseError, decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
+from .footsteps import air_time, foot_contacts
 from .rotations import euler_to_quat, quat_to_euler
 
 num_threads = 1
 
 __all__ = [
     "ParseError",
+    "air_time",
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
+    "dynamic_features",
     "euler_to_quat",
+    "foot_contacts",
     "format_motion_block",
     "forward_kinematics",
     "forward_kinematics_many",

@@ -1,0 +1,254 @@
+"""Foot contacts and the dynamic features per frame of METHODS.md part 2.
+
+Python does forward kinematics, joint roles and defaults; the per-frame loops (speeds, contact
+filter, heading frame, running mean) run in the kernels (Rust, or the NumPy twins in
+``expressive_mocap.reference``). Y is up; thresholds are fractions of the actor's height
+(:func:`expressive_mocap.roles.actor_height`), speeds per second.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .backend import kernels
+from .errors import MocapError
+from .motion import Motion
+from .roles import JointRoles, actor_height, hips_rest_height
+
+FEATURE_NAMES = (
+    "velocity_x",  # hips velocity in the heading frame (x = left, y = up, z = forward) / height, per s
+    "velocity_y",
+    "velocity_z",
+    "mean_velocity_x",  # the same, averaged over the last third of a second
+    "mean_velocity_y",
+    "mean_velocity_z",
+    "contact_left",  # 1 in contact, 0 in flight
+    "contact_right",
+    "air_time_left",  # seconds since the foot last left contact
+    "air_time_right",
+    "hips_height",  # (hips height - floor) / hips rest height
+    "thigh_left_x",  # local rotation of the upper legs (x, y, z, w)
+    "thigh_left_y",
+    "thigh_left_z",
+    "thigh_left_w",
+    "thigh_right_x",
+    "thigh_right_y",
+    "thigh_right_z",
+    "thigh_right_w",
+)
+
+HEIGHT_THRESHOLD = 0.05  # x actor height
+SPEED_THRESHOLD = 0.5  # x actor height per second
+MIN_DURATION = 0.1  # seconds: shorter contact or flight runs are noise
+FLOOR_PERCENTILE = 5.0
+
+
+class ContactInterval(NamedTuple):
+    """Frames ``start`` to ``end`` (both included) in contact, lasting ``seconds`` (frames x frame time)."""
+
+    start: int
+    end: int
+    seconds: float
+
+
+def _motion(motion) -> Motion:
+    if not isinstance(motion, Motion):
+        raise MocapError(f"argument `motion`: expected a Motion, got {type(motion).__name__}")
+    if motion.n_frames == 0:
+        raise MocapError("argument `motion`: the motion has no frames")
+    return motion
+
+
+def _positive(name: str, value) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise MocapError(f"argument `{name}`: expected a number, got {value!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise MocapError(f"argument `{name}`: must be a positive number, got {value}")
+    return value
+
+
+def _frames(seconds: float, motion: Motion) -> int:
+    return max(1, int(round(seconds * motion.fps)))
+
+
+def default_floor(positions: np.ndarray, roles: JointRoles) -> float:
+    """The floor height: the 5th percentile of both toes' heights over the clip (``positions [F, J, 3]``)."""
+    return float(np.percentile(positions[:, list(roles.toes), 1], FLOOR_PERCENTILE))
+
+
+def _floor(floor, positions: np.ndarray, roles: JointRoles, causal: bool) -> float:
+    if floor is None:
+        return 0.0 if causal else default_floor(positions, roles)
+    value = float(floor)
+    if not np.isfinite(value):
+        raise MocapError(f"argument `floor`: must be a finite height, got {floor}")
+    return value
+
+
+def _contacts(motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration) -> np.ndarray:
+    feet = positions[:, [[roles.feet[0], roles.toes[0]], [roles.feet[1], roles.toes[1]]]]
+    return kernels().foot_contacts(
+        np.ascontiguousarray(feet),
+        motion.frame_time,
+        floor,
+        _positive("height_threshold", height_threshold) * height,
+        _positive("speed_threshold", speed_threshold) * height,
+        _frames(_positive("min_duration", min_duration), motion),
+        bool(causal),
+    )
+
+
+def _setup(motion, roles, height):
+    motion = _motion(motion)
+    if roles is None:
+        roles = JointRoles.find(motion.skeleton)
+    elif not isinstance(roles, JointRoles):
+        raise MocapError(f"argument `roles`: expected JointRoles, got {type(roles).__name__}")
+    height = actor_height(motion.skeleton, roles) if height is None else _positive("height", height)
+    return motion, roles, height
+
+
+def foot_contacts(
+    motion: Motion,
+    roles: JointRoles | None = None,
+    *,
+    floor: float | None = None,
+    causal: bool = False,
+    height_threshold: float = HEIGHT_THRESHOLD,
+    speed_threshold: float = SPEED_THRESHOLD,
+    min_duration: float = MIN_DURATION,
+    height: float | None = None,
+) -> np.ndarray:
+    """Contacts ``bool [F, 2]`` (left, right foot) after Lee et al. 2002.
+
+    A foot (its ankle and toe: either counts) touches when its height above ``floor`` is below
+    ``height_threshold`` x actor height and its speed below ``speed_threshold`` x actor height
+    per second. Offline (default) contact and flight runs shorter than ``min_duration`` seconds
+    are absorbed by their neighbours; ``causal=True`` uses a hold of ``min_duration`` instead
+    (a change counts once it has lasted that long; frame ``t`` uses frames ``<= t``).
+    ``floor`` defaults to the 5th percentile of toe heights (0 when causal); ``height`` (file
+    units) to :func:`~expressive_mocap.roles.actor_height`; ``roles`` to ``JointRoles.find``.
+    """
+    motion, roles, height = _setup(motion, roles, height)
+    positions = motion.positions()
+    floor = _floor(floor, positions, roles, causal)
+    return _contacts(motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration)
+
+
+def air_time(contacts, frame_time: float) -> np.ndarray:
+    """Seconds since each foot last left contact ``[F, S]`` from ``contacts bool [F, S]`` (0 in
+    contact; a clip that starts in flight counts from one frame before its start)."""
+    contacts = np.asarray(contacts)
+    if contacts.ndim != 2:
+        raise MocapError(f"argument `contacts`: expected shape [F, S], got {list(contacts.shape)}")
+    return kernels().air_time(np.ascontiguousarray(contacts, dtype=bool), _positive("frame_time", frame_time))
+
+
+def contact_intervals(contacts, frame_time: float) -> list:
+    """Contact intervals of one foot ``contacts [F]`` as a list of :class:`ContactInterval`, or
+    of each foot of ``contacts [F, S]`` as a list per foot."""
+    contacts = np.asarray(contacts, dtype=bool)
+    frame_time = _positive("frame_time", frame_time)
+    if contacts.ndim == 2:
+        return [contact_intervals(contacts[:, s], frame_time) for s in range(contacts.shape[1])]
+    if contacts.ndim != 1:
+        raise MocapError(f"argument `contacts`: expected shape [F] or [F, S], got {list(contacts.shape)}")
+    edges = np.diff(np.r_[0, contacts.astype(np.int8), 0])
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    return [ContactInterval(int(a), int(b), float((b - a + 1) * frame_time)) for a, b in zip(starts, ends)]
+
+
+def footstrikes(contacts) -> np.ndarray:
+    """Footstrikes ``int [N, 2]`` (frame, foot), in time order: the frames where a contact
+    begins, the first frame excluded (a contact there started before the clip)."""
+    contacts = np.asarray(contacts, dtype=bool)
+    if contacts.ndim != 2:
+        raise MocapError(f"argument `contacts`: expected shape [F, S], got {list(contacts.shape)}")
+    frames, feet = np.nonzero(contacts[1:] & ~contacts[:-1])
+    order = np.lexsort((feet, frames))
+    return np.stack([frames[order] + 1, feet[order]], axis=1)
+
+
+def cadence(contacts, frame_time: float) -> float:
+    """Steps per second: footstrikes (both feet) per second between the first and the last
+    one; NaN with fewer than two footstrikes."""
+    strikes = footstrikes(contacts)[:, 0]
+    frame_time = _positive("frame_time", frame_time)
+    if len(strikes) < 2 or strikes[-1] == strikes[0]:
+        return float("nan")
+    return (len(strikes) - 1) / ((strikes[-1] - strikes[0]) * frame_time)
+
+
+def mean_rotation(quats: np.ndarray) -> np.ndarray:
+    """A mean of unit quaternions ``[F, 4] -> [4]``: each put on the first one's hemisphere,
+    summed and normalised (good for rotations that stay well within 90 degrees of each other)."""
+    quats = np.asarray(quats, dtype=np.float64)
+    aligned = np.where(np.sum(quats * quats[:1], axis=-1, keepdims=True) < 0, -quats, quats)
+    total = aligned.sum(axis=0)
+    norm = np.linalg.norm(total)
+    return total / norm if norm > 1e-12 else quats[0]
+
+
+def _thigh_reference(thigh_reference, thighs: np.ndarray, causal: bool) -> np.ndarray:
+    if thigh_reference is None:
+        # Causal: the first frame (the only one every frame may look at); offline: the clip's mean.
+        return thighs[0].copy() if causal else np.stack([mean_rotation(thighs[:, 0]), mean_rotation(thighs[:, 1])])
+    reference = np.asarray(thigh_reference, dtype=np.float64)
+    if reference.shape != (2, 4) or not np.isfinite(reference).all():
+        raise MocapError(f"argument `thigh_reference`: expected finite quaternions [2, 4] (left, right; x, y, z, w), got shape {list(reference.shape)}")
+    return np.ascontiguousarray(reference)
+
+
+def dynamic_features(
+    motion: Motion,
+    roles: JointRoles | None = None,
+    floor: float | None = None,
+    thigh_reference=None,
+    causal: bool = True,
+    *,
+    height: float | None = None,
+    height_threshold: float = HEIGHT_THRESHOLD,
+    speed_threshold: float = SPEED_THRESHOLD,
+    min_duration: float = MIN_DURATION,
+) -> np.ndarray:
+    """The 19 features of every frame, ``float64 [F, 19]``, columns named in :data:`FEATURE_NAMES`.
+
+    Frame ``t`` uses frames ``<= t`` only (with the defaults ``causal=True``): hips velocity
+    ``(x_t - x_{t-1}) / dt / height`` in the heading frame (yaw removed; heading from the line
+    between the upper legs; 0 at frame 0), its mean over the last ``round(fps / 3)`` frames,
+    foot contacts (causal hold filter), air time, hips height above the floor / hips rest height,
+    and each upper leg's local rotation kept on the hemisphere of ``thigh_reference [2, 4]``
+    (default: the first frame's thigh rotations; a trained model passes its own).
+    ``causal=False`` uses the offline contact filter, the 5th percentile of toe heights as the
+    default floor (0 when causal) and the clip's mean thigh rotations as the default reference.
+    Other arguments as in :func:`foot_contacts`.
+    """
+    motion, roles, height = _setup(motion, roles, height)
+    positions = motion.positions()
+    floor = _floor(floor, positions, roles, causal)
+    contacts = _contacts(motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration)
+    points = np.ascontiguousarray(positions[:, [roles.hips, *roles.upper_legs]])
+    thighs = np.ascontiguousarray(motion.rotations[:, list(roles.upper_legs)])
+    reference = _thigh_reference(thigh_reference, thighs, causal)
+    window = max(1, int(round(motion.fps / 3)))
+    return kernels().dynamic_features(
+        points, thighs, contacts, reference, motion.frame_time, height, hips_rest_height(motion.skeleton, roles), floor, window
+    )
+
+
+__all__ = [
+    "FEATURE_NAMES",
+    "ContactInterval",
+    "air_time",
+    "cadence",
+    "contact_intervals",
+    "default_floor",
+    "dynamic_features",
+    "foot_contacts",
+    "footstrikes",
+    "mean_rotation",
+]

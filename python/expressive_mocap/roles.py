@@ -1,0 +1,148 @@
+"""Which joint plays which part: hips, head, the spine-to-head chain, upper legs, ankles, toes.
+
+Found by name on the skeletons met in practice (Bandai-Namco ``UpperLeg_L``/``Foot_L``/
+``Toes_L``, CMU ``LeftUpLeg``/``LeftFoot``/``LeftToeBase``, Mixamo ``mixamorig:LeftUpLeg``, and
+``Left``/``L``/``_l`` spellings of them); any role can be given by the caller instead.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import MocapError
+from .motion import Skeleton
+
+_SIDES = {"left": r"(?:left|l)", "right": r"(?:right|r)"}
+_PARTS = {
+    "upper_leg": r"(?:upleg|upperleg|thigh|hip)",
+    "foot": r"(?:foot|ankle)",
+    "toe": r"(?:toes?|toebase|ball)",
+}
+_CENTRE = {"hips": r"(?:hips|pelvis)", "head": r"head"}
+
+
+def _key(name: str) -> str:
+    """``"mixamorig:Left_Up-Leg"`` -> ``"leftupleg"``: no namespace prefix, case or separators."""
+    return re.sub(r"[\s_.\-]", "", name.rsplit(":", 1)[-1].lower())
+
+
+def _sided(part: str, side: str) -> re.Pattern:
+    s, p = _SIDES[side], _PARTS[part]
+    return re.compile(rf"^(?:{s}{p}|{p}{s})$")
+
+
+ROLE_NAMES = ("hips", "head", "left_upper_leg", "right_upper_leg", "left_foot", "right_foot", "left_toe", "right_toe")
+_PATTERNS = {
+    "hips": re.compile(rf"^{_CENTRE['hips']}$"),
+    "head": re.compile(rf"^{_CENTRE['head']}$"),
+    **{f"{side}_{part}": _sided(part, side) for part in _PARTS for side in _SIDES},
+}
+
+
+@dataclass(frozen=True)
+class JointRoles:
+    """Joint indices of the parts the features need. ``spine`` is the chain from the hips to the
+    head, both included, in that order. Pairs are (left, right)."""
+
+    hips: int
+    head: int
+    spine: tuple[int, ...]
+    upper_legs: tuple[int, int]
+    feet: tuple[int, int]
+    toes: tuple[int, int]
+
+    @classmethod
+    def find(cls, skeleton: Skeleton, **overrides: int | str) -> JointRoles:
+        """Roles of ``skeleton`` by joint name. ``overrides`` give any role (names in
+        :data:`ROLE_NAMES`) as a joint index or name, e.g. ``left_toe="LeftToe_End"``.
+
+        Raises :class:`MocapError` naming every role that could not be found (or was found twice).
+        """
+        unknown = set(overrides) - set(ROLE_NAMES)
+        if unknown:
+            raise MocapError(f"unknown joint role(s) {', '.join(sorted(unknown))}; roles are {', '.join(ROLE_NAMES)}")
+        keys = [_key(n) for n in skeleton.names]
+        found: dict[str, int] = {}
+        problems = []
+        for role in ROLE_NAMES:
+            if role in overrides:
+                found[role] = _joint(skeleton, overrides[role], role)
+                continue
+            matches = [j for j, k in enumerate(keys) if _PATTERNS[role].match(k)]
+            if len(matches) == 1:
+                found[role] = matches[0]
+            elif matches:
+                problems.append(f"{role} (several candidates: {', '.join(skeleton.names[j] for j in matches)})")
+            else:
+                problems.append(role)
+        if problems:
+            raise MocapError(
+                f"cannot tell which joint is the {'; '.join(problems)}: pass it by name, e.g. "
+                f"JointRoles.find(skeleton, {problems[0].split()[0]}='JointName'); joints are: {', '.join(skeleton.names)}"
+            )
+        spine = _chain(skeleton, found["hips"], found["head"])
+        return cls(
+            hips=found["hips"],
+            head=found["head"],
+            spine=spine,
+            upper_legs=(found["left_upper_leg"], found["right_upper_leg"]),
+            feet=(found["left_foot"], found["right_foot"]),
+            toes=(found["left_toe"], found["right_toe"]),
+        )
+
+    def names(self, skeleton: Skeleton) -> dict[str, str]:
+        """Role -> joint name, for messages."""
+        pairs = {"upper_leg": self.upper_legs, "foot": self.feet, "toe": self.toes}
+        out = {"hips": skeleton.names[self.hips], "head": skeleton.names[self.head]}
+        for part, (left, right) in pairs.items():
+            out[f"left_{part}"], out[f"right_{part}"] = skeleton.names[left], skeleton.names[right]
+        return out
+
+
+def _joint(skeleton: Skeleton, value: int | str, role: str) -> int:
+    if isinstance(value, str):
+        return skeleton.index(value)
+    index = int(value)
+    if not 0 <= index < skeleton.n_joints:
+        raise MocapError(f"role {role}: joint index {index} out of range (the skeleton has {skeleton.n_joints} joints)")
+    return index
+
+
+def _chain(skeleton: Skeleton, top: int, bottom: int) -> tuple[int, ...]:
+    """Joints from ``top`` down to ``bottom`` along the parents, both included."""
+    chain = [bottom]
+    while chain[-1] != top:
+        parent = int(skeleton.parents[chain[-1]])
+        if parent < 0:
+            raise MocapError(f"joint {skeleton.names[bottom]!r} does not hang below the hips {skeleton.names[top]!r}")
+        chain.append(parent)
+    return tuple(reversed(chain))
+
+
+def hips_rest_height(skeleton: Skeleton, roles: JointRoles) -> float:
+    """Height of the hips above the floor in the rest pose, in file units.
+
+    The hips' rest Y above the file's origin, taken as the floor (Bandai-Namco, Mixamo and the
+    demo put the origin there). Where that is under half the leg's length (files such as CMU's
+    hang the rest pose from the origin), the leg's length is used: the bone lengths from the
+    hips down to the ankle, which a standing actor's hips are about that high.
+    """
+    joints, _ = skeleton.rest_positions()
+    leg = sum(float(np.linalg.norm(skeleton.offsets[j])) for j in _chain(skeleton, roles.hips, roles.feet[0])[1:])
+    above_origin = float(joints[roles.hips, 1])
+    return above_origin if above_origin >= 0.5 * leg else leg
+
+
+def actor_height(skeleton: Skeleton, roles: JointRoles | None = None) -> float:
+    """The actor's height in file units: :func:`hips_rest_height` plus the bone lengths of the
+    spine-to-head chain (METHODS.md part 2: the Bandai rest pose is not upright, so its vertical
+    extent is no measure; this gives about 141 cm there)."""
+    roles = roles or JointRoles.find(skeleton)
+    spine = sum(float(np.linalg.norm(skeleton.offsets[j])) for j in roles.spine[1:])
+    return hips_rest_height(skeleton, roles) + spine
+
+
+__all__ = ["ROLE_NAMES", "JointRoles", "actor_height", "hips_rest_height"]

@@ -1,0 +1,276 @@
+"""Joint roles, actor height and the 19 dynamic features: cases by hand, heading invariance,
+causality, Rust/NumPy parity and real Bandai-Namco walks."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import expressive_mocap as em
+from expressive_mocap import quat, reference
+from expressive_mocap.backend import kernels
+from expressive_mocap.demo import bandai_like_skeleton, procedural_walk
+from expressive_mocap.features import FEATURE_NAMES, dynamic_features, mean_rotation
+from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
+
+from conftest import stick_walker
+
+ATOL = 1e-9  # Rust vs NumPy and invariances, on features of order 1 (measured ~1e-15)
+V, V_MEAN, CONTACT, AIR, H, THIGHS = slice(0, 3), slice(3, 6), slice(6, 8), slice(8, 10), 10, slice(11, 19)
+
+
+def straight_walker(frames=40, velocity=(0.0, 0.0, 140.0), fps=30.0):
+    """Hips 90 cm up moving at a constant ``velocity`` (cm/s), facing +Z, feet on the floor."""
+    t = np.arange(frames)[:, None] / fps
+    hips = np.array([0.0, 90.0, 0.0]) + t * np.array(velocity)
+    feet = hips * [1, 0, 1]
+    return stick_walker(hips, feet + [10, 0, 0], feet - [10, 0, 0], fps=fps)
+
+
+def turned(motion, degrees, shift=(0.0, 0.0, 0.0)):
+    """The same motion turned about the vertical through the origin, then moved by ``shift``."""
+    q = quat.about("Y", degrees)
+    rotations, translations = motion.rotations.copy(), motion.translations.copy()
+    rotations[:, 0] = quat.mul(q, rotations[:, 0])
+    translations[:, 0] = quat.rotate(q, translations[:, 0]) + shift
+    return em.Motion(motion.skeleton, rotations, translations, motion.frame_time)
+
+
+# -- roles and actor height ---------------------------------------------------------------
+
+
+def test_roles_of_bandai_cmu_and_mixamo_names():
+    bandai = JointRoles.find(bandai_like_skeleton())
+    assert bandai.names(bandai_like_skeleton()) == {
+        "hips": "Hips",
+        "head": "Head",
+        "left_upper_leg": "UpperLeg_L",
+        "right_upper_leg": "UpperLeg_R",
+        "left_foot": "Foot_L",
+        "right_foot": "Foot_R",
+        "left_toe": "Toes_L",
+        "right_toe": "Toes_R",
+    }
+    assert [bandai_like_skeleton().names[j] for j in bandai.spine] == ["Hips", "Spine", "Chest", "Neck", "Head"]
+    walker = straight_walker(frames=2)
+    for prefix in ["", "mixamorig:"]:
+        skeleton = stick_walker(*(walker.positions()[:, j] for j in (0, 4, 7)), prefix=prefix).skeleton
+        roles = JointRoles.find(skeleton)
+        assert (roles.hips, roles.head, roles.spine, roles.upper_legs, roles.feet, roles.toes) == (0, 2, (0, 1, 2), (3, 6), (4, 7), (5, 8))
+
+
+def test_roles_can_be_given_and_missing_ones_are_named(mixed_path):
+    skeleton = bandai_like_skeleton()
+    roles = JointRoles.find(skeleton, left_toe="Foot_L", right_toe=20)
+    assert roles.toes == (16, 20)
+    with pytest.raises(em.MocapError, match="no joint named 'Nope'"):
+        JointRoles.find(skeleton, head="Nope")
+    with pytest.raises(em.MocapError, match="unknown joint role.*left_hand"):
+        JointRoles.find(skeleton, left_hand="Hand_L")
+    with pytest.raises(em.MocapError, match="out of range"):
+        JointRoles.find(skeleton, hips=99)
+    hand_written = em.read_bvh(mixed_path).skeleton
+    with pytest.raises(em.MocapError, match="cannot tell which joint is the left_upper_leg; right_upper_leg; left_foot; left_toe: pass it by name") as error:
+        JointRoles.find(hand_written)
+    assert "joints are: mixamorig:Hips, Spine Lower" in str(error.value)
+
+
+def test_two_candidates_for_a_role_are_reported():
+    skeleton = bandai_like_skeleton()
+    names = list(skeleton.names)
+    names[names.index("Shoulder_L")] = "LeftUpLeg"  # a second left upper leg
+    twin = em.Skeleton(tuple(names), skeleton.parents, skeleton.offsets, skeleton.channels)
+    with pytest.raises(em.MocapError, match="left_upper_leg \\(several candidates: LeftUpLeg, UpperLeg_L\\)"):
+        JointRoles.find(twin)
+
+
+def test_actor_height_by_hand():
+    skeleton = straight_walker(frames=2).skeleton
+    roles = JointRoles.find(skeleton)
+    assert hips_rest_height(skeleton, roles) == pytest.approx(90.0)
+    assert actor_height(skeleton, roles) == pytest.approx(140.0)
+    # Rest pose hanging from the origin (CMU style): the leg's length stands in for the hips' height.
+    offsets = skeleton.offsets.copy()
+    offsets[0] = 0.0
+    hanging = skeleton.with_offsets(offsets, [])
+    assert hips_rest_height(hanging, roles) == pytest.approx(np.hypot(10, 5) + 80)
+
+
+@pytest.mark.real_data
+def test_bandai_actor_is_141_cm(bandai2_dir):
+    skeleton = em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh").skeleton
+    roles = JointRoles.find(skeleton)
+    assert hips_rest_height(skeleton, roles) == pytest.approx(93.31, abs=0.01)
+    assert actor_height(skeleton) == pytest.approx(140.9, abs=0.1)
+
+
+# -- features by hand ---------------------------------------------------------------------
+
+
+def test_feature_names():
+    assert len(FEATURE_NAMES) == 19 == len(set(FEATURE_NAMES))
+
+
+def test_constant_hips_velocity(backend):
+    walker = straight_walker(frames=40)  # 140 cm/s forward = 1 actor height a second
+    f = dynamic_features(walker, floor=0.0)
+    assert f.shape == (40, 19)
+    np.testing.assert_allclose(f[0, V], 0.0)
+    np.testing.assert_allclose(f[1:, V], np.tile([0.0, 0.0, 1.0], (39, 1)), atol=1e-12)
+    # The mean over the last 10 frames (a third of a second) ramps up from frame 0's zero.
+    np.testing.assert_allclose(f[:10, 5], np.arange(10) / np.arange(1, 11), atol=1e-12)
+    np.testing.assert_allclose(f[10:, V_MEAN], np.tile([0.0, 0.0, 1.0], (30, 1)), atol=1e-12)
+    np.testing.assert_allclose(f[:, H], 1.0)  # hips 90 cm above the floor, 90 cm at rest
+    # Moving sideways to the left (+X while facing +Z) at 70 cm/s, and upwards.
+    f = dynamic_features(straight_walker(frames=5, velocity=(70.0, 14.0, 0.0)), floor=0.0)
+    np.testing.assert_allclose(f[1:, V], np.tile([0.5, 0.1, 0.0], (4, 1)), atol=1e-12)
+
+
+def test_hips_height_is_above_the_floor_over_the_rest_height(backend):
+    walker = straight_walker(frames=5)
+    f = dynamic_features(walker, floor=-9.0)
+    np.testing.assert_allclose(f[:, H], 99.0 / 90.0)
+
+
+@pytest.mark.parametrize("degrees", [90.0, -137.0])
+def test_turning_the_motion_changes_nothing(backend, degrees):
+    walk = procedural_walk(seconds=2.0)
+    for causal in (True, False):
+        original = dynamic_features(walk, causal=causal)
+        np.testing.assert_allclose(dynamic_features(turned(walk, degrees, shift=(300.0, 0.0, -50.0)), causal=causal), original, atol=ATOL)
+    # The heading frame's +Z is forward, +X left.
+    assert original[1:, 5].mean() > 0.5 and abs(original[1:, 3].mean()) < 0.05
+
+
+def test_thighs_follow_the_reference_hemisphere(backend):
+    walk = procedural_walk(seconds=1.0)
+    thighs = walk.rotations[:, [14, 18]]
+    default = dynamic_features(walk)[:, THIGHS].reshape(-1, 2, 4)
+    np.testing.assert_allclose(np.abs(default), np.abs(thighs), atol=1e-15)
+    assert (np.sum(default * thighs[:1], axis=-1) >= 0).all()  # causal default: the first frame
+    flipped = dynamic_features(walk, thigh_reference=-thighs[0])[:, THIGHS].reshape(-1, 2, 4)
+    np.testing.assert_allclose(flipped, -default, atol=1e-15)
+    offline = dynamic_features(walk, causal=False)[:, THIGHS].reshape(-1, 2, 4)
+    means = np.stack([mean_rotation(thighs[:, 0]), mean_rotation(thighs[:, 1])])
+    assert (np.sum(offline * means, axis=-1) >= 0).all()
+
+
+# -- causality ----------------------------------------------------------------------------
+
+
+@pytest.mark.real_data
+def test_causal_features_do_not_look_ahead(backend, bandai2_dir):
+    walk = em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh")
+    other = em.read_bvh(bandai2_dir / "dataset-2_walk_exhausted_001.bvh")
+    full = dynamic_features(walk)
+    for k in (1, 2, 3, 11, 57, 150):
+        np.testing.assert_allclose(dynamic_features(walk[:k]), full[:k], atol=1e-12, err_msg=f"truncated to {k} frames")
+        # Other frames after k (a different walk, shifted to start where this one is): same first k rows.
+        spliced = em.Motion(
+            walk.skeleton,
+            np.concatenate([walk.rotations[:k], other.rotations[k:]]),
+            np.concatenate([walk.translations[:k], other.translations[k:]]),
+            walk.frame_time,
+        )
+        np.testing.assert_allclose(dynamic_features(spliced)[:k], full[:k], atol=1e-12, err_msg=f"changed after frame {k}")
+
+
+# -- Rust vs NumPy ------------------------------------------------------------------------
+
+
+def random_feature_inputs(rng, frames):
+    points = rng.normal(scale=50.0, size=(frames, 3, 3))
+    points[::7, 2] = points[::7, 1] + [0.0, 3.0, 0.0]  # upper legs one above the other: no heading
+    points[0, 2] = points[0, 1] + [0.0, -2.0, 0.0]
+    thighs = Rotation.random(frames * 2, random_state=frames).as_quat().reshape(frames, 2, 4)
+    contacts = rng.random((frames, 2)) < 0.5
+    ref = Rotation.random(2, random_state=1).as_quat()
+    return points, thighs, contacts, ref
+
+
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+@pytest.mark.parametrize("frames, window", [(1, 10), (7, 1), (7, 30), (3000, 10)])
+def test_rust_matches_numpy_twin(frames, window):
+    from expressive_mocap import _core
+
+    rng = np.random.default_rng(frames + window)
+    args = (*random_feature_inputs(rng, frames), 1 / 30, 140.0, 93.0, 4.0, window)
+    rust, numpy = _core.dynamic_features(*args), reference.dynamic_features(*args)
+    assert rust.shape == numpy.shape == (frames, 19)
+    np.testing.assert_allclose(rust, numpy, rtol=0, atol=ATOL * max(1.0, np.abs(numpy).max()))
+
+
+@pytest.mark.real_data
+def test_real_walk_parity_through_the_public_api(bandai2_dir):
+    if not em.rust_available():
+        pytest.skip("the Rust extension is not built")
+    walk = em.read_bvh(bandai2_dir / "dataset-2_walk-turn-right_active_001.bvh")
+    results = []
+    for name in ("rust", "numpy"):
+        with em.use_backend(name):
+            results.append([dynamic_features(walk), dynamic_features(walk, causal=False)])
+    for rust, numpy in zip(*results):
+        np.testing.assert_allclose(rust, numpy, rtol=0, atol=ATOL)
+
+
+# -- real walks ---------------------------------------------------------------------------
+
+
+@pytest.mark.real_data
+@pytest.mark.parametrize("style", ["normal", "exhausted", "youthful"])
+def test_real_walk_features_are_sane(backend, bandai2_dir, style):
+    walk = em.read_bvh(bandai2_dir / f"dataset-2_walk_{style}_001.bvh")
+    f = dynamic_features(walk)
+    assert f.shape == (walk.n_frames, 19) and np.isfinite(f).all()
+    speed = f[1:, 5].mean() * actor_height(walk.skeleton)
+    assert 40 < speed < 250, f"{style}: mean forward hips speed {speed:.0f} cm/s in the heading frame"
+    assert abs(f[1:, 3].mean()) < 0.1 * f[1:, 5].mean(), "walks go forward, not sideways"
+    assert 0.85 < np.median(f[:, H]) < 1.05, np.median(f[:, H])
+    # Bandai thighs sit near 180 degrees (w ~ 0): the hemisphere rule must not flip them frame to frame.
+    thighs = f[:, THIGHS].reshape(-1, 2, 4)
+    assert (np.sum(thighs[1:] * thighs[:-1], axis=-1) > 0.9).all()
+    assert set(np.unique(f[:, CONTACT])) == {0.0, 1.0}
+    assert (f[:, AIR][f[:, CONTACT] == 1] == 0).all() and f[:, AIR].max() < 1.0
+
+
+def test_demo_walk_features(backend):
+    f = dynamic_features(procedural_walk(seconds=3.0, speed=1.2))
+    assert np.isfinite(f).all()
+    # 120 cm/s over an actor of 137 cm: about 0.88 heights a second, straight ahead.
+    assert f[15:, 5].mean() == pytest.approx(120 / actor_height(bandai_like_skeleton()), rel=0.05)
+    assert f[:, CONTACT].any(axis=0).all()
+
+
+# -- errors -------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "options, name",
+    [
+        (dict(thigh_reference=[0, 0, 0, 1]), "thigh_reference"),
+        (dict(floor=float("nan")), "floor"),
+        (dict(roles=3), "roles"),
+        (dict(height=0), "height"),
+        (dict(speed_threshold=0), "speed_threshold"),
+    ],
+)
+def test_argument_errors_name_the_argument(backend, options, name):
+    with pytest.raises(em.MocapError, match=f"`{name}`"):
+        dynamic_features(straight_walker(frames=3), **options)
+
+
+@pytest.mark.parametrize("name", ["points", "thighs", "contacts", "reference", "frame_time", "height", "hips_rest_height", "window"])
+def test_kernel_errors_name_the_argument(backend, name):
+    points, thighs, contacts, ref = random_feature_inputs(np.random.default_rng(0), 5)
+    arguments = dict(points=points, thighs=thighs, contacts=contacts, reference=ref, frame_time=0.1, height=1.0, hips_rest_height=1.0, floor=0.0, window=3)
+    arguments[name] = {
+        "points": points[:, :2],
+        "thighs": thighs[:4],
+        "contacts": contacts[:, :1],
+        "reference": ref[:1],
+        "frame_time": 0.0,
+        "height": -1.0,
+        "hips_rest_height": float("nan"),
+        "window": 0,
+    }[name]
+    with pytest.raises(ValueError, match=f"`{name}`"):
+        kernels().dynamic_features(*arguments.values())
