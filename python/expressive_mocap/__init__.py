@@ -7,7 +7,8 @@ lengths are in the file's units. See the README for the conventions table.
 from .backend import get_backend, rust_available, set_backend, use_backend
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .errors import BVHError, MocapError
-from .kernels import euler_to_quat, forward_kinematics, forward_kinematics_many, quat_to_euler
+from .kernels import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
+from .mlp import Mlp
 from .motion import Motion, Skeleton
 
 __version__ = "0.1.0"
@@ -15,6 +16,7 @@ __version__ = "0.1.0"
 __all__ = [
     "BVHError",
     "MocapError",
+    "Mlp",
     "Motion",
     "Skeleton",
     "__version__",
@@ -23,6 +25,7 @@ __all__ = [
     "forward_kinematics",
     "forward_kinematics_many",
     "get_backend",
+    "mlp_forward",
     "quat_to_euler",
     "read_bvh",
     "read_bvh_many",

@@ -5,6 +5,7 @@ import numpy as np
 import numpy.typing as npt
 
 F64 = npt.NDArray[np.float64]
+Float = npt.NDArray[np.float32] | npt.NDArray[np.float64]
 
 num_threads: int
 
@@ -35,3 +36,7 @@ def forward_kinematics_many(clips: list[tuple[F64, F64, npt.NDArray[np.int64]]])
 
 def format_motion_block(values: F64, decimals: int | None = None) -> bytes:
     """Text of the MOTION block for ``values [F, C]``; ``decimals=None`` is the shortest exact text."""
+
+def mlp_forward(x: Float, weights: list[Float], biases: list[Float], activations: list[str]) -> Float:
+    """Dense network on ``x [N, in]`` (float32 or float64, kept): per layer ``act(h @ W [in, out] + b [out])``,
+    ``act`` "tanh" or "linear"; weights and biases in the dtype of ``x``. Rows in parallel, GIL released."""
