@@ -5,6 +5,7 @@ import numpy as np
 import numpy.typing as npt
 
 F64 = npt.NDArray[np.float64]
+Float = npt.NDArray[np.float32] | npt.NDArray[np.float64]
 
 num_threads: int
 
@@ -48,3 +49,8 @@ def dynamic_features(
 ) -> F64:
     """The 19 features ``[F, 19]`` from ``points [F, 3, 3]`` (hips, left and right upper leg, world), ``thighs [F, 2, 4]``
     (local), ``contacts bool [F, 2]`` and the thighs' hemisphere ``reference [2, 4]``."""
+
+
+def mlp_forward(x: Float, weights: list[Float], biases: list[Float], activations: list[str]) -> Float:
+    """Dense network on ``x [N, in]`` (float32 or float64, kept): per layer ``act(h @ W [in, out] + b [out])``,
+    ``act`` "tanh" or "linear"; weights and biases in the dtype of ``x``. Rows in parallel, GIL released."""

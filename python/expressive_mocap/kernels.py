@@ -110,3 +110,37 @@ def compose_rotations(expressive, body, scale: float = 1.0) -> np.ndarray:
 def _frames(array: np.ndarray) -> np.ndarray:
     """``[..., J, k]`` as ``[F, J, k]``, all leading dimensions folded into frames."""
     return array.reshape(-1, *array.shape[-2:])
+
+
+def _float(array) -> np.ndarray:
+    """``array`` as a C-contiguous float32 or float64 array (float32 kept, anything else float64)."""
+    array = np.asarray(array)
+    dtype = np.float32 if array.dtype == np.float32 else np.float64
+    return np.ascontiguousarray(array, dtype=dtype)
+
+
+def mlp_forward(x, weights, biases, activations) -> np.ndarray:
+    """Batched forward pass of a dense network: ``h = act_i(h @ weights[i] + biases[i])``.
+
+    ``x [..., in]`` float32 or float64 (kept; other dtypes become float64), leading dimensions
+    folded into rows; ``weights[i] [in_i, out_i]``, ``biases[i] [out_i]`` (cast to the dtype of
+    ``x``), ``activations[i]`` ``"tanh"`` or ``"linear"``. Returns ``[..., out]``.
+    """
+    x = _float(x)
+    if x.ndim < 1:
+        raise ValueError(f"argument `x`: expected shape [..., in], got {list(x.shape)}")
+    weights, biases, activations = list(weights), list(biases), [str(a) for a in activations]
+    for name, items in (("biases", biases), ("activations", activations)):
+        if len(items) != len(weights):
+            raise ValueError(f"argument `{name}`: expected one for each of the {len(weights)} layers, got {len(items)}")
+    for i, (w, b) in enumerate(zip(weights, biases)):
+        if np.ndim(w) != 2:
+            raise ValueError(f"argument `weights`: layer {i} must be 2-D [in, out], got shape {list(np.shape(w))}")
+        if np.ndim(b) != 1:
+            raise ValueError(f"argument `biases`: layer {i} must be 1-D [out], got shape {list(np.shape(b))}")
+    weights = [np.ascontiguousarray(w, dtype=x.dtype) for w in weights]
+    biases = [np.ascontiguousarray(b, dtype=x.dtype) for b in biases]
+    batch = x.shape[:-1]
+    flat = x.reshape(-1, x.shape[-1])
+    out = kernels().mlp_forward(flat, weights, biases, activations)
+    return out.reshape(*batch, out.shape[-1])

@@ -1,7 +1,88 @@
 //! Bindings of `crate::mlp`.
 
+use numpy::ndarray::Array2;
+use numpy::{Element, IntoPyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArray, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
-pub fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+use super::{shape_error, to_py};
+use crate::mlp::{mlp_forward as forward, Activation, Layer, Scalar};
+
+fn dtype_error(name: &str, layer: usize, array: &Bound<'_, PyAny>, dtype: &str) -> PyErr {
+    let got = array.cast::<PyUntypedArray>().map_or_else(|_| array.get_type().to_string(), |a| format!("{} array of {} dimensions", a.dtype(), a.ndim()));
+    PyTypeError::new_err(format!("argument `{name}`: layer {layer} must be a {dtype} array like `x`, got {got}"))
+}
+
+fn forward_typed<'py, T: Scalar + Element>(
+    py: Python<'py>,
+    x: &PyReadonlyArray2<'py, T>,
+    weights: &[Bound<'py, PyAny>],
+    biases: &[Bound<'py, PyAny>],
+    activations: &[String],
+    dtype: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let n = weights.len();
+    if biases.len() != n || activations.len() != n {
+        return Err(PyValueError::new_err(format!(
+            "arguments `weights`, `biases`, `activations`: one of each a layer, got {n}, {} and {}",
+            biases.len(),
+            activations.len()
+        )));
+    }
+    let mut ws = Vec::with_capacity(n);
+    let mut bs = Vec::with_capacity(n);
+    for (i, (w, b)) in weights.iter().zip(biases).enumerate() {
+        ws.push(w.extract::<PyReadonlyArray2<'py, T>>().map_err(|_| dtype_error("weights", i, w, &format!("2-D {dtype}")))?);
+        bs.push(b.extract::<PyReadonlyArray1<'py, T>>().map_err(|_| dtype_error("biases", i, b, &format!("1-D {dtype}")))?);
+    }
+    let acts = activations.iter().enumerate().map(|(i, a)| Activation::parse(a, i)).collect::<Result<Vec<_>, _>>().map_err(to_py)?;
+    let (rows, columns) = (x.shape()[0], x.shape()[1]);
+    if let Some(first) = ws.first() {
+        if first.shape()[0] != columns {
+            return Err(shape_error("x", &format!("[N, {}] (the inputs of layer 0)", first.shape()[0]), x.shape()));
+        }
+    }
+    let mut layers = Vec::with_capacity(n);
+    for ((w, b), activation) in ws.iter().zip(&bs).zip(acts) {
+        let (inputs, outputs) = (w.shape()[0], w.shape()[1]);
+        layers.push(Layer { weights: w.as_slice()?, bias: b.as_slice()?, inputs, outputs, activation });
+    }
+    let xs = x.as_slice()?;
+    let out = py.detach(|| forward(xs, rows, &layers)).map_err(to_py)?;
+    let outputs = layers.last().map_or(0, |l| l.outputs);
+    let array = Array2::from_shape_vec((rows, outputs), out).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(array.into_pyarray(py).into_any())
+}
+
+/// Batched forward pass of a dense network: `act_i(h_{i-1} @ weights[i] + biases[i])`.
+///
+/// Args:
+///     x: float32 or float64 [N, in], C-contiguous.
+///     weights: per layer [in_i, out_i], same dtype as `x`, C-contiguous.
+///     biases: per layer [out_i], same dtype.
+///     activations: per layer "tanh" or "linear".
+///
+/// Returns:
+///     [N, out] in the dtype of `x`. The GIL is released; don't mutate the inputs meanwhile.
+#[pyfunction]
+fn mlp_forward<'py>(
+    py: Python<'py>,
+    x: &Bound<'py, PyAny>,
+    weights: Vec<Bound<'py, PyAny>>,
+    biases: Vec<Bound<'py, PyAny>>,
+    activations: Vec<String>,
+) -> PyResult<Bound<'py, PyAny>> {
+    if let Ok(x32) = x.extract::<PyReadonlyArray2<'py, f32>>() {
+        return forward_typed(py, &x32, &weights, &biases, &activations, "float32");
+    }
+    let x64 = x.extract::<PyReadonlyArray2<'py, f64>>().map_err(|_| {
+        let got = x.cast::<PyUntypedArray>().map_or_else(|_| x.get_type().to_string(), |a| format!("{} array of {} dimensions", a.dtype(), a.ndim()));
+        PyTypeError::new_err(format!("argument `x`: expected a 2-D float32 or float64 array, got {got}"))
+    })?;
+    forward_typed(py, &x64, &weights, &biases, &activations, "float64")
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(mlp_forward, m)?)?;
     Ok(())
 }

@@ -10,6 +10,7 @@ written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in de
 from .decouple import compose_rotations, decouple_rotations
 from .features import dynamic_features
 from .fk import forward_kinematics, forward_kinematics_many
+from .mlp import mlp_forward
 from .motion_block import ParseError, decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
 from .footsteps import air_time, foot_contacts
 from .rotations import euler_to_quat, quat_to_euler
@@ -28,6 +29,7 @@ __all__ = [
     "format_motion_block",
     "forward_kinematics",
     "forward_kinematics_many",
+    "mlp_forward",
     "num_threads",
     "parse_motion_block",
     "read_motion_blocks",

@@ -1,0 +1,57 @@
+"""MLP inference speed: the Rust kernel vs its NumPy twin, on a 19 -> 300 -> 300 -> 80 stack
+(the body-mechanics network's shape) over 100k rows, float32 and float64.
+
+    PYTHONPATH=python python benches/bench_mlp.py [--rows 100000] [--repeat 5]
+
+Calls alternate between the two backends and the best of ``--repeat`` is kept (machines here
+drift by 30-40%: only ratios taken in the same run are comparable).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+
+import numpy as np
+
+from expressive_mocap import _core, reference
+
+
+def net_arrays(rng, widths, dtype):
+    weights = [(rng.normal(size=(a, b)) / np.sqrt(a)).astype(dtype) for a, b in zip(widths[:-1], widths[1:])]
+    biases = [rng.normal(scale=0.1, size=b).astype(dtype) for b in widths[1:]]
+    activations = ["tanh"] * (len(widths) - 2) + ["linear"]
+    return weights, biases, activations
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rows", type=int, default=100_000)
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args()
+    widths = (19, 300, 300, 80)
+    flops = 2 * args.rows * sum(a * b for a, b in zip(widths[:-1], widths[1:]))
+    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cpus, rayon threads {_core.num_threads}, NumPy {np.__version__}")
+    print(f"network {' -> '.join(map(str, widths))}, {args.rows} rows, {flops / 1e9:.1f} GFLOP a pass, best of {args.repeat}")
+    for dtype in (np.float32, np.float64):
+        rng = np.random.default_rng(0)
+        weights, biases, activations = net_arrays(rng, widths, dtype)
+        x = rng.normal(size=(args.rows, widths[0])).astype(dtype)
+        best = {"rust": np.inf, "numpy": np.inf}
+        for _ in range(args.repeat):
+            for name, module in (("rust", _core), ("numpy", reference)):
+                start = time.perf_counter()
+                out = module.mlp_forward(x, weights, biases, activations)
+                best[name] = min(best[name], time.perf_counter() - start)
+            del out
+        rust, numpy = best["rust"], best["numpy"]
+        print(
+            f"{np.dtype(dtype).name:8s} rust {rust * 1e3:7.1f} ms ({args.rows / rust / 1e6:5.2f} M rows/s, {flops / rust / 1e9:5.1f} GFLOP/s)"
+            f"   numpy {numpy * 1e3:7.1f} ms ({args.rows / numpy / 1e6:5.2f} M rows/s)   numpy/rust {numpy / rust:4.2f}x"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,359 @@
+"""Training the body-mechanics network on plain arrays (METHODS.md part 2; Boehs et al. III.B, IV).
+
+Inputs ``X [N, 19]`` (the dynamic features of each frame), poses ``P [N, D]`` and ``groups [N]``
+(a clip id per frame). Stages, each reported with train and test MSE on a 70/30 split by group
+(no clip on both sides):
+
+a. a denoising autoencoder on poses: ``P -> H tanh -> P`` (linear decoder), its input corrupted
+   by masking 10-30% of the values and Gaussian noise;
+b. a regression network ``X -> R tanh -> code`` onto the autoencoder's code (its tanh units);
+c. the stack ``X -> R -> code -> decoder -> P``;
+d. the stack fine-tuned end to end on ``(X, P)``;
+
+plus the mean-pose baseline and a plain ``X -> H tanh -> P`` network for comparison. The result
+is an :class:`~expressive_mocap.mlp.Mlp` taking raw features and giving poses: the z-scoring of
+``X`` and the pose scaling are folded into its first and last layers, so inference (in Rust)
+needs nothing else.
+
+Optimiser: full-batch L-BFGS (``scipy.optimize.minimize(method="L-BFGS-B", jac=True)``) on
+NumPy forward/backward passes in float64. Full batch fits: 50k frames x 300 units is ~0.1 GB of
+activations, and L-BFGS needs no learning rate or schedule to tune, which is what keeps a
+training run reproducible and free of knobs. The denoising autoencoder's corruption is drawn
+afresh for each of a few rounds (L-BFGS needs a fixed objective within a round).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .mlp import Layer, Mlp
+
+Log = Callable[[str], None]
+Params = list[tuple[np.ndarray, np.ndarray]]  # per layer (weights [in, out], bias [out])
+
+
+def _stderr(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+# --- splitting ---------------------------------------------------------------------------------
+
+
+def split_by_group(groups, test_fraction: float = 0.3, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Row indices ``(train, test)``: whole groups go to one side, shuffled with ``seed``, test
+    groups added until they hold ``test_fraction`` of the rows. ``groups [N]``: any hashable ids."""
+    groups = np.asarray(groups)
+    ids, inverse, counts = np.unique(groups, return_inverse=True, return_counts=True)
+    if len(ids) < 2:
+        raise ValueError(f"argument `groups`: a split by group needs at least 2 groups, got {len(ids)}")
+    order = np.random.default_rng(seed).permutation(len(ids))
+    cumulative = np.cumsum(counts[order])
+    # Smallest number of groups reaching the fraction, leaving at least one group for training.
+    n_test = int(np.clip(np.searchsorted(cumulative, test_fraction * len(groups)) + 1, 1, len(ids) - 1))
+    is_test = np.zeros(len(ids), dtype=bool)
+    is_test[order[:n_test]] = True
+    test_rows = is_test[inverse.ravel()]
+    return np.flatnonzero(~test_rows), np.flatnonzero(test_rows)
+
+
+# --- networks as plain arrays: init, forward, backward, L-BFGS ---------------------------------
+
+
+def init_params(rng: np.random.Generator, widths: Sequence[int]) -> Params:
+    """Glorot-uniform weights and zero biases for layers ``widths[i] -> widths[i + 1]``."""
+    params = []
+    for a, b in zip(widths[:-1], widths[1:]):
+        limit = np.sqrt(6.0 / (a + b))
+        params.append((rng.uniform(-limit, limit, size=(a, b)), np.zeros(b)))
+    return params
+
+
+def forward_all(params: Params, activations: Sequence[str], x: np.ndarray) -> list[np.ndarray]:
+    """Every layer's output ``[N, out_i]`` (input first), kept for the backward pass."""
+    hs = [x]
+    for (w, b), act in zip(params, activations):
+        h = hs[-1] @ w + b
+        hs.append(np.tanh(h, out=h) if act == "tanh" else h)
+    return hs
+
+
+def loss_and_grad(params: Params, activations: Sequence[str], x: np.ndarray, y: np.ndarray, weight_decay: float = 0.0) -> tuple[float, Params]:
+    """``mean((net(x) - y)^2) + weight_decay * sum(W^2)`` (biases not decayed) and its gradient,
+    one ``(dW, db)`` per layer. ``x [N, in]``, ``y [N, out]``."""
+    hs = forward_all(params, activations, x)
+    error = hs[-1] - y
+    loss = float(np.mean(error**2)) + weight_decay * sum(float(np.sum(w * w)) for w, _ in params)
+    grad_h = error * (2.0 / error.size)
+    grads: Params = []
+    for i in range(len(params) - 1, -1, -1):
+        w, _ = params[i]
+        grad_a = grad_h * (1.0 - hs[i + 1] ** 2) if activations[i] == "tanh" else grad_h
+        grads.append((hs[i].T @ grad_a + 2.0 * weight_decay * w, grad_a.sum(axis=0)))
+        if i > 0:
+            grad_h = grad_a @ w.T
+    return loss, grads[::-1]
+
+
+def _pack(params: Params) -> np.ndarray:
+    return np.concatenate([a.ravel() for layer in params for a in layer])
+
+
+def _unpack(flat: np.ndarray, like: Params) -> Params:
+    out, start = [], 0
+    for w, b in like:
+        out.append((flat[start : start + w.size].reshape(w.shape), flat[start + w.size : start + w.size + b.size]))
+        start += w.size + b.size
+    return out
+
+
+def fit(
+    params: Params,
+    activations: Sequence[str],
+    x: np.ndarray,
+    y: np.ndarray,
+    *,
+    max_iter: int,
+    weight_decay: float,
+    name: str,
+    log: Log | None = _stderr,
+    log_every: int = 50,
+) -> tuple[Params, int]:
+    """Minimise :func:`loss_and_grad` with L-BFGS from ``params``; returns the fitted
+    parameters and the number of iterations run."""
+    from scipy.optimize import minimize
+
+    state = {"loss": np.nan, "iter": 0, "start": time.perf_counter()}
+
+    def objective(flat):
+        loss, grads = loss_and_grad(_unpack(flat, params), activations, x, y, weight_decay)
+        state["loss"] = loss
+        return loss, _pack(grads)
+
+    def progress(_flat):
+        state["iter"] += 1
+        if log and state["iter"] % log_every == 0:
+            log(f"{name}: iteration {state['iter']}/{max_iter}, loss {state['loss']:.4g} ({time.perf_counter() - state['start']:.1f} s)")
+
+    result = minimize(
+        objective, _pack(params), jac=True, method="L-BFGS-B", callback=progress,
+        options={"maxiter": max_iter, "maxcor": 20, "ftol": 1e-12, "gtol": 1e-9},
+    )  # fmt: skip
+    return [(w.copy(), b.copy()) for w, b in _unpack(result.x, params)], int(result.nit)
+
+
+# --- normalisation folded into the network -----------------------------------------------------
+
+
+def _zscore_stats(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    mean, std = a.mean(axis=0), a.std(axis=0)
+    # Constant columns carry no information: leave them unscaled rather than divide by ~0.
+    return mean, np.where(std > 1e-8 * max(float(std.max(initial=0.0)), 1e-300), std, 1.0)
+
+
+def _fold_input(layer: tuple[np.ndarray, np.ndarray], mean: np.ndarray, std: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The layer acting on raw inputs that equals ``layer`` on ``(x - mean) / std``."""
+    w, b = layer
+    return w / std[:, None], b - (mean / std) @ w
+
+
+def _fold_output(layer: tuple[np.ndarray, np.ndarray], mean: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """The layer giving ``out * scale + mean`` where ``layer`` gave ``out``."""
+    w, b = layer
+    return w * scale, b * scale + mean
+
+
+def _mlp(params: Params, activations: Sequence[str]) -> Mlp:
+    return Mlp(Layer(w, b, act) for (w, b), act in zip(params, activations))
+
+
+def corrupt(rng: np.random.Generator, z: np.ndarray, mask: tuple[float, float] = (0.1, 0.3), noise: float = 0.1) -> np.ndarray:
+    """Denoising input: per row a fraction drawn from ``mask`` of the values set to 0 (the mean,
+    on z-scored poses), and Gaussian noise of std ``noise`` (in units of each column's std)."""
+    fraction = rng.uniform(*mask, size=(len(z), 1))
+    keep = rng.random(z.shape) >= fraction
+    return z * keep + rng.normal(scale=noise, size=z.shape)
+
+
+def _scores(predicted: np.ndarray, target: np.ndarray, variance: float) -> dict:
+    mse = float(np.mean((predicted - target) ** 2))
+    return {"mse": mse, "variance_explained": 1.0 - mse / variance if variance > 0 else float("nan")}
+
+
+def _stage(net: Mlp, x: np.ndarray, y: np.ndarray, train: np.ndarray, test: np.ndarray, variance: float, **extra) -> dict:
+    """Train and test MSE of ``net`` (run through the kernel backend, as at inference)."""
+    tr, te = _scores(net(x[train]), y[train], variance), _scores(net(x[test]), y[test], variance)
+    return {"train_mse": tr["mse"], "test_mse": te["mse"], "test_variance_explained": te["variance_explained"], **extra}
+
+
+# --- the stages --------------------------------------------------------------------------------
+
+
+def train_autoencoder(
+    poses: np.ndarray,
+    hidden: int = 300,
+    *,
+    seed: int = 0,
+    max_iter: int = 400,
+    rounds: int = 4,
+    mask: tuple[float, float] = (0.1, 0.3),
+    noise: float = 0.1,
+    weight_decay: float = 1e-6,
+    log: Log | None = _stderr,
+) -> Mlp:
+    """Denoising autoencoder ``poses [N, D] -> H tanh -> [N, D]`` (linear decoder), as an
+    :class:`Mlp` on raw poses (layer 0 the encoder, layer 1 the decoder).
+
+    ``max_iter`` L-BFGS iterations in all, split over ``rounds`` with fresh corruption each.
+    """
+    poses = np.asarray(poses, dtype=np.float64)
+    rng = np.random.default_rng(seed)
+    mean, std = _zscore_stats(poses)
+    scale = float(np.sqrt(np.mean(std**2)))  # one number: the loss keeps the weighting of the pose MSE
+    z, target = (poses - mean) / std, (poses - mean) / scale
+    params = init_params(rng, (poses.shape[1], hidden, poses.shape[1]))
+    acts = ("tanh", "linear")
+    for r in range(rounds):
+        iters = max_iter // rounds + (r < max_iter % rounds)
+        params, _ = fit(params, acts, corrupt(rng, z, mask, noise), target, max_iter=iters, weight_decay=weight_decay, name=f"autoencoder H={hidden} round {r + 1}/{rounds}", log=log)
+    return _mlp([_fold_input(params[0], mean, std), _fold_output(params[1], mean, scale)], acts)
+
+
+def train_body_mechanics(
+    X,
+    P,
+    groups,
+    unlabelled_poses=None,
+    hidden: int = 300,
+    regression_hidden: int = 300,
+    *,
+    seed: int = 0,
+    test_fraction: float = 0.3,
+    max_iter: int = 400,
+    weight_decay: float = 1e-6,
+    mask: tuple[float, float] = (0.1, 0.3),
+    noise: float = 0.1,
+    compare_plain: bool = True,
+    log: Log | None = _stderr,
+) -> tuple[Mlp, dict]:
+    """Train the stacked body-mechanics network; returns it and a report of every stage.
+
+    Args:
+        X: features ``[N, F]`` (19 per frame), raw: z-scored here, the statistics folded into
+            the network.
+        P: poses ``[N, D]``.
+        groups: ``[N]`` clip id of each row; the 70/30 split (``test_fraction``) is by group.
+        unlabelled_poses: ``[M, D]`` extra poses for the autoencoder (the paper's large
+            unlabelled set). Default: the training split of ``P``. Keep test clips out of it,
+            or the autoencoder's test score is not held out.
+        hidden: the autoencoder's code units ``H``; regression_hidden: the regression's ``R``.
+        max_iter: L-BFGS iterations of each stage.
+
+    Returns:
+        ``(net, report)``: ``net`` an :class:`Mlp` ``[F] -> R tanh -> H tanh -> [D]`` on raw
+        features; ``report`` a dict with, per stage (``mean_pose``, ``autoencoder``,
+        ``regression`` (in code units), ``stack``, ``fine_tuned``, ``plain``), ``train_mse``,
+        ``test_mse``, ``test_variance_explained`` and ``seconds``; plus ``split`` and
+        ``test_variance`` (the mean per-column variance of the test poses).
+    """
+    X, P, groups = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64), np.asarray(groups)
+    if X.ndim != 2 or P.ndim != 2 or len(X) != len(P):
+        raise ValueError(f"arguments `X`, `P`: expected [N, F] and [N, D] with the same N, got {list(X.shape)} and {list(P.shape)}")
+    if groups.shape != (len(X),):
+        raise ValueError(f"argument `groups`: expected shape [{len(X)}], got {list(groups.shape)}")
+    train, test = split_by_group(groups, test_fraction, seed)
+    variance = float(np.mean(P[test].var(axis=0)))
+    report: dict = {
+        "split": {"train_rows": len(train), "test_rows": len(test), "train_groups": len(np.unique(groups[train])), "test_groups": len(np.unique(groups[test]))},
+        "test_variance": variance,
+    }
+    mean_pose = P[train].mean(axis=0)
+    report["mean_pose"] = {
+        "train_mse": float(np.mean((P[train] - mean_pose) ** 2)),
+        "test_mse": float(np.mean((P[test] - mean_pose) ** 2)),
+    }
+    report["mean_pose"]["test_variance_explained"] = 1.0 - report["mean_pose"]["test_mse"] / variance
+    common = {"weight_decay": weight_decay, "log": log}
+
+    # (a) autoencoder
+    start = time.perf_counter()
+    ae_poses = P[train] if unlabelled_poses is None else np.asarray(unlabelled_poses, dtype=np.float64)
+    ae = train_autoencoder(ae_poses, hidden, seed=seed, max_iter=max_iter, mask=mask, noise=noise, **common)
+    report["autoencoder"] = _stage(ae, P, P, train, test, variance, seconds=time.perf_counter() - start, hidden=hidden)
+
+    # (b) regression from z-scored features to the code (the encoder's tanh units on clean poses)
+    start = time.perf_counter()
+    encoder, decoder = ae.layers
+    x_mean, x_std = _zscore_stats(X[train])
+    xz = (X - x_mean) / x_std
+    code = Mlp([encoder])(P)
+    rng = np.random.default_rng(seed + 1)
+    reg_acts = ("tanh", "tanh")
+    reg, _ = fit(init_params(rng, (X.shape[1], regression_hidden, hidden)), reg_acts, xz[train], code[train], max_iter=max_iter, name="regression", **common)
+    report["regression"] = _stage(_mlp(reg, reg_acts), xz, code, train, test, float(np.mean(code[test].var(axis=0))), seconds=time.perf_counter() - start)
+
+    # (c) stack: regression layers then the decoder, on raw features
+    stack_acts = ("tanh", "tanh", "linear")
+    to_raw = lambda params: _mlp([_fold_input(params[0], x_mean, x_std), *params[1:]], stack_acts)  # noqa: E731
+    stacked = [reg[0], reg[1], (decoder.weights, decoder.bias)]
+    report["stack"] = _stage(to_raw(stacked), X, P, train, test, variance)
+
+    # (d) fine-tune end to end, on z-scored features and poses scaled as in the autoencoder
+    start = time.perf_counter()
+    p_mean, p_scale = P[train].mean(axis=0), float(np.sqrt(np.mean(P[train].var(axis=0)))) or 1.0
+    scaled = (P - p_mean) / p_scale
+    unfold = _fold_output((decoder.weights, decoder.bias), -p_mean / p_scale, 1.0 / p_scale)
+    tuned, iters = fit([reg[0], reg[1], unfold], stack_acts, xz[train], scaled[train], max_iter=max_iter, name="fine-tuning", **common)
+    tuned[2] = _fold_output(tuned[2], p_mean, p_scale)
+    net = to_raw(tuned)
+    report["fine_tuned"] = _stage(net, X, P, train, test, variance, seconds=time.perf_counter() - start, iterations=iters)
+
+    if compare_plain:
+        start = time.perf_counter()
+        plain = train_plain(X[train], P[train], hidden, seed=seed, max_iter=max_iter, **common)
+        report["plain"] = _stage(plain, X, P, train, test, variance, seconds=time.perf_counter() - start, hidden=hidden)
+    if log:
+        log(format_report(report))
+    return net, report
+
+
+def train_plain(X, P, hidden: int = 300, *, seed: int = 0, max_iter: int = 400, weight_decay: float = 1e-6, log: Log | None = _stderr) -> Mlp:
+    """A plain ``X [N, F] -> H tanh -> P [N, D]`` network (the comparison for the stack), as an
+    :class:`Mlp` on raw features."""
+    X, P = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64)
+    x_mean, x_std = _zscore_stats(X)
+    p_mean, p_scale = P.mean(axis=0), float(np.sqrt(np.mean(P.var(axis=0)))) or 1.0
+    acts = ("tanh", "linear")
+    params = init_params(np.random.default_rng(seed + 2), (X.shape[1], hidden, P.shape[1]))
+    params, _ = fit(params, acts, (X - x_mean) / x_std, (P - p_mean) / p_scale, max_iter=max_iter, weight_decay=weight_decay, name=f"plain H={hidden}", log=log)
+    return _mlp([_fold_input(params[0], x_mean, x_std), _fold_output(params[1], p_mean, p_scale)], acts)
+
+
+def sweep_autoencoder(P, groups, hiddens: Sequence[int] = (300, 150, 50, 15), *, seed: int = 0, test_fraction: float = 0.3, log: Log | None = _stderr, **kwargs) -> dict[int, dict]:
+    """Train and test MSE of the autoencoder for each hidden size (the paper's 300/150/50/15),
+    trained on the training split of ``P`` by group. ``kwargs`` go to :func:`train_autoencoder`."""
+    P = np.asarray(P, dtype=np.float64)
+    train, test = split_by_group(groups, test_fraction, seed)
+    variance = float(np.mean(P[test].var(axis=0)))
+    results = {}
+    for hidden in hiddens:
+        start = time.perf_counter()
+        ae = train_autoencoder(P[train], hidden, seed=seed, log=log, **kwargs)
+        results[hidden] = _stage(ae, P, P, train, test, variance, seconds=time.perf_counter() - start)
+        if log:
+            log(f"autoencoder H={hidden}: train MSE {results[hidden]['train_mse']:.3g}, test MSE {results[hidden]['test_mse']:.3g}")
+    return results
+
+
+def format_report(report: dict) -> str:
+    """The report as a small table: one line per stage."""
+    lines = [f"split: {report['split']}, test variance {report['test_variance']:.4g}", f"{'stage':12s} {'train MSE':>10s} {'test MSE':>10s} {'test var. expl.':>15s} {'seconds':>8s}"]
+    for stage in ("mean_pose", "autoencoder", "regression", "stack", "fine_tuned", "plain"):
+        if stage in report:
+            r = report[stage]
+            lines.append(f"{stage:12s} {r['train_mse']:10.4g} {r['test_mse']:10.4g} {r['test_variance_explained']:15.4f} {r.get('seconds', 0.0):8.1f}")
+    lines.append("(regression in code units; every other stage in pose units)")
+    return "\n".join(lines)
