@@ -249,6 +249,31 @@ def cmd_calibrate(args) -> int:
     return 0
 
 
+def cmd_train(args) -> int:
+    from .model import train_model
+    from .train import format_report
+
+    def read_all(paths, what):
+        motions = []
+        for k, path in enumerate(paths, 1):
+            motions.append(read_bvh(path))
+            if k % 200 == 0 or k == len(paths):
+                print(f"read {k}/{len(paths)} {what} clips", file=sys.stderr, flush=True)
+        return motions
+
+    neutral = read_all(args.neutral, "neutral")
+    unlabelled = read_all(args.unlabelled or [], "unlabelled")
+    log = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
+    model = train_model(
+        neutral, unlabelled, hidden=args.hidden, regression_hidden=args.regression_hidden, unlabelled_frames=args.unlabelled_frames,
+        seed=args.seed, max_iter=args.max_iter, log=log,
+    )
+    model.save(args.output)
+    print(format_report(model.report))
+    print(f"wrote {args.output}")
+    return 0
+
+
 def _add_model_options(p, calibrate: bool = True) -> None:
     p.add_argument("--model", metavar="MODEL.npz", help="body-mechanics model (default: the shipped one, trained on Bandai-Namco neutral locomotion)")
     if calibrate:
@@ -321,6 +346,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     _add_model_options(p)
     p.set_defaults(run=cmd_blend)
+
+    p = commands.add_parser("train", help="train a body-mechanics model on neutral clips of one skeleton")
+    p.add_argument("neutral", nargs="+", metavar="NEUTRAL", help="neutral clips (no gestures, head forward, limbs moving with the body); 70/30 split by clip")
+    p.add_argument("--unlabelled", nargs="+", metavar="CLIP", help="any clips of the same skeleton: frames for the denoising autoencoder")
+    p.add_argument("-o", "--output", required=True, metavar="MODEL.npz", help="the model file")
+    p.add_argument("--hidden", type=_positive(int), default=300, help="autoencoder code units H (default 300)")
+    p.add_argument("--regression-hidden", type=_positive(int), default=300, help="regression hidden units (default 300)")
+    p.add_argument("--unlabelled-frames", type=_positive(int), default=40_000, help="frames drawn from the unlabelled clips (default 40000)")
+    p.add_argument("--max-iter", type=_positive(int), default=400, help="L-BFGS iterations per stage (default 400)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.set_defaults(run=cmd_train)
 
     p = commands.add_parser("calibrate", help="calibrate the body-mechanics model to an actor or capture session")
     p.add_argument("neutral", nargs="+", metavar="NEUTRAL", help="neutral clips (walks, runs, standing) of that actor/session")

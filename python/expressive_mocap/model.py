@@ -1,0 +1,288 @@
+"""The body-mechanics model: from a frame's dynamic features to the pose a neutral performer
+would have (METHODS.md part 2), and its file format.
+
+A model predicts the local rotations of every joint except the root and the hips (those come
+from the motion itself), each on the hemisphere of its mean training rotation. It knows the
+skeleton it was trained on (joint names), the features' normalisation, the settings and the
+mean squared errors of every training stage, and optionally a calibration to one actor or
+capture session (a constant rotation per joint).
+
+Model files are ``.npz`` archives of plain arrays plus one JSON string, read with
+``allow_pickle=False``: data, never code.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+from dataclasses import dataclass, field, replace
+from importlib import resources
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from . import quat
+from .errors import MocapError
+from .features import FEATURE_NAMES, default_floor, dynamic_features, mean_rotation
+from .io import atomic_write
+from .mlp import Mlp
+from .motion import Motion
+from .roles import JointRoles
+
+FORMAT = "expressive-mocap body model"
+VERSION = 1
+DEFAULT_MODEL = "body_model.npz"  # shipped inside the package (python/expressive_mocap/data/)
+
+
+@dataclass(frozen=True)
+class BodyModel:
+    """``network`` maps raw features ``[N, 19]`` (their z-scoring is folded into its first
+    layer) to predicted rotations ``[N, 4 P]``.
+
+    ``joint_names``: the skeleton the model was trained on; ``predicted``: indices of the
+    predicted joints; ``hemispheres [P, 4]``: each predicted joint's mean training rotation;
+    ``thigh_reference [2, 4]``: hemisphere of the thigh features; ``calibration [J, 4]`` or
+    None: ``Q_j`` applied to the prediction as ``Q_j * B_j``.
+    """
+
+    joint_names: tuple[str, ...]
+    predicted: np.ndarray
+    hemispheres: np.ndarray
+    thigh_reference: np.ndarray
+    network: Mlp
+    settings: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)
+    calibration: np.ndarray | None = None
+
+    # ---------------------------------------------------------------- prediction
+
+    def check_skeleton(self, motion: Motion) -> None:
+        """Refuse a motion of another skeleton, naming the difference."""
+        names = motion.skeleton.names
+        if names != self.joint_names:
+            missing = [n for n in self.joint_names if n not in names]
+            extra = [n for n in names if n not in self.joint_names]
+            detail = f"missing {', '.join(missing[:5])}" if missing else ""
+            detail += ("; " if detail and extra else "") + (f"unknown {', '.join(extra[:5])}" if extra else "")
+            raise MocapError(
+                f"this body model was trained on a {len(self.joint_names)}-joint skeleton ({', '.join(self.joint_names[:4])}, ...); "
+                f"the motion has {len(names)} joints{': ' + detail if detail else ' in another order'}"
+            )
+
+    def features(self, motion: Motion, floor: float | None = None) -> np.ndarray:
+        """The model's inputs ``[F, 19]`` for ``motion``: causal dynamic features (floor: the
+        clip's 5th percentile of toe heights unless given)."""
+        self.check_skeleton(motion)
+        return model_features(motion, self.thigh_reference, floor)
+
+    def predict(self, motion: Motion, floor: float | None = None) -> np.ndarray:
+        """Body-mechanics local rotations ``[F, J, 4]``: the network's pose for each frame's
+        features (calibrated if the model is), root and hips copied from ``motion``."""
+        return self.predict_from_features(motion.rotations, self.features(motion, floor))
+
+    def predict_from_features(self, rotations: np.ndarray, features: np.ndarray) -> np.ndarray:
+        """As :meth:`predict`, from ``features [F, 19]`` and the motion's ``rotations [F, J, 4]``."""
+        out = self.network.forward(features).reshape(len(features), len(self.predicted), 4)
+        body = np.array(rotations, dtype=np.float64, copy=True)
+        body[:, self.predicted] = quat.normalize(out)
+        if self.calibration is not None:
+            body = quat.mul(self.calibration[None], body)
+        return body
+
+    # ---------------------------------------------------------------- calibration
+
+    def calibrated(self, neutral: Sequence[Motion]) -> BodyModel:
+        """This model calibrated to the actor or session of ``neutral`` clips (neutral movement
+        of that session): per joint ``Q_j`` = mean over all frames of ``O_j * B_j^-1``."""
+        if not neutral:
+            raise MocapError("calibration needs at least one neutral clip")
+        uncalibrated = replace(self, calibration=None)
+        offsets = [quat.mul(m.rotations, quat.conjugate(uncalibrated.predict(m))) for m in neutral]
+        stacked = np.concatenate(offsets, axis=0)
+        q = np.stack([mean_rotation(stacked[:, j]) for j in range(stacked.shape[1])])
+        q[[j for j in range(len(self.joint_names)) if j not in set(self.predicted.tolist())]] = [0.0, 0.0, 0.0, 1.0]
+        return replace(self, calibration=q)
+
+    def calibration_angles(self) -> dict[str, float]:
+        """Degrees of each joint's calibration rotation (empty when uncalibrated)."""
+        if self.calibration is None:
+            return {}
+        return {n: float(np.degrees(a)) for n, a in zip(self.joint_names, quat.angle(self.calibration))}
+
+    # ---------------------------------------------------------------- files
+
+    def to_bytes(self) -> bytes:
+        meta = {
+            "format": FORMAT,
+            "version": VERSION,
+            "joint_names": list(self.joint_names),
+            "feature_names": list(FEATURE_NAMES),
+            "settings": self.settings,
+            "report": self.report,
+        }
+        arrays = {
+            "meta": np.array(json.dumps(meta)),
+            "predicted": self.predicted.astype(np.int64),
+            "hemispheres": self.hemispheres,
+            "thigh_reference": self.thigh_reference,
+            **self.network.to_arrays("network"),
+        }
+        if self.calibration is not None:
+            arrays["calibration"] = self.calibration
+        buffer = io.BytesIO()
+        np.savez_compressed(buffer, **arrays)
+        return buffer.getvalue()
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the model as an .npz file, atomically."""
+        atomic_write(path, self.to_bytes())
+
+    @classmethod
+    def load(cls, source: str | os.PathLike | bytes | None = None) -> BodyModel:
+        """Read a model file (default: the model shipped with the package). Arrays only, no
+        pickles; the contents are checked against the format, with a clear error otherwise."""
+        name = str(source) if isinstance(source, (str, os.PathLike)) else "<bytes>"
+        if source is None:
+            source, name = shipped_model_bytes(), f"the shipped {DEFAULT_MODEL}"
+        try:
+            data = io.BytesIO(source) if isinstance(source, bytes) else Path(source).read_bytes()
+            if isinstance(data, bytes):
+                data = io.BytesIO(data)
+            with np.load(data, allow_pickle=False) as archive:
+                arrays = {k: archive[k] for k in archive.files}
+        except (OSError, ValueError, EOFError) as error:  # zip errors are ValueErrors or OSErrors
+            raise MocapError(f"{name}: not a readable model file ({error})") from None
+        except Exception as error:  # a damaged zip can raise zipfile.BadZipFile and friends
+            raise MocapError(f"{name}: not a readable model file ({type(error).__name__}: {error})") from None
+        return cls._from_arrays(arrays, name)
+
+    @classmethod
+    def _from_arrays(cls, arrays: dict, name: str) -> BodyModel:
+        def need(key: str, shape: tuple | None = None) -> np.ndarray:
+            if key not in arrays:
+                raise MocapError(f"{name}: model file lacks {key!r}")
+            value = arrays[key]
+            if value.dtype.kind not in "fiu" or (shape is not None and value.shape != shape) or not np.isfinite(value).all():
+                raise MocapError(f"{name}: {key!r} has shape {value.shape} / dtype {value.dtype}, expected finite numbers of shape {shape}")
+            return value
+
+        try:
+            meta = json.loads(str(arrays["meta"]))
+        except (KeyError, ValueError) as error:
+            raise MocapError(f"{name}: model file lacks readable metadata ({error})") from None
+        if meta.get("format") != FORMAT or meta.get("version") != VERSION:
+            raise MocapError(f"{name}: not an expressive-mocap body model of version {VERSION} (format {meta.get('format')!r}, version {meta.get('version')!r})")
+        if meta.get("feature_names") != list(FEATURE_NAMES):
+            raise MocapError(f"{name}: the model's features {meta.get('feature_names')} are not this version's {list(FEATURE_NAMES)}")
+        joint_names = tuple(meta.get("joint_names", ()))
+        predicted = need("predicted")
+        if predicted.ndim != 1 or len(predicted) == 0 or predicted.min() < 0 or predicted.max() >= len(joint_names):
+            raise MocapError(f"{name}: predicted joint indices do not fit the {len(joint_names)} joints")
+        try:
+            network = Mlp.from_arrays(arrays, "network")
+        except (KeyError, ValueError) as error:
+            raise MocapError(f"{name}: the network's arrays are invalid ({error})") from None
+        n_features = len(FEATURE_NAMES)
+        if network.n_inputs != n_features or network.n_outputs != 4 * len(predicted):
+            raise MocapError(f"{name}: the network maps {network.n_inputs} -> {network.n_outputs}, expected {n_features} -> {4 * len(predicted)}")
+        return cls(
+            joint_names=joint_names,
+            predicted=predicted.astype(np.int64),
+            hemispheres=need("hemispheres", (len(predicted), 4)),
+            thigh_reference=need("thigh_reference", (2, 4)),
+            network=network,
+            settings=meta.get("settings", {}),
+            report=meta.get("report", {}),
+            calibration=need("calibration", (len(joint_names), 4)) if "calibration" in arrays else None,
+        )
+
+
+def shipped_model_bytes() -> bytes:
+    """The bytes of the model shipped inside the package."""
+    path = resources.files("expressive_mocap") / "data" / DEFAULT_MODEL
+    if not path.is_file():
+        raise MocapError(f"the package has no shipped model ({DEFAULT_MODEL}); train one with `expressive-mocap train`")
+    return path.read_bytes()
+
+
+def pose_vectors(rotations: np.ndarray, predicted: np.ndarray, hemispheres: np.ndarray) -> np.ndarray:
+    """Flattened poses ``[F, 4 P]``: the predicted joints' rotations on their reference hemispheres."""
+    q = rotations[:, predicted]
+    q = np.where(np.sum(q * hemispheres[None], axis=-1, keepdims=True) < 0, -q, q)
+    return q.reshape(len(rotations), -1)
+
+
+def model_features(motion: Motion, thigh_reference: np.ndarray, floor: float | None = None) -> np.ndarray:
+    """The 19 causal dynamic features ``[F, 19]`` as a model sees them (training and prediction alike)."""
+    roles = JointRoles.find(motion.skeleton)
+    if floor is None:
+        floor = default_floor(motion.positions(), roles)
+    return dynamic_features(motion, roles, floor=floor, thigh_reference=thigh_reference, causal=True)
+
+
+def _mean_rotations(rotations: np.ndarray) -> np.ndarray:
+    """Per-joint mean rotation ``[J, 4]`` of ``rotations [N, J, 4]``."""
+    return np.stack([mean_rotation(rotations[:, j]) for j in range(rotations.shape[1])])
+
+
+def train_model(
+    neutral: Sequence[Motion],
+    unlabelled: Sequence[Motion] = (),
+    *,
+    hidden: int = 300,
+    regression_hidden: int = 300,
+    unlabelled_frames: int = 40_000,
+    seed: int = 0,
+    max_iter: int = 400,
+    log=None,
+) -> BodyModel:
+    """Train a body-mechanics model on ``neutral`` clips (one skeleton; 70/30 split by clip),
+    its autoencoder also on up to ``unlabelled_frames`` frames drawn from ``unlabelled`` clips
+    (any clip, expressive ones included; the neutral test clips are left out of it, so the test
+    scores stay held out). Progress goes to ``log`` (a callable taking a line)."""
+    from .train import split_by_group, train_body_mechanics
+
+    if not neutral:
+        raise MocapError("training needs at least two neutral clips")
+    skeleton = neutral[0].skeleton
+    for motion in list(neutral) + list(unlabelled):
+        if motion.skeleton.names != skeleton.names:
+            raise MocapError("every training clip must have the same skeleton (joint names) as the first")
+    roles = JointRoles.find(skeleton)
+    predicted = np.array([j for j in range(skeleton.n_joints) if skeleton.parents[j] >= 0 and j != roles.hips])
+    rotations = np.concatenate([m.rotations for m in neutral])
+    hemispheres = _mean_rotations(rotations[:, predicted])
+    thigh_reference = _mean_rotations(rotations[:, list(roles.upper_legs)])
+
+    X = np.concatenate([model_features(m, thigh_reference) for m in neutral])
+    P = np.concatenate([pose_vectors(m.rotations, predicted, hemispheres) for m in neutral])
+    groups = np.concatenate([np.full(m.n_frames, k) for k, m in enumerate(neutral)])
+    extra = None
+    if unlabelled:
+        # The same split train_body_mechanics makes: keep its test clips out of the autoencoder.
+        train_rows, test_rows = split_by_group(groups, 0.3, seed)
+        test_clips = {_fingerprint(neutral[k]) for k in np.unique(groups[test_rows])}
+        kept = [m for m in unlabelled if _fingerprint(m) not in test_clips]
+        pool = np.concatenate([pose_vectors(m.rotations, predicted, hemispheres) for m in kept])
+        rng = np.random.default_rng(seed)
+        extra = np.concatenate([pool[rng.choice(len(pool), size=min(unlabelled_frames, len(pool)), replace=False)], P[train_rows]])
+    network, report = train_body_mechanics(X, P, groups, extra, hidden, regression_hidden, seed=seed, max_iter=max_iter, log=log)
+    settings = {
+        "hidden": hidden,
+        "regression_hidden": regression_hidden,
+        "seed": seed,
+        "max_iter": max_iter,
+        "neutral_clips": len(neutral),
+        "neutral_frames": int(len(X)),
+        "unlabelled_clips": len(unlabelled),
+        "unlabelled_frames": 0 if extra is None else int(len(extra)),
+        "features": "causal; floor = 5th percentile of toe heights; thigh hemisphere = training mean",
+    }
+    return BodyModel(tuple(skeleton.names), predicted, hemispheres, thigh_reference, network, settings, report)
+
+
+def _fingerprint(motion: Motion) -> tuple:
+    """Identifies a clip read twice (from the neutral and the unlabelled lists)."""
+    return motion.n_frames, motion.rotations[0].tobytes(), motion.rotations[-1].tobytes()
