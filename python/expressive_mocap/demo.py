@@ -122,9 +122,11 @@ def procedural_walk(
     wave_amplitude: float = 30.0,
 ) -> Motion:
     """A straight walk at ``speed`` m/s along +Z on the Bandai-Namco skeleton, feet on the floor
-    (y = 0), optionally waving the ``"left"`` or ``"right"`` arm (the upper arm raised, the
+    at y = 0 (the toe joints, inside the feet, touch down 4.35 cm above it, as in the real
+    files), optionally waving the ``"left"`` or ``"right"`` arm (the upper arm raised, the
     forearm and hand swinging ``wave_amplitude`` degrees either way ``wave_frequency`` times a
     second). Cadence, stride, arm swing, pelvis turn and hip bob grow with speed."""
+    # Both walks come from one call, so the walk is the same with or without a wave.
     pair = walk_and_wave(seconds, fps, speed, wave or "right", wave_frequency, wave_amplitude)
     return pair.waving if wave else pair.walk
 
