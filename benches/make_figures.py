@@ -11,7 +11,7 @@ import subprocess
 from pathlib import Path
 
 import expressive_mocap as em
-from expressive_mocap.demo import procedural_walk
+from expressive_mocap.demo import walk_and_wave
 from expressive_mocap.features import cadence, foot_contacts
 from expressive_mocap.render import plot_contacts, render
 
@@ -32,9 +32,12 @@ def main() -> None:
     args = parser.parse_args()
     out = HERE / "figures"
     out.mkdir(exist_ok=True)
-    render([procedural_walk()], out / "demo_walk.png", titles=["procedural walk (demo)"])
     data = dataset_dir(args.data)
     walks = [em.read_bvh(data / f"dataset-2_walk_{style}_001.bvh") for style in ("normal", "exhausted")]
+    # The demo at the real clip's speed, with and without its wave, above 4 s of that clip.
+    demo = walk_and_wave(seconds=4.0, speed=1.1)
+    titles = ["procedural walk (demo), 1.1 m/s", "the same, waving the right arm", "dataset-2_walk_normal_001, 1.1 m/s (Bandai-Namco, CC BY-NC 4.0)"]
+    render([demo.walk, demo.waving, walks[0][30:151]], out / "demo_walk.png", titles=titles)
     render(walks, out / "bandai_walks.png", titles=["walk, normal", "walk, exhausted"], poses=6)
     contacts_figure(walks[0], out / "bandai_walk_contacts.png")
     print(f"wrote {out}")

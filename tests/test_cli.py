@@ -58,11 +58,19 @@ def test_demo_runs_without_data(tmp_path):
     result = run("demo", "-o", tmp_path / "demo")
     assert result.returncode == 0, result.stderr
     walk = em.read_bvh(tmp_path / "demo" / "walk.bvh")
+    waving = em.read_bvh(tmp_path / "demo" / "walk_wave.bvh")
     assert walk.skeleton.n_joints == 22 and walk.n_frames == 121
-    # Feet on the floor, and the walk travels about speed x duration.
+    # The Bandai skeleton: its rest pose is a crouch 99.78 cm tall, the actor 140.9 cm.
+    assert "rest pose height 99.78" in result.stdout and "actor height 140.9 cm" in result.stdout
+    # The toe joints (inside the feet) touch down 4.35 cm above the floor, as in the real clips,
+    # and the hips travel speed x duration along +Z.
     positions = walk.positions()
-    assert positions[:, [16, 17, 20, 21], 1].min() == pytest.approx(2.0)
-    assert np.linalg.norm(positions[-1, 0, [0, 2]] - positions[0, 0, [0, 2]]) == pytest.approx(480.0, rel=0.02)
+    assert positions[:, [16, 17, 20, 21], 1].min() == pytest.approx(4.35)
+    assert positions[-1, 1, 2] - positions[0, 1, 2] == pytest.approx(480.0)
+    assert "hips travelled 4.80 m in 4.00 s" in result.stdout
+    assert "footsteps: 7 (3 left, 4 right), cadence 1.88 steps/s" in result.stdout
+    assert "joints that differ: UpperArm_R, LowerArm_R, Hand_R" in result.stdout
+    np.testing.assert_array_equal(np.delete(waving.rotations, [11, 12, 13], axis=1), np.delete(walk.rotations, [11, 12, 13], axis=1))
     assert (tmp_path / "demo" / "walk.png").exists() and (tmp_path / "demo" / "walk.gif").exists()
 
 

@@ -141,25 +141,37 @@ def cmd_footsteps(args) -> int:
 
 
 def cmd_demo(args) -> int:
-    from .demo import procedural_walk
+    from .demo import walk_and_wave
+    from .features import cadence, foot_contacts, footstrikes
     from .render import render
+    from .roles import JointRoles, actor_height
 
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     print(f"expressive-mocap {__version__}, kernels: {backend.get_backend()}")
-    walk = procedural_walk(seconds=args.seconds, speed=args.speed)
-    bvh_path = out / "walk.bvh"
-    write_bvh(walk, bvh_path)
-    again = read_bvh(bvh_path)
-    drift = float(np.abs(again.positions() - walk.positions()).max())
-    print(f"procedural walk at {args.speed} m/s: {walk.n_frames} frames, {walk.skeleton.n_joints} joints -> {bvh_path}")
+    pair = walk_and_wave(seconds=args.seconds, speed=args.speed, side=args.wave)
+    bvh_path, wave_path = out / "walk.bvh", out / "walk_wave.bvh"
+    write_bvh(pair.walk, bvh_path)
+    write_bvh(pair.waving, wave_path)
+    again, waving = read_bvh(bvh_path), read_bvh(wave_path)
+    drift = float(np.abs(again.positions() - pair.walk.positions()).max())
+    print(f"procedural walk at {args.speed} m/s on the Bandai-Namco dataset-2 skeleton: {again.n_frames} frames -> {bvh_path}")
     cmd_info(argparse.Namespace(files=[str(bvh_path)]))
+    roles = JointRoles.find(again.skeleton)
+    print(f"  actor height {actor_height(again.skeleton, roles):.4g} cm (hips rest height + spine-to-head chain: the rest pose is not upright)")
     print(f"  read back: largest joint position difference {drift:.2e} cm")
-    positions = again.positions()
-    step = positions[-1, 0] - positions[0, 0]
-    print(f"  travelled {np.linalg.norm(step[[0, 2]]) / 100:.2f} m in {again.duration:.2f} s")
-    render([again], out / "walk.png", titles=["procedural walk"])
-    render([again[: int(again.fps * 1.5)]], out / "walk.gif", titles=["procedural walk"])
+    hips = again.positions()[:, roles.hips]
+    print(f"  hips travelled {np.linalg.norm(hips[-1, [0, 2]] - hips[0, [0, 2]]) / 100:.2f} m in {again.duration:.2f} s")
+    contacts = foot_contacts(again, roles)
+    strikes = footstrikes(contacts)
+    left = int(np.count_nonzero(strikes[:, 1] == 0))
+    print(f"  footsteps: {len(strikes)} ({left} left, {len(strikes) - left} right), cadence {cadence(contacts, again.frame_time):.2f} steps/s")
+    changed = [again.skeleton.names[j] for j in range(again.skeleton.n_joints) if not np.array_equal(again.rotations[:, j], waving.rotations[:, j])]
+    print(f"the same walk waving the {args.wave} arm -> {wave_path} (joints that differ: {', '.join(changed)})")
+    titles = ["procedural walk", f"waving the {args.wave} arm"]
+    render([again, waving], out / "walk.png", titles=titles)
+    seconds = int(again.fps * 1.5)
+    render([again[:seconds], waving[:seconds]], out / "walk.gif", titles=titles, view="front")
     print(f"pictures: {out / 'walk.png'}, {out / 'walk.gif'}")
     return 0
 
@@ -379,10 +391,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--floor", type=float, metavar="Y", help="floor height in file units (default: 5th percentile of toe heights; 0 with --causal)")
     p.set_defaults(run=cmd_footsteps)
 
-    p = commands.add_parser("demo", help="generate a procedural walk (no download), write, read and draw it")
+    p = commands.add_parser("demo", help="generate a procedural walk and a waving one (no download), write, read and draw them")
     p.add_argument("-o", "--output", default="expressive-mocap-demo", metavar="DIR", help="folder for the outputs (default: ./expressive-mocap-demo)")
     p.add_argument("--speed", type=_positive(float), default=1.2, help="walking speed in m/s (default: 1.2)")
     p.add_argument("--seconds", type=_positive(float), default=4.0, help="length of the walk (default: 4)")
+    p.add_argument("--wave", choices=["left", "right"], default="right", help="arm that waves in walk_wave.bvh (default: right)")
     p.set_defaults(run=cmd_demo)
     return parser
 

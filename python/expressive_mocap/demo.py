@@ -1,100 +1,337 @@
-"""The embedded default: a procedurally generated walk, so everything runs with no download.
+"""The embedded default: a procedurally generated walk on the Bandai-Namco skeleton, so
+everything runs with no download, and optionally a wave laid on one arm.
 
-The skeleton has the 22 joints of the Bandai-Namco datasets (same names, hierarchy, bone
-lengths and BVH channel layout: six channels a joint, Z X Y rotation order), in an upright
-rest pose (T-pose, facing +Z, Y up, centimetres). Arm swing and step length follow the speed.
+The skeleton is the one of the Bandai-Namco dataset-2 files: 22 joints, their names, hierarchy,
+rest offsets (cm, Y up) and channel layout (six channels a joint, Z X Y rotation order, End Sites
+at the hand, toe and head joints). Its rest pose is not upright (each bone lies along its joint's
+local X axis), so the walk is made in three steps:
+
+1. an upright generator gives every joint a WORLD rotation ``R_j(t)``; its standing pose ``U_j``
+   has every swing at zero and the arms down (pelvis sway, trunk counter-rotation, arm swing,
+   foot pitch; the thighs and shins only follow the pelvis);
+2. the retarget ``R'_j = R_j U_j^-1 W_j`` lays those changes on ``W_j``, the world rotations of
+   a real Bandai neutral walk's average pose, which brings the dataset's own twist conventions;
+3. a footstep plan (a planted stance foot rolling over heel and toe, swing arcs between
+   footprints) places the hips and the ankles, and two-bone IK swings each thigh and shin so the
+   ankle lands where the plan puts it.
+
+A wave is a world rotation laid on one arm in step 1, before the retarget: it changes that arm's
+upper arm, forearm and hand and nothing else.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from . import quat
+from .errors import MocapError
 from .motion import Motion, Skeleton
 
 BANDAI_CHANNELS = ("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")
 
-# name, parent, rest offset (cm). Bone lengths measured on the Bandai-Namco skeleton.
-_JOINTS = [
-    ("joint_Root", None, (0.0, 0.0, 0.0)),
-    ("Hips", "joint_Root", (0.0, 89.4, 0.0)),
-    ("Spine", "Hips", (0.0, 15.7, 0.0)),
-    ("Chest", "Spine", (0.0, 9.0, 0.0)),
-    ("Neck", "Chest", (0.0, 16.4, 1.0)),
-    ("Head", "Neck", (0.0, 6.5, 0.5)),
-    ("Shoulder_L", "Chest", (5.0, 13.0, 0.5)),
-    ("UpperArm_L", "Shoulder_L", (5.3, 0.0, 0.0)),
-    ("LowerArm_L", "UpperArm_L", (24.3, 0.0, 0.0)),
-    ("Hand_L", "LowerArm_L", (22.3, 0.0, 0.0)),
-    ("Shoulder_R", "Chest", (-5.0, 13.0, 0.5)),
-    ("UpperArm_R", "Shoulder_R", (-5.3, 0.0, 0.0)),
-    ("LowerArm_R", "UpperArm_R", (-24.3, 0.0, 0.0)),
-    ("Hand_R", "LowerArm_R", (-22.3, 0.0, 0.0)),
-    ("UpperLeg_L", "Hips", (6.4, -2.2, 0.0)),
-    ("LowerLeg_L", "UpperLeg_L", (0.0, -39.1, 0.0)),
-    ("Foot_L", "LowerLeg_L", (0.0, -41.0, 0.0)),
-    ("Toes_L", "Foot_L", (0.0, -7.1, 9.3)),
-    ("UpperLeg_R", "Hips", (-6.4, -2.2, 0.0)),
-    ("LowerLeg_R", "UpperLeg_R", (0.0, -39.1, 0.0)),
-    ("Foot_R", "LowerLeg_R", (0.0, -41.0, 0.0)),
-    ("Toes_R", "Foot_R", (0.0, -7.1, 9.3)),
+# From Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0), dataset-2_walk_normal_001.bvh:
+# name, parent, rest offset (cm; the Hips offset is that clip's own), and W, the joint's world
+# rotation (x, y, z, w) averaged over the clip with its heading removed (facing +Z); for the feet
+# and toes, averaged over the frames where that foot is flat on the floor.
+_BANDAI = [
+    ("joint_Root", None, (0.0, 0.0, 0.0), (0.0000, 0.0000, 0.0000, 1.0000)),
+    ("Hips", "joint_Root", (-0.726466, 93.3139, -2.00062), (-0.0199, 0.0202, 0.7003, 0.7133)),
+    ("Spine", "Hips", (15.7357, 0.0, 0.0), (0.5131, 0.4912, 0.5042, 0.4911)),
+    ("Chest", "Spine", (8.98455, -0.406207, 0.0), (0.5243, 0.4880, 0.5163, 0.4693)),
+    ("Neck", "Chest", (16.3773, 0.0, 0.0), (0.5101, 0.4855, 0.5409, 0.4599)),
+    ("Head", "Neck", (6.45672, 0.0, 0.0), (0.5401, 0.4513, 0.5408, 0.4607)),
+    ("Shoulder_L", "Chest", (12.9942, -0.242716, 4.98039), (0.0425, 0.1788, 0.0230, 0.9827)),
+    ("UpperArm_L", "Shoulder_L", (5.34809, 0.0, 0.0), (0.0758, -0.0614, -0.5861, 0.8043)),
+    ("LowerArm_L", "UpperArm_L", (24.3286, 1.87007e-05, 0.0), (0.0369, -0.2878, -0.5808, 0.7606)),
+    ("Hand_L", "LowerArm_L", (22.2916, 0.0, 0.0), (0.0303, -0.3505, -0.5200, 0.7784)),
+    ("Shoulder_R", "Chest", (12.9945, -0.242716, -4.98039), (-0.9875, -0.0616, -0.1410, 0.0334)),
+    ("UpperArm_R", "Shoulder_R", (-5.34813, 0.0, 0.0), (-0.7826, -0.6082, 0.0996, 0.0875)),
+    ("LowerArm_R", "UpperArm_R", (-24.3289, 0.000322201, 0.0), (-0.7375, -0.6044, 0.2965, 0.0532)),
+    ("Hand_R", "LowerArm_R", (-22.2915, -0.000108084, 0.0), (-0.7824, -0.5208, 0.3378, 0.0507)),
+    ("UpperLeg_L", "Hips", (-2.19248, -6.46944, 0.0), (-0.1241, -0.0198, -0.6911, 0.7117)),
+    ("LowerLeg_L", "UpperLeg_L", (39.0811, 0.0, -1.23785e-05), (0.0702, 0.1782, -0.6980, 0.6900)),
+    ("Foot_L", "LowerLeg_L", (40.9854, 0.0, -1.26872e-05), (-0.3466, -0.2558, -0.6062, 0.6686)),
+    ("Toes_L", "Foot_L", (11.7543, 0.0, 0.0), (-0.4348, -0.3536, -0.5472, 0.6217)),
+    ("UpperLeg_R", "Hips", (-2.19251, 6.46944, 0.0), (0.7060, 0.6926, -0.0081, 0.1480)),
+    ("LowerLeg_R", "UpperLeg_R", (-39.0811, -0.00228153, -0.0401928), (-0.6859, -0.7039, -0.1809, 0.0362)),
+    ("Foot_R", "LowerLeg_R", (-40.9854, 0.0, 0.0), (0.6841, 0.5896, -0.2352, 0.3592)),
+    ("Toes_R", "Foot_R", (-11.7543, 0.0, 0.0), (0.6306, 0.5155, -0.3539, 0.4598)),
 ]
-_END_SITES = {"Head": (0.0, 16.0, 1.0), "Hand_L": (9.0, 0.0, 0.0), "Hand_R": (-9.0, 0.0, 0.0), "Toes_L": (0.0, 0.0, 5.0), "Toes_R": (0.0, 0.0, 5.0)}
+_END_SITES = ("Head", "Hand_L", "Hand_R", "Toes_L", "Toes_R")  # all at their joint (zero offset)
+_NAMES = tuple(n for n, _, _, _ in _BANDAI)
+_J = {n: j for j, n in enumerate(_NAMES)}
+_PARENTS = np.array([-1 if p is None else _NAMES.index(p) for _, p, _, _ in _BANDAI])
+_STANDING = quat.normalize(np.array([w for _, _, _, w in _BANDAI]))  # W_j
+
+# Measured on the same clip: the toe joint sits inside the foot, 4.35 cm above the floor when the
+# foot is flat; the ankles are 13.2 cm apart; the hips are 90.4 cm high on average (1.5 cm std).
+_TOE_HEIGHT = 4.35
+_ANKLE_LATERAL = 6.6
+_HIPS_HEIGHT = 90.4
+
+# The gait cycle of one foot, in fractions of a stride from its heel strike.
+_HEEL_ROCKER_END = 0.08  # heel strike: the foot rolls down onto the sole
+_TOE_ROCKER_START = 0.34  # the heel lifts, the foot rolls over the toes
+_TOE_OFF = 0.6  # swing begins
+_MID_STANCE = 0.28  # the hips pass over the ankle
+_HEEL_STRIKE_PITCH = 12.0  # degrees, toes up
+_TOE_OFF_PITCH = 35.0  # degrees, heel up
+_LIFT = 12.0  # cm, extra ankle height in the swing: highest 30% of the way, gone at 80% (the leg reaches out low)
+
+_REACH = 0.9995  # of the leg's length: IK stays clear of a fully straight knee
+
+WAVE_RAISE = 125.0  # degrees the upper arm turns up from hanging, out to the side
+WAVE_BEND = 30.0  # degrees the forearm turns further up (the elbow bends)
 
 
 def bandai_like_skeleton() -> Skeleton:
-    """The demo skeleton: Bandai-Namco joint names and layout, upright rest pose."""
-    names = [n for n, _, _ in _JOINTS]
+    """The Bandai-Namco dataset-2 skeleton: joint names, hierarchy, rest offsets and channels
+    as in ``dataset-2_walk_normal_001.bvh`` (the Hips offset is that clip's)."""
     return Skeleton(
-        names=tuple(names),
-        parents=[-1 if p is None else names.index(p) for _, p, _ in _JOINTS],
-        offsets=[o for _, _, o in _JOINTS],
-        channels=(BANDAI_CHANNELS,) * len(_JOINTS),
-        end_sites=tuple((names.index(n), o) for n, o in _END_SITES.items()),
+        names=_NAMES,
+        parents=_PARENTS,
+        offsets=[o for _, _, o, _ in _BANDAI],
+        channels=(BANDAI_CHANNELS,) * len(_NAMES),
+        end_sites=tuple((_J[n], (0.0, 0.0, 0.0)) for n in _END_SITES),
     )
 
 
-def procedural_walk(seconds: float = 4.0, fps: float = 30.0, speed: float = 1.2) -> Motion:
-    """A straight walk at ``speed`` metres a second along +Z, feet on the floor (y = 0).
+def strides_per_second(speed: float) -> float:
+    """Strides (two steps) a second at ``speed`` m/s: 1.8 steps/s at 1.1 m/s, as the Bandai
+    neutral walks, growing with speed."""
+    return (1.2 + 0.55 * speed) / 2
 
-    Step frequency, stride, arm swing and hip bob grow with speed (walking, not running).
-    """
+
+class WalkAndWave(NamedTuple):
+    """The same walk twice: ``walk`` without the wave, ``waving`` with it (identical but for
+    the waving arm's upper arm, forearm and hand)."""
+
+    walk: Motion
+    waving: Motion
+
+
+def procedural_walk(
+    seconds: float = 4.0,
+    fps: float = 30.0,
+    speed: float = 1.2,
+    *,
+    wave: str | None = None,
+    wave_frequency: float = 2.0,
+    wave_amplitude: float = 30.0,
+) -> Motion:
+    """A straight walk at ``speed`` m/s along +Z on the Bandai-Namco skeleton, feet on the floor
+    at y = 0 (the toe joints, inside the feet, touch down 4.35 cm above it, as in the real
+    files), optionally waving the ``"left"`` or ``"right"`` arm (the upper arm raised, the
+    forearm and hand swinging ``wave_amplitude`` degrees either way ``wave_frequency`` times a
+    second). Cadence, stride, arm swing, pelvis turn and hip bob grow with speed."""
+    # Both walks come from one call, so the walk is the same with or without a wave.
+    pair = walk_and_wave(seconds, fps, speed, wave or "right", wave_frequency, wave_amplitude)
+    return pair.waving if wave else pair.walk
+
+
+def walk_and_wave(
+    seconds: float = 4.0,
+    fps: float = 30.0,
+    speed: float = 1.2,
+    side: str = "right",
+    frequency: float = 2.0,
+    amplitude: float = 30.0,
+) -> WalkAndWave:
+    """The procedural walk with and without a wave of the ``side`` arm (see :func:`procedural_walk`)."""
+    if side not in ("left", "right"):
+        raise MocapError(f"wave: expected 'left', 'right' or None, got {side!r}")
+    for name, value in (("seconds", seconds), ("fps", fps), ("speed", speed), ("wave_frequency", frequency)):
+        if not (np.isfinite(value) and value > 0):
+            raise MocapError(f"procedural_walk: {name} must be positive, got {value}")
+    t = np.arange(int(round(seconds * fps)) + 1) / fps
+    upright = _upright_world(t, speed)
+    standing = _upright_world(t[:1], speed, amplitude=0.0)[0]  # U_j
+    hips = _hips_path(t, speed)
+    ankles, pitches = _footsteps(t, speed)
+    upright[:, [_J["Foot_L"], _J["Foot_R"]]] = quat.about("X", -pitches[..., 0])
+    upright[:, [_J["Toes_L"], _J["Toes_R"]]] = quat.about("X", -pitches[..., 1])
+    waved = upright.copy()
+    letter = side[0].upper()
+    for name, q in zip(("UpperArm", "LowerArm", "Hand"), _wave(t, side, frequency, amplitude)):
+        waved[:, _J[f"{name}_{letter}"]] = quat.mul(q, waved[:, _J[f"{name}_{letter}"]])
+    motions = [_on_bandai(world, standing, hips, ankles, 1.0 / fps) for world in (upright, waved)]
+    return WalkAndWave(*motions)
+
+
+# -- step 1: the upright generator ---------------------------------------------------------
+
+
+def _upright_world(t: np.ndarray, speed: float, amplitude: float = 1.0) -> np.ndarray:
+    """World rotations ``[F, J, 4]`` of the upright walk (facing +Z, left is +X); ``amplitude``
+    scales every swing (0: the standing pose U, arms hanging, elbows a little bent)."""
+    u = strides_per_second(speed) * t  # strides since the left heel strike at t = 0
+    local = np.zeros((len(t), len(_NAMES), 4))
+    local[..., 3] = 1.0
+    # The pelvis turns the forward-swinging leg's hip forward and drops on the swing side.
+    yaw = -amplitude * 4.0 * speed * np.cos(2 * np.pi * u)
+    roll = amplitude * 2.5 * np.sin(2 * np.pi * u)
+    local[:, _J["Hips"]] = quat.mul(quat.about("Y", yaw), quat.about("Z", roll))
+    # The trunk turns against the pelvis and keeps the shoulders level.
+    for name in ("Spine", "Chest"):
+        local[:, _J[name]] = quat.mul(quat.about("Y", -0.7 * yaw), quat.about("Z", -0.5 * roll))
+    for side, shift, sign in (("L", 0.0, 1.0), ("R", 0.5, -1.0)):
+        cycle = np.cos(2 * np.pi * (u + shift))  # -1 when this side's arm is furthest forward
+        # Arms hang down (about Z) and swing against the leg of their side (about X, outermost);
+        # the elbow bends more on the forward swing.
+        swing = amplitude * (8.0 + 12.0 * speed) * cycle
+        local[:, _J[f"UpperArm_{side}"]] = quat.mul(quat.about("X", swing), quat.about("Z", np.full(len(t), -sign * 78.0)))
+        local[:, _J[f"LowerArm_{side}"]] = quat.about("Y", -sign * (15.0 + amplitude * 12.0 * np.clip(-cycle, 0, None)))
+    return _world(local)
+
+
+def _world(local: np.ndarray) -> np.ndarray:
+    world = local.copy()
+    for j in range(1, len(_NAMES)):
+        world[:, j] = quat.mul(world[:, _PARENTS[j]], local[:, j])
+    return world
+
+
+def _wave(t: np.ndarray, side: str, frequency: float, amplitude: float) -> list[np.ndarray]:
+    """World rotations laid on the upper arm, forearm and hand: the arm raised out to the side
+    (about the walking direction), the forearm bent further up and swinging, the hand lagging."""
+    sign = 1.0 if side == "left" else -1.0
+    angle = 2 * np.pi * frequency * t
+    raise_arm = quat.about("Z", np.full(len(t), sign * WAVE_RAISE))
+    forearm = quat.mul(raise_arm, quat.about("Z", sign * (WAVE_BEND + amplitude * np.sin(angle))))
+    hand = quat.mul(forearm, quat.about("Z", sign * 0.3 * amplitude * np.sin(angle - 1.0)))
+    return [raise_arm, forearm, hand]
+
+
+# -- step 3's plan: hips path and footsteps ------------------------------------------------
+
+
+def _smooth(x: np.ndarray) -> np.ndarray:
+    """0 -> 1 with zero slope at both ends."""
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3 - 2 * x)
+
+
+def _hips_path(t: np.ndarray, speed: float) -> np.ndarray:
+    """Hips positions ``[F, 3]``: constant speed forward, swaying over the stance foot, highest
+    at mid-stance (twice a stride)."""
+    u = strides_per_second(speed) * t - _MID_STANCE
+    sway = 1.5 * np.cos(2 * np.pi * u)
+    bob = (1.0 + 1.0 * speed) * np.cos(4 * np.pi * u)
+    return np.stack([sway, _HIPS_HEIGHT + bob, 100.0 * speed * t], axis=1)
+
+
+def _foot_geometry(side: str) -> tuple[np.ndarray, np.ndarray, float]:
+    """The flat foot of ``side`` ("L", "R"), relative to its ankle: ball (the toe joint) and
+    heel, and the ankle's height above the floor."""
+    ball = quat.rotate(_STANDING[_J[f"Foot_{side}"]], np.array(_BANDAI[_J[f"Toes_{side}"]][2]))
+    ankle_height = _TOE_HEIGHT - ball[1]
+    heel = np.array([0.0, -ankle_height + 2.0, -4.0])
+    return ball, heel, ankle_height
+
+
+def _footsteps(t: np.ndarray, speed: float) -> tuple[np.ndarray, np.ndarray]:
+    """Planned ankle positions ``[F, 2, 3]`` and pitches ``[F, 2, 2]`` (foot, toes; degrees,
+    toes up) of the left and right feet."""
+    stride = 100.0 * speed / strides_per_second(speed)
+    ankles, pitches = [], []
+    for side, shift, lateral in (("L", 0.0, _ANKLE_LATERAL), ("R", 0.5, -_ANKLE_LATERAL)):
+        ball, heel, ankle_height = _foot_geometry(side)
+        u = strides_per_second(speed) * t + shift
+        n = np.floor(u)
+        p = u - n
+
+        def footprint(k):  # the flat ankle of stride k: under the hips at mid-stance
+            return np.stack([np.full_like(k, lateral), np.full_like(k, ankle_height), stride * (k + _MID_STANCE - shift)], axis=1)
+
+        def rolled(k, pitch, pivot):  # the ankle when the foot turns about a point of its sole
+            turn = quat.about("X", -pitch)
+            return footprint(k) + pivot - quat.rotate(turn, np.broadcast_to(pivot, (len(k), 3)))
+
+        heel_pitch = _HEEL_STRIKE_PITCH * (1 - _smooth(p / _HEEL_ROCKER_END))
+        toe_pitch = -_TOE_OFF_PITCH * _smooth((p - _TOE_ROCKER_START) / (_TOE_OFF - _TOE_ROCKER_START))
+        swing = _smooth((p - _TOE_OFF) / (1 - _TOE_OFF))
+        lift = _LIFT * np.sin(np.pi * np.clip((p - _TOE_OFF) / (0.8 * (1 - _TOE_OFF)), 0, 1) ** 0.7) ** 2
+        take_off = rolled(n, np.full_like(p, -_TOE_OFF_PITCH), ball)
+        landing = rolled(n + 1, np.full_like(p, _HEEL_STRIKE_PITCH), heel)
+        in_swing = (p >= _TOE_OFF)[:, None]
+        stance = np.where((p < _TOE_ROCKER_START)[:, None], rolled(n, heel_pitch, heel), rolled(n, toe_pitch, ball))
+        ankle = np.where(in_swing, take_off + swing[:, None] * (landing - take_off) + np.outer(lift, [0, 1, 0]), stance)
+        pitch = np.where(p < _TOE_ROCKER_START, heel_pitch, np.where(p < _TOE_OFF, toe_pitch, -_TOE_OFF_PITCH + swing * (_HEEL_STRIKE_PITCH + _TOE_OFF_PITCH)))
+        # The toes bend (stay flatter than the foot) while the heel is up, and catch up in the swing.
+        toes = np.where(p < _TOE_ROCKER_START, pitch, np.where(p < _TOE_OFF, 0.4 * pitch, (0.4 + 0.6 * swing) * pitch))
+        ankles.append(ankle)
+        pitches.append(np.stack([pitch, toes], axis=1))
+    return np.stack(ankles, axis=1), np.stack(pitches, axis=1)
+
+
+# -- steps 2 and 3: retarget onto the Bandai skeleton, then plant the feet ---------------------
+
+
+def _on_bandai(upright: np.ndarray, standing: np.ndarray, hips: np.ndarray, ankles: np.ndarray, frame_time: float) -> Motion:
     skeleton = bandai_like_skeleton()
-    frames = int(round(seconds * fps)) + 1
-    t = np.arange(frames) / fps
-    cadence = 0.75 + 0.35 * speed  # strides (two steps) per second
-    phase = 2 * np.pi * cadence * t
-    swing = 10.0 + 12.0 * speed  # hip flexion amplitude, degrees
+    world = quat.mul(quat.mul(upright, quat.conjugate(standing)), _STANDING)  # R U^-1 W
+    world[:, 0] = [0.0, 0.0, 0.0, 1.0]  # joint_Root stays on the floor, unturned, as in the files
+    hips = _within_reach(world, hips, ankles, skeleton.offsets)
+    for side, target in zip("LR", np.moveaxis(ankles, 1, 0)):
+        _two_bone_ik(world, hips, skeleton.offsets, *(_J[f"{n}_{side}"] for n in ("UpperLeg", "LowerLeg", "Foot")), target)
+    rotations = world.copy()
+    rotations[:, 1:] = quat.mul(quat.conjugate(world[:, _PARENTS[1:]]), world[:, 1:])
+    translations = np.broadcast_to(skeleton.offsets, world.shape[:2] + (3,)).copy()
+    translations[:, _J["Hips"]] = hips
+    return Motion(skeleton, rotations, translations, frame_time)
 
-    index = {n: i for i, n in enumerate(skeleton.names)}
-    rotations = np.zeros((frames, skeleton.n_joints, 4))
-    rotations[..., 3] = 1.0
 
-    def set_rotation(name: str, q: np.ndarray) -> None:
-        rotations[:, index[name]] = q
+def _within_reach(world: np.ndarray, hips: np.ndarray, ankles: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """The hips path lowered wherever a leg, nearly straight, could not reach its planned ankle
+    (long strides of fast walks)."""
+    hips = hips.copy()
+    for side, target in zip("LR", np.moveaxis(ankles, 1, 0)):
+        leg = _REACH * sum(np.linalg.norm(offsets[_J[f"{n}_{side}"]]) for n in ("LowerLeg", "Foot"))
+        joint = quat.rotate(world[:, 1], offsets[_J[f"UpperLeg_{side}"]])  # the hip joint, from the hips
+        gap = target - hips - joint
+        highest = target[:, 1] + np.sqrt(np.maximum(leg**2 - gap[:, 0] ** 2 - gap[:, 2] ** 2, 0.0)) - joint[:, 1]
+        hips[:, 1] = np.minimum(hips[:, 1], highest)
+    return hips
 
-    hips_yaw = 4.0 * speed * np.sin(phase)
-    set_rotation("Hips", quat.mul(quat.about("Y", hips_yaw), quat.about("Z", 2.0 * np.sin(phase))))
-    set_rotation("Spine", quat.about("Y", -0.6 * hips_yaw))
-    set_rotation("Chest", quat.about("Y", -0.4 * hips_yaw))
-    for side, shift, sign in (("L", 0.0, 1.0), ("R", np.pi, -1.0)):
-        p = phase + shift
-        # Hip flexion brings the foot forward (negative X rotation); the knee bends most mid-swing.
-        set_rotation(f"UpperLeg_{side}", quat.about("X", -swing * np.sin(p)))
-        set_rotation(f"LowerLeg_{side}", quat.about("X", 5.0 + 45.0 * np.clip(np.cos(p + 0.4), 0, None) ** 2))
-        set_rotation(f"Foot_{side}", quat.about("X", -8.0 * np.sin(p)))
-        # Arms hang down (about Z) and swing against the leg of their side (about X, outermost).
-        arm_swing = (8.0 + 14.0 * speed) * np.sin(p)
-        set_rotation(f"UpperArm_{side}", quat.mul(quat.about("X", arm_swing), quat.about("Z", np.full(frames, -sign * 78.0))))
-        set_rotation(f"LowerArm_{side}", quat.about("Y", -sign * (15.0 + 10.0 * np.clip(np.sin(p), 0, None))))
 
-    translations = np.broadcast_to(skeleton.offsets, (frames, skeleton.n_joints, 3)).copy()
-    translations[:, index["joint_Root"]] = np.stack([1.5 * np.sin(phase), np.zeros(frames), 100.0 * speed * t], axis=1)
-    translations[:, index["Hips"], 1] += 1.0 * speed * np.cos(2 * phase)
-    motion = Motion(skeleton, rotations, translations, 1.0 / fps)
+def _about(axis: np.ndarray, radians: np.ndarray) -> np.ndarray:
+    """Rotations ``[F, 4]`` by ``radians [F]`` about unit ``axis [F, 3]``."""
+    return np.concatenate([axis * np.sin(radians / 2)[:, None], np.cos(radians / 2)[:, None]], axis=1)
 
-    # Put the lower foot of every frame on the floor.
-    positions = motion.positions()
-    feet = [index[n] for n in ("Foot_L", "Toes_L", "Foot_R", "Toes_R")]
-    translations[:, index["joint_Root"], 1] -= positions[:, feet, 1].min(axis=1) - 2.0
-    return Motion(skeleton, rotations, translations, 1.0 / fps)
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    """Unit vectors along ``v [F, 3]``; +X where ``v`` is zero (its rotation angle is 0 then)."""
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.where(norm > 1e-12, v / np.where(norm > 1e-12, norm, 1.0), [1.0, 0.0, 0.0])
+
+
+def _angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.arccos(np.clip(np.sum(_unit(a) * _unit(b), axis=-1), -1.0, 1.0))
+
+
+def _two_bone_ik(world: np.ndarray, hips: np.ndarray, offsets: np.ndarray, hip: int, knee: int, ankle: int, target: np.ndarray) -> None:
+    """Swing the thigh ``hip`` and shin ``knee`` (world rotations, in place) so the ankle reaches
+    ``target [F, 3]``, bending in the knee's own plane (after D. Holden's two-joint IK); the
+    twist of each bone and the foot's world rotation are kept."""
+    a = hips + quat.rotate(world[:, 1], offsets[hip])
+    b = a + quat.rotate(world[:, hip], offsets[knee])
+    c = b + quat.rotate(world[:, knee], offsets[ankle])
+    thigh, shin = np.linalg.norm(offsets[knee]), np.linalg.norm(offsets[ankle])
+    reach = np.clip(np.linalg.norm(target - a, axis=1), abs(thigh - shin) + 1e-3, (thigh + shin) * 0.9999)
+    # Angles at the hip (between hip-ankle and thigh) and at the knee, now and wanted.
+    hip_now, knee_now = _angle_between(c - a, b - a), _angle_between(a - b, c - b)
+    hip_wanted = np.arccos(np.clip((shin**2 - thigh**2 - reach**2) / (-2 * thigh * reach), -1, 1))
+    knee_wanted = np.arccos(np.clip((reach**2 - thigh**2 - shin**2) / (-2 * thigh * shin), -1, 1))
+    bend_axis = _unit(np.cross(c - a, b - a))
+    bend_hip = _about(bend_axis, hip_wanted - hip_now)
+    bend_knee = _about(bend_axis, knee_wanted - knee_now)
+    # Then turn the whole leg about the hip so the ankle points at the target.
+    c_bent = a + quat.rotate(bend_hip, b - a) + quat.rotate(quat.mul(bend_knee, bend_hip), c - b)
+    aim = _about(_unit(np.cross(c_bent - a, target - a)), _angle_between(c_bent - a, target - a))
+    world[:, hip] = quat.mul(aim, quat.mul(bend_hip, world[:, hip]))
+    world[:, knee] = quat.mul(aim, quat.mul(bend_knee, quat.mul(bend_hip, world[:, knee])))
+
+
+__all__ = ["BANDAI_CHANNELS", "WAVE_BEND", "WAVE_RAISE", "WalkAndWave", "bandai_like_skeleton", "procedural_walk", "strides_per_second", "walk_and_wave"]
