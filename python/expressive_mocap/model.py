@@ -143,18 +143,20 @@ class BodyModel:
     def load(cls, source: str | os.PathLike | bytes | None = None) -> BodyModel:
         """Read a model file (default: the model shipped with the package). Arrays only, no
         pickles; the contents are checked against the format, with a clear error otherwise."""
-        name = str(source) if isinstance(source, (str, os.PathLike)) else "<bytes>"
         if source is None:
-            source, name = shipped_model_bytes(), f"the shipped {DEFAULT_MODEL}"
+            data, name = shipped_model_bytes(), f"the shipped {DEFAULT_MODEL}"
+        elif isinstance(source, bytes):
+            data, name = source, "<bytes>"
+        else:
+            name = str(source)
+            try:
+                data = Path(source).read_bytes()
+            except OSError as error:
+                raise MocapError(f"{name}: cannot read the model file: {error.strerror or error}") from None
         try:
-            data = io.BytesIO(source) if isinstance(source, bytes) else Path(source).read_bytes()
-            if isinstance(data, bytes):
-                data = io.BytesIO(data)
-            with np.load(data, allow_pickle=False) as archive:
+            with np.load(io.BytesIO(data), allow_pickle=False) as archive:
                 arrays = {k: archive[k] for k in archive.files}
-        except (OSError, ValueError, EOFError) as error:  # zip errors are ValueErrors or OSErrors
-            raise MocapError(f"{name}: not a readable model file ({error})") from None
-        except Exception as error:  # a damaged zip can raise zipfile.BadZipFile and friends
+        except Exception as error:  # damaged zips raise BadZipFile, ValueError, OSError, EOFError...
             raise MocapError(f"{name}: not a readable model file ({type(error).__name__}: {error})") from None
         return cls._from_arrays(arrays, name)
 
