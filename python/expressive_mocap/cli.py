@@ -173,7 +173,32 @@ def cmd_demo(args) -> int:
     seconds = int(again.fps * 1.5)
     render([again[:seconds], waving[:seconds]], out / "walk.gif", titles=titles, view="front")
     print(f"pictures: {out / 'walk.png'}, {out / 'walk.gif'}")
+    _demo_decoupling(waving, changed, out)
     return 0
+
+
+def _demo_decoupling(waving: Motion, arm: list[str], out: Path) -> None:
+    """Decouple the waving walk with the shipped model, modulate it, draw both."""
+    from .decouple import decompose
+    from .model import BodyModel
+    from .render import render
+
+    parts = decompose(waving, BodyModel.load())
+    names = waving.skeleton.names
+    on_arm = [names.index(n) for n in arm]
+    elsewhere = [j for j in range(2, len(names)) if j not in on_arm]
+    print("decoupled with the shipped body-mechanics model (trained on Bandai-Namco neutral locomotion):")
+    print(f"  mean activity on the waving arm ({', '.join(arm)}): {parts.activity[:, on_arm].mean():.2f}; on the other 17 joints: {parts.activity[:, elsewhere].mean():.3f}")
+    write_bvh(parts.body_motion(), out / "walk_wave_body.bvh")
+    write_bvh(parts.expressive_motion(), out / "walk_wave_expressive.bvh")
+    for scale in (0.5, 1.5):
+        write_bvh(parts.recompose(scale), out / f"walk_wave_x{scale:g}.bvh")
+    print(f"  wrote walk_wave_body.bvh, walk_wave_expressive.bvh, walk_wave_x0.5.bvh, walk_wave_x1.5.bvh in {out}")
+    clip = slice(0, int(waving.fps * 1.5))
+    render([waving, parts.body_motion(), parts.expressive_motion()], out / "decouple.png", ["original", "body mechanics", "expressive"], view="front", poses=4)
+    render([parts.recompose(s) for s in (0.5, 1.0, 1.5)], out / "modulate.png", ["50% expressive", "100% (original)", "150% expressive"], view="front", poses=4)
+    render([waving[clip], parts.body_motion()[clip], parts.expressive_motion()[clip]], out / "decouple.gif", ["original", "body mechanics", "expressive"], view="front")
+    print(f"pictures: {out / 'decouple.png'}, {out / 'modulate.png'}, {out / 'decouple.gif'}")
 
 
 def _model(args):
