@@ -87,13 +87,12 @@ def main() -> None:
     rows2 = {label: mean_activity(paths, model) for label, paths in groups2.items()}
     counts = {label: len(paths) for label, paths in groups2.items()}
 
-    # Dataset-1: calibrate on the first take of each neutral clip, evaluate on the others.
-    neutral1 = sorted(data1.glob("dataset-1_walk_normal_*.bvh")) + sorted(data1.glob("dataset-1_run_normal_*.bvh"))
-    calibration_clips = [p for p in neutral1 if p.stem.endswith("_001")]
-    evaluated_neutral = [p for p in neutral1 if p not in calibration_clips]
+    # Dataset-1: calibrate on one walk and one run, evaluate the other neutral locomotion clips.
+    calibration_clips = [data1 / "dataset-1_walk_normal_001.bvh", data1 / "dataset-1_run_normal_001.bvh"]
+    neutral1 = [p for c in ("walk", "walk-back", "walk-left", "walk-right", "dash") for p in sorted(data1.glob(f"dataset-1_{c}_normal_*.bvh"))]
     calibrated = model.calibrated(em.read_bvh_many(calibration_clips))
-    groups1 = {"neutral walk/run (normal style)": evaluated_neutral}
-    for content in ["bye", "byebye", "call", "guide", "respond"]:
+    groups1 = {"neutral walk (also back/left/right), dash (normal style)": [p for p in neutral1 if p not in calibration_clips]}
+    for content in ["bye", "byebye", "call", "guide", "respond", "bow"]:
         groups1[f"{content} (normal style)"] = sorted(data1.glob(f"dataset-1_{content}_normal_*.bvh"))
     rows1, rows1c = {}, {}
     for label, paths in groups1.items():
