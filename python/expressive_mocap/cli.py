@@ -94,10 +94,21 @@ def cmd_render(args) -> int:
     from .render import render
 
     motions = [read_bvh(path) for path in args.files]
+    titles = [Path(p).stem for p in args.files]
+    if args.decoupled or args.modulated:
+        from .decouple import decompose
+
+        if len(motions) != 1:
+            raise MocapError("--decoupled and --modulated draw one file: give exactly one")
+        parts = decompose(motions[0], _model(args), args.gain, args.exponent)
+        if args.decoupled:
+            motions, titles = [motions[0], parts.body_motion(), parts.expressive_motion()], ["original", "body mechanics", "expressive"]
+        else:
+            motions, titles = [parts.recompose(s) for s in (0.5, 1.0, 1.5)], ["50% expressive", "100% (original)", "150% expressive"]
     if args.start or args.end:
         motions = [m[args.start : args.end] for m in motions]
     options = {"poses": args.poses} if args.output.lower().endswith(".png") else {}
-    render(motions, args.output, titles=[Path(p).stem for p in args.files], view=args.view, **options)
+    render(motions, args.output, titles=titles, view=args.view, **options)
     print(f"wrote {args.output}")
     return 0
 
@@ -350,6 +361,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--poses", type=_positive(int), default=8, help="poses per panel in a PNG (default: 8)")
     p.add_argument("--start", type=int, default=0, help="first frame (default: 0)")
     p.add_argument("--end", type=int, help="frame to stop before (default: the end)")
+    what = p.add_mutually_exclusive_group()
+    what.add_argument("--decoupled", action="store_true", help="one file: original | body mechanics | expressive")
+    what.add_argument("--modulated", action="store_true", help="one file: expressiveness at 50%% | 100%% | 150%%")
+    _add_model_options(p)
     p.set_defaults(run=cmd_render)
 
     p = commands.add_parser("decouple", help="split a motion into body mechanics and expressiveness (BVH + activity per joint)")

@@ -266,10 +266,10 @@ def train_model(
         # The same split train_body_mechanics makes: keep its test clips out of the autoencoder.
         train_rows, test_rows = split_by_group(groups, 0.3, seed)
         test_clips = {_fingerprint(neutral[k]) for k in np.unique(groups[test_rows])}
-        kept = [m for m in unlabelled if _fingerprint(m) not in test_clips]
-        pool = np.concatenate([pose_vectors(m.rotations, predicted, hemispheres) for m in kept])
-        rng = np.random.default_rng(seed)
-        extra = np.concatenate([pool[rng.choice(len(pool), size=min(unlabelled_frames, len(pool)), replace=False)], P[train_rows]])
+        kept = [pose_vectors(m.rotations, predicted, hemispheres) for m in unlabelled if _fingerprint(m) not in test_clips]
+        pool = np.concatenate(kept) if kept else np.zeros((0, P.shape[1]))
+        drawn = np.random.default_rng(seed).choice(len(pool), size=min(unlabelled_frames, len(pool)), replace=False)
+        extra = np.concatenate([pool[drawn], P[train_rows]])
     network, report = train_body_mechanics(X, P, groups, extra, hidden, regression_hidden, seed=seed, max_iter=max_iter, log=log)
     settings = {
         "hidden": hidden,
