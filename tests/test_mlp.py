@@ -118,3 +118,16 @@ def test_save_and_load_without_pickle(tmp_path, backend):
     np.testing.assert_array_equal(loaded(x), net(x))
     with pytest.raises(KeyError, match="prefix 'nope'"):
         Mlp.from_arrays(np.load(path), "nope")
+
+
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+def test_concurrent_calls_match_serial_calls():
+    from concurrent.futures import ThreadPoolExecutor
+
+    net = random_net(np.random.default_rng(7), (19, 64, 64, 80))
+    batches = [np.random.default_rng(s).normal(size=(3000, 19)).astype(dt) for s in range(4) for dt in (np.float32, np.float64)]
+    serial = [net(x) for x in batches]
+    with ThreadPoolExecutor(4) as pool:
+        concurrent = list(pool.map(net, batches))
+    for a, b in zip(serial, concurrent):
+        np.testing.assert_array_equal(a, b)

@@ -1,0 +1,46 @@
+"""Training time of the body-mechanics network on synthetic data of the real size: ~50k frames
+in clips of 75, 19 features, D = 80 pose values, H = 300, every stage (and the plain network).
+
+    PYTHONPATH=python python benches/bench_train.py [--clips 667] [--frames 75] [--max-iter 400]
+
+Poses are ``tanh(X A) B`` plus noise on a 6-D manifold (as in tests/test_train.py), so the MSE
+figures say the optimiser works, not how well real poses are predicted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+from expressive_mocap.train import format_report, train_body_mechanics
+
+
+def synthetic(n_groups: int, frames: int, n_in: int = 19, d: int = 80, latent: int = 6, seed: int = 0):
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(n_in, latent)) * 1.5 / np.sqrt(n_in)
+    b = rng.normal(size=(latent, d)) * 0.1
+    z = np.concatenate([rng.normal(size=n_in) + np.cumsum(rng.normal(scale=0.15, size=(frames, n_in)), axis=0) for _ in range(n_groups)])
+    poses = np.tanh(z @ a) @ b + rng.normal(scale=1e-3, size=(len(z), d))
+    return z * 2.0 + 5.0, poses, np.repeat(np.arange(n_groups), frames)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--clips", type=int, default=667)
+    parser.add_argument("--frames", type=int, default=75)
+    parser.add_argument("--hidden", type=int, default=300)
+    parser.add_argument("--max-iter", type=int, default=400)
+    args = parser.parse_args()
+    X, P, groups = synthetic(args.clips, args.frames)
+    print(f"{len(X)} rows, {X.shape[1]} features, D = {P.shape[1]}, H = {args.hidden}, max_iter {args.max_iter} a stage, {os.cpu_count()} cpus")
+    start = time.perf_counter()
+    _, report = train_body_mechanics(X, P, groups, hidden=args.hidden, regression_hidden=args.hidden, max_iter=args.max_iter, log=lambda line: print(line, flush=True) if "iteration" not in line else None)
+    print(format_report(report))
+    print(f"total {time.perf_counter() - start:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
