@@ -46,6 +46,9 @@ fn check_pair(name: &'static str, first: &[f64], second: &[f64]) -> Result<()> {
     Ok(())
 }
 
+/// One rotation's outputs: its index, `E*` and `B'` slots, and its activity.
+type Outputs<'a> = (usize, ((&'a mut [f64], &'a mut [f64]), &'a mut f64));
+
 /// Decouple original rotations `O` from body-mechanics rotations `B` (both `[F, J, 4]`):
 /// returns `(E*, B', A)` with `E*` and `B'` `[F, J, 4]` and the activity `A` `[F, J]`.
 ///
@@ -63,7 +66,7 @@ pub fn decouple(original: &[f64], body: &[f64], gain: f64, exponent: f64) -> Res
     let mut expressive = vec![0.0; original.len()];
     let mut recovered = vec![0.0; original.len()];
     let mut activities = vec![0.0; count];
-    let per_rotation = |(i, ((e_out, b_out), a_out)): (usize, ((&mut [f64], &mut [f64]), &mut f64))| {
+    let per_rotation = |(i, ((e_out, b_out), a_out)): Outputs| {
         let o = DQuat::from_slice(&original[4 * i..4 * i + 4]);
         let b = DQuat::from_slice(&body[4 * i..4 * i + 4]);
         let e = o * b.conjugate();
@@ -130,7 +133,7 @@ mod tests {
     fn decouple_recomposes_exactly_and_filters_small_rotations() {
         let o = [about(DVec3::X, 30.0), about(DVec3::Y, 120.0)];
         let b = [about(DVec3::X, 28.0), about(DVec3::Z, 10.0)];
-        let flat = |qs: &[DQuat]| qs.iter().flat_map(|q| q.to_array()).collect::<Vec<f64>>();
+        let flat = |qs: &[DQuat]| qs.iter().flat_map(DQuat::to_array).collect::<Vec<f64>>();
         let (e, b2, a) = decouple(&flat(&o), &flat(&b), 2.0, 4.0).unwrap();
         let recomposed = compose(&e, &b2, 1.0).unwrap();
         for (r, o) in recomposed.chunks(4).zip(&o) {

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import os
 import sys
 from pathlib import Path
 
@@ -446,6 +447,10 @@ def main(argv: list[str] | None = None) -> int:
         if args.backend:
             backend.set_backend(args.backend)
         return args.run(args)
+    except BrokenPipeError:
+        # The reader went away (`| head`): stop quietly, and keep Python from complaining at exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except (MocapError, OSError) as error:
         print(f"{PROG}: error: {error}", file=sys.stderr)
         return 1
