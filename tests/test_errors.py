@@ -78,3 +78,44 @@ def test_missing_file(tmp_path):
 
 def test_bvh_error_is_a_value_error_of_the_package():
     assert issubclass(em.BVHError, em.MocapError) and issubclass(em.MocapError, ValueError)
+
+
+HUGE_CLAIM = """
+import sys
+import expressive_mocap as em
+
+def peak_mb():
+    return int(open("/proc/self/status").read().split("VmHWM:")[1].split()[0]) / 1024
+
+data = open(sys.argv[1], "rb").read().replace(b"Frames: 4", b"Frames: 1000000000")
+before = peak_mb()
+with em.use_backend(sys.argv[2]):
+    try:
+        em.read_bvh(data)
+    except em.BVHError as error:
+        print("refused:", error)
+print(peak_mb() - before)
+"""
+
+
+def test_a_huge_frame_count_is_refused_without_allocating_for_it(backend):
+    # 10^9 frames x 27 channels would be 216 GB of float64: the reader must say the block is
+    # truncated, not try to allocate for the claim. Measured in a fresh process (peak RSS).
+    import subprocess
+    import sys
+
+    result = subprocess.run([sys.executable, "-c", HUGE_CLAIM, str(DATA / "mixed_orders.bvh"), backend], capture_output=True, text=True)
+    refused, grown_mb = result.stdout.splitlines()
+    assert "truncated" in refused, result.stdout + result.stderr
+    assert float(grown_mb) < 100, grown_mb
+
+
+def test_a_deep_hierarchy_is_read_without_recursion(tmp_path):
+    depth = 5000  # far beyond Python's recursion limit
+    lines = ["HIERARCHY"]
+    for j in range(depth):
+        lines += [("ROOT" if j == 0 else "JOINT") + f" j{j}", "{", "OFFSET 0 1 0", "CHANNELS 3 Zrotation Xrotation Yrotation"]
+    lines += ["}"] * depth + ["MOTION", "Frames: 1", "Frame Time: 0.04", " ".join(["1.0"] * 3 * depth)]
+    motion = em.read_bvh("\n".join(lines).encode())
+    assert motion.skeleton.n_joints == depth
+    assert em.read_bvh(em.bvh_bytes(motion)).skeleton.parents[-1] == depth - 2
