@@ -263,3 +263,46 @@ def _renamed(motion):
     s = motion.skeleton
     names = ("Root",) + s.names[1:]
     return em.Motion(em.Skeleton(names, s.parents, s.offsets, s.channels, s.end_sites), motion.rotations, motion.translations, motion.frame_time)
+
+
+# ----------------------------------------------------------------- commands
+
+
+def test_rank_exaggerate_validate_commands(tmp_path, capsys):
+    from expressive_mocap.cli import main
+
+    files = {}
+    for p in range(2):
+        for i, k in enumerate(LEVELS):
+            files[p, k] = tmp_path / f"p{p}_k{k:g}.bvh"
+            em.write_bvh(loaded_walk(k, wobble=0.3, seed=10 * p + i), files[p, k])
+    levels = [a for k in LEVELS for a in ("--level", f"{k:g}", str(files[0, k]), str(files[1, k]))]
+    plot, saved = tmp_path / "rank.png", tmp_path / "model.npz"
+    assert main(["rank", *levels, "-o", str(plot), "-o", str(saved)]) == 0
+    out = capsys.readouterr().out
+    assert "key DOFs" in out and "person 1:" in out and plot.stat().st_size > 1000
+    walk = tmp_path / "walk.bvh"
+    em.write_bvh(loaded_walk(2.0, 4.0), walk)
+    result = tmp_path / "out.bvh"
+    assert main(["exaggerate", "--model", str(saved), "--input", str(walk), "--from", "2", "--to", "3", "-o", str(result)]) == 0
+    out = capsys.readouterr().out
+    assert "largest change per joint" in out and em.read_bvh(result).n_frames == em.read_bvh(walk).n_frames
+    assert main(["validate", "--model", str(saved), "--draws", "20"]) == 0
+    out = capsys.readouterr().out
+    assert "union" in out and "leave-one-person-out" in out
+
+
+def test_commands_fail_in_one_line(tmp_path, capsys):
+    from expressive_mocap.cli import main
+
+    walk = tmp_path / "w.bvh"
+    em.write_bvh(loaded_walk(1.0, 2.0), walk)
+    assert main(["rank", "--level", "1", str(walk)]) == 1
+    assert "at least two --level" in capsys.readouterr().err
+    assert main(["rank", "--level", "1", str(walk), "--level", "2", str(walk), str(walk)]) == 1
+    assert "same number of files" in capsys.readouterr().err
+    assert main(["rank", "--level", "1", str(walk), "--level", "2", str(walk), "-o", "x.txt"]) == 1
+    assert ".png" in capsys.readouterr().err
+    assert main(["exaggerate", "--model", str(tmp_path / "none.npz"), "--input", str(walk), "--to", "2", "-o", str(tmp_path / "o.bvh")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot read" in err

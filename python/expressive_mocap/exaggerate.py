@@ -729,7 +729,7 @@ def exaggerate(
     current: float | None = None,
     cycles: Sequence[Cycle] | None = None,
     reference: str = "model",
-    margin: float = 0.5,
+    margin: float = 0.2,
     fade: float = 0.15,
     lock_feet: bool = True,
     roles: JointRoles | None = None,
@@ -839,11 +839,149 @@ def _foot_lock_shift(original: Motion, edited: Motion, contacts: np.ndarray, rol
     return np.cumsum(velocity, axis=0)
 
 
+# --------------------------------------------------------------------------- validation
+
+
+def dof_positions(model: ExaggerationModel, dofs: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """World joint positions ``[N, J, 3]`` of DOF frames ``[N, D]`` (rotations relative to
+    ``reference [J, 4]``, heading removed), the hips at ``(0, height DOF x actor height, 0)``:
+    the pose and the hips' height, without the path on the floor."""
+    J = len(model.joint_names)
+    rotations = dofs_to_rotations(dofs[:, : 3 * J], reference, model.representation, model.orders)
+    translations = np.broadcast_to(model.offsets, (len(dofs), J, 3)).copy()
+    translations[:, 0] = 0.0
+    translations[:, model.hips] = 0.0
+    translations[:, model.hips, 1] = dofs[:, -1] * model.height
+    return forward_kinematics(rotations, translations, model.parents)[1]
+
+
+@dataclass
+class SwapResult:
+    """The paper's test for one person (or the union): ``||swap - heavy|| / ||light - heavy||``
+    over DOF trajectories and over world joint positions, for the key set (``swapped`` DOFs,
+    ``share`` of all), a random set of the same size (mean of ``draws``) and the best set of that
+    size (the DOFs with the largest light-heavy difference)."""
+
+    person: str
+    swapped: int
+    share: float
+    ratio: float
+    ratio_positions: float
+    random: float
+    random_positions: float
+    best: float
+    best_positions: float
+
+
+def _ratios(model: ExaggerationModel, light: np.ndarray, heavy: np.ndarray, reference: np.ndarray, sets: Sequence[np.ndarray]) -> np.ndarray:
+    """``[len(sets), 2]``: DOF and position ratios after swapping each set of DOFs light -> heavy."""
+    hp = dof_positions(model, heavy, reference)
+    base = np.linalg.norm(light - heavy), np.linalg.norm(dof_positions(model, light, reference) - hp)
+    out = []
+    for dofs in sets:
+        swap = light.copy()
+        swap[:, dofs] = heavy[:, dofs]
+        out.append((np.linalg.norm(swap - heavy) / base[0], np.linalg.norm(dof_positions(model, swap, reference) - hp) / base[1]))
+    return np.array(out)
+
+
+def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int = 200, seed: int = 0) -> list[SwapResult]:
+    """Swap the key DOF trajectories of each person's lightest performance for the heaviest's
+    and compare with the real heaviest (METHODS part 1, step 10). ``person``: one index, or every
+    person (their own key sets) followed by ``"union"`` (every person with the union key set,
+    ratios pooled)."""
+    P, K, T, D = model.trajectories.shape
+    rng = np.random.default_rng(seed)
+    people = range(P) if person is None else [int(person)]
+    results = []
+
+    def run(label: str, pairs: list[int], key: np.ndarray) -> SwapResult:
+        n = int(key.sum())
+        numbers = []
+        for p in pairs:
+            light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
+            difference = np.linalg.norm(light - heavy, axis=0)
+            sets = [np.flatnonzero(key), np.argsort(-difference)[:n]] + [rng.choice(D, n, replace=False) for _ in range(draws)]
+            numbers.append(_ratios(model, light, heavy, model.person_reference[p], sets))
+        r = np.mean(numbers, axis=0)
+        return SwapResult(label, n, n / D, r[0, 0], r[0, 1], float(r[2:, 0].mean()), float(r[2:, 1].mean()), r[1, 0], r[1, 1])
+
+    for p in people:
+        if not 0 <= p < P:
+            raise MocapError(f"person {p}: the model has {P} people")
+        results.append(run(str(p), [p], model.person_key[p]))
+    if person is None and P > 1:
+        results.append(run("union", list(range(P)), model.key))
+    return results
+
+
+@dataclass
+class WarpResult:
+    """Leave-one-person-out: mappings (and basis, key set) from the other people, applied to this
+    person's lightest performance towards the heaviest; ratios as in :class:`SwapResult`."""
+
+    person: str
+    key: int
+    ratio: float
+    ratio_positions: float
+
+
+def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
+    """For each person: fit on the others (same settings), warp the person's lightest cycle to
+    the heaviest intensity (``x + U (f(k_K) - f(k_1))`` on the key DOFs) and compare with the real
+    heaviest. Needs at least two people."""
+    P = model.trajectories.shape[0]
+    if P < 2:
+        raise MocapError("leave-one-person-out needs at least two people")
+    settings = model.settings
+    results = []
+    for p in range(P):
+        others = model.trajectories[[q for q in range(P) if q != p]]
+        fitted = fit(others, model.levels, model.weights, share=settings.get("share", 0.9), energy=settings.get("energy", 0.99),
+                     rank=settings.get("rank"), degree=settings.get("degree", 1))
+        k = np.array([model.levels[0], model.levels[-1]])
+        powers = k[:, None] ** np.arange(fitted["mappings"].shape[-1] - 1, -1, -1)
+        f = np.einsum("dip,kp->kdi", fitted["mappings"], powers)
+        change = (f[1] - f[0]) * fitted["key"][:, None]
+        light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
+        warped = light + fitted["basis"] @ change.T
+        reference = model.person_reference[p]
+        hp = dof_positions(model, heavy, reference)
+        ratio = np.linalg.norm(warped - heavy) / np.linalg.norm(light - heavy)
+        positions = np.linalg.norm(dof_positions(model, warped, reference) - hp) / np.linalg.norm(dof_positions(model, light, reference) - hp)
+        results.append(WarpResult(str(p), int(fitted["key"].sum()), float(ratio), float(positions)))
+    return results
+
+
+def validation_table(swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = ()) -> str:
+    """Both tests as text."""
+    lines = [f"{'person':<8} {'swapped':>11} {'ratio':>7} {'random':>7} {'best':>7} | {'pos.':>6} {'random':>7} {'best':>7}"]
+    for r in swaps:
+        lines.append(
+            f"{r.person:<8} {r.swapped:4d} ({r.share:4.0%}) {r.ratio:7.3f} {r.random:7.3f} {r.best:7.3f} | "
+            f"{r.ratio_positions:6.3f} {r.random_positions:7.3f} {r.best_positions:7.3f}"
+        )
+    if warps:
+        lines.append("")
+        lines.append("leave-one-person-out warp, lightest -> heaviest (mappings from the other people):")
+        lines.append(f"{'person':<8} {'key':>4} {'ratio':>7} {'pos.':>7}")
+        for w in warps:
+            lines.append(f"{w.person:<8} {w.key:4d} {w.ratio:7.3f} {w.ratio_positions:7.3f}")
+        lines.append(f"{'mean':<8} {'':>4} {np.mean([w.ratio for w in warps]):7.3f} {np.mean([w.ratio_positions for w in warps]):7.3f}")
+    return "\n".join(lines)
+
+
 __all__ = [
     "Cycle",
     "ExaggerationModel",
     "ExaggerationReport",
+    "SwapResult",
+    "WarpResult",
+    "dof_positions",
     "exaggerate",
+    "leave_one_out",
+    "swap_test",
+    "validation_table",
     "find_cycles",
     "fit",
     "normalise_cycle",
