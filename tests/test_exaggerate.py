@@ -41,7 +41,7 @@ def model(people):
 
 @pytest.fixture(scope="module")
 def walk():
-    return loaded_walk(2.0, seconds=4.0)
+    return loaded_walk(2.0, seconds=5.0)
 
 
 def joint_rank(model):
@@ -52,7 +52,7 @@ def joint_rank(model):
 
 
 def test_cycles_are_footstrike_to_footstrike_of_one_foot_and_follow_each_other():
-    motion = procedural_walk(4.0)
+    motion = procedural_walk(5.0)
     cycles = find_cycles(motion)
     assert len(cycles) >= 3
     assert len({c.foot for c in cycles}) == 1
@@ -63,7 +63,7 @@ def test_cycles_are_footstrike_to_footstrike_of_one_foot_and_follow_each_other()
 
 
 def test_time_normalisation_and_back():
-    motion = procedural_walk(2.0)
+    motion = procedural_walk(3.0)
     cycle = find_cycles(motion)[0]
     part = normalise_cycle(motion, cycle, 50)
     assert part.n_frames == 50
@@ -140,7 +140,7 @@ def test_diminish_then_exaggerate_returns_the_input(clean_model, walk):
 
 def test_intensity_is_estimated_from_the_mapping(clean_model):
     for k in (1.5, 2.0, 2.5):
-        _, report = exaggerate(clean_model, loaded_walk(k, 4.0), k + 1)
+        _, report = exaggerate(clean_model, loaded_walk(k, 5.0), k + 1)
         assert report.k0_estimated and report.k0 == pytest.approx(k, abs=0.1)
 
 
@@ -158,7 +158,7 @@ def test_exaggeration_follows_the_training_series_and_extrapolates(clean_model, 
     leans = [lean(exaggerate(clean_model, walk, k, current=2.0)[0], walk, inside) for k in (0.5, 1.0, 2.0, 3.0, 3.5)]
     assert np.all(np.diff(leans) > 0)
     # As much as the real k = 3 walk leans more (4 degrees).
-    assert leans[3] == pytest.approx(lean(loaded_walk(3.0, 4.0), walk, inside), abs=0.3)
+    assert leans[3] == pytest.approx(lean(loaded_walk(3.0, 5.0), walk, inside), abs=0.3)
     assert leans[4] > leans[3] + 1.0
 
 

@@ -66,17 +66,17 @@ class Cycle:
         return self.end - self.start + 1
 
 
-def find_cycles(motion: Motion, roles: JointRoles | None = None, contacts: np.ndarray | None = None) -> list[Cycle]:
-    """Gait cycles of a walk: footstrike to next footstrike of the same foot, for the foot whose
-    cycles cover more frames (they follow each other without gaps). Empty when no foot strikes
-    twice."""
+def find_cycles(motion: Motion, roles: JointRoles | None = None, contacts: np.ndarray | None = None, foot: int | None = 0) -> list[Cycle]:
+    """Gait cycles of a walk: footstrike to next footstrike of ``foot`` (0 = left, the default, so
+    that every cycle of every clip starts in the same phase; None: the foot whose cycles cover
+    more frames). The cycles follow each other without gaps; empty when the foot never strikes twice."""
     if contacts is None:
         contacts = foot_contacts(motion, roles)
     strikes = footstrikes(contacts)
     best: list[Cycle] = []
-    for foot in (0, 1):
-        frames = strikes[strikes[:, 1] == foot, 0]
-        cycles = [Cycle(int(a), int(b), foot) for a, b in zip(frames[:-1], frames[1:]) if b - a >= 2]
+    for side in (0, 1) if foot is None else (int(foot),):
+        frames = strikes[strikes[:, 1] == side, 0]
+        cycles = [Cycle(int(a), int(b), side) for a, b in zip(frames[:-1], frames[1:]) if b - a >= 2]
         if sum(c.n_frames for c in cycles) > sum(c.n_frames for c in best):
             best = cycles
     return best
@@ -222,6 +222,8 @@ def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple) 
         return [Cycle(start, end)]
     if cycle == "whole":
         return [Cycle(0, motion.n_frames - 1)]
+    if cycle not in CYCLE_CHOICES and not isinstance(cycle, (int, np.integer)):
+        raise MocapError(f"cycle must be one of {', '.join(CYCLE_CHOICES)}, an index or a (start, end) range, got {cycle!r}")
     cycles = find_cycles(motion, roles)
     if not cycles:
         raise MocapError(
