@@ -323,6 +323,104 @@ def cmd_train(args) -> int:
     return 0
 
 
+def _levels(args) -> tuple[list[list[Motion]], list[float], list[list[str]]]:
+    """``--level K FILE...`` options -> people (person i = the i-th file of every level), the
+    intensities in increasing order, and the file names per person."""
+    if not args.level or len(args.level) < 2:
+        raise MocapError("give at least two --level K FILE... options (one per intensity)")
+    levels = []
+    for values in args.level:
+        try:
+            k = float(values[0])
+        except ValueError:
+            raise MocapError(f"--level {values[0]}: the first value is the intensity, a number") from None
+        if len(values) < 2:
+            raise MocapError(f"--level {values[0]}: give at least one BVH file after the intensity")
+        levels.append((k, values[1:]))
+    levels.sort(key=lambda kv: kv[0])
+    counts = {len(files) for _, files in levels}
+    if len(counts) != 1:
+        raise MocapError(f"every --level needs the same number of files (one per person); got {[len(f) for _, f in levels]}")
+    n = counts.pop()
+    paths = [[files[i] for _, files in levels] for i in range(n)]
+    people = [[read_bvh(path) for path in person] for person in paths]
+    return people, [k for k, _ in levels], paths
+
+
+def _train_from_args(args):
+    from .exaggerate import ExaggerationModel, train
+
+    if getattr(args, "model", None):
+        return ExaggerationModel.load(args.model), None
+    people, levels, paths = _levels(args)
+    cycle = args.cycle if args.cycle in ("middle", "first", "mean", "whole") else int(args.cycle)
+    model = train(
+        people, levels, samples=args.samples, share=args.share, energy=args.energy, rank=args.rank, degree=args.degree,
+        representation="euler" if args.euler else "rotvec", cycle=cycle,
+    )
+    return model, paths
+
+
+def cmd_rank(args) -> int:
+    outputs = args.output or []
+    bad = [o for o in outputs if not o.lower().endswith((".png", ".npz"))]
+    if bad:
+        raise MocapError(f"-o {bad[0]}: outputs must end in .png (the plot) or .npz (the model)")
+    model, paths = _train_from_args(args)
+    for i, person in enumerate(paths):
+        print(f"person {i}: " + " < ".join(Path(p).name for p in person))
+    print(model.table(top=args.top))
+    for out in outputs:
+        if out.lower().endswith(".png"):
+            model.plot(out, title=f"expressiveness of {len(paths)} person(s), intensities {', '.join(f'{k:g}' for k in model.levels)}")
+        else:
+            model.save(out)
+        print(f"wrote {out}")
+    return 0
+
+
+def cmd_exaggerate(args) -> int:
+    from .exaggerate import ExaggerationModel, exaggerate
+
+    model = ExaggerationModel.load(args.model)
+    motion = read_bvh(args.input)
+    out, report = exaggerate(
+        model, motion, args.to, current=args.current, margin=args.margin, fade=args.fade, lock_feet=not args.no_foot_lock, reference=args.reference
+    )
+    write_bvh(out, args.output)
+    print(report.text())
+    print(f"wrote {args.output}")
+    return 0
+
+
+def cmd_validate(args) -> int:
+    from .exaggerate import leave_one_out, swap_test, validation_table
+
+    model, paths = _train_from_args(args)
+    if paths:
+        for i, person in enumerate(paths):
+            print(f"person {i}: " + " < ".join(Path(p).name for p in person))
+    swaps = swap_test(model, draws=args.draws, seed=args.seed)
+    warps = leave_one_out(model) if model.trajectories.shape[0] > 1 else []
+    print(f"swap test at share {model.settings.get('share', 0.9):g}: ||swap - heaviest|| / ||lightest - heaviest|| over DOF trajectories and joint positions")
+    print(validation_table(swaps, warps))
+    return 0
+
+
+def _add_training_options(p, model: bool = False) -> None:
+    p.add_argument("--level", action="append", nargs="+", metavar=("K", "FILE"),
+                   help="an intensity K and its BVH files, one per person (person i = the i-th file of every level); repeat per intensity")
+    if model:
+        p.add_argument("--model", metavar="MODEL.npz", help="a model saved by `rank -o MODEL.npz` instead of --level files")
+    p.add_argument("--share", type=_positive(float), default=0.9, help="expressiveness share of the key features (default 0.9)")
+    p.add_argument("--energy", type=_positive(float), default=0.99, help="basis share of sum(s^2) (default 0.99)")
+    p.add_argument("--rank", type=_positive(int), help="number of basis vectors (default: by --energy)")
+    p.add_argument("--degree", type=int, default=1, help="degree of the intensity-to-coefficient mappings (default 1: lines)")
+    p.add_argument("--samples", type=_positive(int), default=50, help="samples per time-normalised cycle T (default 50)")
+    p.add_argument("--cycle", default="middle", help="cycle of each clip: middle (default), first, mean (all, averaged), whole (not a walk), or an index")
+    p.add_argument("--euler", action="store_true", help="DOFs are the Euler channels (relative to the mean) instead of rotation vectors")
+
+
 def _add_model_options(p, calibrate: bool = True) -> None:
     p.add_argument("--model", metavar="MODEL.npz", help="body-mechanics model (default: the shipped one, trained on Bandai-Namco neutral locomotion)")
     if calibrate:
@@ -416,6 +514,30 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, metavar="CAL.npz", help="the calibrated model, for --model")
     p.add_argument("--model", metavar="MODEL.npz", help="model to calibrate (default: the shipped one)")
     p.set_defaults(run=cmd_calibrate)
+
+    p = commands.add_parser("rank", help="rank the expressive features of an action performed at several intensities (Davis & Kannappan)")
+    _add_training_options(p)
+    p.add_argument("-o", "--output", action="append", metavar="OUT.png|MODEL.npz", help="write the bar plot (.png) and/or the model (.npz); repeatable")
+    p.add_argument("--top", type=_positive(int), default=20, help="DOFs listed (default 20)")
+    p.set_defaults(run=cmd_rank)
+
+    p = commands.add_parser("exaggerate", help="exaggerate or diminish a motion with a model from `rank -o MODEL.npz`")
+    p.add_argument("--model", required=True, metavar="MODEL.npz", help="exaggeration model")
+    p.add_argument("--input", required=True, metavar="IN.bvh", help="the motion (same skeleton and action)")
+    p.add_argument("--from", dest="current", type=float, metavar="K0", help="its current intensity (default: estimated from the mappings)")
+    p.add_argument("--to", type=float, required=True, metavar="K1", help="target intensity (beyond the trained range extrapolates)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
+    p.add_argument("--margin", type=float, default=0.2, help="DOFs stay within the training range widened by this share of its width (default 0.2)")
+    p.add_argument("--fade", type=float, default=0.15, help="cross-fade at cycle boundaries, seconds (default 0.15)")
+    p.add_argument("--reference", choices=["model", "own"], default="model", help="rotations measured from the training mean pose (default) or the motion's own")
+    p.add_argument("--no-foot-lock", action="store_true", help="do not shift the hips to keep the stance foot in place")
+    p.set_defaults(run=cmd_exaggerate)
+
+    p = commands.add_parser("validate", help="the swap test (with random and best same-size sets) and the leave-one-person-out warp")
+    _add_training_options(p, model=True)
+    p.add_argument("--draws", type=_positive(int), default=200, help="random same-size sets averaged (default 200)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.set_defaults(run=cmd_validate)
 
     p = commands.add_parser(
         "footsteps",

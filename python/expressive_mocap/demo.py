@@ -335,3 +335,39 @@ def _two_bone_ik(world: np.ndarray, hips: np.ndarray, offsets: np.ndarray, hip: 
 
 
 __all__ = ["BANDAI_CHANNELS", "WAVE_BEND", "WAVE_RAISE", "WalkAndWave", "bandai_like_skeleton", "procedural_walk", "strides_per_second", "walk_and_wave"]
+
+
+LOADED_JOINTS = ("Spine", "Chest", "UpperArm_L", "UpperArm_R", "LowerArm_L", "LowerArm_R")
+
+
+def loaded_walk(intensity: float, seconds: float = 3.0, *, lean: float = 4.0, stiffness: float = 0.2, wobble: float = 0.0, seed: int = 0) -> Motion:
+    """The procedural walk as if carrying a load of ``intensity`` (METHODS.md section 3): the
+    spine and chest each lean ``lean`` x intensity degrees further forward, and the upper arms
+    and forearms swing less (their deviation from their mean rotation scaled by
+    ``1 - stiffness (intensity - 1)``). Only :data:`LOADED_JOINTS` change with the intensity.
+    ``wobble`` > 0 adds a slow random rotation (up to ``wobble`` degrees; ``seed`` picks it) to
+    every joint but the root, like a performer who never repeats a walk exactly."""
+    from .features import mean_rotation
+
+    motion = procedural_walk(seconds)
+    rotations = motion.rotations.copy()
+    names = motion.skeleton.names
+    for name in ("Spine", "Chest"):
+        j = names.index(name)
+        rotations[:, j] = quat.mul(rotations[:, j], quat.about("Z", -lean * intensity))  # bones lie along local X
+    for name in ("UpperArm_L", "UpperArm_R", "LowerArm_L", "LowerArm_R"):
+        j = names.index(name)
+        mean = mean_rotation(rotations[:, j])
+        swing = quat.mul(quat.conjugate(mean), rotations[:, j])
+        rotations[:, j] = quat.mul(mean, quat.power(swing, 1.0 - stiffness * (intensity - 1.0)))
+    if wobble > 0:
+        rng = np.random.default_rng(seed)
+        t = np.arange(motion.n_frames)[:, None, None] * motion.frame_time
+        amplitude = np.radians(wobble) * rng.uniform(0.3, 1.0, (1, len(names), 3))
+        frequency, phase = rng.uniform(0.1, 0.4, (1, len(names), 3)), rng.uniform(0, 2 * np.pi, (1, len(names), 3))
+        vectors = amplitude * np.sin(2 * np.pi * frequency * t + phase)
+        vectors[:, 0] = 0.0  # the root stays put: its rotation would tilt the whole figure
+        angle = np.linalg.norm(vectors, axis=-1, keepdims=True)
+        axis = vectors / np.maximum(angle, 1e-15)
+        rotations = quat.mul(rotations, np.concatenate([axis * np.sin(angle / 2), np.cos(angle / 2)], axis=-1))
+    return Motion(motion.skeleton, rotations, motion.translations, motion.frame_time)

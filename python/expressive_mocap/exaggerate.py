@@ -1,0 +1,994 @@
+"""Expressive features for movement exaggeration (Davis & Kannappan; METHODS.md part 1).
+
+From performances of one action at known intensities (e.g. walks 'exhausted' < 'normal' <
+'active' as 1 < 2 < 3), find the joint-angle trajectories (DOFs) that change most and most
+predictably with intensity (the *key features*), model their change, and exaggerate or diminish
+a new motion of the same action.
+
+Pipeline and shapes (``T`` samples a cycle, ``D`` DOFs, ``K`` intensities, ``P`` people,
+``r`` basis vectors):
+
+1. a cycle (footstrike to next footstrike of the same foot, or a whole clip) resampled to ``T``
+   samples (slerp / linear) with the heading removed (the hips pre-multiplied by the inverse yaw
+   of the cycle's travel direction);
+2. DOFs ``[T, D]``: per joint the rotation vector of ``m_j^-1 q_j`` (``m_j`` the joint's mean over
+   the person's samples, one hemisphere), 3 a joint, plus the hips height / actor height
+   (``D = 3 J + 1``); Euler channels relative to the mean as an option;
+3. ``A [T, P K D]``, thin SVD, ``U [T, r]`` keeping 99% of ``sum(s^2)``; coefficients ``U^T x``;
+4. observability ``O_d = ||c_d(k_1) - c_d(k_K)|| w_j`` (``w_j`` the summed bone lengths below
+   joint ``j``), predictability ``P_d = sum_i s_i / sum(s) |rho(c_{d,i}(k), k)|``,
+   ``E_d = O_d P_d^2``, normalised and accumulated to ``share`` (0.9): key features;
+5. least-squares lines ``c_{d,i}(k)``, averaged over people;
+6. a new motion, per cycle: ``x' = x + U (f(k1) - f(k0))`` on the key DOFs, mapped back onto each
+   cycle's own frames, cross-faded at cycle boundaries, clamped to the training range plus a
+   margin, optionally with the stance foot locked.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from . import quat
+from .errors import MocapError
+from .features import foot_contacts, footstrikes, mean_rotation
+from .io import atomic_write
+from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
+from .motion import Motion, Skeleton
+from .roles import JointRoles, actor_height
+
+FORMAT = "expressive-mocap exaggeration model"
+VERSION = 1
+REPRESENTATIONS = ("rotvec", "euler")
+CYCLE_CHOICES = ("middle", "first", "mean", "whole")
+IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+
+# --------------------------------------------------------------------------- cycles
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """Frames ``start`` to ``end`` (both included; ``end`` is the next footstrike of ``foot``,
+    0 = left, 1 = right, -1 for a whole clip or a given range)."""
+
+    start: int
+    end: int
+    foot: int = -1
+
+    @property
+    def n_frames(self) -> int:
+        return self.end - self.start + 1
+
+
+def find_cycles(motion: Motion, roles: JointRoles | None = None, contacts: np.ndarray | None = None, foot: int | None = 0) -> list[Cycle]:
+    """Gait cycles of a walk: footstrike to next footstrike of ``foot`` (0 = left, the default, so
+    that every cycle of every clip starts in the same phase; None: the foot whose cycles cover
+    more frames). The cycles follow each other without gaps; empty when the foot never strikes twice."""
+    if contacts is None:
+        contacts = foot_contacts(motion, roles)
+    strikes = footstrikes(contacts)
+    best: list[Cycle] = []
+    for side in (0, 1) if foot is None else (int(foot),):
+        frames = strikes[strikes[:, 1] == side, 0]
+        cycles = [Cycle(int(a), int(b), side) for a, b in zip(frames[:-1], frames[1:]) if b - a >= 2]
+        if sum(c.n_frames for c in cycles) > sum(c.n_frames for c in best):
+            best = cycles
+    return best
+
+
+def normalise_cycle(motion: Motion, cycle: Cycle, samples: int = 50) -> Motion:
+    """The frames of ``cycle`` resampled to ``samples`` frames over the same span (slerp for
+    rotations, linear for translations): the time-normalised cycle."""
+    if cycle.start < 0 or cycle.end >= motion.n_frames or cycle.end - cycle.start < 1:
+        raise MocapError(f"cycle frames {cycle.start}-{cycle.end} do not fit a {motion.n_frames}-frame motion")
+    return motion[cycle.start : cycle.end + 1].resample(n_frames=samples)
+
+
+def to_cycle_timing(trajectory: np.ndarray, n_frames: int) -> np.ndarray:
+    """Map a normalised trajectory ``[T, ...]`` back to a cycle of ``n_frames`` frames (the
+    inverse of the uniform time normalisation: linear interpolation at each frame's phase)."""
+    trajectory = np.asarray(trajectory, dtype=np.float64)
+    samples = len(trajectory)
+    position = np.linspace(0.0, samples - 1, n_frames)
+    i0 = np.minimum(np.floor(position).astype(int), samples - 2)
+    t = (position - i0).reshape((-1,) + (1,) * (trajectory.ndim - 1))
+    return (1 - t) * trajectory[i0] + t * trajectory[i0 + 1]
+
+
+# --------------------------------------------------------------------------- DOFs
+
+
+def subtree_weights(skeleton: Skeleton) -> np.ndarray:
+    """``w_j [J]``: the summed length of every bone below joint ``j`` (its children's offsets, their
+    children's, ..., End Sites included): a shoulder moves the whole arm."""
+    weights = np.zeros(skeleton.n_joints)
+    for j, off in skeleton.end_sites:
+        weights[j] += float(np.linalg.norm(off))
+    for j in range(skeleton.n_joints - 1, 0, -1):  # children come after parents
+        parent = skeleton.parents[j]
+        weights[parent] += weights[j] + float(np.linalg.norm(skeleton.offsets[j]))
+    return weights
+
+
+def dof_names(skeleton: Skeleton, representation: str = "rotvec") -> list[str]:
+    """Names of the ``3 J + 1`` DOFs: ``Joint.rx ry rz`` (rotation vector) or ``Joint.Zrot ...`` (Euler,
+    in the joint's order), then ``Hips.height``."""
+    names = []
+    for j, joint in enumerate(skeleton.names):
+        axes = "xyz" if representation == "rotvec" else skeleton.rotation_order(j)
+        names += [f"{joint}.r{a}" if representation == "rotvec" else f"{joint}.{a}rot" for a in axes]
+    return names + ["Hips.height"]
+
+
+def _log(q: np.ndarray) -> np.ndarray:
+    """Rotation vectors ``[..., 3]`` of unit quaternions (shortest arc: w >= 0)."""
+    q = np.where(q[..., 3:] < 0, -q, q)
+    sin_half = np.linalg.norm(q[..., :3], axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(sin_half, q[..., 3:])
+    return q[..., :3] * np.where(sin_half < 1e-12, 2.0, angle / np.where(sin_half < 1e-12, 1.0, sin_half))
+
+
+def _exp(v: np.ndarray) -> np.ndarray:
+    """Unit quaternions of rotation vectors ``[..., 3]``."""
+    angle = np.linalg.norm(v, axis=-1, keepdims=True)
+    scale = np.where(angle < 1e-12, 0.5, np.sin(angle / 2) / np.where(angle < 1e-12, 1.0, angle))
+    return np.concatenate([v * scale, np.cos(angle / 2)], axis=-1)
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def rotations_to_dofs(rotations: np.ndarray, reference: np.ndarray, representation: str, orders: np.ndarray) -> np.ndarray:
+    """Local rotations ``[N, J, 4]`` (heading removed) -> rotation DOFs ``[N, 3 J]`` relative to the
+    ``reference [J, 4]`` (rotation vector of ``ref^-1 q``, or Euler angles minus the reference's,
+    wrapped to (-pi, pi], radians)."""
+    if representation == "rotvec":
+        return _log(quat.mul(quat.conjugate(reference)[None], rotations)).reshape(len(rotations), -1)
+    angles = np.radians(quat_to_euler(rotations, orders)) - np.radians(quat_to_euler(reference[None], orders))
+    return _wrap(angles).reshape(len(rotations), -1)
+
+
+def dofs_to_rotations(dofs: np.ndarray, reference: np.ndarray, representation: str, orders: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`rotations_to_dofs`: ``[N, 3 J]`` -> ``[N, J, 4]``."""
+    dofs = dofs.reshape(len(dofs), -1, 3)
+    if representation == "rotvec":
+        return quat.mul(reference[None], _exp(dofs))
+    angles = np.degrees(dofs + np.radians(quat_to_euler(reference[None], orders)))
+    return euler_to_quat(angles, orders)
+
+
+def _yaw(vector: np.ndarray) -> float:
+    """Degrees about Y that turn +Z towards the horizontal ``vector``."""
+    return float(np.degrees(np.arctan2(vector[0], vector[2])))
+
+
+def cycle_heading(motion: Motion, roles: JointRoles, cycle: Cycle, positions: np.ndarray | None = None) -> float:
+    """The yaw (degrees) of a cycle's travel direction: the hips' horizontal displacement from its
+    first to its last frame; where the hips barely travel (< 5% of the actor's height), the
+    facing direction (perpendicular to the line from the right to the left upper leg)."""
+    if positions is None:
+        positions = motion.positions()
+    hips = positions[[cycle.start, cycle.end], roles.hips]
+    travel = hips[1] - hips[0]
+    travel[1] = 0.0
+    if np.linalg.norm(travel) >= 0.05 * actor_height(motion.skeleton, roles):
+        return _yaw(travel)
+    left, right = positions[cycle.start : cycle.end + 1, roles.upper_legs[0]], positions[cycle.start : cycle.end + 1, roles.upper_legs[1]]
+    side = (left - right).mean(axis=0)
+    return _yaw(np.array([-side[2], 0.0, side[0]]))  # +X left, +Z forward: forward = up x left
+
+
+def _without_heading(rotations: np.ndarray, hips: int, yaw: np.ndarray) -> np.ndarray:
+    """Rotations with the hips pre-multiplied by the inverse of ``yaw`` (degrees, per frame or one)."""
+    out = rotations.copy()
+    out[:, hips] = quat.mul(quat.about("Y", -np.broadcast_to(yaw, len(rotations))), rotations[:, hips])
+    return out
+
+
+@dataclass
+class _Sampled:
+    """Time-normalised cycles of one clip: heading-free rotations ``[C, T, J, 4]`` and hips
+    heights / actor height ``[C, T]``."""
+
+    rotations: np.ndarray
+    heights: np.ndarray
+
+
+def _sample_cycles(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], samples: int) -> _Sampled:
+    positions = motion.positions()
+    height = actor_height(motion.skeleton, roles)
+    rots, heights = [], []
+    for cycle in cycles:
+        yaw = cycle_heading(motion, roles, cycle, positions)
+        part = normalise_cycle(motion, cycle, samples)
+        rots.append(_without_heading(part.rotations, roles.hips, yaw))
+        heights.append(part.positions()[:, roles.hips, 1] / height)
+    return _Sampled(np.stack(rots), np.stack(heights))
+
+
+def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple) -> list[Cycle]:
+    """The cycles of a training clip for ``cycle`` = "middle" (the one nearest the clip's middle:
+    steady walking), "first", "mean" (all, averaged later), "whole" (the clip), an index, or a
+    ``(start, end)`` frame range."""
+    if isinstance(cycle, tuple):
+        start, end = (int(v) for v in cycle)
+        return [Cycle(start, end)]
+    if cycle == "whole":
+        return [Cycle(0, motion.n_frames - 1)]
+    if cycle not in CYCLE_CHOICES and not isinstance(cycle, (int, np.integer)):
+        raise MocapError(f"cycle must be one of {', '.join(CYCLE_CHOICES)}, an index or a (start, end) range, got {cycle!r}")
+    cycles = find_cycles(motion, roles)
+    if not cycles:
+        raise MocapError(
+            f"no gait cycle found in a {motion.n_frames}-frame clip (no foot strikes twice); "
+            "for other actions use cycle='whole' or a (start, end) frame range"
+        )
+    if cycle == "first":
+        return cycles[:1]
+    if cycle == "mean":
+        return cycles
+    if cycle == "middle":
+        middle = motion.n_frames / 2
+        return [min(cycles, key=lambda c: abs((c.start + c.end) / 2 - middle))]
+    if isinstance(cycle, (int, np.integer)):
+        if not -len(cycles) <= cycle < len(cycles):
+            raise MocapError(f"cycle {cycle}: the clip has {len(cycles)} cycles")
+        return [cycles[cycle]]
+    raise MocapError(f"cycle must be one of {', '.join(CYCLE_CHOICES)}, an index or a (start, end) range, got {cycle!r}")
+
+
+# --------------------------------------------------------------------------- the model
+
+
+@dataclass
+class ExaggerationModel:
+    """What training finds, with everything needed to exaggerate a new motion and save it.
+
+    ``joint_names [J]``, ``parents [J]``, ``offsets [J, 3]`` (for positions), ``height`` (actor,
+    file units), ``hips`` (joint index), ``orders [J, 3]``; ``dof_names [D]``, ``weights [D]``;
+    ``levels [K]`` intensities; ``basis [T, r]``, ``singular_values [r]`` (of the kept vectors),
+    ``energy`` kept; ``expressiveness [P, D]`` (each person's ``E``, normalised) and ``overall
+    [D]`` (their mean); ``key [D]`` bool (union of each person's key set), ``person_key [P, D]``;
+    ``mappings [D, r, degree + 1]`` (polynomial in k, highest power first, averaged over
+    people); ``reference [J, 4]`` (mean rotations over people); ``lower, upper [D]`` (training
+    range of each DOF); ``trajectories [P, K, T, D]`` (the training DOFs, for validation);
+    ``person_reference [P, J, 4]``.
+    """
+
+    joint_names: tuple[str, ...]
+    parents: np.ndarray
+    offsets: np.ndarray
+    height: float
+    hips: int
+    orders: np.ndarray
+    representation: str
+    dof_names: tuple[str, ...]
+    weights: np.ndarray
+    levels: np.ndarray
+    basis: np.ndarray
+    singular_values: np.ndarray
+    energy: float
+    expressiveness: np.ndarray
+    overall: np.ndarray
+    key: np.ndarray
+    person_key: np.ndarray
+    mappings: np.ndarray
+    reference: np.ndarray
+    person_reference: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    trajectories: np.ndarray
+    settings: dict = field(default_factory=dict)
+
+    # ------------------------------------------------------------ derived
+
+    @property
+    def n_dofs(self) -> int:
+        return len(self.dof_names)
+
+    @property
+    def zero_weight_joints(self) -> list[str]:
+        """Joints whose bones below have zero length: weight 0, never key features."""
+        w = self.weights[:-1].reshape(-1, 3)[:, 0]
+        return [n for n, v in zip(self.joint_names, w) if v == 0.0]
+
+    def joint_of(self, d: int) -> str:
+        return self.dof_names[d].split(".")[0]
+
+    def joint_expressiveness(self, values: np.ndarray | None = None) -> dict[str, float]:
+        """``E`` summed per joint (the hips height counted as its own row ``Hips.height``)."""
+        values = self.overall if values is None else values
+        out: dict[str, float] = {}
+        for j, name in enumerate(self.joint_names):
+            out[name] = float(values[3 * j : 3 * j + 3].sum())
+        out["Hips.height"] = float(values[-1])
+        return out
+
+    def key_names(self) -> list[str]:
+        """Key DOFs, most expressive first."""
+        return [self.dof_names[d] for d in np.argsort(-self.overall) if self.key[d]]
+
+    def predict_coefficients(self, k) -> np.ndarray:
+        """``f(k) [..., D, r]``: the mapped coefficients at intensity ``k`` (scalar or array)."""
+        k = np.asarray(k, dtype=np.float64)
+        powers = k[..., None] ** np.arange(self.mappings.shape[-1] - 1, -1, -1)
+        return np.einsum("dip,...p->...di", self.mappings, powers)
+
+    def estimate_intensity(self, coefficients: np.ndarray) -> float:
+        """Least-squares intensity of coefficients ``[D, r]`` over the key DOFs: the ``k`` whose
+        mapped coefficients are closest (closed form for lines, a search otherwise)."""
+        key = self.key
+        c = coefficients[key]
+        if self.mappings.shape[-1] == 2:
+            slope, intercept = self.mappings[key, :, 0], self.mappings[key, :, 1]
+            denominator = float(np.sum(slope * slope))
+            return float(np.sum(slope * (c - intercept)) / denominator) if denominator > 0 else float(np.mean(self.levels))
+        span = float(self.levels[-1] - self.levels[0])
+        grid = np.linspace(self.levels[0] - 2 * span, self.levels[-1] + 2 * span, 2001)
+        errors = ((self.predict_coefficients(grid)[:, key] - c[None]) ** 2).sum(axis=(1, 2))
+        return float(grid[np.argmin(errors)])
+
+    def table(self, top: int | None = None) -> str:
+        """The ranking as text: DOFs (most expressive first, key ones marked) then joints."""
+        order = np.argsort(-self.overall)
+        cumulative = np.cumsum(self.overall[order])
+        lines = [f"{'DOF':<18} {'E':>7} {'cum.':>6}  key"]
+        for n, d in enumerate(order[: top or len(order)]):
+            lines.append(f"{self.dof_names[d]:<18} {self.overall[d]:7.4f} {cumulative[n]:6.3f}  {'*' if self.key[d] else ''}")
+        lines.append("")
+        lines.append(f"{'joint':<18} {'E':>7}")
+        for name, value in sorted(self.joint_expressiveness().items(), key=lambda kv: -kv[1]):
+            lines.append(f"{name:<18} {value:7.4f} {'#' * int(round(value * 60))}")
+        zero = self.zero_weight_joints
+        if zero:
+            lines.append(f"weight 0 (no bone below them, never key features): {', '.join(zero)}")
+        lines.append(
+            f"{int(self.key.sum())} key DOFs of {self.n_dofs} ({self.key.mean():.0%}) at share {self.settings.get('share', 0.9):g}; "
+            f"basis: {self.basis.shape[1]} of {self.basis.shape[0]} vectors ({self.energy:.1%} of the energy); "
+            f"{self.expressiveness.shape[0]} person(s), intensities {', '.join(f'{k:g}' for k in self.levels)}"
+        )
+        return "\n".join(lines)
+
+    def plot(self, path: str | os.PathLike, title: str = "") -> None:
+        """A bar plot like the paper's Figure 1 (bottom): expressiveness per DOF, grouped by joint in
+        skeleton order, key DOFs dark; below it the per-joint sums. PNG, written atomically."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, (top, bottom) = plt.subplots(2, 1, figsize=(12, 6.5))
+        x = np.arange(self.n_dofs)
+        top.bar(x, self.overall, color=np.where(self.key, "tab:red", "0.7"), width=0.85)
+        top.set_xticks(np.arange(1, self.n_dofs, 3), [n for n in self.joint_names] + [], rotation=70, fontsize=7)
+        top.set_ylabel("expressiveness E (per DOF)")
+        top.set_title(title or "expressiveness per DOF (red: key features)", fontsize=10, loc="left")
+        per_joint = self.joint_expressiveness()
+        names = list(per_joint)
+        key_joints = {self.joint_of(d) if not self.dof_names[d].endswith("height") else "Hips.height" for d in np.flatnonzero(self.key)}
+        bottom.bar(np.arange(len(names)), list(per_joint.values()), color=["tab:red" if n in key_joints else "0.7" for n in names])
+        bottom.set_xticks(np.arange(len(names)), names, rotation=70, fontsize=7)
+        bottom.set_ylabel("expressiveness per joint")
+        for ax in (top, bottom):
+            for side in ("top", "right"):
+                ax.spines[side].set_visible(False)
+        fig.tight_layout()
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format="png", dpi=110)
+        plt.close(fig)
+        atomic_write(path, buffer.getvalue())
+
+    # ------------------------------------------------------------ files
+
+    _ARRAYS = (
+        "parents", "offsets", "orders", "weights", "levels", "basis", "singular_values", "expressiveness", "overall", "key",
+        "person_key", "mappings", "reference", "person_reference", "lower", "upper", "trajectories",
+    )
+
+    def to_bytes(self) -> bytes:
+        meta = {
+            "format": FORMAT,
+            "version": VERSION,
+            "joint_names": list(self.joint_names),
+            "dof_names": list(self.dof_names),
+            "height": self.height,
+            "hips": self.hips,
+            "representation": self.representation,
+            "energy": self.energy,
+            "settings": self.settings,
+        }
+        arrays = {name: np.asarray(getattr(self, name)) for name in self._ARRAYS}
+        buffer = io.BytesIO()
+        np.savez_compressed(buffer, meta=np.array(json.dumps(meta)), **arrays)
+        return buffer.getvalue()
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the model as ``.npz`` (plain arrays + one JSON string), atomically."""
+        atomic_write(path, self.to_bytes())
+
+    @classmethod
+    def load(cls, source: str | os.PathLike | bytes) -> ExaggerationModel:
+        """Read a model file written by :meth:`save` (``allow_pickle=False``; every array's shape is
+        checked against the metadata, with a one-line error naming what is wrong)."""
+        name = "<bytes>" if isinstance(source, bytes) else str(source)
+        try:
+            data = source if isinstance(source, bytes) else Path(source).read_bytes()
+        except OSError as error:
+            raise MocapError(f"{name}: cannot read the model file: {error.strerror or error}") from None
+        try:
+            with np.load(io.BytesIO(data), allow_pickle=False) as archive:
+                arrays = {k: archive[k] for k in archive.files}
+            meta = json.loads(str(arrays.pop("meta")))
+        except Exception as error:  # damaged zips raise BadZipFile, ValueError, OSError, KeyError...
+            raise MocapError(f"{name}: not a readable exaggeration model ({type(error).__name__}: {error})") from None
+        if not isinstance(meta, dict) or meta.get("format") != FORMAT or meta.get("version") != VERSION:
+            raise MocapError(f"{name}: not an expressive-mocap exaggeration model of version {VERSION}")
+        try:
+            J, D = len(meta["joint_names"]), len(meta["dof_names"])
+            T, r = arrays["basis"].shape
+            P, K = arrays["trajectories"].shape[:2]
+            degree = arrays["mappings"].shape[-1]
+            shapes = {
+                "parents": (J,), "offsets": (J, 3), "orders": (J, 3), "weights": (D,), "levels": (K,), "basis": (T, r),
+                "singular_values": (r,), "expressiveness": (P, D), "overall": (D,), "key": (D,), "person_key": (P, D),
+                "mappings": (D, r, degree), "reference": (J, 4), "person_reference": (P, J, 4), "lower": (D,), "upper": (D,),
+                "trajectories": (P, K, T, D),
+            }
+            for key, shape in shapes.items():
+                value = arrays[key]
+                if value.shape != shape or value.dtype.kind not in "fiub" or not np.isfinite(value.astype(np.float64)).all():
+                    raise MocapError(f"{name}: {key!r} has shape {list(value.shape)} / dtype {value.dtype}, expected finite numbers of shape {list(shape)}")
+            if D != 3 * J + 1 or meta["representation"] not in REPRESENTATIONS:
+                raise MocapError(f"{name}: {D} DOFs for {J} joints in representation {meta['representation']!r}")
+            return cls(
+                joint_names=tuple(meta["joint_names"]), dof_names=tuple(meta["dof_names"]), height=float(meta["height"]),
+                hips=int(meta["hips"]), representation=meta["representation"], energy=float(meta["energy"]),
+                settings=dict(meta.get("settings", {})),
+                **{k: (arrays[k].astype(bool) if k in ("key", "person_key") else arrays[k]) for k in cls._ARRAYS},
+            )
+        except KeyError as error:
+            raise MocapError(f"{name}: model file lacks {error}") from None
+
+    def check_skeleton(self, motion: Motion) -> None:
+        if motion.skeleton.names != self.joint_names:
+            raise MocapError(
+                f"the model was trained on a {len(self.joint_names)}-joint skeleton ({', '.join(self.joint_names[:3])}, ...); "
+                f"the motion has {motion.skeleton.n_joints} joints ({', '.join(motion.skeleton.names[:3])}, ...)"
+            )
+
+
+# --------------------------------------------------------------------------- training
+
+
+def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cycle, representation: str) -> tuple[np.ndarray, np.ndarray]:
+    """DOF trajectories ``[K, T, D]`` of one person's clips and the person's mean rotations ``[J, 4]``
+    (over every sample of every clip; cycles averaged in DOF space when ``cycle="mean"``)."""
+    sampled = [_sample_cycles(m, roles, _choose_cycles(m, roles, cycle), samples) for m in motions]
+    everything = np.concatenate([s.rotations.reshape(-1, *s.rotations.shape[2:]) for s in sampled])
+    reference = np.stack([mean_rotation(everything[:, j]) for j in range(everything.shape[1])])
+    orders = motions[0].skeleton.euler_orders
+    out = []
+    for s in sampled:
+        C, T, J, _ = s.rotations.shape
+        rot = rotations_to_dofs(s.rotations.reshape(C * T, J, 4), reference, representation, orders).reshape(C, T, 3 * J)
+        out.append(np.concatenate([rot, s.heights[..., None]], axis=-1).mean(axis=0))
+    return np.stack(out), reference
+
+
+def _key_set(values: np.ndarray, share: float) -> np.ndarray:
+    """The most expressive DOFs whose normalised values first reach ``share`` (bool ``[D]``)."""
+    order = np.argsort(-values)
+    reached = np.searchsorted(np.cumsum(values[order]), share - 1e-12) + 1
+    key = np.zeros(len(values), dtype=bool)
+    key[order[: min(reached, len(values))]] = True
+    return key & (values > 0)
+
+
+def _correlation(c: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Pearson correlation of ``c [K, ...]`` with ``k [K]`` along the first axis (0 where ``c`` is constant)."""
+    dc = c - c.mean(axis=0)
+    dk = (k - k.mean()).reshape((-1,) + (1,) * (c.ndim - 1))
+    denominator = np.sqrt((dc * dc).sum(axis=0) * (dk * dk).sum())
+    return np.where(denominator > 1e-12 * max(1.0, float(np.abs(c).max(initial=0.0))), (dc * dk).sum(axis=0) / np.where(denominator > 0, denominator, 1.0), 0.0)
+
+
+def fit(
+    trajectories: np.ndarray,
+    levels: np.ndarray,
+    weights: np.ndarray,
+    *,
+    share: float = 0.9,
+    energy: float = 0.99,
+    rank: int | None = None,
+    degree: int = 1,
+) -> dict:
+    """The method on DOF trajectories ``[P, K, T, D]`` at intensities ``levels [K]`` with DOF
+    weights ``[D]``: basis, expressiveness, key sets, mappings. Returns a dict of the model's
+    arrays (``basis, singular_values, energy, expressiveness, overall, key, person_key, mappings``)."""
+    P, K, T, D = trajectories.shape
+    levels = np.asarray(levels, dtype=np.float64)
+    A = trajectories.transpose(2, 0, 1, 3).reshape(T, P * K * D)  # intensity after intensity, person after person
+    U, s, _ = np.linalg.svd(A, full_matrices=False)
+    total = float(np.sum(s * s))
+    if rank is None:
+        rank = int(np.searchsorted(np.cumsum(s * s) / max(total, 1e-300), energy - 1e-12) + 1)
+    rank = int(min(max(rank, 1), len(s)))
+    U, s = U[:, :rank], s[:rank]
+    C = np.einsum("tr,pktd->pkdr", U, trajectories)  # coefficients [P, K, D, r]
+    observability = np.linalg.norm(C[:, 0] - C[:, -1], axis=-1) * weights  # [P, D]
+    rho = _correlation(C.transpose(1, 0, 2, 3), levels)  # [P, D, r]
+    predictability = np.abs(rho) @ (s / s.sum())
+    E = observability * predictability**2
+    sums = E.sum(axis=1, keepdims=True)
+    E = np.where(sums > 0, E / np.where(sums > 0, sums, 1.0), 0.0)
+    person_key = np.stack([_key_set(e, share) for e in E])
+    # Mappings: a polynomial per person, DOF and basis vector; coefficients averaged over people.
+    V = np.vander(levels, degree + 1)  # [K, degree + 1]
+    per_person = np.linalg.lstsq(V, C.transpose(1, 0, 2, 3).reshape(K, -1), rcond=None)[0]  # [degree + 1, P D r]
+    mappings = per_person.reshape(degree + 1, P, D, rank).mean(axis=1).transpose(1, 2, 0)
+    return {
+        "basis": U,
+        "singular_values": s,
+        "energy": float(np.sum(s * s) / max(total, 1e-300)),
+        "expressiveness": E,
+        "overall": E.mean(axis=0),
+        "key": person_key.any(axis=0),
+        "person_key": person_key,
+        "mappings": mappings,
+    }
+
+
+def train(
+    people: Sequence[Sequence[Motion]],
+    levels: Sequence[float],
+    *,
+    samples: int = 50,
+    share: float = 0.9,
+    energy: float = 0.99,
+    rank: int | None = None,
+    degree: int = 1,
+    representation: str = "rotvec",
+    cycle: str | int | tuple = "middle",
+    roles: JointRoles | None = None,
+) -> ExaggerationModel:
+    """Rank the expressive features of one action and fit the intensity mappings.
+
+    ``people[p][k]`` is person ``p``'s performance at intensity ``levels[k]`` (one list per person;
+    one person is ``[[light, medium, heavy]]``). ``cycle`` picks each clip's cycle (see
+    :func:`_choose_cycles`: "middle" by default; "whole" or ``(start, end)`` for actions that
+    are not walks). ``samples`` is ``T``; ``energy`` the basis' share of ``sum(s^2)`` unless
+    ``rank`` is given; ``share`` the expressiveness accumulated into the key set; ``degree`` the
+    mappings' polynomial degree (< number of intensities).
+    """
+    people = [list(p) for p in people]
+    levels = np.asarray(levels, dtype=np.float64).reshape(-1)
+    K = len(levels)
+    if K < 2 or not np.all(np.diff(levels) > 0) or not np.isfinite(levels).all():
+        raise MocapError(f"intensities must be at least two increasing numbers, got {levels.tolist()}")
+    if not people or any(len(p) != K for p in people):
+        raise MocapError(f"each person needs one clip per intensity ({K}); got {[len(p) for p in people]}")
+    if representation not in REPRESENTATIONS:
+        raise MocapError(f"representation must be one of {', '.join(REPRESENTATIONS)}, got {representation!r}")
+    if not 0 < share <= 1 or not 0 < energy <= 1:
+        raise MocapError(f"share and energy must be in (0, 1], got {share} and {energy}")
+    if not 0 <= int(degree) < K:
+        raise MocapError(f"degree {degree}: a polynomial mapping needs fewer degrees than intensities ({K})")
+    if int(samples) < 3:
+        raise MocapError(f"samples (T) must be at least 3, got {samples}")
+    for m in (m for p in people for m in p):
+        if not isinstance(m, Motion):
+            raise MocapError(f"expected Motion objects, got {type(m).__name__}")
+    skeleton = people[0][0].skeleton
+    if any(m.skeleton.names != skeleton.names for p in people for m in p):
+        raise MocapError("every clip must have the same skeleton (joint names) as the first")
+    roles = roles or JointRoles.find(skeleton)
+    per_person = [_person_dofs(p, roles, int(samples), cycle, representation) for p in people]
+    X = np.stack([x for x, _ in per_person])
+    refs = np.stack([r for _, r in per_person])
+    J = skeleton.n_joints
+    w = subtree_weights(skeleton)
+    weights = np.append(np.repeat(w, 3), w[0] if skeleton.parents[roles.hips] < 0 else w[roles.hips])
+    fitted = fit(X, levels, weights, share=share, energy=energy, rank=rank, degree=int(degree))
+    return ExaggerationModel(
+        joint_names=skeleton.names,
+        parents=np.asarray(skeleton.parents),
+        offsets=np.asarray(skeleton.offsets),
+        height=actor_height(skeleton, roles),
+        hips=roles.hips,
+        orders=np.asarray(skeleton.euler_orders).astype(np.int64),
+        representation=representation,
+        dof_names=tuple(dof_names(skeleton, representation)),
+        weights=weights,
+        levels=levels,
+        reference=np.stack([mean_rotation(refs[:, j]) for j in range(J)]),
+        person_reference=refs,
+        lower=X.min(axis=(0, 1, 2)),
+        upper=X.max(axis=(0, 1, 2)),
+        trajectories=X,
+        settings={"samples": int(samples), "share": share, "energy": energy, "rank": rank, "degree": int(degree), "cycle": str(cycle)},
+        **fitted,
+    )
+
+
+# --------------------------------------------------------------------------- exaggeration
+
+
+@dataclass
+class ExaggerationReport:
+    """What :func:`exaggerate` did: intensities (``k0`` estimated or given), cycles edited, DOFs clamped
+    (``{dof: (frames, largest excess)}``), the largest rotation change per joint (degrees), the
+    hips' largest shift from foot locking (file units), stance-foot speeds before and after."""
+
+    k0: float
+    k1: float
+    k0_estimated: bool
+    cycles: list[Cycle]
+    clamped: dict[str, tuple[int, float]]
+    largest_change: dict[str, float]
+    root_shift: float
+    stance_speed_input: float
+    stance_speed_output: float
+
+    def text(self) -> str:
+        lines = [
+            f"intensity {self.k0:.3g}{' (estimated)' if self.k0_estimated else ''} -> {self.k1:.3g}; {len(self.cycles)} cycle(s) edited"
+            + (f" (frames {self.cycles[0].start}-{self.cycles[-1].end})" if self.cycles else ""),
+        ]
+        if self.clamped:
+            worst = sorted(self.clamped.items(), key=lambda kv: -kv[1][1])
+            lines.append(
+                f"clamped to the training range (+margin), {len(worst)} DOF(s): "
+                + ", ".join(f"{d} ({n} frames, by up to {_amount(d, v)})" for d, (n, v) in worst[:8])
+            )
+        else:
+            lines.append("nothing clamped")
+        changes = sorted(self.largest_change.items(), key=lambda kv: -kv[1])
+        lines.append("largest change per joint (degrees): " + ", ".join(f"{n} {v:.1f}" for n, v in changes if v >= 0.05)[:600] or "largest change: none")
+        lines.append(f"stance-foot speed {self.stance_speed_input:.3g} -> {self.stance_speed_output:.3g} (file units/s); foot locking moved the hips by up to {self.root_shift:.3g}")
+        return "\n".join(lines)
+
+
+def _amount(dof: str, value: float) -> str:
+    return f"{value:.3f} x height" if dof.endswith(".height") else f"{np.degrees(value):.1f} deg"
+
+
+def stance_foot_speed(motion: Motion, contacts: np.ndarray, roles: JointRoles | None = None) -> float:
+    """Mean horizontal speed (file units per second) of the feet (ankle and toe) over the frames
+    where ``contacts [F, 2]`` says they touch the floor."""
+    roles = roles or JointRoles.find(motion.skeleton)
+    p = motion.positions()
+    speeds = []
+    for s in (0, 1):
+        for joint in (roles.feet[s], roles.toes[s]):
+            v = np.linalg.norm(np.diff(p[:, joint, [0, 2]], axis=0), axis=-1) / motion.frame_time
+            both = contacts[1:, s] & contacts[:-1, s]
+            speeds.append(v[both])
+    speeds = np.concatenate(speeds)
+    return float(speeds.mean()) if len(speeds) else 0.0
+
+
+def _per_frame_change(delta: np.ndarray, cycles: Sequence[Cycle], n_frames: int, fade: int) -> np.ndarray:
+    """The normalised change ``delta [T, D]`` laid on every cycle's own frames ``-> [F, D]`` (0
+    outside the cycles), each jump at a cycle boundary split half and half over ``fade`` frames
+    either side with a raised cosine, so no seam appears at the footstrikes."""
+    out = np.zeros((n_frames, delta.shape[1]))
+    for c in cycles:
+        out[c.start : c.end + 1] = to_cycle_timing(delta, c.n_frames)
+    if fade < 1 or not cycles:
+        return out
+    # Boundaries: between frame a (left) and a + 1 (right). Cycle c owns frames start .. end - 1
+    # (its end is the next cycle's start); the last owns its end frame too.
+    lefts = [cycles[0].start - 1] + [c.end - 1 for c in cycles[:-1]] + [cycles[-1].end]
+    if len(cycles) > 1:
+        for c, nxt in zip(cycles[:-1], cycles[1:]):
+            out[c.end] = to_cycle_timing(delta, nxt.n_frames)[0]
+    g = 0.5 * (1 + np.cos(np.pi * np.arange(fade) / fade))  # 1 at the boundary, -> 0
+    corrected = out.copy()
+    for a in lefts:
+        if a < 0 or a + 1 >= n_frames:
+            continue  # nothing beyond the clip's edge to fade into
+        jump = out[a + 1] - out[a]
+        for i in range(fade):
+            if a - i >= 0:
+                corrected[a - i] += 0.5 * jump * g[i]
+            if a + 1 + i < n_frames:
+                corrected[a + 1 + i] -= 0.5 * jump * g[i]
+    return corrected
+
+
+def _frame_yaw(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], positions: np.ndarray) -> np.ndarray:
+    """Heading (degrees) of every frame: its cycle's; before the first / after the last, the nearest."""
+    yaw = np.zeros(motion.n_frames)
+    if not cycles:
+        return yaw + cycle_heading(motion, roles, Cycle(0, motion.n_frames - 1), positions)
+    headings = [cycle_heading(motion, roles, c, positions) for c in cycles]
+    yaw[: cycles[0].start] = headings[0]
+    for c, h in zip(cycles, headings):
+        yaw[c.start : c.end + 1] = h
+    yaw[cycles[-1].end :] = headings[-1]
+    return yaw
+
+
+def motion_dofs(model: ExaggerationModel, motion: Motion, roles: JointRoles, yaw: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """DOFs ``[F, D]`` of every frame of ``motion`` (heading ``yaw [F]`` removed, rotations relative to ``reference``)."""
+    rot = rotations_to_dofs(_without_heading(motion.rotations, roles.hips, yaw), reference, model.representation, model.orders)
+    heights = motion.positions()[:, roles.hips, 1] / model.height
+    return np.concatenate([rot, heights[:, None]], axis=1)
+
+
+def exaggerate(
+    model: ExaggerationModel,
+    motion: Motion,
+    to: float,
+    *,
+    current: float | None = None,
+    cycles: Sequence[Cycle] | None = None,
+    reference: str = "model",
+    margin: float = 0.2,
+    fade: float = 0.15,
+    lock_feet: bool = True,
+    roles: JointRoles | None = None,
+) -> tuple[Motion, ExaggerationReport]:
+    """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
+
+    ``current`` is ``k0``; by default it is estimated by least squares from the mean coefficients
+    of the motion's cycles. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles;
+    a single whole-clip cycle when none is found) gets ``x' = x + U (f(to) - f(k0))`` on the key DOFs,
+    in its own timing; frames outside the cycles keep their values and the changes are cross-faded
+    over ``fade`` seconds at every boundary. DOFs are kept within the training range widened by
+    ``margin`` x its width (never pushed past where they already were). ``reference`` "model"
+    measures rotations from the training people's mean pose, "own" from the motion's own mean.
+    ``lock_feet`` shifts the hips horizontally so each stance foot moves as in the input (no new
+    skating). Returns the new motion and an :class:`ExaggerationReport`.
+    """
+    if not isinstance(motion, Motion):
+        raise MocapError(f"argument `motion`: expected a Motion, got {type(motion).__name__}")
+    model.check_skeleton(motion)
+    if not np.isfinite(to) or (current is not None and not np.isfinite(current)):
+        raise MocapError(f"intensities must be finite numbers, got to={to}, current={current}")
+    if reference not in ("model", "own"):
+        raise MocapError(f"reference must be 'model' or 'own', got {reference!r}")
+    if motion.n_frames < 3:
+        raise MocapError(f"a motion of {motion.n_frames} frames is too short to exaggerate")
+    roles = roles or JointRoles.find(motion.skeleton)
+    contacts = foot_contacts(motion, roles)
+    if cycles is None:
+        cycles = find_cycles(motion, roles, contacts) or [Cycle(0, motion.n_frames - 1)]
+    cycles = list(cycles)
+    positions = motion.positions()
+    yaw = _frame_yaw(motion, roles, cycles, positions)
+    T = model.basis.shape[0]
+    if reference == "own":
+        hf = _without_heading(motion.rotations, roles.hips, yaw)
+        ref = np.stack([mean_rotation(hf[cycles[0].start : cycles[-1].end + 1, j]) for j in range(motion.skeleton.n_joints)])
+    else:
+        ref = model.reference
+    X = motion_dofs(model, motion, roles, yaw, ref)  # [F, D]
+    # Coefficients of each cycle's normalised trajectories (same sampling as training).
+    sampled = _sample_cycles(motion, roles, cycles, T)
+    C, _, J, _ = sampled.rotations.shape
+    rot = rotations_to_dofs(sampled.rotations.reshape(C * T, J, 4), ref, model.representation, model.orders).reshape(C, T, 3 * J)
+    cycle_dofs = np.concatenate([rot, sampled.heights[..., None]], axis=-1)
+    coefficients = np.einsum("tr,ctd->dr", model.basis, cycle_dofs) / C
+    estimated = current is None
+    k0 = model.estimate_intensity(coefficients) if estimated else float(current)
+    change = (model.predict_coefficients(float(to)) - model.predict_coefficients(k0)) * model.key[:, None]  # [D, r]
+    delta = model.basis @ change.T  # [T, D]
+    per_frame = _per_frame_change(delta, cycles, motion.n_frames, int(round(fade * motion.fps)))
+    target = X + per_frame
+    # Plausibility: the training range, widened by the margin, and never tighter than the input itself.
+    width = model.upper - model.lower
+    low = np.minimum(model.lower - margin * width, X)
+    high = np.maximum(model.upper + margin * width, X)
+    clamped_values = np.clip(target, low, high)
+    excess = np.abs(clamped_values - target)
+    clamped = {model.dof_names[d]: (int(np.count_nonzero(excess[:, d] > 1e-12)), float(excess[:, d].max())) for d in np.flatnonzero(excess.max(axis=0) > 1e-12)}
+    new = clamped_values
+    changed = np.flatnonzero(np.abs(new - X).max(axis=0) > 0)
+    rotations = motion.rotations.copy()
+    translations = motion.translations.copy()
+    joints = sorted({int(d) // 3 for d in changed if d < 3 * J})
+    if joints:
+        rebuilt = dofs_to_rotations(new[:, : 3 * J], ref, model.representation, model.orders)
+        rebuilt[:, roles.hips] = quat.mul(quat.about("Y", yaw), rebuilt[:, roles.hips])  # the heading back
+        rotations[:, joints] = rebuilt[:, joints]
+    world_rotations, _ = forward_kinematics(motion.rotations, motion.translations, motion.skeleton.parents)
+    parent = motion.skeleton.parents[roles.hips]
+    parent_rot = world_rotations[:, parent] if parent >= 0 else np.broadcast_to(IDENTITY, (motion.n_frames, 4))
+    lift = np.zeros((motion.n_frames, 3))
+    lift[:, 1] = (new[:, -1] - X[:, -1]) * model.height
+    translations[:, roles.hips] += quat.rotate(quat.conjugate(parent_rot), lift)
+    out = Motion(motion.skeleton, rotations, translations, motion.frame_time)
+    shift = np.zeros((motion.n_frames, 3))
+    if lock_feet:
+        shift = _foot_lock_shift(motion, out, contacts, roles)
+        translations[:, roles.hips] += quat.rotate(quat.conjugate(parent_rot), shift)
+        out = Motion(motion.skeleton, rotations, translations, motion.frame_time)
+    angles = np.degrees(quat.angle(quat.mul(quat.conjugate(motion.rotations), rotations))).max(axis=0)
+    report = ExaggerationReport(
+        k0=k0, k1=float(to), k0_estimated=estimated, cycles=cycles, clamped=clamped,
+        largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
+        root_shift=float(np.linalg.norm(shift, axis=1).max()),
+        stance_speed_input=stance_foot_speed(motion, contacts, roles),
+        stance_speed_output=stance_foot_speed(out, contacts, roles),
+    )
+    return out, report
+
+
+def _foot_lock_shift(original: Motion, edited: Motion, contacts: np.ndarray, roles: JointRoles) -> np.ndarray:
+    """World shifts of the hips ``[F, 3]`` (horizontal) that make each stance foot (ankle and toe)
+    move as in ``original``: in stance frames the hips take the opposite of the feet's extra
+    velocity (averaged over the feet in contact); in flight the shift is held, so it never jumps."""
+    p0, p1 = original.positions(), edited.positions()
+    extra = np.zeros((original.n_frames, 3))
+    count = np.zeros(original.n_frames)
+    for s in (0, 1):
+        joints = [roles.feet[s], roles.toes[s]]
+        v0 = np.diff(p0[:, joints], axis=0).mean(axis=1)
+        v1 = np.diff(p1[:, joints], axis=0).mean(axis=1)
+        stance = contacts[1:, s] & contacts[:-1, s]
+        extra[1:][stance] += (v1 - v0)[stance]
+        count[1:] += stance
+    velocity = -extra / np.maximum(count, 1)[:, None]
+    velocity[:, 1] = 0.0  # horizontal only: heights are the edit's business
+    return np.cumsum(velocity, axis=0)
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def dof_positions(model: ExaggerationModel, dofs: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """World joint positions ``[N, J, 3]`` of DOF frames ``[N, D]`` (rotations relative to
+    ``reference [J, 4]``, heading removed), the hips at ``(0, height DOF x actor height, 0)``:
+    the pose and the hips' height, without the path on the floor."""
+    J = len(model.joint_names)
+    rotations = dofs_to_rotations(dofs[:, : 3 * J], reference, model.representation, model.orders)
+    translations = np.broadcast_to(model.offsets, (len(dofs), J, 3)).copy()
+    translations[:, 0] = 0.0
+    translations[:, model.hips] = 0.0
+    translations[:, model.hips, 1] = dofs[:, -1] * model.height
+    return forward_kinematics(rotations, translations, model.parents)[1]
+
+
+@dataclass
+class SwapResult:
+    """The paper's test for one person (or the union): ``||swap - heavy|| / ||light - heavy||``
+    over DOF trajectories and over world joint positions, for the key set (``swapped`` DOFs,
+    ``share`` of all), a random set of the same size (mean of ``draws``) and the best set of that
+    size (the DOFs with the largest light-heavy difference)."""
+
+    person: str
+    swapped: int
+    share: float
+    ratio: float
+    ratio_positions: float
+    random: float
+    random_positions: float
+    best: float
+    best_positions: float
+
+
+def _ratios(model: ExaggerationModel, light: np.ndarray, heavy: np.ndarray, reference: np.ndarray, sets: Sequence[np.ndarray]) -> np.ndarray:
+    """``[len(sets), 2]``: DOF and position ratios after swapping each set of DOFs light -> heavy."""
+    hp = dof_positions(model, heavy, reference)
+    base = np.linalg.norm(light - heavy), np.linalg.norm(dof_positions(model, light, reference) - hp)
+    out = []
+    for dofs in sets:
+        swap = light.copy()
+        swap[:, dofs] = heavy[:, dofs]
+        out.append((np.linalg.norm(swap - heavy) / base[0], np.linalg.norm(dof_positions(model, swap, reference) - hp) / base[1]))
+    return np.array(out)
+
+
+def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int = 200, seed: int = 0) -> list[SwapResult]:
+    """Swap the key DOF trajectories of each person's lightest performance for the heaviest's
+    and compare with the real heaviest (METHODS part 1, step 10). ``person``: one index, or every
+    person (their own key sets) followed by ``"union"`` (every person with the union key set,
+    ratios pooled)."""
+    P, K, T, D = model.trajectories.shape
+    rng = np.random.default_rng(seed)
+    people = range(P) if person is None else [int(person)]
+    results = []
+
+    def run(label: str, pairs: list[int], key: np.ndarray) -> SwapResult:
+        n = int(key.sum())
+        numbers = []
+        for p in pairs:
+            light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
+            difference = np.linalg.norm(light - heavy, axis=0)
+            sets = [np.flatnonzero(key), np.argsort(-difference)[:n]] + [rng.choice(D, n, replace=False) for _ in range(draws)]
+            numbers.append(_ratios(model, light, heavy, model.person_reference[p], sets))
+        r = np.mean(numbers, axis=0)
+        return SwapResult(label, n, n / D, r[0, 0], r[0, 1], float(r[2:, 0].mean()), float(r[2:, 1].mean()), r[1, 0], r[1, 1])
+
+    for p in people:
+        if not 0 <= p < P:
+            raise MocapError(f"person {p}: the model has {P} people")
+        results.append(run(str(p), [p], model.person_key[p]))
+    if person is None and P > 1:
+        results.append(run("union", list(range(P)), model.key))
+    return results
+
+
+@dataclass
+class WarpResult:
+    """Leave-one-person-out: mappings (and basis, key set) from the other people, applied to this
+    person's lightest performance towards the heaviest; ratios as in :class:`SwapResult`."""
+
+    person: str
+    key: int
+    ratio: float
+    ratio_positions: float
+
+
+def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
+    """For each person: fit on the others (same settings), warp the person's lightest cycle to
+    the heaviest intensity (``x + U (f(k_K) - f(k_1))`` on the key DOFs) and compare with the real
+    heaviest. Needs at least two people."""
+    P = model.trajectories.shape[0]
+    if P < 2:
+        raise MocapError("leave-one-person-out needs at least two people")
+    settings = model.settings
+    results = []
+    for p in range(P):
+        others = model.trajectories[[q for q in range(P) if q != p]]
+        fitted = fit(others, model.levels, model.weights, share=settings.get("share", 0.9), energy=settings.get("energy", 0.99),
+                     rank=settings.get("rank"), degree=settings.get("degree", 1))
+        k = np.array([model.levels[0], model.levels[-1]])
+        powers = k[:, None] ** np.arange(fitted["mappings"].shape[-1] - 1, -1, -1)
+        f = np.einsum("dip,kp->kdi", fitted["mappings"], powers)
+        change = (f[1] - f[0]) * fitted["key"][:, None]
+        light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
+        warped = light + fitted["basis"] @ change.T
+        reference = model.person_reference[p]
+        hp = dof_positions(model, heavy, reference)
+        ratio = np.linalg.norm(warped - heavy) / np.linalg.norm(light - heavy)
+        positions = np.linalg.norm(dof_positions(model, warped, reference) - hp) / np.linalg.norm(dof_positions(model, light, reference) - hp)
+        results.append(WarpResult(str(p), int(fitted["key"].sum()), float(ratio), float(positions)))
+    return results
+
+
+def validation_table(swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = ()) -> str:
+    """Both tests as text."""
+    lines = [f"{'person':<8} {'swapped':>11} {'ratio':>7} {'random':>7} {'best':>7} | {'pos.':>6} {'random':>7} {'best':>7}"]
+    for r in swaps:
+        lines.append(
+            f"{r.person:<8} {r.swapped:4d} ({r.share:4.0%}) {r.ratio:7.3f} {r.random:7.3f} {r.best:7.3f} | "
+            f"{r.ratio_positions:6.3f} {r.random_positions:7.3f} {r.best_positions:7.3f}"
+        )
+    if warps:
+        lines.append("")
+        lines.append("leave-one-person-out warp, lightest -> heaviest (mappings from the other people):")
+        lines.append(f"{'person':<8} {'key':>4} {'ratio':>7} {'pos.':>7}")
+        for w in warps:
+            lines.append(f"{w.person:<8} {w.key:4d} {w.ratio:7.3f} {w.ratio_positions:7.3f}")
+        lines.append(f"{'mean':<8} {'':>4} {np.mean([w.ratio for w in warps]):7.3f} {np.mean([w.ratio_positions for w in warps]):7.3f}")
+    return "\n".join(lines)
+
+
+__all__ = [
+    "Cycle",
+    "ExaggerationModel",
+    "ExaggerationReport",
+    "SwapResult",
+    "WarpResult",
+    "dof_positions",
+    "exaggerate",
+    "leave_one_out",
+    "swap_test",
+    "validation_table",
+    "find_cycles",
+    "fit",
+    "normalise_cycle",
+    "stance_foot_speed",
+    "subtree_weights",
+    "to_cycle_timing",
+    "train",
+]

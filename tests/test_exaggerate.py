@@ -1,0 +1,308 @@
+"""Expressive features for exaggeration (METHODS.md part 1) on the synthetic intensity series
+of section 3: the procedural walk 'carrying' a load k (more trunk lean, stiffer arms)."""
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap import quat
+from expressive_mocap.demo import LOADED_JOINTS, loaded_walk, procedural_walk
+from expressive_mocap.exaggerate import (
+    Cycle,
+    ExaggerationModel,
+    exaggerate,
+    find_cycles,
+    normalise_cycle,
+    subtree_weights,
+    _log,
+    to_cycle_timing,
+    train,
+)
+
+LEVELS = [1.0, 2.0, 3.0]
+
+
+@pytest.fixture(scope="module")
+def clean_model():
+    """One person, no performance noise: only the loaded joints change with k."""
+    return train([[loaded_walk(k) for k in LEVELS]], LEVELS)
+
+
+@pytest.fixture(scope="module")
+def people():
+    """Three 'people': the same series, each take with its own slow random wobble (0.3 degrees)."""
+    return [[loaded_walk(k, wobble=0.3, seed=10 * p + i) for i, k in enumerate(LEVELS)] for p in range(3)]
+
+
+@pytest.fixture(scope="module")
+def model(people):
+    return train(people, LEVELS)
+
+
+@pytest.fixture(scope="module")
+def walk():
+    return loaded_walk(2.0, seconds=5.0)
+
+
+def joint_rank(model):
+    return [name for name, _ in sorted(model.joint_expressiveness().items(), key=lambda kv: -kv[1])]
+
+
+# ----------------------------------------------------------------- cycles and time
+
+
+def test_cycles_are_footstrike_to_footstrike_of_one_foot_and_follow_each_other():
+    motion = procedural_walk(5.0)
+    cycles = find_cycles(motion)
+    assert len(cycles) >= 3
+    assert len({c.foot for c in cycles}) == 1
+    assert all(a.end == b.start for a, b in zip(cycles[:-1], cycles[1:]))
+    strikes = em.features.footstrikes(em.foot_contacts(motion))
+    ends = set(strikes[strikes[:, 1] == cycles[0].foot, 0].tolist())
+    assert all(c.start in ends and c.end in ends for c in cycles)
+
+
+def test_time_normalisation_and_back():
+    motion = procedural_walk(3.0)
+    cycle = find_cycles(motion)[0]
+    part = normalise_cycle(motion, cycle, 50)
+    assert part.n_frames == 50
+    np.testing.assert_allclose(part.rotations[[0, -1]], motion.rotations[[cycle.start, cycle.end]], atol=1e-12)
+    # A trajectory sampled on the normalised grid comes back on the cycle's own frames.
+    frames = np.arange(cycle.n_frames, dtype=float)
+    normalised = np.linspace(0, cycle.n_frames - 1, 50)
+    np.testing.assert_allclose(to_cycle_timing(np.sin(normalised / 5), cycle.n_frames), np.sin(frames / 5), atol=2e-3)
+    np.testing.assert_allclose(to_cycle_timing(normalised[:, None] * 2, cycle.n_frames)[:, 0], frames * 2, atol=1e-9)
+
+
+def test_subtree_weights_sum_bone_lengths_below_a_joint():
+    skeleton = procedural_walk(0.5).skeleton
+    w = subtree_weights(skeleton)
+    names = skeleton.names
+    arm = [names.index(n) for n in ("LowerArm_L", "Hand_L")]
+    assert w[names.index("UpperArm_L")] == pytest.approx(sum(np.linalg.norm(skeleton.offsets[j]) for j in arm))
+    assert w[names.index("Hand_L")] == 0.0 and w[names.index("Head")] == 0.0
+    assert w[0] == pytest.approx(np.linalg.norm(skeleton.offsets[1:], axis=1).sum())
+
+
+# ----------------------------------------------------------------- ranking
+
+
+def test_only_the_changed_joints_rank_first(clean_model, model):
+    assert set(joint_rank(clean_model)[: len(LOADED_JOINTS)]) == set(LOADED_JOINTS)
+    assert {clean_model.joint_of(d) for d in np.flatnonzero(clean_model.key)} <= set(LOADED_JOINTS)
+    # With three wobbling people the four most expressive joints are still loaded ones: trunk and upper arms.
+    assert set(joint_rank(model)[:4]) <= set(LOADED_JOINTS)
+    assert model.overall.sum() == pytest.approx(1.0)
+    assert model.expressiveness.shape == (3, model.n_dofs)
+
+
+def test_zero_length_joints_get_no_weight_and_are_reported(clean_model):
+    assert set(clean_model.zero_weight_joints) == {"Head", "Hand_L", "Hand_R", "Toes_L", "Toes_R"}
+    assert "weight 0" in clean_model.table()
+    for name in clean_model.zero_weight_joints:
+        assert clean_model.joint_expressiveness()[name] == 0.0
+
+
+def test_basis_keeps_99_percent_or_a_given_rank(people):
+    m = train(people[:1], LEVELS, rank=3)
+    assert m.basis.shape == (50, 3)
+    np.testing.assert_allclose(m.basis.T @ m.basis, np.eye(3), atol=1e-10)
+    assert train(people[:1], LEVELS).energy >= 0.99
+
+
+def test_euler_channels_rank_the_same_joints():
+    m = train([[loaded_walk(k) for k in LEVELS]], LEVELS, representation="euler")
+    assert m.dof_names[6] == "Spine.Zrot"
+    assert set(joint_rank(m)[:2]) == {"Spine", "Chest"}
+
+
+# ----------------------------------------------------------------- exaggeration
+
+
+def test_exaggerating_to_the_current_intensity_is_the_identity(model, walk):
+    out, report = exaggerate(model, walk, 2.0, current=2.0)
+    np.testing.assert_array_equal(out.rotations, walk.rotations)
+    np.testing.assert_allclose(out.translations, walk.translations, atol=1e-9)
+    assert report.clamped == {} and max(report.largest_change.values()) < 1e-9
+
+
+def test_diminish_then_exaggerate_returns_the_input(clean_model, walk):
+    """Tolerance: 1e-6 degrees and 1e-6 cm (log/exp round trips; no clamping in range)."""
+    cycles = find_cycles(walk)
+    down, report = exaggerate(clean_model, walk, 1.5, current=2.0, cycles=cycles, lock_feet=False)
+    assert report.clamped == {}
+    assert max(report.largest_change.values()) > 1.0
+    back, _ = exaggerate(clean_model, down, 2.0, current=1.5, cycles=cycles, lock_feet=False)
+    assert np.degrees(quat.angle(quat.mul(quat.conjugate(back.rotations), walk.rotations))).max() < 1e-6
+    assert np.abs(back.positions() - walk.positions()).max() < 1e-6
+
+
+def test_intensity_is_estimated_from_the_mapping(clean_model):
+    for k in (1.5, 2.0, 2.5):
+        _, report = exaggerate(clean_model, loaded_walk(k, 5.0), k + 1)
+        assert report.k0_estimated and report.k0 == pytest.approx(k, abs=0.1)
+
+
+def lean(motion, walk, frames=slice(None)):
+    """Extra forward lean of the spine (degrees, mean over the clip) of ``motion`` over ``walk``:
+    loaded_walk leans by turning the spine -4 degrees per unit of k about its local Z."""
+    j = motion.skeleton.names.index("Spine")
+    change = quat.mul(quat.conjugate(walk.rotations[frames, j]), motion.rotations[frames, j])
+    return -float(np.degrees(_log(change)[:, 2]).mean())
+
+
+def test_exaggeration_follows_the_training_series_and_extrapolates(clean_model, walk):
+    cycles = find_cycles(walk)
+    inside = slice(cycles[0].start + 5, cycles[-1].end - 5)  # the lead-in and -out keep their lean
+    leans = [lean(exaggerate(clean_model, walk, k, current=2.0)[0], walk, inside) for k in (0.5, 1.0, 2.0, 3.0, 3.5)]
+    assert np.all(np.diff(leans) > 0)
+    # As much as the real k = 3 walk leans more (4 degrees).
+    assert leans[3] == pytest.approx(lean(loaded_walk(3.0, 5.0), walk, inside), abs=0.3)
+    assert leans[4] > leans[3] + 1.0
+
+
+def test_every_cycle_is_edited_and_there_is_no_seam(clean_model, walk):
+    out, report = exaggerate(clean_model, walk, 3.5, current=2.0)
+    cycles = report.cycles
+    assert len(cycles) >= 3 and cycles[0].start > 0
+    # Frames far before the first footstrike keep their values; every cycle changes.
+    np.testing.assert_allclose(out.rotations[: cycles[0].start - 6], walk.rotations[: cycles[0].start - 6], atol=1e-12)
+    j = walk.skeleton.names.index("UpperArm_R")
+    for c in cycles:
+        assert np.abs(out.rotations[c.start : c.end, j] - walk.rotations[c.start : c.end, j]).max() > 1e-3
+    # No seam: the frame-to-frame rotation change stays close to the input's everywhere.
+    step = lambda m: np.degrees(quat.angle(quat.mul(quat.conjugate(m.rotations[:-1]), m.rotations[1:])))  # noqa: E731
+    assert (step(out) - step(walk)).max() < 1.5
+
+
+def test_large_changes_are_clamped_and_reported(clean_model, walk):
+    out, report = exaggerate(clean_model, walk, 30.0, current=2.0)
+    assert "Spine.rz" in report.clamped
+    assert "clamped" in report.text()
+    free, _ = exaggerate(clean_model, walk, 30.0, current=2.0, margin=100.0)
+    assert lean(free, walk) > lean(out, walk) + 5
+
+
+def test_foot_locking_keeps_the_stance_foot(model, walk):
+    _, report = exaggerate(model, walk, 4.0, current=2.0)
+    assert report.stance_speed_output <= 1.2 * report.stance_speed_input + 0.5
+    _, loose = exaggerate(model, walk, 4.0, current=2.0, lock_feet=False)
+    assert report.stance_speed_output <= loose.stance_speed_output + 1e-9
+
+
+def test_a_clip_with_no_steps_is_edited_as_a_whole(clean_model):
+    standing = loaded_walk(2.0, 1.0)[:10]
+    out, report = exaggerate(clean_model, standing, 3.0, current=2.0)
+    assert report.cycles == [Cycle(0, 9)]
+    assert out.n_frames == 10
+
+
+# ----------------------------------------------------------------- files
+
+
+def test_save_load_round_trip(model, walk, tmp_path):
+    path = tmp_path / "m.npz"
+    model.save(path)
+    again = ExaggerationModel.load(path)
+    for name in ExaggerationModel._ARRAYS:
+        np.testing.assert_array_equal(getattr(again, name), getattr(model, name))
+    assert again.dof_names == model.dof_names and again.settings == model.settings
+    a, _ = exaggerate(model, walk, 3.0)
+    b, _ = exaggerate(again, walk, 3.0)
+    np.testing.assert_array_equal(a.rotations, b.rotations)
+
+
+def test_damaged_model_files_give_clear_errors(model, tmp_path):
+    with pytest.raises(em.MocapError, match="not a readable"):
+        ExaggerationModel.load(b"not a zip")
+    with pytest.raises(em.MocapError, match="cannot read"):
+        ExaggerationModel.load(tmp_path / "missing.npz")
+    import io
+
+    with np.load(io.BytesIO(model.to_bytes())) as archive:
+        arrays = {k: archive[k] for k in archive.files}
+    arrays["basis"] = arrays["basis"][:, :1]
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    with pytest.raises(em.MocapError, match="expected finite numbers of shape"):
+        ExaggerationModel.load(buffer.getvalue())
+    del arrays["mappings"]
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    with pytest.raises(em.MocapError, match="lacks"):
+        ExaggerationModel.load(buffer.getvalue())
+
+
+# ----------------------------------------------------------------- bad inputs
+
+
+def test_bad_inputs_give_clear_errors(clean_model, walk):
+    walks = [loaded_walk(k, 2.0) for k in LEVELS]
+    with pytest.raises(em.MocapError, match="increasing"):
+        train([walks], [3, 2, 1])
+    with pytest.raises(em.MocapError, match="one clip per intensity"):
+        train([walks[:2]], LEVELS)
+    with pytest.raises(em.MocapError, match="degree"):
+        train([walks], LEVELS, degree=3)
+    with pytest.raises(em.MocapError, match="representation"):
+        train([walks], LEVELS, representation="matrix")
+    with pytest.raises(em.MocapError, match="cycle must be"):
+        train([walks], LEVELS, cycle="best")
+    with pytest.raises(em.MocapError, match="no gait cycle"):
+        train([[w[:20] for w in walks]], LEVELS)
+    with pytest.raises(em.MocapError, match="skeleton"):
+        exaggerate(clean_model, _renamed(walk), 3.0)
+    with pytest.raises(em.MocapError, match="finite"):
+        exaggerate(clean_model, walk, float("nan"))
+    with pytest.raises(em.MocapError, match="reference"):
+        exaggerate(clean_model, walk, 3.0, reference="mine")
+
+
+def _renamed(motion):
+    s = motion.skeleton
+    names = ("Root",) + s.names[1:]
+    return em.Motion(em.Skeleton(names, s.parents, s.offsets, s.channels, s.end_sites), motion.rotations, motion.translations, motion.frame_time)
+
+
+# ----------------------------------------------------------------- commands
+
+
+def test_rank_exaggerate_validate_commands(tmp_path, capsys):
+    from expressive_mocap.cli import main
+
+    files = {}
+    for p in range(2):
+        for i, k in enumerate(LEVELS):
+            files[p, k] = tmp_path / f"p{p}_k{k:g}.bvh"
+            em.write_bvh(loaded_walk(k, wobble=0.3, seed=10 * p + i), files[p, k])
+    levels = [a for k in LEVELS for a in ("--level", f"{k:g}", str(files[0, k]), str(files[1, k]))]
+    plot, saved = tmp_path / "rank.png", tmp_path / "model.npz"
+    assert main(["rank", *levels, "-o", str(plot), "-o", str(saved)]) == 0
+    out = capsys.readouterr().out
+    assert "key DOFs" in out and "person 1:" in out and plot.stat().st_size > 1000
+    walk = tmp_path / "walk.bvh"
+    em.write_bvh(loaded_walk(2.0, 4.0), walk)
+    result = tmp_path / "out.bvh"
+    assert main(["exaggerate", "--model", str(saved), "--input", str(walk), "--from", "2", "--to", "3", "-o", str(result)]) == 0
+    out = capsys.readouterr().out
+    assert "largest change per joint" in out and em.read_bvh(result).n_frames == em.read_bvh(walk).n_frames
+    assert main(["validate", "--model", str(saved), "--draws", "20"]) == 0
+    out = capsys.readouterr().out
+    assert "union" in out and "leave-one-person-out" in out
+
+
+def test_commands_fail_in_one_line(tmp_path, capsys):
+    from expressive_mocap.cli import main
+
+    walk = tmp_path / "w.bvh"
+    em.write_bvh(loaded_walk(1.0, 2.0), walk)
+    assert main(["rank", "--level", "1", str(walk)]) == 1
+    assert "at least two --level" in capsys.readouterr().err
+    assert main(["rank", "--level", "1", str(walk), "--level", "2", str(walk), str(walk)]) == 1
+    assert "same number of files" in capsys.readouterr().err
+    assert main(["rank", "--level", "1", str(walk), "--level", "2", str(walk), "-o", "x.txt"]) == 1
+    assert ".png" in capsys.readouterr().err
+    assert main(["exaggerate", "--model", str(tmp_path / "none.npz"), "--input", str(walk), "--to", "2", "-o", str(tmp_path / "o.bvh")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot read" in err
