@@ -62,10 +62,12 @@ import numpy as np
 from .backend import get_backend
 from .bvh import read_bvh_many
 from .errors import MocapError
-from .features import FEATURE_NAMES, dynamic_features, foot_contacts
+from .decouple import EXPONENT, GAIN
+from .features import FEATURE_NAMES, default_floor, dynamic_features, foot_contacts
 from .io import atomic_write
-from .kernels import forward_kinematics_many
+from .kernels import decouple_rotations, forward_kinematics_many
 from .motion import Motion
+from .roles import JointRoles
 
 FORMAT = "expressive-mocap dataset"
 VERSION = 1
@@ -229,10 +231,10 @@ class _Posed(Motion):
         return self._fk
 
 
-def clip_arrays(motion: Motion, keep: tuple[str, ...], model=None, fk=None) -> dict[str, np.ndarray]:
-    """The arrays of one clip for the kinds in ``keep`` (dtypes as stored): what the dataset
-    holds for it, computed with the package's own functions. ``fk``: its (world rotations,
-    positions) if already computed."""
+def clip_arrays(motion: Motion, keep: tuple[str, ...], fk=None, roles=None) -> dict[str, np.ndarray]:
+    """The arrays of one clip for the kinds in ``keep`` other than the model's (dtypes as
+    stored), computed with the package's own functions. ``fk``: the clip's (world rotations,
+    positions) if already computed; ``roles``: its JointRoles if already found."""
     posed = _Posed(motion, fk if fk is not None else motion.fk())
     out: dict[str, np.ndarray] = {}
     if "positions" in keep:
@@ -240,17 +242,36 @@ def clip_arrays(motion: Motion, keep: tuple[str, ...], model=None, fk=None) -> d
     if "rotations" in keep:
         out["rotations"] = motion.rotations.astype(np.float32)
     if "features" in keep:
-        out["features"] = dynamic_features(posed).astype(np.float32)
+        out["features"] = dynamic_features(posed, roles).astype(np.float32)
     if "contacts" in keep:
-        out["contacts"] = foot_contacts(posed).astype(bool)
-    if any(k in keep for k in MODEL_KINDS):
-        from .decouple import decompose
-
-        parts = decompose(posed, model)
-        for kind, values in (("activity", parts.activity), ("body", parts.body), ("expressive", parts.expressive)):
-            if kind in keep:
-                out[kind] = values.astype(np.float32)
+        out["contacts"] = foot_contacts(posed, roles).astype(bool)
     return out
+
+
+def _model_features(motion: Motion, model, roles) -> np.ndarray:
+    """``model.features(motion)`` (see :func:`expressive_mocap.model.model_features`), with the
+    joint roles found once per dataset instead of once per call."""
+    model.check_skeleton(motion)
+    floor = default_floor(motion.positions(), roles)
+    return dynamic_features(motion, roles, floor=floor, thigh_reference=model.thigh_reference, causal=True)
+
+
+def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], model) -> list[dict[str, np.ndarray]]:
+    """``decompose`` of many clips at once, from each clip's local ``rotations [F, J, 4]`` and
+    model ``features [F, 19]``: one network call for all their frames (the network and the
+    decoupling work frame by frame, so this is the per-clip result, with one kernel call that
+    the Rust MLP spreads over its threads instead of a small call per clip). Returns per clip
+    ``activity [F, J]``, ``body`` and ``expressive [F, J, 4]`` (float64)."""
+    if not rotations:
+        return []
+    original = np.concatenate(rotations)
+    body = model.predict_from_features(original, np.concatenate(features))
+    expressive, recovered, activity = decouple_rotations(original, body, GAIN, EXPONENT)
+    cuts = np.cumsum([len(r) for r in rotations])[:-1]
+    return [
+        {"activity": a, "body": b, "expressive": e}
+        for a, b, e in zip(np.split(activity, cuts), np.split(recovered, cuts), np.split(expressive, cuts))
+    ]
 
 
 # ----------------------------------------------------------------------------- the run
@@ -529,12 +550,25 @@ def _process(batch, motions, skeleton, keep, model, record, rows) -> tuple[dict,
             good.append((item, motion))
     fks = forward_kinematics_many([m for _, m in good])
     arrays: dict[str, list] = {k: [] for k in keep}
+    use_model = any(k in MODEL_KINDS for k in keep)
+    needs_roles = use_model or "features" in keep or "contacts" in keep
+    roles, kept, model_inputs = None, [], []
     for (item, motion), fk in zip(good, fks):
         try:
-            values = clip_arrays(motion, keep, model, fk)
+            # One skeleton (names and parents) per dataset: its roles are found once.
+            if roles is None and needs_roles:
+                roles = JointRoles.find(motion.skeleton)
+            values = clip_arrays(motion, keep, fk, roles)
+            if use_model:
+                model_inputs.append(_model_features(_Posed(motion, fk), model, roles))
         except MocapError as error:
             record["failures"].append({"name": item.name, "source": item.source, "error": f"{item.source}: {error}"})
             continue
+        kept.append((item, motion, values))
+    if use_model:
+        for (_, _, values), parts in zip(kept, decompose_many([m.rotations for _, m, _ in kept], model_inputs, model)):
+            values.update(parts)
+    for item, motion, values in kept:
         for kind in keep:
             arrays[kind].append(values[kind])
         record["clips"].append({"name": item.name, "source": item.source, "frames": motion.n_frames,
