@@ -53,6 +53,7 @@ import sys
 import tarfile
 import time
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
@@ -306,7 +307,8 @@ class Summary:
             f"{self.out}: {state}; {self.clips_ok} clips ok, {self.clips_failed} failed"
             + (f" ({self.clips_resumed} done by an earlier run)" if self.clips_resumed else ""),
             f"  {self.frames:,} frames, {self.bytes_read / MB:.1f} MB of BVH read this run in {self.seconds:.2f} s ({self.mb_per_s:.0f} MB/s)",
-            f"  time: parsing {self.parse_s:.2f} s, kernels (FK, features, contacts, model) {self.kernels_s:.2f} s, writing {self.write_s:.2f} s",
+            f"  time: parsing {self.parse_s:.2f} s (in a background thread, overlapping the rest), kernels (FK, features, "
+            f"contacts, model) {self.kernels_s:.2f} s, writing {self.write_s:.2f} s",
         ]
         for failure in self.failures[:10]:
             out.append(f"  failed: {failure['error']}")
@@ -453,12 +455,9 @@ def preprocess(
         total_files = len(source.items) if source.items is not None else None
         bar = _Progress(total_bytes, total_files, progress)
         batch_number = len(entries)
-        for batch in _batched(todo, batch_mb * MB):
-            if max_batches is not None and summary.batches >= max_batches:
-                break
-            times = [time.perf_counter()]
-            motions = read_bvh_many([item.open() for item in batch], errors="return")
-            times.append(time.perf_counter())
+        stopped: list[bool] = []
+        for batch, motions, parse_s in _parsed(_batched(todo, batch_mb * MB), max_batches, stopped):
+            times = [time.perf_counter()] * 2
             record = {"batch": batch_number, "items": [item.source for item in batch], "clips": [], "failures": []}
             if skeleton is None:
                 first = next((m for m in motions if isinstance(m, Motion)), None)
@@ -481,7 +480,7 @@ def preprocess(
             failures += record["failures"]
             frames = sum(c["frames"] for c in record["clips"])
             nbytes = sum(item.size for item in batch)
-            summary.parse_s += times[1] - times[0]
+            summary.parse_s += parse_s
             summary.kernels_s += times[2] - times[1]
             summary.write_s += times[3] - times[2]
             summary.frames += frames
@@ -492,7 +491,7 @@ def preprocess(
             summary.failures += record["failures"]
             batch_number += 1
             bar.update(len(clips) + len(failures), sum(c["frames"] for c in clips), nbytes, summary.bytes_read)
-        else:
+        if not stopped:
             t0 = time.perf_counter()
             _finish(out, kinds or [], clips, failures, skeleton, rows, options)
             summary.write_s += time.perf_counter() - t0
@@ -533,6 +532,31 @@ def _batched(items: Iterator[_Item], batch_bytes: float) -> Iterator[list[_Item]
             batch, size = [], 0
     if batch:
         yield batch
+
+
+def _parsed(batches: Iterator[list[_Item]], limit: int | None, stopped: list) -> Iterator[tuple]:
+    """``(batch, motions or BVHErrors, seconds parsing)`` for each batch, up to ``limit``
+    batches (``stopped`` gets an entry if more were left). The next batch is parsed in a
+    background thread while the caller works on this one: the Rust parser releases the GIL, so
+    parsing overlaps the kernels and the writing."""
+
+    def parse(batch):
+        start = time.perf_counter()
+        motions = read_bvh_many([item.open() for item in batch], errors="return")
+        return batch, motions, time.perf_counter() - start
+
+    with ThreadPoolExecutor(max_workers=1) as parser:
+        pending = None
+        for count, batch in enumerate(batches):
+            if limit is not None and count >= limit:
+                stopped.append(True)
+                break
+            future = parser.submit(parse, batch)
+            if pending is not None:
+                yield pending.result()
+            pending = future
+        if pending is not None:
+            yield pending.result()
 
 
 def _process(batch, motions, skeleton, keep, model, record, rows) -> tuple[dict, int]:
