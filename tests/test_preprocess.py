@@ -207,3 +207,12 @@ def test_twenty_bandai_clips(bandai2_dir, tmp_path):
         np.testing.assert_allclose(clip["features"], em.dynamic_features(motion).astype(np.float32), rtol=2e-7, atol=1e-6)
         np.testing.assert_array_equal(clip["contacts"], em.foot_contacts(motion))
         np.testing.assert_allclose(clip["activity"], decompose(motion, model).activity.astype(np.float32), rtol=2e-7, atol=1e-6)
+
+
+def test_model_in_float32_stays_close_to_float64(archive, tmp_path):
+    run(archive / "clips", tmp_path / "f64", keep="activity,body", model="")
+    run(archive / "clips", tmp_path / "f32", keep="activity,body", model="", model_float32=True)
+    a, b = load_dataset(tmp_path / "f64"), load_dataset(tmp_path / "f32")
+    assert b.manifest["options"]["model_float32"] and a.names == b.names
+    np.testing.assert_allclose(b["activity"], a["activity"], atol=1e-4)
+    np.testing.assert_allclose(b["body"], a["body"], atol=1e-5)

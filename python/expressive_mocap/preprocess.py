@@ -257,16 +257,19 @@ def _model_features(motion: Motion, model, roles) -> np.ndarray:
     return dynamic_features(motion, roles, floor=floor, thigh_reference=model.thigh_reference, causal=True)
 
 
-def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], model) -> list[dict[str, np.ndarray]]:
+def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], model, float32: bool = False) -> list[dict[str, np.ndarray]]:
     """``decompose`` of many clips at once, from each clip's local ``rotations [F, J, 4]`` and
     model ``features [F, 19]``: one network call for all their frames (the network and the
     decoupling work frame by frame, so this is the per-clip result, with one kernel call that
     the Rust MLP spreads over its threads instead of a small call per clip). Returns per clip
-    ``activity [F, J]``, ``body`` and ``expressive [F, J, 4]`` (float64)."""
+    ``activity [F, J]``, ``body`` and ``expressive [F, J, 4]`` (float64). ``float32``: run the
+    network in float32, about 2x faster (on 12,689 Bandai frames: activity within 2e-5, body
+    rotations within 3e-6 of the float64 result)."""
     if not rotations:
         return []
     original = np.concatenate(rotations)
-    body = model.predict_from_features(original, np.concatenate(features))
+    inputs = np.concatenate(features)
+    body = model.predict_from_features(original, inputs.astype(np.float32) if float32 else inputs)
     expressive, recovered, activity = decouple_rotations(original, body, GAIN, EXPONENT)
     cuts = np.cumsum([len(r) for r in rotations])[:-1]
     return [
@@ -389,6 +392,7 @@ def preprocess(
     *,
     batch_mb: float = 64.0,
     max_batches: int | None = None,
+    model_float32: bool = False,
     overwrite: bool = False,
     progress: bool = True,
 ) -> Summary:
@@ -399,7 +403,8 @@ def preprocess(
     body-mechanics model file, or ``""`` for the shipped one (needed for activity, body,
     expressive). Clips are read in batches of about ``batch_mb`` MB of BVH text.
     ``max_batches``: stop after that many batches (the run resumes when called again with the
-    same arguments). ``overwrite``: redo a folder that already holds a finished dataset.
+    same arguments). ``model_float32``: run the network in float32 (see :func:`decompose_many`).
+    ``overwrite``: redo a folder that already holds a finished dataset.
     Returns a :class:`Summary`.
     """
     started = time.perf_counter()
@@ -410,7 +415,7 @@ def preprocess(
     if batch_mb <= 0:
         raise MocapError(f"batch_mb must be positive, got {batch_mb}")
     body_model = _load_model(model) if model is not None else None
-    options = {"keep": list(keep), "model": _model_label(model), "source": str(Path(src).resolve()) if Path(src).exists() else str(src),
+    options = {"keep": list(keep), "model": _model_label(model), "model_float32": bool(model_float32), "source": str(Path(src).resolve()) if Path(src).exists() else str(src),
                "backend": get_backend()}
 
     partial = out / PARTIAL
@@ -466,7 +471,7 @@ def preprocess(
                     record["skeleton"] = skeleton
                     kinds = _kinds(keep, len(skeleton["names"]))
                     _cut_data_files(partial, kinds, 0)
-            arrays, rows = _process(batch, motions, skeleton, keep, body_model, record, rows)
+            arrays, rows = _process(batch, motions, skeleton, keep, body_model, model_float32, record, rows)
             times.append(time.perf_counter())
             for kind in kinds or ():
                 if record["clips"]:
@@ -559,7 +564,7 @@ def _parsed(batches: Iterator[list[_Item]], limit: int | None, stopped: list) ->
             yield pending.result()
 
 
-def _process(batch, motions, skeleton, keep, model, record, rows) -> tuple[dict, int]:
+def _process(batch, motions, skeleton, keep, model, model_float32, record, rows) -> tuple[dict, int]:
     """Arrays of the batch's good clips (per kind, a list of per-clip arrays); clips and
     failures go into ``record``. Returns the arrays and the row count after the batch."""
     good = []
@@ -590,7 +595,7 @@ def _process(batch, motions, skeleton, keep, model, record, rows) -> tuple[dict,
             continue
         kept.append((item, motion, values))
     if use_model:
-        for (_, _, values), parts in zip(kept, decompose_many([m.rotations for _, m, _ in kept], model_inputs, model)):
+        for (_, _, values), parts in zip(kept, decompose_many([m.rotations for _, m, _ in kept], model_inputs, model, model_float32)):
             values.update(parts)
     for item, motion, values in kept:
         for kind in keep:
