@@ -11,7 +11,8 @@ by +-30 %, so compare within a run):
 
 - the unpacked folder, Rust kernels, 2 threads (the default);
 - a .zip of the same files (made once in a temporary folder, deflated), read in place;
-- the folder with the shipped body-mechanics model (keeps activity too);
+- the folder with the shipped body-mechanics model (keeps activity too), its network in float64
+  (the default) and in float32 (``--model-float32``);
 - the folder on 1 Rust thread (``RAYON_NUM_THREADS=1``), for the 1 -> 2 workers scaling;
 - the folder with the NumPy twins (``EXPRESSIVE_MOCAP_BACKEND=numpy``; one round, it is slow).
 
@@ -42,13 +43,14 @@ DEFAULT_DATA = Path.home() / ".cache" / "motion-data" / "dataset" / "Bandai-Namc
 CITATION = "Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), licensed CC BY-NC 4.0."
 MB = 1e6
 
-# name -> (source kind, environment, model)
+# name -> (source kind, environment, model: None, "float64" or "float32" network)
 CONFIGS = {
-    "folder, Rust, 2 threads": ("folder", {"RAYON_NUM_THREADS": "2"}, False),
-    "zip, Rust, 2 threads": ("zip", {"RAYON_NUM_THREADS": "2"}, False),
-    "folder + --model, Rust, 2 threads": ("folder", {"RAYON_NUM_THREADS": "2"}, True),
-    "folder, Rust, 1 thread": ("folder", {"RAYON_NUM_THREADS": "1"}, False),
-    "folder, NumPy twins": ("folder", {"EXPRESSIVE_MOCAP_BACKEND": "numpy"}, False),
+    "folder, Rust, 2 threads": ("folder", {"RAYON_NUM_THREADS": "2"}, None),
+    "zip, Rust, 2 threads": ("zip", {"RAYON_NUM_THREADS": "2"}, None),
+    "folder + --model, Rust, 2 threads": ("folder", {"RAYON_NUM_THREADS": "2"}, "float64"),
+    "folder + --model --model-float32, Rust, 2 threads": ("folder", {"RAYON_NUM_THREADS": "2"}, "float32"),
+    "folder, Rust, 1 thread": ("folder", {"RAYON_NUM_THREADS": "1"}, None),
+    "folder, NumPy twins": ("folder", {"EXPRESSIVE_MOCAP_BACKEND": "numpy"}, None),
 }
 
 
@@ -62,13 +64,13 @@ def peak_rss() -> int:
         return next(int(line.split()[1]) * 1024 for line in status if line.startswith("VmHWM:"))
 
 
-def child(src: str, out: str, model: bool) -> None:
+def child(src: str, out: str, model: str | None) -> None:
     """One preprocess run; prints one JSON line."""
     import expressive_mocap as em
     from expressive_mocap.preprocess import preprocess
 
     start = time.perf_counter()
-    summary = preprocess(src, out, model="" if model else None, progress=False)
+    summary = preprocess(src, out, model="" if model else None, model_float32=model == "float32", progress=False)
     wall = time.perf_counter() - start
     print(json.dumps({
         "wall": wall, "parse": summary.parse_s, "kernels": summary.kernels_s, "write": summary.write_s,
@@ -82,7 +84,7 @@ def run_child(name: str, sources: dict, work: Path) -> dict:
     out = work / "out"
     shutil.rmtree(out, ignore_errors=True)
     environment = {**os.environ, "PYTHONPATH": str(REPO / "python"), **env}
-    command = [sys.executable, __file__, "--child", str(sources[kind]), "--child-out", str(out)] + (["--child-model"] if model else [])
+    command = [sys.executable, __file__, "--child", str(sources[kind]), "--child-out", str(out)] + (["--child-model", model] if model else [])
     result = subprocess.run(command, env=environment, capture_output=True, text=True)
     if result.returncode != 0:
         raise SystemExit(f"{name}: the child failed:\n{result.stderr}")
@@ -113,7 +115,7 @@ def main() -> None:
     parser.add_argument("--out", default=str(REPO / "benches" / "RESULTS.md"), help="markdown file to append the section to")
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--child-out", help=argparse.SUPPRESS)
-    parser.add_argument("--child-model", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--child-model", choices=["float64", "float32"], help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         return child(args.child, args.child_out, args.child_model)
@@ -170,6 +172,7 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
         f"- machine: {info}",
         f"- command: `python benches/bench_preprocess.py{' --limit ' + str(args.limit) if args.limit else ''}`; "
         f"{args.rounds} rounds of the Rust configurations, order rotated each round, each run a fresh child process (times: medians)",
+        f"- load average at the end: {', '.join(f'{x:.1f}' for x in os.getloadavg())} (other jobs on the machine slow every figure alike)",
         f"- data: {clips} clips, {size / MB:.1f} MB, {frames:,} frames; the zip: {zip_size / MB:.1f} MB deflated, made in {zip_seconds:.1f} s (not timed below)",
         "- each run: parse + FK + dynamic features + foot contacts (+ the decomposition with --model) + writing the dataset "
         "(positions, features, contacts[, activity]) to a local folder; page cache warm",
@@ -191,6 +194,8 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
         ("folder < 3 s", folder, folder < 3, f"{folder:.2f} s"),
         ("zip < 5 s", med("zip, Rust, 2 threads", "wall"), med("zip, Rust, 2 threads", "wall") < 5, f"{med('zip, Rust, 2 threads', 'wall'):.2f} s"),
         ("with --model < 5 s", None, med("folder + --model, Rust, 2 threads", "wall") < 5, f"{med('folder + --model, Rust, 2 threads', 'wall'):.2f} s"),
+        ("... with --model --model-float32", None, med("folder + --model --model-float32, Rust, 2 threads", "wall") < 5,
+         f"{med('folder + --model --model-float32, Rust, 2 threads', 'wall'):.2f} s"),
     ]
     if runs["folder, NumPy twins"]:
         ratio = runs["folder, NumPy twins"][0]["wall"] / folder

@@ -216,3 +216,15 @@ def test_model_in_float32_stays_close_to_float64(archive, tmp_path):
     assert b.manifest["options"]["model_float32"] and a.names == b.names
     np.testing.assert_allclose(b["activity"], a["activity"], atol=1e-4)
     np.testing.assert_allclose(b["body"], a["body"], atol=1e-5)
+
+
+def test_a_dask_cluster_writes_the_single_machine_dataset(archive, tmp_path):
+    distributed = pytest.importorskip("distributed", reason="the [distributed] extra (Dask) is not installed")
+    run(archive / "clips.zip", tmp_path / "single", model="", batch_mb=1e-6)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            summary = run(archive / "clips.zip", tmp_path / "dask", model="", batch_mb=1e-6, cluster=client)
+    assert summary.finished and summary.clips_ok == 3 and summary.clips_failed == 1
+    single, dask = load_dataset(tmp_path / "single"), load_dataset(tmp_path / "dask")
+    assert_same_dataset(single, dask)
+    assert [f["error"] for f in single.failures] == [f["error"] for f in dask.failures]

@@ -326,7 +326,7 @@ def cmd_preprocess(args) -> int:
     from .preprocess import preprocess
 
     summary = preprocess(args.source, args.output, args.keep, args.model, batch_mb=args.batch_mb,
-                         max_batches=args.max_batches, model_float32=args.model_float32, overwrite=args.overwrite,
+                         max_batches=args.max_batches, model_float32=args.model_float32, cluster=args.dask, overwrite=args.overwrite,
                          progress=not args.quiet)
     print("\n".join(summary.lines()))
     return 0
@@ -455,6 +455,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "(default: positions,features,contacts, plus activity with --model)")
     p.add_argument("--model", nargs="?", const="", metavar="MODEL.npz", help="decompose with this body-mechanics model (no value: the shipped one)")
     p.add_argument("--model-float32", action="store_true", help="run the network in float32: ~2x faster, activity within ~2e-5 of float64")
+    p.add_argument("--dask", nargs="?", const="local", metavar="ADDRESS", help="run the batches on a Dask cluster at ADDRESS "
+                   "(no value: a local cluster of 2 worker processes on 127.0.0.1); needs pip install 'expressive-mocap[distributed]'")
     p.add_argument("--batch-mb", type=_positive(float), default=64.0, help="MB of BVH text read per batch (default 64)")
     p.add_argument("--max-batches", type=_positive(int), metavar="N", help="stop after N batches (rerun to resume)")
     p.add_argument("--overwrite", action="store_true", help="redo OUT if it already holds a finished dataset")

@@ -86,22 +86,35 @@ _HEADER_BYTES = 128  # room reserved at the start of each data file for its .npy
 @dataclass(frozen=True)
 class _Item:
     """One clip to read: ``name`` (path inside SRC without .bvh), ``source`` (where it came
-    from, for the manifest and error messages), ``size`` in bytes, and how to get its bytes
-    (``read``) or its path (``path``, handed to the reader directly)."""
+    from, for the manifest and error messages), ``size`` in bytes, and where its bytes are: a
+    file ``path``, a ``member`` of the zip at ``path``, or ``data`` (a tar member already read).
+    Plain values only, so a batch of items can be sent to the workers of a cluster."""
 
     name: str
     source: str
     size: int
     path: str | None = None
-    read: Callable[[], bytes] | None = None
+    member: str | None = None
+    data: bytes | None = None
 
     def open(self):
         """What read_bvh_many takes: a path, or a named in-memory file."""
-        if self.path is not None:
+        if self.data is None and self.member is None:
             return self.path
-        handle = io.BytesIO(self.read())
+        handle = io.BytesIO(self.data if self.data is not None else _zip(self.path).read(self.member))
         handle.name = self.source  # read_bvh_many names the file in its errors with this
         return handle
+
+
+_ZIPS: dict[str, zipfile.ZipFile] = {}
+
+
+def _zip(path: str) -> zipfile.ZipFile:
+    """One open ZipFile per archive and process (each worker of a cluster opens its own)."""
+    archive = _ZIPS.get(path)
+    if archive is None:
+        archive = _ZIPS[path] = zipfile.ZipFile(path)
+    return archive
 
 
 def _is_tar(path: Path) -> bool:
@@ -142,13 +155,10 @@ def open_source(src: str | os.PathLike) -> _Source:
     if path.is_dir():
         return _Source(f"folder {path}", _files(path.rglob("*.bvh"), path))
     if path.is_file() and zipfile.is_zipfile(path):
-        archive = zipfile.ZipFile(path)
+        archive = _zip(str(path))
         members = [m for m in archive.infolist() if not m.is_dir() and m.filename.lower().endswith(".bvh")]
-        items = [
-            _Item(_clip_name(m.filename), f"{path}:{m.filename}", m.file_size, read=lambda m=m: archive.read(m))
-            for m in members
-        ]
-        return _Source(f"zip {path}", sorted(items, key=lambda i: i.name), _close=archive.close)
+        items = [_Item(_clip_name(m.filename), f"{path}:{m.filename}", m.file_size, path=str(path), member=m.filename) for m in members]
+        return _Source(f"zip {path}", sorted(items, key=lambda i: i.name), _close=lambda: _ZIPS.pop(str(path)).close())
     if path.is_file() and _is_tar(path):
         return _Source(f"tar {path}", None, _stream=lambda: _tar_stream(path))
     if any(c in text for c in "*?["):
@@ -171,7 +181,7 @@ def _tar_stream(path: Path) -> Iterator[_Item]:
             for member in archive:
                 if member.isfile() and member.name.lower().endswith(".bvh"):
                     data = archive.extractfile(member).read()
-                    yield _Item(_clip_name(member.name), f"{path}:{member.name}", len(data), read=lambda d=data: d)
+                    yield _Item(_clip_name(member.name), f"{path}:{member.name}", len(data), data=data)
     except (tarfile.TarError, EOFError, OSError) as error:
         raise MocapError(f"{path}: cannot read the tar archive ({type(error).__name__}: {error})") from None
 
@@ -284,7 +294,8 @@ def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], mode
 @dataclass
 class Summary:
     """What a run did: clips ok / failed (this run and earlier ones it resumed), frames,
-    bytes of BVH text read, seconds in total and split into parsing, kernels and writing."""
+    bytes of BVH text read, seconds in total and split into parsing, kernels and writing
+    (parsing and kernels summed over the threads or workers that ran them: they overlap)."""
 
     out: str
     clips_ok: int = 0
@@ -310,8 +321,8 @@ class Summary:
             f"{self.out}: {state}; {self.clips_ok} clips ok, {self.clips_failed} failed"
             + (f" ({self.clips_resumed} done by an earlier run)" if self.clips_resumed else ""),
             f"  {self.frames:,} frames, {self.bytes_read / MB:.1f} MB of BVH read this run in {self.seconds:.2f} s ({self.mb_per_s:.0f} MB/s)",
-            f"  time: parsing {self.parse_s:.2f} s (in a background thread, overlapping the rest), kernels (FK, features, "
-            f"contacts, model) {self.kernels_s:.2f} s, writing {self.write_s:.2f} s",
+            f"  time: parsing {self.parse_s:.2f} s, kernels (FK, features, contacts, model) {self.kernels_s:.2f} s, writing "
+            f"{self.write_s:.2f} s (parsing runs in another thread or on a cluster's workers, overlapping the rest)",
         ]
         for failure in self.failures[:10]:
             out.append(f"  failed: {failure['error']}")
@@ -393,6 +404,7 @@ def preprocess(
     batch_mb: float = 64.0,
     max_batches: int | None = None,
     model_float32: bool = False,
+    cluster=None,
     overwrite: bool = False,
     progress: bool = True,
 ) -> Summary:
@@ -404,6 +416,10 @@ def preprocess(
     expressive). Clips are read in batches of about ``batch_mb`` MB of BVH text.
     ``max_batches``: stop after that many batches (the run resumes when called again with the
     same arguments). ``model_float32``: run the network in float32 (see :func:`decompose_many`).
+    ``cluster``: run the batches on a Dask cluster instead of this process: a
+    ``distributed.Client``, a scheduler address, or ``"local"`` (a LocalCluster of 2 worker
+    processes on 127.0.0.1); needs the ``[distributed]`` extra. The batches are written in order
+    as they come back, so the dataset is the one a single-machine run writes.
     ``overwrite``: redo a folder that already holds a finished dataset.
     Returns a :class:`Summary`.
     """
@@ -454,6 +470,7 @@ def preprocess(
         _cut_data_files(partial, kinds, rows)
 
     source = open_source(src)
+    client, close_client = _client(cluster) if cluster is not None else (None, lambda: None)
     try:
         todo = (item for item in source if item.source not in done)
         total_bytes = sum(i.size for i in source.items if i.source not in done) if source.items is not None else None
@@ -461,18 +478,18 @@ def preprocess(
         bar = _Progress(total_bytes, total_files, progress)
         batch_number = len(entries)
         stopped: list[bool] = []
-        for batch, motions, parse_s in _parsed(_batched(todo, batch_mb * MB), max_batches, stopped):
-            times = [time.perf_counter()] * 2
+        batches = _batched(todo, batch_mb * MB)
+        if cluster is None:
+            results = _local(batches, max_batches, stopped, keep, body_model, model_float32)
+        else:
+            results = _on_cluster(batches, max_batches, stopped, client, (keep, model, model_float32, get_backend()))
+        for batch, outcomes, parse_s, kernels_s in results:
             record = {"batch": batch_number, "items": [item.source for item in batch], "clips": [], "failures": []}
-            if skeleton is None:
-                first = next((m for m in motions if isinstance(m, Motion)), None)
-                if first is not None:
-                    skeleton = {"names": list(first.skeleton.names), "parents": first.skeleton.parents.tolist()}
-                    record["skeleton"] = skeleton
-                    kinds = _kinds(keep, len(skeleton["names"]))
-                    _cut_data_files(partial, kinds, 0)
-            arrays, rows = _process(batch, motions, skeleton, keep, body_model, model_float32, record, rows)
-            times.append(time.perf_counter())
+            times = [time.perf_counter()]
+            arrays, rows, skeleton = _collect(batch, outcomes, skeleton, keep, record, rows)
+            if "skeleton" in record:  # the first clip parsed: now the row shapes are known
+                kinds = _kinds(keep, len(skeleton["names"]))
+                _cut_data_files(partial, kinds, 0)
             for kind in kinds or ():
                 if record["clips"]:
                     with open(partial / f"{kind.name}.npy", "ab") as handle:
@@ -481,13 +498,14 @@ def preprocess(
             record["rows"] = rows
             _append_line(journal, record)
             times.append(time.perf_counter())
+            del outcomes, arrays
             clips += record["clips"]
             failures += record["failures"]
             frames = sum(c["frames"] for c in record["clips"])
             nbytes = sum(item.size for item in batch)
             summary.parse_s += parse_s
-            summary.kernels_s += times[2] - times[1]
-            summary.write_s += times[3] - times[2]
+            summary.kernels_s += kernels_s
+            summary.write_s += times[1] - times[0]
             summary.frames += frames
             summary.bytes_read += nbytes
             summary.batches += 1
@@ -504,6 +522,7 @@ def preprocess(
         bar.close()
     finally:
         source.close()
+        close_client()
     summary.clips_ok, summary.clips_failed = len(clips), len(failures)
     summary.failures = failures
     summary.seconds = time.perf_counter() - started
@@ -539,6 +558,72 @@ def _batched(items: Iterator[_Item], batch_bytes: float) -> Iterator[list[_Item]
         yield batch
 
 
+def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tuple]:
+    """``(batch, outcomes, seconds parsing, seconds in the kernels)`` of each batch, on this machine."""
+    for batch, motions, parse_s in _parsed(batches, limit, stopped):
+        start = time.perf_counter()
+        outcomes = _compute(batch, motions, keep, model, model_float32)
+        yield batch, outcomes, parse_s, time.perf_counter() - start
+
+
+def _client(cluster):
+    """A Dask client for ``cluster`` (a Client, an address or "local") and how to close what was opened here."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise MocapError("running on a cluster needs Dask: pip install 'expressive-mocap[distributed]'") from None
+    if isinstance(cluster, Client):
+        return cluster, lambda: None
+    if cluster == "local":
+        local = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None)
+        client = Client(local)
+
+        def close():
+            client.close()
+            local.close()
+
+        return client, close
+    client = Client(str(cluster))
+    return client, client.close
+
+
+_MODELS: dict = {}
+
+
+def _remote_batch(batch: list[_Item], keep, model, model_float32: bool, backend: str) -> tuple[list[dict], float, float]:
+    """What a cluster's worker does with one batch: parse it and compute its outcomes."""
+    from .backend import use_backend
+
+    if model is not None and model not in _MODELS:  # loaded once per worker process
+        _MODELS[model] = _load_model(model)
+    with use_backend(backend):
+        start = time.perf_counter()
+        motions = read_bvh_many([item.open() for item in batch], errors="return")
+        parsed = time.perf_counter()
+        outcomes = _compute(batch, motions, keep, _MODELS.get(model), model_float32)
+    return outcomes, parsed - start, time.perf_counter() - parsed
+
+
+def _on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
+    """As :func:`_local`, the batches run on a Dask cluster: a few per worker in flight,
+    results taken back in order (memory stays bounded, the output is written in order)."""
+    from collections import deque
+
+    window = 2 * max(1, len(client.scheduler_info().get("workers", {})))
+    running: deque = deque()
+    for count, batch in enumerate(batches):
+        if limit is not None and count >= limit:
+            stopped.append(True)
+            break
+        running.append((batch, client.submit(_remote_batch, batch, *work, pure=False)))
+        if len(running) >= window:
+            done, future = running.popleft()
+            yield (done, *future.result())
+    while running:
+        done, future = running.popleft()
+        yield (done, *future.result())
+
+
 def _parsed(batches: Iterator[list[_Item]], limit: int | None, stopped: list) -> Iterator[tuple]:
     """``(batch, motions or BVHErrors, seconds parsing)`` for each batch, up to ``limit``
     batches (``stopped`` gets an entry if more were left). The next batch is parsed in a
@@ -564,46 +649,64 @@ def _parsed(batches: Iterator[list[_Item]], limit: int | None, stopped: list) ->
             yield pending.result()
 
 
-def _process(batch, motions, skeleton, keep, model, model_float32, record, rows) -> tuple[dict, int]:
-    """Arrays of the batch's good clips (per kind, a list of per-clip arrays); clips and
-    failures go into ``record``. Returns the arrays and the row count after the batch."""
-    good = []
-    for item, motion in zip(batch, motions):
-        if not isinstance(motion, Motion):
-            record["failures"].append({"name": item.name, "source": item.source, "error": str(motion)})
-        elif list(motion.skeleton.names) != skeleton["names"] or motion.skeleton.parents.tolist() != skeleton["parents"]:
-            error = (f"{item.source}: another skeleton ({motion.skeleton.n_joints} joints) than the dataset's "
-                     f"({len(skeleton['names'])} joints, {', '.join(skeleton['names'][:3])}, ...): one dataset holds one skeleton")
-            record["failures"].append({"name": item.name, "source": item.source, "error": error})
-        else:
-            good.append((item, motion))
-    fks = forward_kinematics_many([m for _, m in good])
-    arrays: dict[str, list] = {k: [] for k in keep}
+def _compute(batch: list[_Item], motions: list, keep: tuple[str, ...], model, model_float32: bool) -> list[dict]:
+    """The work on one parsed batch (FK, features, contacts, model), one outcome per item:
+    ``{"error": text}`` for a clip that failed, else ``frames``, ``fps``, ``frame_time`` and
+    ``values`` (kind -> array as stored); ``skeleton`` (names, parents) for every parsed clip.
+    Plain values, so a cluster's worker can send them back."""
+    outcomes: list[dict] = [{"error": str(m)} if not isinstance(m, Motion) else {} for m in motions]
+    parsed = [(k, m) for k, m in enumerate(motions) if isinstance(m, Motion)]
+    fks = forward_kinematics_many([m for _, m in parsed])
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
-    roles, kept, model_inputs = None, [], []
-    for (item, motion), fk in zip(good, fks):
+    roles_of: dict[tuple, JointRoles] = {}  # found once per skeleton (names and parents)
+    kept, model_inputs = [], []
+    for (k, motion), fk in zip(parsed, fks):
+        shape = (tuple(motion.skeleton.names), tuple(motion.skeleton.parents.tolist()))
+        outcome = outcomes[k]
+        outcome["skeleton"] = shape
         try:
-            # One skeleton (names and parents) per dataset: its roles are found once.
-            if roles is None and needs_roles:
-                roles = JointRoles.find(motion.skeleton)
+            if needs_roles and shape not in roles_of:
+                roles_of[shape] = JointRoles.find(motion.skeleton)
+            roles = roles_of.get(shape)
             values = clip_arrays(motion, keep, fk, roles)
             if use_model:
                 model_inputs.append(_model_features(_Posed(motion, fk), model, roles))
         except MocapError as error:
-            record["failures"].append({"name": item.name, "source": item.source, "error": f"{item.source}: {error}"})
+            outcome["error"] = f"{batch[k].source}: {error}"
             continue
-        kept.append((item, motion, values))
+        outcome.update(frames=motion.n_frames, fps=motion.fps, frame_time=motion.frame_time, values=values)
+        kept.append((k, motion.rotations))
     if use_model:
-        for (_, _, values), parts in zip(kept, decompose_many([m.rotations for _, m, _ in kept], model_inputs, model, model_float32)):
-            values.update(parts)
-    for item, motion, values in kept:
+        parts = decompose_many([r for _, r in kept], model_inputs, model, model_float32)
+        for (k, _), clip_parts in zip(kept, parts):
+            outcomes[k]["values"].update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
+    return outcomes
+
+
+def _collect(batch: list[_Item], outcomes: list[dict], skeleton, keep, record: dict, rows: int) -> tuple[dict, int, dict | None]:
+    """The batch's outcomes in order: clips and failures into ``record`` (a clip of another
+    skeleton than the dataset's, the first parsed clip's, is a failure), their arrays per kind.
+    Returns the arrays, the row count after the batch and the dataset's skeleton."""
+    arrays: dict[str, list] = {k: [] for k in keep}
+    for item, outcome in zip(batch, outcomes):
+        shape, error = outcome.get("skeleton"), outcome.get("error")
+        if shape is not None:
+            names, parents = list(shape[0]), list(shape[1])
+            if skeleton is None:
+                skeleton = record["skeleton"] = {"names": names, "parents": parents}
+            elif names != skeleton["names"] or parents != skeleton["parents"]:
+                error = (f"{item.source}: another skeleton ({len(names)} joints) than the dataset's "
+                         f"({len(skeleton['names'])} joints, {', '.join(skeleton['names'][:3])}, ...): one dataset holds one skeleton")
+        if error is not None:
+            record["failures"].append({"name": item.name, "source": item.source, "error": error})
+            continue
         for kind in keep:
-            arrays[kind].append(values[kind])
-        record["clips"].append({"name": item.name, "source": item.source, "frames": motion.n_frames,
-                                "fps": motion.fps, "frame_time": motion.frame_time, "start": rows})
-        rows += motion.n_frames
-    return arrays, rows
+            arrays[kind].append(outcome["values"][kind])
+        record["clips"].append({"name": item.name, "source": item.source, "frames": outcome["frames"],
+                                "fps": outcome["fps"], "frame_time": outcome["frame_time"], "start": rows})
+        rows += outcome["frames"]
+    return arrays, rows, skeleton
 
 
 def _cut_data_files(partial: Path, kinds: list[_Kind], rows: int) -> None:
