@@ -321,8 +321,8 @@ class Summary:
             f"{self.out}: {state}; {self.clips_ok} clips ok, {self.clips_failed} failed"
             + (f" ({self.clips_resumed} done by an earlier run)" if self.clips_resumed else ""),
             f"  {self.frames:,} frames, {self.bytes_read / MB:.1f} MB of BVH read this run in {self.seconds:.2f} s ({self.mb_per_s:.0f} MB/s)",
-            f"  time: parsing {self.parse_s:.2f} s, kernels (FK, features, contacts, model) {self.kernels_s:.2f} s, writing "
-            f"{self.write_s:.2f} s (parsing runs in another thread or on a cluster's workers, overlapping the rest)",
+            f"  time: reading and parsing {self.parse_s:.2f} s, kernels (FK, features, contacts, model) {self.kernels_s:.2f} s, "
+            f"writing {self.write_s:.2f} s (parsing runs in another thread or on a cluster's workers, overlapping the rest)",
         ]
         for failure in self.failures[:10]:
             out.append(f"  failed: {failure['error']}")
@@ -625,28 +625,29 @@ def _on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
 
 
 def _parsed(batches: Iterator[list[_Item]], limit: int | None, stopped: list) -> Iterator[tuple]:
-    """``(batch, motions or BVHErrors, seconds parsing)`` for each batch, up to ``limit``
-    batches (``stopped`` gets an entry if more were left). The next batch is parsed in a
-    background thread while the caller works on this one: the Rust parser releases the GIL, so
-    parsing overlaps the kernels and the writing."""
+    """``(batch, motions or BVHErrors, seconds reading and parsing)`` for each batch, up to
+    ``limit`` batches (``stopped`` gets an entry if more were left). The next batch is read
+    (from a tar: decompressed) and parsed in a background thread while the caller works on this
+    one: the Rust parser and the decompressors release the GIL, so this overlaps the kernels and
+    the writing."""
 
-    def parse(batch):
+    def read_next():
         start = time.perf_counter()
+        batch = next(batches, None)
+        if batch is None:
+            return None
         motions = read_bvh_many([item.open() for item in batch], errors="return")
         return batch, motions, time.perf_counter() - start
 
-    with ThreadPoolExecutor(max_workers=1) as parser:
-        pending = None
-        for count, batch in enumerate(batches):
-            if limit is not None and count >= limit:
+    with ThreadPoolExecutor(max_workers=1) as reader:
+        pending, count = reader.submit(read_next), 0
+        while (result := pending.result()) is not None:
+            count += 1
+            if limit is not None and count > limit:
                 stopped.append(True)
-                break
-            future = parser.submit(parse, batch)
-            if pending is not None:
-                yield pending.result()
-            pending = future
-        if pending is not None:
-            yield pending.result()
+                return
+            pending = reader.submit(read_next)
+            yield result
 
 
 def _compute(batch: list[_Item], motions: list, keep: tuple[str, ...], model, model_float32: bool) -> list[dict]:
