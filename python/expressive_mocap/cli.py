@@ -421,6 +421,16 @@ def _add_training_options(p, model: bool = False) -> None:
     p.add_argument("--euler", action="store_true", help="DOFs are the Euler channels (relative to the mean) instead of rotation vectors")
 
 
+def cmd_preprocess(args) -> int:
+    from .preprocess import preprocess
+
+    summary = preprocess(args.source, args.output, args.keep, args.model, batch_mb=args.batch_mb,
+                         max_batches=args.max_batches, model_float32=args.model_float32, cluster=args.dask, overwrite=args.overwrite,
+                         progress=not args.quiet)
+    print("\n".join(summary.lines()))
+    return 0
+
+
 def _add_model_options(p, calibrate: bool = True) -> None:
     p.add_argument("--model", metavar="MODEL.npz", help="body-mechanics model (default: the shipped one, trained on Bandai-Namco neutral locomotion)")
     if calibrate:
@@ -553,6 +563,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--speed-threshold", type=_positive(float), default=0.5, metavar="X", help="contact below X x actor height per second (default: 0.5)")
     p.add_argument("--floor", type=float, metavar="Y", help="floor height in file units (default: 5th percentile of toe heights; 0 with --causal)")
     p.set_defaults(run=cmd_footsteps)
+
+    p = commands.add_parser(
+        "preprocess",
+        help="a whole archive of BVH clips (folder, glob, .zip, .tar.gz/.xz) into a dataset of arrays: positions, features, contacts, activity",
+        description="Parse every clip, run FK, dynamic features, foot contacts and optionally the decomposition, in batches "
+        "(parallel Rust parsing and FK), into OUT: one memory-mappable .npy per kind, offsets.npy and manifest.json "
+        "(load with expressive_mocap.preprocess.load_dataset(OUT)). Bad clips are listed with their errors; an interrupted "
+        "run resumes where it stopped when run again.",
+    )
+    p.add_argument("source", metavar="SRC", help="a folder (*.bvh, recursive), a quoted glob, a .zip or a .tar/.tar.gz/.tar.xz")
+    p.add_argument("-o", "--output", required=True, metavar="OUT", help="dataset folder")
+    p.add_argument("--keep", metavar="KINDS", help="comma-separated: positions,rotations,features,contacts,activity,body,expressive "
+                   "(default: positions,features,contacts, plus activity with --model)")
+    p.add_argument("--model", nargs="?", const="", metavar="MODEL.npz", help="decompose with this body-mechanics model (no value: the shipped one)")
+    p.add_argument("--model-float32", action="store_true", help="run the network in float32: ~2x faster, activity within ~2e-5 of float64")
+    p.add_argument("--dask", nargs="?", const="local", metavar="ADDRESS", help="run the batches on a Dask cluster at ADDRESS "
+                   "(no value: a local cluster of 2 worker processes on 127.0.0.1); needs pip install 'expressive-mocap[distributed]'")
+    p.add_argument("--batch-mb", type=_positive(float), default=64.0, help="MB of BVH text read per batch (default 64)")
+    p.add_argument("--max-batches", type=_positive(int), metavar="N", help="stop after N batches (rerun to resume)")
+    p.add_argument("--overwrite", action="store_true", help="redo OUT if it already holds a finished dataset")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(run=cmd_preprocess)
 
     p = commands.add_parser("demo", help="generate a procedural walk and a waving one (no download), write, read and draw them")
     p.add_argument("-o", "--output", default="expressive-mocap-demo", metavar="DIR", help="folder for the outputs (default: ./expressive-mocap-demo)")

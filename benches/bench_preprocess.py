@@ -1,0 +1,213 @@
+#!/usr/bin/env python
+"""Benchmark ``expressive-mocap preprocess`` on the whole Bandai-Namco dataset-2 archive.
+
+    python benches/bench_preprocess.py [--data DIR] [--rounds R] [--limit N] [--no-numpy]
+                                       [--out benches/RESULTS.md]
+
+Each run is one call of ``preprocess`` (parse + FK + dynamic features + foot contacts + writing
+the dataset; ``--model``: also the decomposition's activity) in a fresh child process, so its
+peak memory (VmHWM) is its own. Configurations, alternated round by round (machines here drift
+by +-30 %, so compare within a run):
+
+- the unpacked folder, Rust kernels, 2 threads (the default);
+- a .zip of the same files (made once in a temporary folder, deflated), read in place;
+- the folder with the shipped body-mechanics model (keeps activity too), its network in float64
+  (the default) and in float32 (``--model-float32``);
+- the folder on 1 Rust thread (``RAYON_NUM_THREADS=1``), for the 1 -> 2 workers scaling;
+- the folder with the NumPy twins (``EXPRESSIVE_MOCAP_BACKEND=numpy``; one round, it is slow).
+
+A section with the figures, the machine and the date is appended to ``--out``.
+
+Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
+The repository never contains it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import zipfile
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+DEFAULT_DATA = Path.home() / ".cache" / "motion-data" / "dataset" / "Bandai-Namco-Research-Motiondataset-2" / "data"
+CITATION = "Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), licensed CC BY-NC 4.0."
+MB = 1e6
+
+# name -> (source kind, environment, model: None, "float64" or "float32" network)
+CONFIGS = {
+    "folder, Rust, 2 threads": ("folder", {"RAYON_NUM_THREADS": "2"}, None),
+    "zip, Rust, 2 threads": ("zip", {"RAYON_NUM_THREADS": "2"}, None),
+    "folder + --model, Rust, 2 threads": ("folder", {"RAYON_NUM_THREADS": "2"}, "float64"),
+    "folder + --model --model-float32, Rust, 2 threads": ("folder", {"RAYON_NUM_THREADS": "2"}, "float32"),
+    "folder, Rust, 1 thread": ("folder", {"RAYON_NUM_THREADS": "1"}, None),
+    "folder, NumPy twins": ("folder", {"EXPRESSIVE_MOCAP_BACKEND": "numpy"}, None),
+}
+
+
+def log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def peak_rss() -> int:
+    """This process's RSS high-water mark in bytes (VmHWM; ru_maxrss would survive exec)."""
+    with open("/proc/self/status") as status:
+        return next(int(line.split()[1]) * 1024 for line in status if line.startswith("VmHWM:"))
+
+
+def child(src: str, out: str, model: str | None) -> None:
+    """One preprocess run; prints one JSON line."""
+    import expressive_mocap as em
+    from expressive_mocap.preprocess import preprocess
+
+    start = time.perf_counter()
+    summary = preprocess(src, out, model="" if model else None, model_float32=model == "float32", progress=False)
+    wall = time.perf_counter() - start
+    print(json.dumps({
+        "wall": wall, "parse": summary.parse_s, "kernels": summary.kernels_s, "write": summary.write_s,
+        "clips": summary.clips_ok, "failed": summary.clips_failed, "frames": summary.frames, "bytes": summary.bytes_read,
+        "peak": peak_rss(), "backend": em.get_backend(), "threads": getattr(em.backend._core, "num_threads", None),
+    }))
+
+
+def run_child(name: str, sources: dict, work: Path) -> dict:
+    kind, env, model = CONFIGS[name]
+    out = work / "out"
+    shutil.rmtree(out, ignore_errors=True)
+    environment = {**os.environ, "PYTHONPATH": str(REPO / "python"), **env}
+    command = [sys.executable, __file__, "--child", str(sources[kind]), "--child-out", str(out)] + (["--child-model", model] if model else [])
+    result = subprocess.run(command, env=environment, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise SystemExit(f"{name}: the child failed:\n{result.stderr}")
+    figures = json.loads(result.stdout.strip().splitlines()[-1])
+    figures["out_bytes"] = sum(p.stat().st_size for p in out.iterdir())
+    shutil.rmtree(out, ignore_errors=True)
+    log(f"{name}: {figures['wall']:.2f} s (parse {figures['parse']:.2f}, kernels {figures['kernels']:.2f}, write {figures['write']:.2f}), peak {figures['peak'] / MB:.0f} MB")
+    return figures
+
+
+def machine() -> str:
+    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor())
+    mem = next(int(l.split()[1]) for l in open("/proc/meminfo") if l.startswith("MemTotal")) / 2**20
+    load = os.getloadavg()
+    commit = subprocess.run(["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True).stdout.strip()
+    import numpy
+
+    return (f"{cpu}, {os.cpu_count()} cores, {mem:.1f} GiB RAM; Python {platform.python_version()}, NumPy {numpy.__version__}; "
+            f"commit {commit}; load average at the start {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", default=str(DEFAULT_DATA), help=f"folder of dataset-2 .bvh files (default {DEFAULT_DATA})")
+    parser.add_argument("--rounds", type=int, default=3, help="rounds of the Rust configurations (default 3)")
+    parser.add_argument("--limit", type=int, help="only the first N clips (copied into a temporary folder; a quick run)")
+    parser.add_argument("--no-numpy", action="store_true", help="skip the NumPy-twin run")
+    parser.add_argument("--out", default=str(REPO / "benches" / "RESULTS.md"), help="markdown file to append the section to")
+    parser.add_argument("--child", help=argparse.SUPPRESS)
+    parser.add_argument("--child-out", help=argparse.SUPPRESS)
+    parser.add_argument("--child-model", choices=["float64", "float32"], help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        return child(args.child, args.child_out, args.child_model)
+
+    started, t0 = datetime.datetime.now(), time.perf_counter()
+    info = machine()
+    data = Path(args.data)
+    paths = sorted(data.glob("*.bvh"))
+    if not paths:
+        raise SystemExit(f"no .bvh files in {data}")
+    work = Path(tempfile.mkdtemp(prefix="bench-preprocess-"))
+    try:
+        folder = data
+        if args.limit:
+            paths = paths[: args.limit]
+            folder = work / "clips"
+            folder.mkdir()
+            for p in paths:
+                os.symlink(p, folder / p.name)
+        size = sum(p.stat().st_size for p in paths)
+        for p in paths:  # warm the page cache
+            p.read_bytes()
+        log(f"{len(paths)} clips, {size / MB:.1f} MB; making the zip ...")
+        z0 = time.perf_counter()
+        with zipfile.ZipFile(work / "clips.zip", "w", zipfile.ZIP_DEFLATED) as archive:
+            for p in paths:
+                archive.write(p, p.name)
+        zip_seconds, zip_size = time.perf_counter() - z0, (work / "clips.zip").stat().st_size
+        sources = {"folder": folder, "zip": work / "clips.zip"}
+
+        runs: dict[str, list] = {name: [] for name in CONFIGS}
+        rust = [n for n in CONFIGS if "NumPy" not in n]
+        for r in range(args.rounds):
+            for name in rust[r % len(rust):] + rust[: r % len(rust)]:  # rotate the order each round
+                runs[name].append(run_child(name, sources, work))
+        if not args.no_numpy:
+            runs["folder, NumPy twins"].append(run_child("folder, NumPy twins", sources, work))
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    text = report(args, info, started, time.perf_counter() - t0, len(paths), size, zip_size, zip_seconds, runs)
+    print(text)
+    with open(args.out, "a") as out:
+        out.write("\n" + text)
+    log(f"appended to {args.out}")
+
+
+def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, runs) -> str:
+    med = lambda name, key: statistics.median(r[key] for r in runs[name])  # noqa: E731
+    frames = next(r["frames"] for rs in runs.values() for r in rs)
+    lines = [
+        "# Preprocessing the archive (issue 5): `expressive-mocap preprocess`",
+        "",
+        f"- date: {started:%Y-%m-%d %H:%M} (the run took {seconds / 60:.1f} min)",
+        f"- machine: {info}",
+        f"- command: `python benches/bench_preprocess.py{' --limit ' + str(args.limit) if args.limit else ''}`; "
+        f"{args.rounds} rounds of the Rust configurations, order rotated each round, each run a fresh child process (times: medians)",
+        f"- load average at the end: {', '.join(f'{x:.1f}' for x in os.getloadavg())} (other jobs on the machine slow every figure alike)",
+        f"- data: {clips} clips, {size / MB:.1f} MB, {frames:,} frames; the zip: {zip_size / MB:.1f} MB deflated, made in {zip_seconds:.1f} s (not timed below)",
+        "- each run: parse + FK + dynamic features + foot contacts (+ the decomposition with --model) + writing the dataset "
+        "(positions, features, contacts[, activity]) to a local folder; page cache warm",
+        f"- {CITATION}",
+        "",
+        "| configuration | runs | wall s | MB/s | frames/s | parsing s | kernels s | writing s | peak RSS | output |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, rs in runs.items():
+        if not rs:
+            continue
+        wall = med(name, "wall")
+        lines.append(
+            f"| {name} | {len(rs)} | {wall:.2f} | {size / MB / wall:.0f} | {frames / wall / 1e3:.0f} k | {med(name, 'parse'):.2f} | "
+            f"{med(name, 'kernels'):.2f} | {med(name, 'write'):.2f} | {max(r['peak'] for r in rs) / MB:.0f} MB | {rs[0]['out_bytes'] / MB:.0f} MB |"
+        )
+    folder = med("folder, Rust, 2 threads", "wall")
+    targets = [
+        ("folder < 3 s", folder, folder < 3, f"{folder:.2f} s"),
+        ("zip < 5 s", med("zip, Rust, 2 threads", "wall"), med("zip, Rust, 2 threads", "wall") < 5, f"{med('zip, Rust, 2 threads', 'wall'):.2f} s"),
+        ("with --model < 5 s", None, med("folder + --model, Rust, 2 threads", "wall") < 5, f"{med('folder + --model, Rust, 2 threads', 'wall'):.2f} s"),
+        ("... with --model --model-float32", None, med("folder + --model --model-float32, Rust, 2 threads", "wall") < 5,
+         f"{med('folder + --model --model-float32, Rust, 2 threads', 'wall'):.2f} s"),
+    ]
+    if runs["folder, NumPy twins"]:
+        ratio = runs["folder, NumPy twins"][0]["wall"] / folder
+        targets.append((">= 10x the NumPy path", None, ratio >= 10, f"{ratio:.1f}x"))
+    peak = max(r["peak"] for rs in runs.values() for r in rs)
+    targets.append(("peak memory < 2 GB", None, peak < 2e9, f"{peak / MB:.0f} MB (largest of all runs)"))
+    one = med("folder, Rust, 1 thread", "wall")
+    targets.append(("near-linear 1 -> 2 workers", None, one / folder >= 1.7, f"{one / folder:.2f}x faster on 2 threads ({one:.2f} s -> {folder:.2f} s)"))
+    lines += ["", "| target | measured | result |", "|---|---|---|"]
+    lines += [f"| {t} | {shown} | {'**pass**' if ok else '**FAIL**'} |" for t, _, ok, shown in targets]
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    main()
