@@ -48,6 +48,22 @@ def _rotation_order(channels: tuple[str, ...]) -> str:
     return "".join(written + [a for a in AXES if a not in written])
 
 
+def _prefer_written_axes(angles: np.ndarray, written: np.ndarray) -> np.ndarray:
+    """Every rotation has two Tait-Bryan decompositions, (a, b, c) and (a + 180, 180 - b,
+    c + 180). Where a joint has no channel for some axis, pick the one whose unwritten angles are
+    nearer 0, so a rotation the channels can express is written exactly (``angles [F, J, 3]``,
+    ``written [J, 3]``)."""
+    missing = ~written
+    if not missing.any():
+        return angles
+    other = angles + np.array([180.0, 0.0, 180.0])
+    other[..., 1] = 180.0 - angles[..., 1]
+    other = (other + 180.0) % 360.0 - 180.0
+    cost = np.sum(np.abs(angles) * missing, axis=-1)
+    other_cost = np.sum(np.abs(other) * missing, axis=-1)
+    return np.where((other_cost < cost)[..., None], other, angles)
+
+
 @lru_cache(maxsize=256)
 def _layout(channels: tuple[tuple[str, ...], ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """See :meth:`Skeleton.layout`. Cached: archives share a handful of channel layouts."""
@@ -150,7 +166,7 @@ class Skeleton:
     def encode(self, rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:
         """Local rotations and translations -> channel values ``[F, C]`` (the inverse of :meth:`decode`)."""
         rot_cols, orders, pos_cols = _layout(self.channels)
-        angles = kernels.quat_to_euler(rotations, orders)
+        angles = _prefer_written_axes(kernels.quat_to_euler(rotations, orders), rot_cols >= 0)
         values = np.zeros((len(rotations), self.n_channels))
         values[:, rot_cols[rot_cols >= 0]] = angles[:, rot_cols >= 0]
         values[:, pos_cols[pos_cols >= 0]] = translations[:, pos_cols >= 0]

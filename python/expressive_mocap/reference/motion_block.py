@@ -8,11 +8,24 @@ from __future__ import annotations
 
 import io
 import math
+import re
 import warnings
 
 import numpy as np
 
 from .rotations import euler_to_quat
+
+
+# The Rust parser's grammar: numbers separated by ASCII blanks (space, tab, CR, form feed), one
+# frame a line. Python's own split() also splits at other control characters, so the twin
+# tokenises with these explicitly to accept and refuse exactly the same files.
+_PLAIN = b"0123456789+-.eE \t\r\n\x0c"
+_BLANKS = re.compile(rb"[ \t\r\x0c]+")
+_NUMBER = re.compile(rb"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf(?:inity)?)", re.IGNORECASE)
+
+
+def _tokens(line: bytes) -> list[bytes]:
+    return [t for t in _BLANKS.split(line) if t]
 
 
 class ParseError(ValueError):
@@ -27,9 +40,11 @@ def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> n
     if channels == 0:
         # Frame lines of a skeleton without channels are blank.
         for index, line in enumerate(block.split(b"\n")):
-            if line.strip():
+            if _tokens(line):
                 raise ParseError("expected 0 values (the hierarchy has no CHANNELS)", index)
         return np.zeros((frames, 0))
+    if block.translate(None, _PLAIN):  # anything but plain numbers and blanks: check line by line
+        _raise_first_problem(block, frames, channels)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # loadtxt warns on an empty block; counts are checked below
@@ -77,15 +92,14 @@ def _raise_first_problem(block: bytes, frames: int, channels: int) -> None:
     lines = block.split(b"\n")
     found = 0
     for index, line in enumerate(lines):
-        tokens = line.split()
+        tokens = _tokens(line)
         if not tokens:
             continue
         for token in tokens:
             shown = token[:40].decode("utf-8", "replace") + ("…" if len(token) > 40 else "")
-            try:
-                value = float(token)
-            except ValueError:
-                raise ParseError(f'"{shown}" is not a number', index) from None
+            if not _NUMBER.fullmatch(token):
+                raise ParseError(f'"{shown}" is not a number', index)
+            value = float(token)
             if not math.isfinite(value):
                 raise ParseError(f'"{shown}" is not a finite number (NaN and infinity are not allowed)', index)
         if len(tokens) != channels:
