@@ -13,18 +13,7 @@ import argparse
 import os
 import time
 
-import numpy as np
-
-from expressive_mocap.train import train_body_mechanics
-
-
-def synthetic(n_groups: int, frames: int, n_in: int = 19, d: int = 80, latent: int = 6, seed: int = 0):
-    rng = np.random.default_rng(seed)
-    a = rng.normal(size=(n_in, latent)) * 1.5 / np.sqrt(n_in)
-    b = rng.normal(size=(latent, d)) * 0.1
-    z = np.concatenate([rng.normal(size=n_in) + np.cumsum(rng.normal(scale=0.15, size=(frames, n_in)), axis=0) for _ in range(n_groups)])
-    poses = np.tanh(z @ a) @ b + rng.normal(scale=1e-3, size=(len(z), d))
-    return z * 2.0 + 5.0, poses, np.repeat(np.arange(n_groups), frames)
+from expressive_mocap.train import synthetic_data, train_body_mechanics
 
 
 def main() -> None:
@@ -34,7 +23,7 @@ def main() -> None:
     parser.add_argument("--hidden", type=int, default=300)
     parser.add_argument("--max-iter", type=int, default=400)
     args = parser.parse_args()
-    X, P, groups = synthetic(args.clips, args.frames)
+    X, P, groups = synthetic_data(args.clips, args.frames)
     print(f"{len(X)} rows, {X.shape[1]} features, D = {P.shape[1]}, H = {args.hidden}, max_iter {args.max_iter} a stage, {os.cpu_count()} cpus")
     start = time.perf_counter()
     train_body_mechanics(X, P, groups, hidden=args.hidden, regression_hidden=args.hidden, max_iter=args.max_iter, log=lambda line: print(line, flush=True))

@@ -10,15 +10,9 @@ from expressive_mocap.mlp import Mlp
 pytest.importorskip("scipy")
 
 
-def synthetic(n_groups=30, frames=50, n_in=19, d=24, latent=6, seed=0):
-    """``P = tanh(X A) B + noise``: poses on a 6-D manifold, features smooth within each clip
-    (a random walk from a clip's own start), raw features off-centre so the z-scoring matters."""
-    rng = np.random.default_rng(seed)
-    a = rng.normal(size=(n_in, latent)) * 1.5 / np.sqrt(n_in)
-    b = rng.normal(size=(latent, d)) * 0.1
-    z = np.concatenate([rng.normal(size=n_in) + np.cumsum(rng.normal(scale=0.15, size=(frames, n_in)), axis=0) for _ in range(n_groups)])
-    poses = np.tanh(z @ a) @ b + rng.normal(scale=1e-3, size=(len(z), d))
-    return z * 2.0 + 5.0, poses, np.repeat(np.arange(n_groups), frames)
+def synthetic(n_groups=30, frames=50, d=24, seed=0):
+    """A small known problem (see :func:`train.synthetic_data`)."""
+    return train.synthetic_data(n_groups, frames, d=d, seed=seed)
 
 
 @pytest.fixture(scope="module")

@@ -357,3 +357,15 @@ def format_report(report: dict) -> str:
             lines.append(f"{stage:12s} {r['train_mse']:10.4g} {r['test_mse']:10.4g} {r['test_variance_explained']:15.4f} {r.get('seconds', 0.0):8.1f}")
     lines.append("(regression in code units; every other stage in pose units)")
     return "\n".join(lines)
+
+
+def synthetic_data(n_groups: int = 30, frames: int = 50, n_in: int = 19, d: int = 80, latent: int = 6, seed: int = 0):
+    """A known problem for tests and benchmarks: ``(X [N, n_in], P [N, d], groups [N])`` with
+    ``P = tanh(X A) B + noise``, poses on a ``latent``-dimensional manifold, features smooth
+    within each clip (a random walk from the clip's own start) and off-centre, so z-scoring matters."""
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(n_in, latent)) * 1.5 / np.sqrt(n_in)
+    b = rng.normal(size=(latent, d)) * 0.1
+    z = np.concatenate([rng.normal(size=n_in) + np.cumsum(rng.normal(scale=0.15, size=(frames, n_in)), axis=0) for _ in range(n_groups)])
+    poses = np.tanh(z @ a) @ b + rng.normal(scale=1e-3, size=(len(z), d))
+    return z * 2.0 + 5.0, poses, np.repeat(np.arange(n_groups), frames)
