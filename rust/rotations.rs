@@ -134,13 +134,6 @@ where
     }
 }
 
-/// Rotate a vector by a quaternion (kept here so FK and tests share one definition).
-#[must_use]
-#[inline]
-pub fn rotate(q: DQuat, v: DVec3) -> DVec3 {
-    q * v
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

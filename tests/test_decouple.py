@@ -17,7 +17,8 @@ class SmoothingModel:
     the slow part as 'body mechanics', the fast residue as 'expressive'); root and hips copied."""
 
     def predict(self, motion):
-        rotations = dc._same_hemisphere(motion.rotations)
+        # Each joint on the hemisphere of its first frame, so the rotations can be averaged.
+        rotations = motion.rotations * np.where(np.sum(motion.rotations * motion.rotations[:1], axis=-1, keepdims=True) < 0, -1.0, 1.0)
         kernel = np.ones(11) / 11
         padded = np.pad(rotations, ((5, 5), (0, 0), (0, 0)), mode="edge")
         smooth = np.apply_along_axis(lambda x: np.convolve(x, kernel, mode="valid"), 0, padded)

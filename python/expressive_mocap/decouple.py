@@ -15,6 +15,7 @@ import numpy as np
 
 from . import quat
 from .errors import MocapError
+from .features import mean_rotation
 from .kernels import compose_rotations, decouple_rotations
 from .motion import Motion
 
@@ -45,7 +46,7 @@ class Decomposition:
     def expressive_motion(self) -> Motion:
         """The expressive component made visible: E* laid on the clip's mean body-mechanics
         pose (a neutral stance), root and hips following the original."""
-        mean_body = quat.normalize(np.mean(_same_hemisphere(self.body), axis=0))
+        mean_body = mean_rotation(self.body)
         return self._with_rotations(quat.mul(self.expressive, mean_body[None]))
 
     def recompose(self, scale: float = 1.0) -> Motion:
@@ -55,12 +56,6 @@ class Decomposition:
     def _with_rotations(self, rotations: np.ndarray) -> Motion:
         o = self.original
         return Motion(o.skeleton, rotations, o.translations, o.frame_time)
-
-
-def _same_hemisphere(rotations: np.ndarray) -> np.ndarray:
-    """Flip quaternions ``[F, J, 4]`` onto the hemisphere of each joint's first frame, so they can be averaged."""
-    signs = np.sign(np.sum(rotations * rotations[:1], axis=-1, keepdims=True))
-    return rotations * np.where(signs == 0, 1.0, signs)
 
 
 def decompose(motion: Motion, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT) -> Decomposition:

@@ -472,7 +472,7 @@ def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cyc
     (over every sample of every clip; cycles averaged in DOF space when ``cycle="mean"``)."""
     sampled = [_sample_cycles(m, roles, _choose_cycles(m, roles, cycle), samples) for m in motions]
     everything = np.concatenate([s.rotations.reshape(-1, *s.rotations.shape[2:]) for s in sampled])
-    reference = np.stack([mean_rotation(everything[:, j]) for j in range(everything.shape[1])])
+    reference = mean_rotation(everything)
     orders = motions[0].skeleton.euler_orders
     out = []
     for s in sampled:
@@ -592,7 +592,6 @@ def train(
     per_person = [_person_dofs(p, roles, int(samples), cycle, representation) for p in people]
     X = np.stack([x for x, _ in per_person])
     refs = np.stack([r for _, r in per_person])
-    J = skeleton.n_joints
     w = subtree_weights(skeleton)
     weights = np.append(np.repeat(w, 3), w[0] if skeleton.parents[roles.hips] < 0 else w[roles.hips])
     fitted = fit(X, levels, weights, share=share, energy=energy, rank=rank, degree=int(degree))
@@ -607,7 +606,7 @@ def train(
         dof_names=tuple(dof_names(skeleton, representation)),
         weights=weights,
         levels=levels,
-        reference=np.stack([mean_rotation(refs[:, j]) for j in range(J)]),
+        reference=mean_rotation(refs),
         person_reference=refs,
         lower=X.min(axis=(0, 1, 2)),
         upper=X.max(axis=(0, 1, 2)),
@@ -767,7 +766,7 @@ def exaggerate(
     T = model.basis.shape[0]
     if reference == "own":
         hf = _without_heading(motion.rotations, roles.hips, yaw)
-        ref = np.stack([mean_rotation(hf[cycles[0].start : cycles[-1].end + 1, j]) for j in range(motion.skeleton.n_joints)])
+        ref = mean_rotation(hf[cycles[0].start : cycles[-1].end + 1])
     else:
         ref = model.reference
     X = motion_dofs(model, motion, roles, yaw, ref)  # [F, D]

@@ -184,19 +184,20 @@ def cadence(contacts, frame_time: float) -> float:
 
 
 def mean_rotation(quats: np.ndarray) -> np.ndarray:
-    """A mean of unit quaternions ``[F, 4] -> [4]``: each put on the first one's hemisphere,
-    summed and normalised (good for rotations that stay well within 90 degrees of each other)."""
+    """Means of unit quaternions over the first axis, ``[F, ..., 4] -> [..., 4]`` (e.g. one
+    rotation per joint from ``[F, J, 4]``): each put on the first one's hemisphere, summed and
+    normalised (good for rotations that stay well within 90 degrees of each other)."""
     quats = np.asarray(quats, dtype=np.float64)
     aligned = np.where(np.sum(quats * quats[:1], axis=-1, keepdims=True) < 0, -quats, quats)
     total = aligned.sum(axis=0)
-    norm = np.linalg.norm(total)
-    return total / norm if norm > 1e-12 else quats[0]
+    norm = np.linalg.norm(total, axis=-1, keepdims=True)
+    return np.where(norm > 1e-12, total / np.where(norm > 1e-12, norm, 1.0), quats[0])
 
 
 def _thigh_reference(thigh_reference, thighs: np.ndarray, causal: bool) -> np.ndarray:
     if thigh_reference is None:
         # Causal: the first frame (the only one every frame may look at); offline: the clip's mean.
-        return thighs[0].copy() if causal else np.stack([mean_rotation(thighs[:, 0]), mean_rotation(thighs[:, 1])])
+        return thighs[0].copy() if causal else mean_rotation(thighs)
     reference = np.asarray(thigh_reference, dtype=np.float64)
     if reference.shape != (2, 4) or not np.isfinite(reference).all():
         raise MocapError(f"argument `thigh_reference`: expected finite quaternions [2, 4] (left, right; x, y, z, w), got shape {list(reference.shape)}")

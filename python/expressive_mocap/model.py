@@ -101,7 +101,7 @@ class BodyModel:
         uncalibrated = replace(self, calibration=None)
         offsets = [quat.mul(m.rotations, quat.conjugate(uncalibrated.predict(m))) for m in neutral]
         stacked = np.concatenate(offsets, axis=0)
-        q = np.stack([mean_rotation(stacked[:, j]) for j in range(stacked.shape[1])])
+        q = mean_rotation(stacked)
         q[[j for j in range(len(self.joint_names)) if j not in set(self.predicted.tolist())]] = [0.0, 0.0, 0.0, 1.0]
         return replace(self, calibration=q)
 
@@ -224,11 +224,6 @@ def model_features(motion: Motion, thigh_reference: np.ndarray, floor: float | N
     return dynamic_features(motion, roles, floor=floor, thigh_reference=thigh_reference, causal=True)
 
 
-def _mean_rotations(rotations: np.ndarray) -> np.ndarray:
-    """Per-joint mean rotation ``[J, 4]`` of ``rotations [N, J, 4]``."""
-    return np.stack([mean_rotation(rotations[:, j]) for j in range(rotations.shape[1])])
-
-
 def train_model(
     neutral: Sequence[Motion],
     unlabelled: Sequence[Motion] = (),
@@ -255,8 +250,8 @@ def train_model(
     roles = JointRoles.find(skeleton)
     predicted = np.array([j for j in range(skeleton.n_joints) if skeleton.parents[j] >= 0 and j != roles.hips])
     rotations = np.concatenate([m.rotations for m in neutral])
-    hemispheres = _mean_rotations(rotations[:, predicted])
-    thigh_reference = _mean_rotations(rotations[:, list(roles.upper_legs)])
+    hemispheres = mean_rotation(rotations[:, predicted])
+    thigh_reference = mean_rotation(rotations[:, list(roles.upper_legs)])
 
     X = np.concatenate([model_features(m, thigh_reference) for m in neutral])
     P = np.concatenate([pose_vectors(m.rotations, predicted, hemispheres) for m in neutral])
