@@ -6,6 +6,7 @@ pub mod decouple;
 pub mod error;
 pub mod features;
 pub mod fk;
+pub mod gait;
 pub mod footsteps;
 pub mod format;
 pub mod mlp;

@@ -9,7 +9,7 @@ import expressive_mocap as em
 from expressive_mocap import quat, reference
 from expressive_mocap.backend import kernels
 from expressive_mocap.demo import bandai_like_skeleton, procedural_walk
-from expressive_mocap.features import FEATURE_NAMES, dynamic_features, mean_rotation
+from expressive_mocap.features import FEATURE_NAMES, default_floor, dynamic_features, mean_rotation
 from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
 
 from conftest import stick_walker
@@ -274,3 +274,68 @@ def test_kernel_errors_name_the_argument(backend, name):
     }[name]
     with pytest.raises(ValueError, match=f"`{name}`"):
         kernels().dynamic_features(*arguments.values())
+
+
+# -- many clips at once (what preprocess uses) ----------------------------------------------
+
+
+def _gait_one_by_one(motions, floor=0.0, thigh_reference=None):
+    out = []
+    for m in motions:
+        f = dynamic_features(m, floor=default_floor(m.positions(), JointRoles.find(m.skeleton)) if floor is None else floor,
+                             thigh_reference=thigh_reference)
+        out.append((f, em.foot_contacts(m)))
+    return out
+
+
+def _gait_clips():
+    """Walks of different lengths, speeds and frame rates, one a single frame, one of another actor size."""
+    small = procedural_walk(seconds=2.0, speed=0.8)
+    small = em.Motion(small.skeleton.scaled(0.8), small.rotations, small.translations * 0.8, small.frame_time)
+    return [procedural_walk(seconds=3.0, speed=1.2), procedural_walk(seconds=1.5, fps=60.0, speed=1.6),
+            procedural_walk(seconds=2.0)[:1], small]
+
+
+@pytest.mark.parametrize("floor, reference", [(0.0, None), (None, "given")])
+def test_gait_many_equals_the_one_clip_functions(backend, floor, reference):
+    clips = _gait_clips()
+    thigh_reference = clips[0].rotations[5][list(JointRoles.find(clips[0].skeleton).upper_legs)] if reference else None
+    many = em.gait_many(clips, floor=floor, thigh_reference=thigh_reference)
+    for (f, c), (f1, c1) in zip(many, _gait_one_by_one(clips, floor, thigh_reference)):
+        np.testing.assert_allclose(f, f1, rtol=0, atol=ATOL)
+        np.testing.assert_array_equal(c, c1)
+    assert [len(f) for f, _ in many] == [m.n_frames for m in clips]
+
+
+def test_gait_many_rust_matches_numpy_twin():
+    if not em.rust_available():
+        pytest.skip("the Rust extension is not built")
+    results = []
+    for name in ("rust", "numpy"):
+        with em.use_backend(name):
+            results.append(em.gait_many(_gait_clips(), floor=None))
+    for (f, c), (f1, c1) in zip(*results):
+        np.testing.assert_allclose(f, f1, rtol=0, atol=ATOL)
+        np.testing.assert_array_equal(c, c1)
+
+
+def test_gait_many_asks_only_for_what_is_wanted_and_names_bad_input(backend):
+    walk = procedural_walk(seconds=1.0)
+    (features, contacts), = em.gait_many([walk], features=False)
+    assert features is None and contacts.shape == (walk.n_frames, 2)
+    (features, contacts), = em.gait_many([walk], contacts=False)
+    assert contacts is None and features.shape == (walk.n_frames, 19)
+    assert em.gait_many([]) == []
+    with pytest.raises(em.MocapError, match="`motions`"):
+        em.gait_many([walk, straight_walker(frames=3)])
+    with pytest.raises(em.MocapError, match="`fk`"):
+        em.gait_many([walk], fk=[])
+    with pytest.raises(em.MocapError, match="`thigh_reference`"):
+        em.gait_many([walk], thigh_reference=np.zeros(4))
+    with pytest.raises(ValueError, match="`roles`"):
+        kernels().clip_gait_many([], [0, 1], 0.05, 0.5, 0.1, 5.0, True, True)
+    positions = walk.positions()
+    with pytest.raises(ValueError, match="clip 0"):
+        kernels().clip_gait_many([(positions, walk.rotations[:, :3], walk.frame_time, 140.0, 90.0)], [0] * 7, 0.05, 0.5, 0.1, 5.0, True, True)
+    with pytest.raises(ValueError, match="clip 0.*`toes`"):
+        kernels().clip_gait_many([(positions, walk.rotations, walk.frame_time, 140.0, 90.0)], [0, 1, 2, 3, 4, 5, 99], 0.05, 0.5, 0.1, 5.0, True, True)

@@ -7,7 +7,7 @@ lengths are in the file's units. See the README for the conventions table.
 from .backend import get_backend, rust_available, set_backend, use_backend
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .errors import BVHError, MocapError
-from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts
+from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts, gait_many
 from .kernels import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
 from .mlp import Mlp
 from .motion import Motion, Skeleton
@@ -30,6 +30,7 @@ __all__ = [
     "dynamic_features",
     "euler_to_quat",
     "foot_contacts",
+    "gait_many",
     "forward_kinematics",
     "forward_kinematics_many",
     "get_backend",

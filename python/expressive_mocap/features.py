@@ -241,6 +241,54 @@ def dynamic_features(
     )
 
 
+def gait_many(
+    motions,
+    roles: JointRoles | None = None,
+    *,
+    features: bool = True,
+    contacts: bool = True,
+    floor: float | None = 0.0,
+    thigh_reference=None,
+    fk=None,
+) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
+    """:func:`dynamic_features` and :func:`foot_contacts` of many motions in one kernel call
+    (clips in parallel with the Rust kernels: the way to run them over an archive).
+
+    Per motion ``(features [F, 19] or None, contacts bool [F, 2] or None)``: the features are
+    causal, on ``floor`` (None: the 5th percentile of toe heights) with ``thigh_reference``
+    (default: the first frame's thighs), i.e. ``dynamic_features(m, roles, floor,
+    thigh_reference)``; the contacts are ``foot_contacts(m, roles)`` (offline, default floor).
+    All motions share one hierarchy (joint names), whose ``roles`` default to
+    ``JointRoles.find``; thresholds and actor height are the defaults. ``fk``: each motion's
+    ``(world rotations, world positions)`` if already computed."""
+    motions = [_motion(m) for m in motions]
+    if not motions:
+        return []
+    names = motions[0].skeleton.names
+    other = next((m for m in motions if m.skeleton.names != names), None)
+    if other is not None:
+        raise MocapError(f"argument `motions`: every motion needs the same joints; {len(other.skeleton.names)} joints "
+                         f"({', '.join(other.skeleton.names[:3])}, ...) differ from the first motion's")
+    roles = _setup(motions[0], roles, 1.0)[1]
+    if floor is not None and not np.isfinite(float(floor)):
+        raise MocapError(f"argument `floor`: must be a finite height or None, got {floor}")
+    if thigh_reference is not None:
+        thigh_reference = _thigh_reference(thigh_reference, None, True)
+    if fk is None:
+        fk = [m.fk() for m in motions]
+    elif len(fk) != len(motions):
+        raise MocapError(f"argument `fk`: {len(fk)} results for {len(motions)} motions")
+    clips = []
+    for motion, (_, positions) in zip(motions, fk):
+        skeleton = motion.skeleton
+        clips.append((positions, motion.rotations, motion.frame_time, actor_height(skeleton, roles), hips_rest_height(skeleton, roles)))
+    joints = [roles.hips, *roles.upper_legs, *roles.feet, *roles.toes]
+    return kernels().clip_gait_many(
+        clips, joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE, features, contacts,
+        None if floor is None else float(floor), thigh_reference,
+    )
+
+
 __all__ = [
     "FEATURE_NAMES",
     "ContactInterval",
@@ -251,5 +299,6 @@ __all__ = [
     "dynamic_features",
     "foot_contacts",
     "footstrikes",
+    "gait_many",
     "mean_rotation",
 ]

@@ -204,6 +204,7 @@ class Skeleton:
         # The structure is unchanged and was checked when this skeleton was made.
         copy = object.__new__(Skeleton)
         copy.__dict__.update(self.__dict__)
+        copy.__dict__.pop("_rest", None)  # the cached rest pose belongs to the old offsets
         object.__setattr__(copy, "offsets", _frozen(offsets))
         object.__setattr__(copy, "end_sites", tuple((j, tuple(off)) for (j, _), off in zip(self.end_sites, site_offsets.tolist())))
         return copy
@@ -215,13 +216,18 @@ class Skeleton:
 
     def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
         """World positions of the joints ``[J, 3]`` and End Sites ``[E, 3]`` in the rest pose
-        (identity rotations, offsets only)."""
+        (identity rotations, offsets only); read-only arrays."""
+        return self._rest
+
+    @cached_property
+    def _rest(self) -> tuple[np.ndarray, np.ndarray]:
+        # Cached: the skeleton is immutable, and archives ask for it once per clip, several times.
         identity = np.zeros((1, self.n_joints, 4))
         identity[..., 3] = 1.0
         _, positions = kernels.forward_kinematics(identity, self.offsets[None], self.parents)
         joints = positions[0]
         sites = np.array([joints[j] + off for j, off in self.end_sites]).reshape(-1, 3)
-        return joints, sites
+        return _frozen(joints), _frozen(sites)
 
     def rest_height(self) -> float:
         """Vertical (Y) extent of the rest pose, End Sites included."""

@@ -64,7 +64,7 @@ from .backend import get_backend
 from .bvh import read_bvh_many
 from .errors import MocapError
 from .decouple import EXPONENT, GAIN
-from .features import FEATURE_NAMES, default_floor, dynamic_features, foot_contacts
+from .features import FEATURE_NAMES, gait_many
 from .io import atomic_write
 from .kernels import decouple_rotations, forward_kinematics_many
 from .motion import Motion
@@ -229,42 +229,36 @@ def _kinds(keep: tuple[str, ...], joints: int) -> list[_Kind]:
 # ----------------------------------------------------------------------------- per-clip work
 
 
-class _Posed(Motion):
-    """A motion whose FK is already known (computed for a whole batch by
-    forward_kinematics_many): the feature and model functions ask it for positions several
-    times, and get them without recomputing."""
-
-    def __init__(self, motion: Motion, fk: tuple[np.ndarray, np.ndarray]):
-        super().__init__(motion.skeleton, motion.rotations, motion.translations, motion.frame_time)
-        self._fk = fk
-
-    def fk(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._fk
-
-
-def clip_arrays(motion: Motion, keep: tuple[str, ...], fk=None, roles=None) -> dict[str, np.ndarray]:
-    """The arrays of one clip for the kinds in ``keep`` other than the model's (dtypes as
-    stored), computed with the package's own functions. ``fk``: the clip's (world rotations,
-    positions) if already computed; ``roles``: its JointRoles if already found."""
-    posed = _Posed(motion, fk if fk is not None else motion.fk())
-    out: dict[str, np.ndarray] = {}
-    if "positions" in keep:
-        out["positions"] = posed.positions().astype(np.float32)
-    if "rotations" in keep:
-        out["rotations"] = motion.rotations.astype(np.float32)
-    if "features" in keep:
-        out["features"] = dynamic_features(posed, roles).astype(np.float32)
-    if "contacts" in keep:
-        out["contacts"] = foot_contacts(posed, roles).astype(bool)
+def clip_arrays(motions: list[Motion], keep: tuple[str, ...], fk=None, roles=None) -> list[dict[str, np.ndarray]]:
+    """The arrays of clips of one hierarchy for the kinds in ``keep`` other than the model's
+    (dtypes as stored): positions, rotations, ``dynamic_features(m)`` and ``foot_contacts(m)``,
+    the last two in one kernel call for all the clips (:func:`~expressive_mocap.features.gait_many`).
+    ``fk``: the clips' (world rotations, positions) if already computed; ``roles``: their
+    JointRoles if already found."""
+    fk = fk if fk is not None else [m.fk() for m in motions]
+    out: list[dict[str, np.ndarray]] = [{} for _ in motions]
+    for values, motion, (_, positions) in zip(out, motions, fk):
+        if "positions" in keep:
+            values["positions"] = positions.astype(np.float32)
+        if "rotations" in keep:
+            values["rotations"] = motion.rotations.astype(np.float32)
+    if "features" in keep or "contacts" in keep:
+        gait = gait_many(motions, roles, features="features" in keep, contacts="contacts" in keep, fk=fk)
+        for values, (features, contacts) in zip(out, gait):
+            if features is not None:
+                values["features"] = features.astype(np.float32)
+            if contacts is not None:
+                values["contacts"] = contacts
     return out
 
 
-def _model_features(motion: Motion, model, roles) -> np.ndarray:
-    """``model.features(motion)`` (see :func:`expressive_mocap.model.model_features`), with the
-    joint roles found once per dataset instead of once per call."""
-    model.check_skeleton(motion)
-    floor = default_floor(motion.positions(), roles)
-    return dynamic_features(motion, roles, floor=floor, thigh_reference=model.thigh_reference, causal=True)
+def _model_features(motions: list[Motion], fk, model, roles) -> list[np.ndarray]:
+    """``model.features(m)`` of each clip (see :func:`expressive_mocap.model.model_features`:
+    causal, floor = the clip's toe-height percentile, the model's thigh reference), in one
+    kernel call."""
+    model.check_skeleton(motions[0])  # the clips share one hierarchy
+    gait = gait_many(motions, roles, contacts=False, floor=None, thigh_reference=model.thigh_reference, fk=fk)
+    return [features for features, _ in gait]
 
 
 def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], model, float32: bool = False) -> list[dict[str, np.ndarray]]:
@@ -654,30 +648,33 @@ def _compute(batch: list[_Item], motions: list, keep: tuple[str, ...], model, mo
     """The work on one parsed batch (FK, features, contacts, model), one outcome per item:
     ``{"error": text}`` for a clip that failed, else ``frames``, ``fps``, ``frame_time`` and
     ``values`` (kind -> array as stored); ``skeleton`` (names, parents) for every parsed clip.
-    Plain values, so a cluster's worker can send them back."""
+    Plain values, so a cluster's worker can send them back. Clips are grouped by hierarchy,
+    each group's kernels run in one call (in parallel across its clips)."""
     outcomes: list[dict] = [{"error": str(m)} if not isinstance(m, Motion) else {} for m in motions]
     parsed = [(k, m) for k, m in enumerate(motions) if isinstance(m, Motion)]
     fks = forward_kinematics_many([m for _, m in parsed])
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
-    roles_of: dict[tuple, JointRoles] = {}  # found once per skeleton (names and parents)
-    kept, model_inputs = [], []
+    groups: dict[tuple, list] = {}  # hierarchy (names, parents) -> [(index, motion, fk)]
     for (k, motion), fk in zip(parsed, fks):
         shape = (tuple(motion.skeleton.names), tuple(motion.skeleton.parents.tolist()))
-        outcome = outcomes[k]
-        outcome["skeleton"] = shape
+        outcomes[k]["skeleton"] = shape
+        groups.setdefault(shape, []).append((k, motion, fk))
+    kept, model_inputs = [], []
+    for group in groups.values():
+        indices, clips, fk = (list(column) for column in zip(*group))
         try:
-            if needs_roles and shape not in roles_of:
-                roles_of[shape] = JointRoles.find(motion.skeleton)
-            roles = roles_of.get(shape)
-            values = clip_arrays(motion, keep, fk, roles)
-            if use_model:
-                model_inputs.append(_model_features(_Posed(motion, fk), model, roles))
-        except MocapError as error:
-            outcome["error"] = f"{batch[k].source}: {error}"
+            roles = JointRoles.find(clips[0].skeleton) if needs_roles else None
+            values = clip_arrays(clips, keep, fk, roles)
+            inputs = _model_features(clips, fk, model, roles) if use_model else [None] * len(clips)
+        except MocapError as error:  # the hierarchy lacks a role, or does not fit the model
+            for k in indices:
+                outcomes[k]["error"] = f"{batch[k].source}: {error}"
             continue
-        outcome.update(frames=motion.n_frames, fps=motion.fps, frame_time=motion.frame_time, values=values)
-        kept.append((k, motion.rotations))
+        for k, motion, clip_values, clip_inputs in zip(indices, clips, values, inputs):
+            outcomes[k].update(frames=motion.n_frames, fps=motion.fps, frame_time=motion.frame_time, values=clip_values)
+            kept.append((k, motion.rotations))
+            model_inputs.append(clip_inputs)
     if use_model:
         parts = decompose_many([r for _, r in kept], model_inputs, model, model_float32)
         for (k, _), clip_parts in zip(kept, parts):

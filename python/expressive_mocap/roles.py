@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -130,19 +131,26 @@ def hips_rest_height(skeleton: Skeleton, roles: JointRoles) -> float:
     hang the rest pose from the origin), the leg's length is used: the bone lengths from the
     hips down to the ankle, which a standing actor's hips are about that high.
     """
-    joints, _ = skeleton.rest_positions()
-    leg = sum(float(np.linalg.norm(skeleton.offsets[j])) for j in _chain(skeleton, roles.hips, roles.feet[0])[1:])
-    above_origin = float(joints[roles.hips, 1])
-    return above_origin if above_origin >= 0.5 * leg else leg
+    return _rest_heights(skeleton, roles)[0]
 
 
 def actor_height(skeleton: Skeleton, roles: JointRoles | None = None) -> float:
     """The actor's height in file units: :func:`hips_rest_height` plus the bone lengths of the
     spine-to-head chain (METHODS.md part 2: the Bandai rest pose is not upright, so its vertical
     extent is no measure; this gives about 141 cm there)."""
-    roles = roles or JointRoles.find(skeleton)
-    spine = sum(float(np.linalg.norm(skeleton.offsets[j])) for j in roles.spine[1:])
-    return hips_rest_height(skeleton, roles) + spine
+    return _rest_heights(skeleton, roles or JointRoles.find(skeleton))[1]
+
+
+@lru_cache(maxsize=64)
+def _rest_heights(skeleton: Skeleton, roles: JointRoles) -> tuple[float, float]:
+    """(hips rest height, actor height). Cached: skeletons are immutable (hashed by identity)
+    and an archive asks for both once per clip."""
+    joints, _ = skeleton.rest_positions()
+    bone = np.linalg.norm(skeleton.offsets, axis=1)
+    leg = float(sum(bone[j] for j in _chain(skeleton, roles.hips, roles.feet[0])[1:]))
+    above_origin = float(joints[roles.hips, 1])
+    hips = above_origin if above_origin >= 0.5 * leg else leg
+    return hips, hips + float(sum(bone[j] for j in roles.spine[1:]))
 
 
 __all__ = ["ROLE_NAMES", "JointRoles", "actor_height", "hips_rest_height"]

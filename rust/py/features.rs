@@ -84,9 +84,78 @@ fn dynamic_features<'py>(
     Ok(array2(features, (frames, N_FEATURES))?.into_pyarray(py))
 }
 
+/// Joint order of `clip_gait_many`'s `roles`.
+const GAIT_ROLES: &str = "[hips, left upper leg, right upper leg, left foot, right foot, left toe, right toe]";
+
+/// Gait arrays of many clips, clips in parallel: each clip `(positions [F, J, 3] world,
+/// rotations [F, J, 4] local, frame_time, height, hips_rest_height)`; `roles`: 7 joint indices (see `GAIT_ROLES`).
+/// Returns per clip `(features [F, 19] or None, contacts bool [F, 2] or None)`: causal features
+/// on `feature_floor` (None: the toe-height percentile) with `thigh_reference` [2, 4] (None: the
+/// first frame), offline contacts on the toe-height percentile floor.
+#[pyfunction]
+#[pyo3(signature = (clips, roles, height_threshold, speed_threshold, min_duration, floor_percentile, features, contacts, feature_floor=None, thigh_reference=None))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn clip_gait_many<'py>(
+    py: Python<'py>,
+    clips: Vec<(PyReadonlyArray3<'py, f64>, PyReadonlyArray3<'py, f64>, f64, f64, f64)>,
+    roles: Vec<usize>,
+    height_threshold: f64,
+    speed_threshold: f64,
+    min_duration: f64,
+    floor_percentile: f64,
+    features: bool,
+    contacts: bool,
+    feature_floor: Option<f64>,
+    thigh_reference: Option<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<Vec<(Option<Bound<'py, PyArray2<f64>>>, Option<Bound<'py, PyArray2<bool>>>)>> {
+    use crate::gait::{clip_gait, BodyScale, FeatureRequest, GaitJoints, GaitParams};
+    use rayon::prelude::*;
+    let [hips, left_leg, right_leg, left_foot, right_foot, left_toe, right_toe] = roles[..] else {
+        return Err(PyValueError::new_err(format!("argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {}", roles.len())));
+    };
+    let joints = GaitJoints { hips, upper_legs: [left_leg, right_leg], feet: [left_foot, right_foot], toes: [left_toe, right_toe] };
+    let reference = match &thigh_reference {
+        None => None,
+        Some(array) if array.shape() == [2, 4] => {
+            let mut values = [0.0; 8];
+            values.copy_from_slice(array.as_slice()?);
+            Some(values)
+        }
+        Some(array) => return Err(shape_error("thigh_reference", "[2, 4]", array.shape())),
+    };
+    let request = features.then_some(FeatureRequest { floor: feature_floor, thigh_reference: reference });
+    let params = GaitParams { height_threshold, speed_threshold, min_duration, floor_percentile };
+    let mut jobs = Vec::with_capacity(clips.len());
+    for (index, (positions, rotations, frame_time, height, hips_rest_height)) in clips.iter().enumerate() {
+        let (ps, rs) = (positions.shape(), rotations.shape());
+        if ps[2] != 3 || rs != [ps[0], ps[1], 4] {
+            return Err(PyValueError::new_err(format!(
+                "argument `clips`: clip {index} has positions {ps:?} and rotations {rs:?}, expected [F, J, 3] and [F, J, 4]"
+            )));
+        }
+        let scale = BodyScale { height: *height, hips_rest_height: *hips_rest_height };
+        jobs.push((positions.as_slice()?, rotations.as_slice()?, ps[1], *frame_time, scale));
+    }
+    let results: Vec<_> = py.detach(|| {
+        jobs.par_iter().map(|&(p, r, j, ft, scale)| clip_gait(p, r, j, ft, scale, &joints, &params, request.as_ref(), contacts)).collect()
+    });
+    results
+        .into_iter()
+        .enumerate()
+        .map(|(index, result)| {
+            let gait = result.map_err(|e| PyValueError::new_err(format!("clip {index}: {e}")))?;
+            let frames = jobs[index].0.len() / (jobs[index].2 * 3);
+            let features = gait.features.map(|f| array2(f, (frames, N_FEATURES)).map(|a| a.into_pyarray(py))).transpose()?;
+            let contacts = gait.contacts.map(|c| array2(c, (frames, 2)).map(|a| a.into_pyarray(py))).transpose()?;
+            Ok((features, contacts))
+        })
+        .collect()
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(foot_contacts, m)?)?;
     m.add_function(wrap_pyfunction!(air_time, m)?)?;
     m.add_function(wrap_pyfunction!(dynamic_features, m)?)?;
+    m.add_function(wrap_pyfunction!(clip_gait_many, m)?)?;
     Ok(())
 }

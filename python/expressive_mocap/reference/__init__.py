@@ -9,6 +9,7 @@ written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in de
 
 from .decouple import compose_rotations, decouple_rotations
 from .features import dynamic_features
+from .gait import clip_gait_many
 from .fk import forward_kinematics, forward_kinematics_many
 from .mlp import mlp_forward
 from .motion_block import ParseError, decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
@@ -20,6 +21,7 @@ num_threads = 1
 __all__ = [
     "ParseError",
     "air_time",
+    "clip_gait_many",
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
