@@ -488,7 +488,7 @@ def preprocess(
                 if record["clips"]:
                     with open(partial / f"{kind.name}.npy", "ab") as handle:
                         for values in arrays[kind.name]:
-                            handle.write(np.ascontiguousarray(values, dtype=kind.dtype).tobytes())
+                            handle.write(np.ascontiguousarray(values, dtype=kind.dtype).data)  # no copy
             record["rows"] = rows
             _append_line(journal, record)
             times.append(time.perf_counter())
