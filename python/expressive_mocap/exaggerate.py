@@ -757,7 +757,7 @@ def exaggerate(
     current: float | None = None,
     cycles: Sequence[Cycle] | None = None,
     reference: str = "model",
-    margin: float = 0.2,
+    margin: float = 0.1,
     fade: float = 0.15,
     lock_feet: bool = True,
     blend: float = 0.1,
@@ -787,6 +787,8 @@ def exaggerate(
         raise MocapError(f"reference must be 'model' or 'own', got {reference!r}")
     if motion.n_frames < 3:
         raise MocapError(f"a motion of {motion.n_frames} frames is too short to exaggerate")
+    if not (np.isfinite(margin) and margin >= 0) or not (np.isfinite(fade) and fade >= 0) or not (np.isfinite(blend) and blend >= 0):
+        raise MocapError(f"margin, fade and blend must be finite numbers >= 0, got margin={margin}, fade={fade}, blend={blend}")
     roles = roles or JointRoles.find(motion.skeleton)
     contacts = foot_contacts(motion, roles)
     if cycles is None:
@@ -962,11 +964,11 @@ def _ratios(model: ExaggerationModel, light: np.ndarray, heavy: np.ndarray, refe
     return np.array(out)
 
 
-def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int = 200, seed: int = 0) -> list[SwapResult]:
+def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int = 200, seed: int = 0, union_key: np.ndarray | None = None) -> list[SwapResult]:
     """Swap the key DOF trajectories of each person's lightest performance for the heaviest's
     and compare with the real heaviest (METHODS part 1, step 10). ``person``: one index, or every
-    person (their own key sets) followed by ``"union"`` (every person with the union key set,
-    ratios pooled)."""
+    person (their own key sets) followed by ``"union"`` (every person with the union key set
+    ``union_key``, by default :attr:`ExaggerationModel.key`; the people's ratios averaged)."""
     P, K, T, D = model.trajectories.shape
     rng = np.random.default_rng(seed)
     people = range(P) if person is None else [int(person)]
@@ -988,8 +990,44 @@ def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int
             raise MocapError(f"person {p}: the model has {P} people")
         results.append(run(str(p), [p], model.person_key[p]))
     if person is None and P > 1:
-        results.append(run("union", list(range(P)), model.key))
+        key = model.key if union_key is None else np.asarray(union_key, dtype=bool)
+        if key.shape != (D,):
+            raise MocapError(f"argument `union_key`: expected {D} booleans, got shape {list(key.shape)}")
+        results.append(run("union", list(range(P)), key))
     return results
+
+
+@dataclass
+class RankAgreement:
+    """Spearman rank correlation of the people's expressiveness ``E`` over the ``dofs`` DOFs that
+    have ``E > 0`` for at least one person (DOFs that are 0 for everyone, such as zero-length joints,
+    would only add ties): mean and lowest over every pair of people, and the same over all DOFs."""
+
+    dofs: int
+    mean: float
+    lowest: float
+    mean_all: float
+
+    def text(self) -> str:
+        return (
+            f"rank agreement between people (Spearman, every pair): mean {self.mean:.3f} (lowest {self.lowest:.3f}) over the "
+            f"{self.dofs} DOFs with E > 0 for someone; {self.mean_all:.3f} over all DOFs"
+        )
+
+
+def rank_agreement(model: ExaggerationModel) -> RankAgreement:
+    """How much the people agree on the ranking (needs at least two people)."""
+    from scipy.stats import spearmanr
+
+    E = model.expressiveness
+    P = len(E)
+    if P < 2:
+        raise MocapError("rank agreement needs at least two people")
+    live = (E > 0).any(axis=0)
+    pairs = [(a, b) for a in range(P) for b in range(a + 1, P)]
+    ranked = [float(spearmanr(E[a, live], E[b, live])[0]) for a, b in pairs]
+    everything = [float(spearmanr(E[a], E[b])[0]) for a, b in pairs]
+    return RankAgreement(int(live.sum()), float(np.mean(ranked)), float(np.min(ranked)), float(np.mean(everything)))
 
 
 @dataclass
@@ -1030,8 +1068,8 @@ def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
     return results
 
 
-def validation_table(swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = ()) -> str:
-    """Both tests as text."""
+def validation_table(swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = (), agreement: RankAgreement | None = None) -> str:
+    """Both tests (and the people's rank agreement) as text."""
     lines = [f"{'person':<8} {'swapped':>11} {'ratio':>7} {'random':>7} {'best':>7} | {'pos.':>6} {'random':>7} {'best':>7}"]
     for r in swaps:
         lines.append(
@@ -1045,6 +1083,9 @@ def validation_table(swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = 
         for w in warps:
             lines.append(f"{w.person:<8} {w.key:4d} {w.ratio:7.3f} {w.ratio_positions:7.3f}")
         lines.append(f"{'mean':<8} {'':>4} {np.mean([w.ratio for w in warps]):7.3f} {np.mean([w.ratio_positions for w in warps]):7.3f}")
+    if agreement is not None:
+        lines.append("")
+        lines.append(agreement.text())
     return "\n".join(lines)
 
 
@@ -1052,6 +1093,7 @@ __all__ = [
     "Cycle",
     "ExaggerationModel",
     "ExaggerationReport",
+    "RankAgreement",
     "SwapResult",
     "WarpResult",
     "dof_positions",
@@ -1063,6 +1105,7 @@ __all__ = [
     "fit",
     "lock_stance_feet",
     "normalise_cycle",
+    "rank_agreement",
     "stance_foot_speed",
     "subtree_weights",
     "to_cycle_timing",
