@@ -203,6 +203,23 @@ def test_large_changes_are_clamped_and_reported(clean_model, walk):
     assert lean(free, walk) > lean(out, walk) + 5
 
 
+def test_the_clamping_range_is_measured_as_the_edit_measures(walk):
+    """Two people whose left upper arms differ by a constant 20 degrees: the people's mean lies between
+    them. Diminishing the second person's walk to an intensity they performed in training must stay
+    inside the training range even with no margin; a range measured from each person's own mean
+    would be 10 degrees off for both and clamp the arm swing (by 4 degrees here)."""
+
+    def turned(motion):
+        rotations = motion.rotations.copy()
+        j = motion.skeleton.names.index("UpperArm_L")
+        rotations[:, j] = quat.mul(rotations[:, j], quat.about("Y", 20.0))
+        return em.Motion(motion.skeleton, rotations, motion.translations, motion.frame_time)
+
+    model = train([[loaded_walk(k) for k in LEVELS], [turned(loaded_walk(k)) for k in LEVELS]], LEVELS)
+    _, report = exaggerate(model, turned(walk), 1.0, current=2.0, margin=0.0)
+    assert all(np.degrees(excess) < 0.5 for _, excess in report.clamped.values()), report.clamped
+
+
 def test_foot_locking_pins_the_stance_foot(walk):
     """An edit that swings both thighs 12 degrees (the feet skate), locked: in contact the ankles
     and toes are back where the input has them; beyond the 3-frame blend the edit is untouched."""
