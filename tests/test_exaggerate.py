@@ -261,6 +261,13 @@ def test_foot_locking_on_a_real_walk(bandai2_dir):
     assert locked.stance_speed_output <= 1.2 * locked.stance_speed_input
 
 
+def test_the_cycles_start_at_the_footstrikes_of_the_trained_foot(walk):
+    right = train([[loaded_walk(k) for k in LEVELS]], LEVELS, foot=1)
+    assert right.settings["foot"] == 1
+    _, report = exaggerate(right, walk, 3.0, current=2.0)
+    assert {c.foot for c in report.cycles} == {1} and report.cycles == find_cycles(walk, foot=1)
+
+
 def test_a_clip_with_no_steps_is_edited_as_a_whole(clean_model):
     standing = loaded_walk(2.0, 1.0)[:10]
     out, report = exaggerate(clean_model, standing, 3.0, current=2.0)
@@ -319,6 +326,8 @@ def test_bad_inputs_give_clear_errors(clean_model, walk):
         train([walks], LEVELS, representation="matrix")
     with pytest.raises(em.MocapError, match="cycle must be"):
         train([walks], LEVELS, cycle="best")
+    with pytest.raises(em.MocapError, match="foot must be"):
+        train([walks], LEVELS, foot=2)
     with pytest.raises(em.MocapError, match="no gait cycle"):
         train([[w[:20] for w in walks]], LEVELS)
     with pytest.raises(em.MocapError, match="skeleton"):

@@ -214,10 +214,10 @@ def _sample_cycles(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], s
     return _Sampled(np.stack(rots), np.stack(heights))
 
 
-def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple) -> list[Cycle]:
+def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple, foot: int = 0) -> list[Cycle]:
     """The cycles of a training clip for ``cycle`` = "middle" (the one nearest the clip's middle:
     steady walking), "first", "mean" (all, averaged later), "whole" (the clip), an index, or a
-    ``(start, end)`` frame range."""
+    ``(start, end)`` frame range; walking cycles run from one footstrike of ``foot`` to the next."""
     if isinstance(cycle, tuple):
         start, end = (int(v) for v in cycle)
         return [Cycle(start, end)]
@@ -225,7 +225,7 @@ def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple) 
         return [Cycle(0, motion.n_frames - 1)]
     if cycle not in CYCLE_CHOICES and not isinstance(cycle, (int, np.integer)):
         raise MocapError(f"cycle must be one of {', '.join(CYCLE_CHOICES)}, an index or a (start, end) range, got {cycle!r}")
-    cycles = find_cycles(motion, roles)
+    cycles = find_cycles(motion, roles, foot=foot)
     if not cycles:
         raise MocapError(
             f"no gait cycle found in a {motion.n_frames}-frame clip (no foot strikes twice); "
@@ -478,10 +478,10 @@ class ExaggerationModel:
 # --------------------------------------------------------------------------- training
 
 
-def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cycle, representation: str) -> tuple[np.ndarray, np.ndarray]:
+def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cycle, representation: str, foot: int) -> tuple[np.ndarray, np.ndarray]:
     """DOF trajectories ``[K, T, D]`` of one person's clips and the person's mean rotations ``[J, 4]``
     (over every sample of every clip; cycles averaged in DOF space when ``cycle="mean"``)."""
-    sampled = [_sample_cycles(m, roles, _choose_cycles(m, roles, cycle), samples) for m in motions]
+    sampled = [_sample_cycles(m, roles, _choose_cycles(m, roles, cycle, foot), samples) for m in motions]
     everything = np.concatenate([s.rotations.reshape(-1, *s.rotations.shape[2:]) for s in sampled])
     reference = mean_rotation(everything)
     orders = motions[0].skeleton.euler_orders
@@ -567,6 +567,7 @@ def train(
     degree: int = 1,
     representation: str = "rotvec",
     cycle: str | int | tuple = "middle",
+    foot: int = 0,
     roles: JointRoles | None = None,
 ) -> ExaggerationModel:
     """Rank the expressive features of one action and fit the intensity mappings.
@@ -576,7 +577,9 @@ def train(
     :func:`_choose_cycles`: "middle" by default; "whole" or ``(start, end)`` for actions that
     are not walks). ``samples`` is ``T``; ``energy`` the basis' share of ``sum(s^2)`` unless
     ``rank`` is given; ``share`` the expressiveness accumulated into the key set; ``degree`` the
-    mappings' polynomial degree (< number of intensities).
+    mappings' polynomial degree (< number of intensities); ``foot`` (0 = left, 1 = right) the foot
+    whose footstrikes start a walking cycle, here and in :func:`exaggerate` (the basis is phase-aligned
+    to it).
     """
     people = [list(p) for p in people]
     levels = np.asarray(levels, dtype=np.float64).reshape(-1)
@@ -593,6 +596,8 @@ def train(
         raise MocapError(f"degree {degree}: a polynomial mapping needs fewer degrees than intensities ({K})")
     if int(samples) < 3:
         raise MocapError(f"samples (T) must be at least 3, got {samples}")
+    if foot not in (0, 1):
+        raise MocapError(f"foot must be 0 (left) or 1 (right), got {foot!r}")
     for m in (m for p in people for m in p):
         if not isinstance(m, Motion):
             raise MocapError(f"expected Motion objects, got {type(m).__name__}")
@@ -600,7 +605,7 @@ def train(
     if any(m.skeleton.names != skeleton.names for p in people for m in p):
         raise MocapError("every clip must have the same skeleton (joint names) as the first")
     roles = roles or JointRoles.find(skeleton)
-    per_person = [_person_dofs(p, roles, int(samples), cycle, representation) for p in people]
+    per_person = [_person_dofs(p, roles, int(samples), cycle, representation, int(foot)) for p in people]
     X = np.stack([x for x, _ in per_person])
     refs = np.stack([r for _, r in per_person])
     w = subtree_weights(skeleton)
@@ -633,7 +638,7 @@ def train(
         lower=common.min(axis=0),
         upper=common.max(axis=0),
         trajectories=X,
-        settings={"samples": int(samples), "share": share, "energy": energy, "rank": rank, "degree": int(degree), "cycle": str(cycle)},
+        settings={"samples": int(samples), "share": share, "energy": energy, "rank": rank, "degree": int(degree), "cycle": str(cycle), "foot": int(foot)},
         **fitted,
     )
 
@@ -766,8 +771,8 @@ def exaggerate(
     """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
 
     ``current`` is ``k0``; by default it is estimated by least squares from the mean coefficients
-    of the motion's cycles. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles;
-    a single whole-clip cycle when none is found) gets ``x' = x + U (f(to) - f(k0))`` on the key DOFs,
+    of the motion's cycles. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles of
+    the foot the model was trained with; a single whole-clip cycle when none is found) gets ``x' = x + U (f(to) - f(k0))`` on the key DOFs,
     in its own timing; frames outside the cycles keep their values and the changes are cross-faded
     over ``fade`` seconds at every boundary. DOFs are kept within the training range widened by
     ``margin`` x its width (never pushed past where they already were). ``reference`` "model"
@@ -792,7 +797,7 @@ def exaggerate(
     roles = roles or JointRoles.find(motion.skeleton)
     contacts = foot_contacts(motion, roles)
     if cycles is None:
-        cycles = find_cycles(motion, roles, contacts) or [Cycle(0, motion.n_frames - 1)]
+        cycles = find_cycles(motion, roles, contacts, foot=int(model.settings.get("foot", 0))) or [Cycle(0, motion.n_frames - 1)]
     cycles = list(cycles)
     positions = motion.positions()
     yaw = _frame_yaw(motion, roles, cycles, positions)
