@@ -12,7 +12,10 @@ from expressive_mocap.exaggerate import (
     ExaggerationModel,
     exaggerate,
     find_cycles,
+    lock_stance_feet,
     normalise_cycle,
+    stance_foot_speed,
+    swap_test,
     subtree_weights,
     _log,
     to_cycle_timing,
@@ -97,6 +100,21 @@ def test_only_the_changed_joints_rank_first(clean_model, model):
     assert model.expressiveness.shape == (3, model.n_dofs)
 
 
+def test_the_swap_metric_on_the_synthetic_series_is_small(clean_model, model):
+    """METHODS.md step 10 on the section 3 series. Without performance noise only the loaded joints
+    differ, and the key set must be the best set of its size; with three wobbling people every
+    swap (each person's key set and the union) must bring the light walk close to the heavy one,
+    far closer than a random set of the same size. A key set of the wrong DOFs scores near random."""
+    (clean,) = swap_test(clean_model, draws=50)
+    assert clean.ratio <= clean.best + 0.01 and clean.ratio < 0.3
+    assert clean.ratio_positions == pytest.approx(0.0, abs=0.15) and clean.random > 0.9
+    results = swap_test(model, draws=50)
+    assert [r.person for r in results] == ["0", "1", "2", "union"]
+    for r in results:
+        assert r.ratio < 0.3 and r.ratio_positions < 0.15, r
+        assert r.ratio < r.random - 0.5 and r.ratio_positions < r.random_positions - 0.5, r
+
+
 def test_zero_length_joints_get_no_weight_and_are_reported(clean_model):
     assert set(clean_model.zero_weight_joints) == {"Head", "Hand_L", "Hand_R", "Toes_L", "Toes_R"}
     assert "weight 0" in clean_model.table()
@@ -155,7 +173,8 @@ def lean(motion, walk, frames=slice(None)):
 def test_exaggeration_follows_the_training_series_and_extrapolates(clean_model, walk):
     cycles = find_cycles(walk)
     inside = slice(cycles[0].start + 5, cycles[-1].end - 5)  # the lead-in and -out keep their lean
-    leans = [lean(exaggerate(clean_model, walk, k, current=2.0)[0], walk, inside) for k in (0.5, 1.0, 2.0, 3.0, 3.5)]
+    # A margin wide enough for k = 0.5 and 3.5 (the default 0.1 x the trained range would clamp them).
+    leans = [lean(exaggerate(clean_model, walk, k, current=2.0, margin=0.5)[0], walk, inside) for k in (0.5, 1.0, 2.0, 3.0, 3.5)]
     assert np.all(np.diff(leans) > 0)
     # As much as the real k = 3 walk leans more (4 degrees).
     assert leans[3] == pytest.approx(lean(loaded_walk(3.0, 5.0), walk, inside), abs=0.3)
@@ -184,11 +203,69 @@ def test_large_changes_are_clamped_and_reported(clean_model, walk):
     assert lean(free, walk) > lean(out, walk) + 5
 
 
-def test_foot_locking_keeps_the_stance_foot(model, walk):
-    _, report = exaggerate(model, walk, 4.0, current=2.0)
-    assert report.stance_speed_output <= 1.2 * report.stance_speed_input + 0.5
-    _, loose = exaggerate(model, walk, 4.0, current=2.0, lock_feet=False)
-    assert report.stance_speed_output <= loose.stance_speed_output + 1e-9
+def test_the_clamping_range_is_measured_as_the_edit_measures(walk):
+    """Two people whose left upper arms differ by a constant 20 degrees: the people's mean lies between
+    them. Diminishing the second person's walk to an intensity they performed in training must stay
+    inside the training range even with no margin; a range measured from each person's own mean
+    would be 10 degrees off for both and clamp the arm swing (by 4 degrees here)."""
+
+    def turned(motion):
+        rotations = motion.rotations.copy()
+        j = motion.skeleton.names.index("UpperArm_L")
+        rotations[:, j] = quat.mul(rotations[:, j], quat.about("Y", 20.0))
+        return em.Motion(motion.skeleton, rotations, motion.translations, motion.frame_time)
+
+    model = train([[loaded_walk(k) for k in LEVELS], [turned(loaded_walk(k)) for k in LEVELS]], LEVELS)
+    _, report = exaggerate(model, turned(walk), 1.0, current=2.0, margin=0.0)
+    assert all(np.degrees(excess) < 0.5 for _, excess in report.clamped.values()), report.clamped
+
+
+def test_foot_locking_pins_the_stance_foot(walk):
+    """An edit that swings both thighs 12 degrees (the feet skate), locked: in contact the ankles
+    and toes are back where the input has them; beyond the 3-frame blend the edit is untouched."""
+    roles = em.JointRoles.find(walk.skeleton)
+    contacts = em.foot_contacts(walk, roles)
+    rotations = walk.rotations.copy()
+    for j in roles.upper_legs:
+        rotations[:, j] = quat.mul(quat.about("X", 12.0), rotations[:, j])
+    edited = em.Motion(walk.skeleton, rotations, walk.translations, walk.frame_time)
+    locked, correction, residual = lock_stance_feet(walk, edited, contacts, roles, blend_frames=3)
+    assert correction > 5.0 and residual < 1e-6
+    assert stance_foot_speed(edited, contacts, roles) > 2 * stance_foot_speed(walk, contacts, roles)
+    assert stance_foot_speed(locked, contacts, roles) == pytest.approx(stance_foot_speed(walk, contacts, roles), abs=1e-6)
+    for s in (0, 1):
+        for joint in (roles.feet[s], roles.toes[s]):
+            gap = np.linalg.norm(locked.positions()[contacts[:, s], joint] - walk.positions()[contacts[:, s], joint], axis=1)
+            assert gap.max() < 1e-6
+    for s in (0, 1):
+        far = ~np.convolve(contacts[:, s], np.ones(7), mode="same").astype(bool)  # > 3 frames from the foot's contacts
+        assert far.sum() > 10
+        leg = [roles.upper_legs[s], walk.skeleton.parents[roles.feet[s]], roles.feet[s]]
+        np.testing.assert_array_equal(locked.rotations[far][:, leg], edited.rotations[far][:, leg])
+    # Eased, not popped: the thighs turn no faster than in the edit plus a little.
+    step = lambda m: np.degrees(quat.angle(quat.mul(quat.conjugate(m.rotations[:-1]), m.rotations[1:])))  # noqa: E731
+    legs = [*roles.upper_legs, *(walk.skeleton.parents[f] for f in roles.feet)]
+    assert step(locked)[:, legs].max() < step(edited)[:, legs].max() + 4.0
+
+
+def test_foot_locking_on_a_real_walk(bandai2_dir):
+    """Two takes of dataset-2's walks as people; a third take's normal walk exaggerated far beyond
+    'active': without locking its stance feet slide about 3x as fast as in the input."""
+    read = lambda name: em.read_bvh(bandai2_dir / f"dataset-2_walk_{name}.bvh")  # noqa: E731
+    people = [[read(f"{style}_{p:03d}") for style in ("exhausted", "normal", "active")] for p in (1, 2)]
+    model = train(people, LEVELS)
+    walk = read("normal_012")
+    _, locked = exaggerate(model, walk, 4.0)
+    _, loose = exaggerate(model, walk, 4.0, lock_feet=False)
+    assert loose.stance_speed_output > 1.5 * loose.stance_speed_input
+    assert locked.stance_speed_output <= 1.2 * locked.stance_speed_input
+
+
+def test_the_cycles_start_at_the_footstrikes_of_the_trained_foot(walk):
+    right = train([[loaded_walk(k) for k in LEVELS]], LEVELS, foot=1)
+    assert right.settings["foot"] == 1
+    _, report = exaggerate(right, walk, 3.0, current=2.0)
+    assert {c.foot for c in report.cycles} == {1} and report.cycles == find_cycles(walk, foot=1)
 
 
 def test_a_clip_with_no_steps_is_edited_as_a_whole(clean_model):
@@ -249,6 +326,8 @@ def test_bad_inputs_give_clear_errors(clean_model, walk):
         train([walks], LEVELS, representation="matrix")
     with pytest.raises(em.MocapError, match="cycle must be"):
         train([walks], LEVELS, cycle="best")
+    with pytest.raises(em.MocapError, match="foot must be"):
+        train([walks], LEVELS, foot=2)
     with pytest.raises(em.MocapError, match="no gait cycle"):
         train([[w[:20] for w in walks]], LEVELS)
     with pytest.raises(em.MocapError, match="skeleton"):
@@ -289,7 +368,7 @@ def test_rank_exaggerate_validate_commands(tmp_path, capsys):
     assert "largest change per joint" in out and em.read_bvh(result).n_frames == em.read_bvh(walk).n_frames
     assert main(["validate", "--model", str(saved), "--draws", "20"]) == 0
     out = capsys.readouterr().out
-    assert "union" in out and "leave-one-person-out" in out
+    assert "union" in out and "leave-one-person-out" in out and "rank agreement" in out
 
 
 def test_commands_fail_in_one_line(tmp_path, capsys):

@@ -356,7 +356,7 @@ def _train_from_args(args):
     cycle = args.cycle if args.cycle in ("middle", "first", "mean", "whole") else int(args.cycle)
     model = train(
         people, levels, samples=args.samples, share=args.share, energy=args.energy, rank=args.rank, degree=args.degree,
-        representation="euler" if args.euler else "rotvec", cycle=cycle,
+        representation="euler" if args.euler else "rotvec", cycle=cycle, foot=("left", "right").index(args.foot),
     )
     return model, paths
 
@@ -385,7 +385,8 @@ def cmd_exaggerate(args) -> int:
     model = ExaggerationModel.load(args.model)
     motion = read_bvh(args.input)
     out, report = exaggerate(
-        model, motion, args.to, current=args.current, margin=args.margin, fade=args.fade, lock_feet=not args.no_foot_lock, reference=args.reference
+        model, motion, args.to, current=args.current, margin=args.margin, fade=args.fade, lock_feet=not args.no_foot_lock, blend=args.blend,
+        reference=args.reference,
     )
     write_bvh(out, args.output)
     print(report.text())
@@ -394,16 +395,17 @@ def cmd_exaggerate(args) -> int:
 
 
 def cmd_validate(args) -> int:
-    from .exaggerate import leave_one_out, swap_test, validation_table
+    from .exaggerate import leave_one_out, rank_agreement, swap_test, validation_table
 
     model, paths = _train_from_args(args)
     if paths:
         for i, person in enumerate(paths):
             print(f"person {i}: " + " < ".join(Path(p).name for p in person))
     swaps = swap_test(model, draws=args.draws, seed=args.seed)
-    warps = leave_one_out(model) if model.trajectories.shape[0] > 1 else []
+    several = model.trajectories.shape[0] > 1
+    warps = leave_one_out(model) if several else []
     print(f"swap test at share {model.settings.get('share', 0.9):g}: ||swap - heaviest|| / ||lightest - heaviest|| over DOF trajectories and joint positions")
-    print(validation_table(swaps, warps))
+    print(validation_table(swaps, warps, rank_agreement(model) if several else None))
     return 0
 
 
@@ -418,6 +420,7 @@ def _add_training_options(p, model: bool = False) -> None:
     p.add_argument("--degree", type=int, default=1, help="degree of the intensity-to-coefficient mappings (default 1: lines)")
     p.add_argument("--samples", type=_positive(int), default=50, help="samples per time-normalised cycle T (default 50)")
     p.add_argument("--cycle", default="middle", help="cycle of each clip: middle (default), first, mean (all, averaged), whole (not a walk), or an index")
+    p.add_argument("--foot", choices=["left", "right"], default="left", help="walking cycles run from one footstrike of this foot to the next (default left)")
     p.add_argument("--euler", action="store_true", help="DOFs are the Euler channels (relative to the mean) instead of rotation vectors")
 
 
@@ -537,10 +540,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--from", dest="current", type=float, metavar="K0", help="its current intensity (default: estimated from the mappings)")
     p.add_argument("--to", type=float, required=True, metavar="K1", help="target intensity (beyond the trained range extrapolates)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
-    p.add_argument("--margin", type=float, default=0.2, help="DOFs stay within the training range widened by this share of its width (default 0.2)")
+    p.add_argument("--margin", type=float, default=0.1, help="DOFs stay within the training range widened by this share of its width (default 0.1)")
     p.add_argument("--fade", type=float, default=0.15, help="cross-fade at cycle boundaries, seconds (default 0.15)")
     p.add_argument("--reference", choices=["model", "own"], default="model", help="rotations measured from the training mean pose (default) or the motion's own")
-    p.add_argument("--no-foot-lock", action="store_true", help="do not shift the hips to keep the stance foot in place")
+    p.add_argument("--no-foot-lock", action="store_true", help="do not pin the stance feet with leg IK during contacts")
+    p.add_argument("--blend", type=float, default=0.1, help="foot locking eases in and out over this many seconds (default 0.1)")
     p.set_defaults(run=cmd_exaggerate)
 
     p = commands.add_parser("validate", help="the swap test (with random and best same-size sets) and the leave-one-person-out warp")

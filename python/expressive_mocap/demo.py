@@ -27,6 +27,7 @@ import numpy as np
 
 from . import quat
 from .errors import MocapError
+from .ik import two_bone_ik
 from .motion import Motion, Skeleton
 
 BANDAI_CHANNELS = ("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")
@@ -274,8 +275,12 @@ def _on_bandai(upright: np.ndarray, standing: np.ndarray, hips: np.ndarray, ankl
     world = quat.mul(quat.mul(upright, quat.conjugate(standing)), _STANDING)  # R U^-1 W
     world[:, 0] = [0.0, 0.0, 0.0, 1.0]  # joint_Root stays on the floor, unturned, as in the files
     hips = _within_reach(world, hips, ankles, skeleton.offsets)
+    offsets = skeleton.offsets
     for side, target in zip("LR", np.moveaxis(ankles, 1, 0)):
-        _two_bone_ik(world, hips, skeleton.offsets, *(_J[f"{n}_{side}"] for n in ("UpperLeg", "LowerLeg", "Foot")), target)
+        hip, knee, ankle = (_J[f"{n}_{side}"] for n in ("UpperLeg", "LowerLeg", "Foot"))
+        root = hips + quat.rotate(world[:, 1], offsets[hip])
+        # The foot's world rotation is kept: only the thigh and shin swing.
+        world[:, hip], world[:, knee] = two_bone_ik(root, world[:, hip], world[:, knee], offsets[knee], offsets[ankle], target)
     rotations = world.copy()
     rotations[:, 1:] = quat.mul(quat.conjugate(world[:, _PARENTS[1:]]), world[:, 1:])
     translations = np.broadcast_to(skeleton.offsets, world.shape[:2] + (3,)).copy()
@@ -294,44 +299,6 @@ def _within_reach(world: np.ndarray, hips: np.ndarray, ankles: np.ndarray, offse
         highest = target[:, 1] + np.sqrt(np.maximum(leg**2 - gap[:, 0] ** 2 - gap[:, 2] ** 2, 0.0)) - joint[:, 1]
         hips[:, 1] = np.minimum(hips[:, 1], highest)
     return hips
-
-
-def _about(axis: np.ndarray, radians: np.ndarray) -> np.ndarray:
-    """Rotations ``[F, 4]`` by ``radians [F]`` about unit ``axis [F, 3]``."""
-    return np.concatenate([axis * np.sin(radians / 2)[:, None], np.cos(radians / 2)[:, None]], axis=1)
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    """Unit vectors along ``v [F, 3]``; +X where ``v`` is zero (its rotation angle is 0 then)."""
-    norm = np.linalg.norm(v, axis=-1, keepdims=True)
-    return np.where(norm > 1e-12, v / np.where(norm > 1e-12, norm, 1.0), [1.0, 0.0, 0.0])
-
-
-def _angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.arccos(np.clip(np.sum(_unit(a) * _unit(b), axis=-1), -1.0, 1.0))
-
-
-def _two_bone_ik(world: np.ndarray, hips: np.ndarray, offsets: np.ndarray, hip: int, knee: int, ankle: int, target: np.ndarray) -> None:
-    """Swing the thigh ``hip`` and shin ``knee`` (world rotations, in place) so the ankle reaches
-    ``target [F, 3]``, bending in the knee's own plane (after D. Holden's two-joint IK); the
-    twist of each bone and the foot's world rotation are kept."""
-    a = hips + quat.rotate(world[:, 1], offsets[hip])
-    b = a + quat.rotate(world[:, hip], offsets[knee])
-    c = b + quat.rotate(world[:, knee], offsets[ankle])
-    thigh, shin = np.linalg.norm(offsets[knee]), np.linalg.norm(offsets[ankle])
-    reach = np.clip(np.linalg.norm(target - a, axis=1), abs(thigh - shin) + 1e-3, (thigh + shin) * 0.9999)
-    # Angles at the hip (between hip-ankle and thigh) and at the knee, now and wanted.
-    hip_now, knee_now = _angle_between(c - a, b - a), _angle_between(a - b, c - b)
-    hip_wanted = np.arccos(np.clip((shin**2 - thigh**2 - reach**2) / (-2 * thigh * reach), -1, 1))
-    knee_wanted = np.arccos(np.clip((reach**2 - thigh**2 - shin**2) / (-2 * thigh * shin), -1, 1))
-    bend_axis = _unit(np.cross(c - a, b - a))
-    bend_hip = _about(bend_axis, hip_wanted - hip_now)
-    bend_knee = _about(bend_axis, knee_wanted - knee_now)
-    # Then turn the whole leg about the hip so the ankle points at the target.
-    c_bent = a + quat.rotate(bend_hip, b - a) + quat.rotate(quat.mul(bend_knee, bend_hip), c - b)
-    aim = _about(_unit(np.cross(c_bent - a, target - a)), _angle_between(c_bent - a, target - a))
-    world[:, hip] = quat.mul(aim, quat.mul(bend_hip, world[:, hip]))
-    world[:, knee] = quat.mul(aim, quat.mul(bend_knee, quat.mul(bend_hip, world[:, knee])))
 
 
 __all__ = ["BANDAI_CHANNELS", "WAVE_BEND", "WAVE_RAISE", "WalkAndWave", "bandai_like_skeleton", "procedural_walk", "strides_per_second", "walk_and_wave"]

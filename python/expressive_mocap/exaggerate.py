@@ -38,13 +38,14 @@ import numpy as np
 from . import quat
 from .errors import MocapError
 from .features import foot_contacts, footstrikes, mean_rotation
+from .ik import two_bone_ik
 from .io import atomic_write
 from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
 from .motion import Motion, Skeleton
 from .roles import JointRoles, actor_height
 
 FORMAT = "expressive-mocap exaggeration model"
-VERSION = 1
+VERSION = 2  # 2: lower / upper measured from the people's mean rotations (1: from each person's own)
 REPRESENTATIONS = ("rotvec", "euler")
 CYCLE_CHOICES = ("middle", "first", "mean", "whole")
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
@@ -213,10 +214,10 @@ def _sample_cycles(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], s
     return _Sampled(np.stack(rots), np.stack(heights))
 
 
-def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple) -> list[Cycle]:
+def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple, foot: int = 0) -> list[Cycle]:
     """The cycles of a training clip for ``cycle`` = "middle" (the one nearest the clip's middle:
     steady walking), "first", "mean" (all, averaged later), "whole" (the clip), an index, or a
-    ``(start, end)`` frame range."""
+    ``(start, end)`` frame range; walking cycles run from one footstrike of ``foot`` to the next."""
     if isinstance(cycle, tuple):
         start, end = (int(v) for v in cycle)
         return [Cycle(start, end)]
@@ -224,7 +225,7 @@ def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple) 
         return [Cycle(0, motion.n_frames - 1)]
     if cycle not in CYCLE_CHOICES and not isinstance(cycle, (int, np.integer)):
         raise MocapError(f"cycle must be one of {', '.join(CYCLE_CHOICES)}, an index or a (start, end) range, got {cycle!r}")
-    cycles = find_cycles(motion, roles)
+    cycles = find_cycles(motion, roles, foot=foot)
     if not cycles:
         raise MocapError(
             f"no gait cycle found in a {motion.n_frames}-frame clip (no foot strikes twice); "
@@ -257,9 +258,11 @@ class ExaggerationModel:
     ``energy`` kept; ``expressiveness [P, D]`` (each person's ``E``, normalised) and ``overall
     [D]`` (their mean); ``key [D]`` bool (union of each person's key set), ``person_key [P, D]``;
     ``mappings [D, r, degree + 1]`` (polynomial in k, highest power first, averaged over
-    people); ``reference [J, 4]`` (mean rotations over people); ``lower, upper [D]`` (training
-    range of each DOF); ``trajectories [P, K, T, D]`` (the training DOFs, for validation);
-    ``person_reference [P, J, 4]``.
+    people); ``reference [J, 4]`` (mean rotations over people); ``lower, upper [D]`` (the range of
+    each DOF over every training sample, with rotations measured from ``reference``, the
+    parameterisation :func:`exaggerate` edits in by default); ``trajectories [P, K, T, D]`` (the
+    training DOFs, each person's rotations measured from their own mean, for validation);
+    ``person_reference [P, J, 4]`` (those means).
     """
 
     joint_names: tuple[str, ...]
@@ -298,6 +301,14 @@ class ExaggerationModel:
         """Joints whose bones below have zero length: weight 0, never key features."""
         w = self.weights[:-1].reshape(-1, 3)[:, 0]
         return [n for n, v in zip(self.joint_names, w) if v == 0.0]
+
+    def dof_range(self, reference: str = "model") -> tuple[np.ndarray, np.ndarray]:
+        """The lowest and highest value ``[D]`` of each DOF over every training sample, measured as
+        :func:`exaggerate` measures a motion with ``reference``: from the people's mean rotations
+        (``"model"``: :attr:`lower`, :attr:`upper`) or each from its own mean (``"own"``)."""
+        if reference == "own":
+            return self.trajectories.min(axis=(0, 1, 2)), self.trajectories.max(axis=(0, 1, 2))
+        return self.lower, self.upper
 
     def joint_of(self, d: int) -> str:
         return self.dof_names[d].split(".")[0]
@@ -467,10 +478,10 @@ class ExaggerationModel:
 # --------------------------------------------------------------------------- training
 
 
-def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cycle, representation: str) -> tuple[np.ndarray, np.ndarray]:
+def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cycle, representation: str, foot: int) -> tuple[np.ndarray, np.ndarray]:
     """DOF trajectories ``[K, T, D]`` of one person's clips and the person's mean rotations ``[J, 4]``
     (over every sample of every clip; cycles averaged in DOF space when ``cycle="mean"``)."""
-    sampled = [_sample_cycles(m, roles, _choose_cycles(m, roles, cycle), samples) for m in motions]
+    sampled = [_sample_cycles(m, roles, _choose_cycles(m, roles, cycle, foot), samples) for m in motions]
     everything = np.concatenate([s.rotations.reshape(-1, *s.rotations.shape[2:]) for s in sampled])
     reference = mean_rotation(everything)
     orders = motions[0].skeleton.euler_orders
@@ -556,6 +567,7 @@ def train(
     degree: int = 1,
     representation: str = "rotvec",
     cycle: str | int | tuple = "middle",
+    foot: int = 0,
     roles: JointRoles | None = None,
 ) -> ExaggerationModel:
     """Rank the expressive features of one action and fit the intensity mappings.
@@ -565,7 +577,9 @@ def train(
     :func:`_choose_cycles`: "middle" by default; "whole" or ``(start, end)`` for actions that
     are not walks). ``samples`` is ``T``; ``energy`` the basis' share of ``sum(s^2)`` unless
     ``rank`` is given; ``share`` the expressiveness accumulated into the key set; ``degree`` the
-    mappings' polynomial degree (< number of intensities).
+    mappings' polynomial degree (< number of intensities); ``foot`` (0 = left, 1 = right) the foot
+    whose footstrikes start a walking cycle, here and in :func:`exaggerate` (the basis is phase-aligned
+    to it).
     """
     people = [list(p) for p in people]
     levels = np.asarray(levels, dtype=np.float64).reshape(-1)
@@ -582,6 +596,8 @@ def train(
         raise MocapError(f"degree {degree}: a polynomial mapping needs fewer degrees than intensities ({K})")
     if int(samples) < 3:
         raise MocapError(f"samples (T) must be at least 3, got {samples}")
+    if foot not in (0, 1):
+        raise MocapError(f"foot must be 0 (left) or 1 (right), got {foot!r}")
     for m in (m for p in people for m in p):
         if not isinstance(m, Motion):
             raise MocapError(f"expected Motion objects, got {type(m).__name__}")
@@ -589,29 +605,40 @@ def train(
     if any(m.skeleton.names != skeleton.names for p in people for m in p):
         raise MocapError("every clip must have the same skeleton (joint names) as the first")
     roles = roles or JointRoles.find(skeleton)
-    per_person = [_person_dofs(p, roles, int(samples), cycle, representation) for p in people]
+    per_person = [_person_dofs(p, roles, int(samples), cycle, representation, int(foot)) for p in people]
     X = np.stack([x for x, _ in per_person])
     refs = np.stack([r for _, r in per_person])
     w = subtree_weights(skeleton)
     weights = np.append(np.repeat(w, 3), w[0] if skeleton.parents[roles.hips] < 0 else w[roles.hips])
     fitted = fit(X, levels, weights, share=share, energy=energy, rank=rank, degree=int(degree))
+    reference = mean_rotation(refs)
+    # The training range in the parameterisation a new motion is edited in: rotations from the
+    # people's mean (X measures each person's from their own mean, which may differ by degrees).
+    orders = np.asarray(skeleton.euler_orders).astype(np.int64)
+    P, K, T, D = X.shape
+    J = skeleton.n_joints
+    common = np.concatenate(
+        [rotations_to_dofs(dofs_to_rotations(X[p, ..., :-1].reshape(K * T, 3 * J), refs[p], representation, orders), reference, representation, orders)
+         for p in range(P)]
+    )
+    common = np.concatenate([common, X[..., -1].reshape(-1, 1)], axis=1)
     return ExaggerationModel(
         joint_names=skeleton.names,
         parents=np.asarray(skeleton.parents),
         offsets=np.asarray(skeleton.offsets),
         height=actor_height(skeleton, roles),
         hips=roles.hips,
-        orders=np.asarray(skeleton.euler_orders).astype(np.int64),
+        orders=orders,
         representation=representation,
         dof_names=tuple(dof_names(skeleton, representation)),
         weights=weights,
         levels=levels,
-        reference=mean_rotation(refs),
+        reference=reference,
         person_reference=refs,
-        lower=X.min(axis=(0, 1, 2)),
-        upper=X.max(axis=(0, 1, 2)),
+        lower=common.min(axis=0),
+        upper=common.max(axis=0),
         trajectories=X,
-        settings={"samples": int(samples), "share": share, "energy": energy, "rank": rank, "degree": int(degree), "cycle": str(cycle)},
+        settings={"samples": int(samples), "share": share, "energy": energy, "rank": rank, "degree": int(degree), "cycle": str(cycle), "foot": int(foot)},
         **fitted,
     )
 
@@ -622,8 +649,9 @@ def train(
 @dataclass
 class ExaggerationReport:
     """What :func:`exaggerate` did: intensities (``k0`` estimated or given), cycles edited, DOFs clamped
-    (``{dof: (frames, largest excess)}``), the largest rotation change per joint (degrees), the
-    hips' largest shift from foot locking (file units), stance-foot speeds before and after."""
+    (``{dof: (frames, largest excess)}``), the largest rotation change per joint (degrees), foot
+    locking's largest ankle correction and the largest distance it could not close (file units),
+    stance-foot speeds before and after."""
 
     k0: float
     k1: float
@@ -631,7 +659,8 @@ class ExaggerationReport:
     cycles: list[Cycle]
     clamped: dict[str, tuple[int, float]]
     largest_change: dict[str, float]
-    root_shift: float
+    foot_correction: float
+    foot_residual: float
     stance_speed_input: float
     stance_speed_output: float
 
@@ -650,7 +679,10 @@ class ExaggerationReport:
             lines.append("nothing clamped")
         changes = sorted(self.largest_change.items(), key=lambda kv: -kv[1])
         lines.append("largest change per joint (degrees): " + ", ".join(f"{n} {v:.1f}" for n, v in changes if v >= 0.05)[:600] or "largest change: none")
-        lines.append(f"stance-foot speed {self.stance_speed_input:.3g} -> {self.stance_speed_output:.3g} (file units/s); foot locking moved the hips by up to {self.root_shift:.3g}")
+        lines.append(
+            f"stance-foot speed {self.stance_speed_input:.3g} -> {self.stance_speed_output:.3g} (file units/s); foot locking moved "
+            f"the ankles by up to {self.foot_correction:.3g} (out of reach by up to {self.foot_residual:.3g})"
+        )
         return "\n".join(lines)
 
 
@@ -730,22 +762,26 @@ def exaggerate(
     current: float | None = None,
     cycles: Sequence[Cycle] | None = None,
     reference: str = "model",
-    margin: float = 0.2,
+    margin: float = 0.1,
     fade: float = 0.15,
     lock_feet: bool = True,
+    blend: float = 0.1,
     roles: JointRoles | None = None,
 ) -> tuple[Motion, ExaggerationReport]:
     """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
 
     ``current`` is ``k0``; by default it is estimated by least squares from the mean coefficients
-    of the motion's cycles. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles;
-    a single whole-clip cycle when none is found) gets ``x' = x + U (f(to) - f(k0))`` on the key DOFs,
+    of the motion's cycles. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles of
+    the foot the model was trained with; a single whole-clip cycle when none is found) gets ``x' = x + U (f(to) - f(k0))`` on the key DOFs,
     in its own timing; frames outside the cycles keep their values and the changes are cross-faded
     over ``fade`` seconds at every boundary. DOFs are kept within the training range widened by
     ``margin`` x its width (never pushed past where they already were). ``reference`` "model"
     measures rotations from the training people's mean pose, "own" from the motion's own mean.
-    ``lock_feet`` shifts the hips horizontally so each stance foot moves as in the input (no new
-    skating). Returns the new motion and an :class:`ExaggerationReport`.
+    The DOF range is the one seen in training, measured from the same reference (see
+    :meth:`ExaggerationModel.dof_range`). ``lock_feet`` pins each stance foot (ankle position and
+    foot orientation) to the input's during its contacts with two-bone leg IK, blended in and out
+    over ``blend`` seconds, so the edit adds no skating (see :func:`lock_stance_feet`). Returns
+    the new motion and an :class:`ExaggerationReport`.
     """
     if not isinstance(motion, Motion):
         raise MocapError(f"argument `motion`: expected a Motion, got {type(motion).__name__}")
@@ -756,10 +792,12 @@ def exaggerate(
         raise MocapError(f"reference must be 'model' or 'own', got {reference!r}")
     if motion.n_frames < 3:
         raise MocapError(f"a motion of {motion.n_frames} frames is too short to exaggerate")
+    if not (np.isfinite(margin) and margin >= 0) or not (np.isfinite(fade) and fade >= 0) or not (np.isfinite(blend) and blend >= 0):
+        raise MocapError(f"margin, fade and blend must be finite numbers >= 0, got margin={margin}, fade={fade}, blend={blend}")
     roles = roles or JointRoles.find(motion.skeleton)
     contacts = foot_contacts(motion, roles)
     if cycles is None:
-        cycles = find_cycles(motion, roles, contacts) or [Cycle(0, motion.n_frames - 1)]
+        cycles = find_cycles(motion, roles, contacts, foot=int(model.settings.get("foot", 0))) or [Cycle(0, motion.n_frames - 1)]
     cycles = list(cycles)
     positions = motion.positions()
     yaw = _frame_yaw(motion, roles, cycles, positions)
@@ -782,10 +820,12 @@ def exaggerate(
     delta = model.basis @ change.T  # [T, D]
     per_frame = _per_frame_change(delta, cycles, motion.n_frames, int(round(fade * motion.fps)))
     target = X + per_frame
-    # Plausibility: the training range, widened by the margin, and never tighter than the input itself.
-    width = model.upper - model.lower
-    low = np.minimum(model.lower - margin * width, X)
-    high = np.maximum(model.upper + margin * width, X)
+    # Plausibility: the training range (in the same parameterisation as X), widened by the margin,
+    # and never tighter than the input itself.
+    lower, upper = model.dof_range(reference)
+    width = upper - lower
+    low = np.minimum(lower - margin * width, X)
+    high = np.maximum(upper + margin * width, X)
     clamped_values = np.clip(target, low, high)
     excess = np.abs(clamped_values - target)
     clamped = {model.dof_names[d]: (int(np.count_nonzero(excess[:, d] > 1e-12)), float(excess[:, d].max())) for d in np.flatnonzero(excess.max(axis=0) > 1e-12)}
@@ -805,39 +845,82 @@ def exaggerate(
     lift[:, 1] = (new[:, -1] - X[:, -1]) * model.height
     translations[:, roles.hips] += quat.rotate(quat.conjugate(parent_rot), lift)
     out = Motion(motion.skeleton, rotations, translations, motion.frame_time)
-    shift = np.zeros((motion.n_frames, 3))
-    if lock_feet:
-        shift = _foot_lock_shift(motion, out, contacts, roles)
-        translations[:, roles.hips] += quat.rotate(quat.conjugate(parent_rot), shift)
-        out = Motion(motion.skeleton, rotations, translations, motion.frame_time)
+    correction = residual = 0.0
+    if lock_feet and len(changed):
+        out, correction, residual = lock_stance_feet(motion, out, contacts, roles, int(round(blend * motion.fps)))
+        rotations = out.rotations
     angles = np.degrees(quat.angle(quat.mul(quat.conjugate(motion.rotations), rotations))).max(axis=0)
     report = ExaggerationReport(
         k0=k0, k1=float(to), k0_estimated=estimated, cycles=cycles, clamped=clamped,
         largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
-        root_shift=float(np.linalg.norm(shift, axis=1).max()),
+        foot_correction=correction,
+        foot_residual=residual,
         stance_speed_input=stance_foot_speed(motion, contacts, roles),
         stance_speed_output=stance_foot_speed(out, contacts, roles),
     )
     return out, report
 
 
-def _foot_lock_shift(original: Motion, edited: Motion, contacts: np.ndarray, roles: JointRoles) -> np.ndarray:
-    """World shifts of the hips ``[F, 3]`` (horizontal) that make each stance foot (ankle and toe)
-    move as in ``original``: in stance frames the hips take the opposite of the feet's extra
-    velocity (averaged over the feet in contact); in flight the shift is held, so it never jumps."""
-    p0, p1 = original.positions(), edited.positions()
-    extra = np.zeros((original.n_frames, 3))
-    count = np.zeros(original.n_frames)
+def _contact_weights(contacts: np.ndarray, frames: int) -> np.ndarray:
+    """Locking weights ``[F, S]`` from ``contacts bool [F, S]``: 1 in contact, easing to 0 over
+    ``frames`` frames before and after each contact (smoothstep of the distance in frames)."""
+    F = len(contacts)
+    linear = contacts.astype(np.float64)
+    for i in range(1, frames + 1):
+        ramp = 1.0 - i / (frames + 1)
+        linear[i:] = np.maximum(linear[i:], ramp * contacts[:-i])
+        linear[:-i] = np.maximum(linear[:-i], ramp * contacts[i:])
+    return linear * linear * (3 - 2 * linear) if F else linear
+
+
+def lock_stance_feet(original: Motion, edited: Motion, contacts: np.ndarray, roles: JointRoles, blend_frames: int = 3) -> tuple[Motion, float, float]:
+    """``edited`` with each foot put back where ``original`` has it while it touches the floor.
+
+    For each side, in the frames where the foot's locking weight ``w`` (1 in the contacts
+    ``[F, 2]``, eased to 0 over ``blend_frames`` frames either side) is above 0, the ankle's
+    target is ``(1 - w) edited + w original`` (world positions) and the foot's world rotation the
+    slerp between the two by ``w``; two-bone IK (:func:`~expressive_mocap.ik.two_bone_ik`) turns
+    the upper and lower leg to reach the target, and the foot's local rotation is set to give the
+    wanted world rotation. The toe, fixed to the foot, follows. The hips path is not touched.
+
+    Returns the new motion, the largest distance an ankle was moved to its target, and the largest
+    distance left where the target was out of the leg's reach (file units).
+    """
+    parents = original.skeleton.parents
+    world_in, pos_in = forward_kinematics(original.rotations, original.translations, parents)
+    world_out, pos_out = forward_kinematics(edited.rotations, edited.translations, parents)
+    weights = _contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
+    rotations = edited.rotations.copy()
+    correction = 0.0
+    legs = []
     for s in (0, 1):
-        joints = [roles.feet[s], roles.toes[s]]
-        v0 = np.diff(p0[:, joints], axis=0).mean(axis=1)
-        v1 = np.diff(p1[:, joints], axis=0).mean(axis=1)
-        stance = contacts[1:, s] & contacts[:-1, s]
-        extra[1:][stance] += (v1 - v0)[stance]
-        count[1:] += stance
-    velocity = -extra / np.maximum(count, 1)[:, None]
-    velocity[:, 1] = 0.0  # horizontal only: heights are the edit's business
-    return np.cumsum(velocity, axis=0)
+        hip, foot = roles.upper_legs[s], roles.feet[s]
+        knee = parents[foot]
+        if knee < 0 or parents[knee] != hip:
+            names = original.skeleton.names
+            raise MocapError(f"foot locking needs a two-bone leg: {names[foot]} is not the grandchild of {names[hip]}; use lock_feet=False")
+        # Frames to lock: weighted, and where the edit moved or turned the foot at all (elsewhere
+        # the IK would only add rounding).
+        moved = (np.linalg.norm(pos_out[:, foot] - pos_in[:, foot], axis=1) > 1e-9) | (quat.angle(quat.mul(quat.conjugate(world_in[:, foot]), world_out[:, foot])) > 1e-9)
+        frames = np.flatnonzero((weights[:, s] > 0) & moved)
+        if not len(frames):
+            continue
+        w = weights[frames, s, None]
+        target = (1 - w) * pos_out[frames, foot] + w * pos_in[frames, foot]
+        correction = max(correction, float(np.linalg.norm(target - pos_out[frames, foot], axis=1).max()))
+        t = edited.translations[frames]
+        upper, lower = two_bone_ik(pos_out[frames, hip], world_out[frames, hip], world_out[frames, knee], t[:, knee], t[:, foot], target)
+        foot_world = quat.slerp(world_out[frames, foot], world_in[frames, foot], w[:, 0])
+        parent = parents[hip]
+        parent_world = world_out[frames, parent] if parent >= 0 else np.broadcast_to(IDENTITY, (len(frames), 4))
+        rotations[frames, hip] = quat.mul(quat.conjugate(parent_world), upper)
+        rotations[frames, knee] = quat.mul(quat.conjugate(upper), lower)
+        rotations[frames, foot] = quat.mul(quat.conjugate(lower), foot_world)
+        legs.append((frames, foot, target))
+    out = Motion(edited.skeleton, rotations, edited.translations, edited.frame_time)
+    positions = out.positions()
+    residual = max((float(np.linalg.norm(positions[f, foot] - target, axis=1).max()) for f, foot, target in legs), default=0.0)
+    return out, correction, residual
 
 
 # --------------------------------------------------------------------------- validation
@@ -886,11 +969,11 @@ def _ratios(model: ExaggerationModel, light: np.ndarray, heavy: np.ndarray, refe
     return np.array(out)
 
 
-def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int = 200, seed: int = 0) -> list[SwapResult]:
+def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int = 200, seed: int = 0, union_key: np.ndarray | None = None) -> list[SwapResult]:
     """Swap the key DOF trajectories of each person's lightest performance for the heaviest's
     and compare with the real heaviest (METHODS part 1, step 10). ``person``: one index, or every
-    person (their own key sets) followed by ``"union"`` (every person with the union key set,
-    ratios pooled)."""
+    person (their own key sets) followed by ``"union"`` (every person with the union key set
+    ``union_key``, by default :attr:`ExaggerationModel.key`; the people's ratios averaged)."""
     P, K, T, D = model.trajectories.shape
     rng = np.random.default_rng(seed)
     people = range(P) if person is None else [int(person)]
@@ -912,8 +995,44 @@ def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int
             raise MocapError(f"person {p}: the model has {P} people")
         results.append(run(str(p), [p], model.person_key[p]))
     if person is None and P > 1:
-        results.append(run("union", list(range(P)), model.key))
+        key = model.key if union_key is None else np.asarray(union_key, dtype=bool)
+        if key.shape != (D,):
+            raise MocapError(f"argument `union_key`: expected {D} booleans, got shape {list(key.shape)}")
+        results.append(run("union", list(range(P)), key))
     return results
+
+
+@dataclass
+class RankAgreement:
+    """Spearman rank correlation of the people's expressiveness ``E`` over the ``dofs`` DOFs that
+    have ``E > 0`` for at least one person (DOFs that are 0 for everyone, such as zero-length joints,
+    would only add ties): mean and lowest over every pair of people, and the same over all DOFs."""
+
+    dofs: int
+    mean: float
+    lowest: float
+    mean_all: float
+
+    def text(self) -> str:
+        return (
+            f"rank agreement between people (Spearman, every pair): mean {self.mean:.3f} (lowest {self.lowest:.3f}) over the "
+            f"{self.dofs} DOFs with E > 0 for someone; {self.mean_all:.3f} over all DOFs"
+        )
+
+
+def rank_agreement(model: ExaggerationModel) -> RankAgreement:
+    """How much the people agree on the ranking (needs at least two people)."""
+    from scipy.stats import spearmanr
+
+    E = model.expressiveness
+    P = len(E)
+    if P < 2:
+        raise MocapError("rank agreement needs at least two people")
+    live = (E > 0).any(axis=0)
+    pairs = [(a, b) for a in range(P) for b in range(a + 1, P)]
+    ranked = [float(spearmanr(E[a, live], E[b, live])[0]) for a, b in pairs]
+    everything = [float(spearmanr(E[a], E[b])[0]) for a, b in pairs]
+    return RankAgreement(int(live.sum()), float(np.mean(ranked)), float(np.min(ranked)), float(np.mean(everything)))
 
 
 @dataclass
@@ -954,8 +1073,8 @@ def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
     return results
 
 
-def validation_table(swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = ()) -> str:
-    """Both tests as text."""
+def validation_table(swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = (), agreement: RankAgreement | None = None) -> str:
+    """Both tests (and the people's rank agreement) as text."""
     lines = [f"{'person':<8} {'swapped':>11} {'ratio':>7} {'random':>7} {'best':>7} | {'pos.':>6} {'random':>7} {'best':>7}"]
     for r in swaps:
         lines.append(
@@ -969,6 +1088,9 @@ def validation_table(swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = 
         for w in warps:
             lines.append(f"{w.person:<8} {w.key:4d} {w.ratio:7.3f} {w.ratio_positions:7.3f}")
         lines.append(f"{'mean':<8} {'':>4} {np.mean([w.ratio for w in warps]):7.3f} {np.mean([w.ratio_positions for w in warps]):7.3f}")
+    if agreement is not None:
+        lines.append("")
+        lines.append(agreement.text())
     return "\n".join(lines)
 
 
@@ -976,6 +1098,7 @@ __all__ = [
     "Cycle",
     "ExaggerationModel",
     "ExaggerationReport",
+    "RankAgreement",
     "SwapResult",
     "WarpResult",
     "dof_positions",
@@ -985,7 +1108,9 @@ __all__ = [
     "validation_table",
     "find_cycles",
     "fit",
+    "lock_stance_feet",
     "normalise_cycle",
+    "rank_agreement",
     "stance_foot_speed",
     "subtree_weights",
     "to_cycle_timing",
