@@ -45,15 +45,17 @@ from __future__ import annotations
 import datetime
 import glob as globlib
 import io
+import itertools
 import json
 import os
 import shutil
 import struct
 import sys
 import tarfile
+import threading
 import time
 import zipfile
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
@@ -477,6 +479,7 @@ def preprocess(
 
     source = open_source(src)
     client, close_client = _client(cluster) if cluster is not None else (None, lambda: None)
+    syncer = ThreadPoolExecutor(max_workers=1)  # flushes each batch's rows to disk in the background
     try:
         todo = (item for item in source if item.source not in done)
         total_bytes = sum(i.size for i in source.items if i.source not in done) if source.items is not None else None
@@ -501,6 +504,8 @@ def preprocess(
                     with open(partial / f"{kind.name}.npy", "ab") as handle:
                         for values in arrays[kind.name]:
                             handle.write(np.ascontiguousarray(values, dtype=kind.dtype).data)  # no copy
+            if record["clips"]:
+                syncer.submit(_flush, [partial / f"{kind.name}.npy" for kind in kinds])
             record["rows"] = rows
             _append_line(journal, record)
             times.append(time.perf_counter())
@@ -522,11 +527,13 @@ def preprocess(
             bar.update(len(clips) + len(failures), sum(c["frames"] for c in clips), nbytes, summary.bytes_read)
         if not stopped:
             t0 = time.perf_counter()
+            syncer.shutdown()
             _finish(out, kinds or [], clips, failures, skeleton, rows, options)
             summary.write_s += time.perf_counter() - t0
             summary.finished = True
         bar.close()
     finally:
+        syncer.shutdown()
         source.close()
         close_client()
     summary.clips_ok, summary.clips_failed = len(clips), len(failures)
@@ -634,28 +641,42 @@ def _on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
 
 
 def _parsed(batches: Iterator[list[_Item]], limit: int | None, stopped: list) -> Iterator[tuple]:
-    """``(batch, motions or BVHErrors, seconds reading and parsing)`` for each batch, up to
-    ``limit`` batches (``stopped`` gets an entry if more were left). The next batch is read
-    (from a tar: decompressed) and parsed in a background thread while the caller works on this
-    one: the Rust parser and the decompressors release the GIL, so this overlaps the kernels and
-    the writing."""
+    """``(batch, motions or BVHErrors, seconds reading and parsing)`` for each batch in order,
+    up to ``limit`` batches (``stopped`` gets an entry if more were left). Reader threads take
+    the next batches (from a tar: decompress them) and parse them while the caller works on
+    this one: the Rust parser and the decompressors release the GIL. With two readers (on two
+    or more cores) one's Python work (opening files, headers) overlaps the other's parsing; on
+    one core a second reader only adds switching, so there is one."""
+    readers = min(2, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+    take = threading.Lock()
+    numbers = itertools.count()
 
     def read_next():
         start = time.perf_counter()
-        batch = next(batches, None)
+        with take:  # batches are taken in order; each is numbered as it is taken
+            number, batch = next(numbers), next(batches, None)
         if batch is None:
-            return None
+            return number, None
         motions = read_bvh_many([item.open() for item in batch], errors="return")
-        return batch, motions, time.perf_counter() - start
+        return number, (batch, motions, time.perf_counter() - start)
 
-    with ThreadPoolExecutor(max_workers=1) as reader:
-        pending, count = reader.submit(read_next), 0
-        while (result := pending.result()) is not None:
-            count += 1
-            if limit is not None and count > limit:
+    with ThreadPoolExecutor(max_workers=readers) as pool:
+        running = {pool.submit(read_next) for _ in range(readers)}
+        ready: dict[int, tuple | None] = {}
+        for count in itertools.count():
+            while count not in ready:
+                done, running = wait(running, return_when=FIRST_COMPLETED)
+                for future in done:
+                    number, result = future.result()
+                    ready[number] = result
+                    if result is not None:
+                        running.add(pool.submit(read_next))
+            result = ready.pop(count)
+            if result is None:
+                return
+            if limit is not None and count >= limit:
                 stopped.append(True)
                 return
-            pending = reader.submit(read_next)
             yield result
 
 
@@ -731,6 +752,17 @@ def _cut_data_files(partial: Path, kinds: list[_Kind], rows: int) -> None:
             handle.truncate(_HEADER_BYTES + rows * kind.row_bytes)
             handle.seek(0)
             handle.write(_npy_header(kind.dtype, (0, *kind.row)))  # a placeholder until the end
+
+
+def _flush(paths: list[Path]) -> None:
+    """Have the disk write these files' data now (fdatasync), in the background while the next
+    batches are computed: otherwise it all waits for the final sync, which nothing overlaps."""
+    for path in paths:
+        handle = os.open(path, os.O_RDONLY)
+        try:
+            getattr(os, "fdatasync", os.fsync)(handle)  # macOS has no fdatasync
+        finally:
+            os.close(handle)
 
 
 def _finish(out: Path, kinds: list[_Kind], clips: list, failures: list, skeleton, rows: int, options: dict) -> None:
