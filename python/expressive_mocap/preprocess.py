@@ -2,10 +2,14 @@
 
 Per clip: parse, forward kinematics (world positions), dynamic features, foot contacts and,
 with a body-mechanics model, the decomposition's activity per joint (optionally its body and
-expressive rotations). Clips are read in batches: the Rust reader parses a batch's files in
-parallel (:func:`~expressive_mocap.bvh.read_bvh_many`), FK runs on the whole batch at once
-(:func:`~expressive_mocap.kernels.forward_kinematics_many`), and the batch's arrays are
-appended to the output before the next batch is read, so memory stays bounded.
+expressive rotations). Clips are read in batches, each kernel called once per batch with the
+clips in parallel inside it: the Rust reader parses a batch's files
+(:func:`~expressive_mocap.bvh.read_bvh_many`), then FK
+(:func:`~expressive_mocap.kernels.forward_kinematics_many`), features and contacts
+(:func:`~expressive_mocap.features.gait_many`) and the network run on the whole batch. Two
+reader threads parse the next batches while the main thread computes and appends this one's
+rows to the output, so memory stays bounded and both cores stay busy (the kernels release the
+GIL; what is left in Python per clip is a few array conversions).
 
 The output format: a folder ::
 
@@ -32,8 +36,10 @@ Robustness: a clip that cannot be read or processed is listed in the manifest's 
 its error and the run goes on. The run writes into ``OUT/.partial``: each batch's rows are
 appended to the data files, then one line is appended to a journal; an interrupted run
 restarts from the journal (the data files are cut back to the last journaled batch, finished
-clips are skipped). At the end the files are renamed into ``OUT`` and the manifest is written
-last: a folder with a ``manifest.json`` is a complete dataset, never a half-written one.
+clips are skipped). At the end the data are synced to disk, the files renamed into ``OUT`` and
+the manifest written last: a folder with a ``manifest.json`` is a complete dataset, never a
+half-written one. (An interrupted process loses nothing; the journal is not synced per batch,
+so after a power cut mid-run delete ``OUT/.partial`` and run again.)
 
 Clips are taken in sorted path order from folders, globs and zips, in archive order from tars
 (a compressed tar is read as a stream, once; reading it out of order would decompress it again
