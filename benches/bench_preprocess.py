@@ -15,6 +15,8 @@ by +-30 %, so compare within a run):
   (the default) and in float32 (``--model-float32``);
 - the folder on 1 core (the child pinned with ``sched_setaffinity``: Rust's thread pool and the
   Python threads share that core), for the 1 -> 2 workers scaling;
+- the folder on a Dask LocalCluster of 2 worker processes on loopback (``--dask``; the
+  cluster's start-up is in the time; peak RSS is the client's only);
 - the folder with the NumPy twins (``EXPRESSIVE_MOCAP_BACKEND=numpy``; one round, it is slow).
 
 A section with the figures, the machine and the date is appended to ``--out``.
@@ -51,6 +53,7 @@ CONFIGS = {
     "folder + --model, Rust, 2 cores": ("folder", {}, "float64", None),
     "folder + --model --model-float32, Rust, 2 cores": ("folder", {}, "float32", None),
     "folder, Rust, 1 core": ("folder", {}, None, 1),
+    "folder, Dask LocalCluster (2 worker processes, loopback; start-up included)": ("folder", {"BENCH_CLUSTER": "local"}, None, None),
     "folder, NumPy twins, 2 cores": ("folder", {"EXPRESSIVE_MOCAP_BACKEND": "numpy"}, None, None),
 }
 
@@ -71,7 +74,8 @@ def child(src: str, out: str, model: str | None) -> None:
     from expressive_mocap.preprocess import preprocess
 
     start = time.perf_counter()
-    summary = preprocess(src, out, model="" if model else None, model_float32=model == "float32", progress=False)
+    summary = preprocess(src, out, model="" if model else None, model_float32=model == "float32", progress=False,
+                         cluster=os.environ.get("BENCH_CLUSTER"))
     wall = time.perf_counter() - start
     print(json.dumps({
         "wall": wall, "parse": summary.parse_s, "kernels": summary.kernels_s, "write": summary.write_s,
