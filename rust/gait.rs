@@ -53,8 +53,11 @@ pub struct ClipGait {
     pub contacts: Option<Vec<bool>>,
 }
 
-/// `np.percentile(values, q)` with NumPy's linear interpolation and rounding.
+/// `np.percentile(values, q)` with NumPy's linear interpolation and rounding (NaN if any is).
 fn percentile(values: &mut [f64], q: f64) -> f64 {
+    if values.iter().any(|v| v.is_nan()) {
+        return f64::NAN;
+    }
     let rank = (values.len() - 1) as f64 * (q / 100.0);
     let below = rank.floor() as usize;
     let above = (below + 1).min(values.len() - 1);
@@ -179,6 +182,7 @@ mod tests {
         assert_eq!(percentile(&mut [3.0, 1.0, 2.0, 10.0], 50.0), 2.5);
         assert_eq!(percentile(&mut [3.0, 1.0, 2.0, 10.0], 100.0), 10.0);
         assert_eq!(percentile(&mut [7.0], 5.0), 7.0);
+        assert!(percentile(&mut [1.0, f64::NAN, 2.0], 5.0).is_nan());
     }
 
     #[test]

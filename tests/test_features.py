@@ -310,13 +310,19 @@ def test_gait_many_equals_the_one_clip_functions(backend, floor, reference):
 def test_gait_many_rust_matches_numpy_twin():
     if not em.rust_available():
         pytest.skip("the Rust extension is not built")
+    # One clip with a NaN toe position in one frame: NaN propagates alike (the floor of that clip is NaN).
+    broken = procedural_walk(seconds=1.0)
+    rotations = broken.rotations.copy()
+    rotations[7, JointRoles.find(broken.skeleton).feet[1]] = np.nan  # moves the toe
+    broken = em.Motion(broken.skeleton, rotations, broken.translations, broken.frame_time)
     results = []
     for name in ("rust", "numpy"):
-        with em.use_backend(name):
-            results.append(em.gait_many(_gait_clips(), floor=None))
+        with em.use_backend(name), np.errstate(invalid="ignore"):
+            results.append(em.gait_many([*_gait_clips(), broken], floor=None))
     for (f, c), (f1, c1) in zip(*results):
         np.testing.assert_allclose(f, f1, rtol=0, atol=ATOL)
         np.testing.assert_array_equal(c, c1)
+    assert np.isnan(results[0][-1][0][:, 10]).all()  # hips height above a NaN floor
 
 
 def test_gait_many_asks_only_for_what_is_wanted_and_names_bad_input(backend):
