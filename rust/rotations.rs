@@ -4,7 +4,7 @@
 //! CHANNELS line; the rotation is `R_a(angle0) * R_b(angle1) * R_c(angle2)` (intrinsic, the
 //! first channel outermost), matching SciPy's `Rotation.from_euler("ABC", ..)` with upper case.
 
-use glam::{DMat3, DQuat, DVec3};
+use glam::{DMat3, DQuat};
 use rayon::prelude::*;
 
 use crate::error::{KernelError, Result};
@@ -137,6 +137,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
 
     const ORDERS: [Order; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
 

@@ -80,34 +80,7 @@ def test_bvh_error_is_a_value_error_of_the_package():
     assert issubclass(em.BVHError, em.MocapError) and issubclass(em.MocapError, ValueError)
 
 
-HUGE_CLAIM = """
-import sys
-import expressive_mocap as em
-
-def peak_mb():
-    return int(open("/proc/self/status").read().split("VmHWM:")[1].split()[0]) / 1024
-
-data = open(sys.argv[1], "rb").read().replace(b"Frames: 4", b"Frames: 1000000000")
-before = peak_mb()
-with em.use_backend(sys.argv[2]):
-    try:
-        em.read_bvh(data)
-    except em.BVHError as error:
-        print("refused:", error)
-print(peak_mb() - before)
-"""
-
-
-def test_a_huge_frame_count_is_refused_without_allocating_for_it(backend):
-    # 10^9 frames x 27 channels would be 216 GB of float64: the reader must say the block is
-    # truncated, not try to allocate for the claim. Measured in a fresh process (peak RSS).
-    import subprocess
-    import sys
-
-    result = subprocess.run([sys.executable, "-c", HUGE_CLAIM, str(DATA / "mixed_orders.bvh"), backend], capture_output=True, text=True)
-    refused, grown_mb = result.stdout.splitlines()
-    assert "truncated" in refused, result.stdout + result.stderr
-    assert float(grown_mb) < 100, grown_mb
+# Huge claims (10^9 frames, 10^6 joints, ...) and their memory: tests/test_limits.py.
 
 
 def test_a_deep_hierarchy_is_read_without_recursion(tmp_path):

@@ -1,10 +1,16 @@
-"""Writing output files safely: a complete file appears at the destination, or nothing does."""
+"""Files: writing outputs safely (a complete file appears at the destination, or nothing does),
+and reading model files as data (``.npz`` of plain arrays plus one JSON object, never pickles)."""
 
 from __future__ import annotations
 
+import io
+import json
 import os
 import tempfile
+import zipfile
 from pathlib import Path
+
+import numpy as np
 
 from .errors import MocapError
 
@@ -34,3 +40,46 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+# A model file may not unpack to more than this (a zip bomb of zeros compresses 1000 to 1).
+MAX_MODEL_BYTES = 256 << 20
+
+
+def read_model_file(source: str | os.PathLike | bytes, what: str) -> tuple[dict[str, np.ndarray], dict, str]:
+    """The arrays, the JSON metadata (the array ``meta``, a JSON object) and a name for errors of
+    an ``.npz`` model file, read with ``allow_pickle=False`` after checking that it unpacks to at
+    most :data:`MAX_MODEL_BYTES`. Any damage is a :class:`MocapError` naming the file and ``what``
+    it should be; checking the arrays against the model's schema is the caller's part."""
+    name = "<bytes>" if isinstance(source, (bytes, bytearray)) else str(source)
+    try:
+        data = bytes(source) if isinstance(source, (bytes, bytearray)) else Path(source).read_bytes()
+    except OSError as error:
+        raise MocapError(f"{name}: cannot read the model file: {error.strerror or error}") from None
+    try:
+        with np.load(io.BytesIO(data), allow_pickle=False) as archive:
+            if not isinstance(archive, np.lib.npyio.NpzFile):
+                raise ValueError("a single array, not an .npz archive")
+            unpacked = sum(info.file_size for info in archive.zip.infolist())
+            if unpacked > MAX_MODEL_BYTES:
+                raise ValueError(f"it unpacks to {unpacked} bytes, more than the limit of {MAX_MODEL_BYTES}")
+            arrays = {k: archive[k] for k in archive.files}
+        meta = json.loads(str(arrays.pop("meta")))
+        if not isinstance(meta, dict):
+            raise ValueError(f"the metadata is a JSON {type(meta).__name__}, not an object")
+    except (zipfile.BadZipFile, EOFError, OSError, KeyError, ValueError, TypeError, RuntimeError) as error:
+        # Damaged zips and arrays raise any of these; a pickled array raises ValueError.
+        raise MocapError(f"{name}: not a readable {what} ({type(error).__name__}: {error})") from None
+    return arrays, meta, name
+
+
+def finite_array(arrays: dict, key: str, name: str, shape: tuple | None = None, kinds: str = "fiu") -> np.ndarray:
+    """``arrays[key]``, checked: present, of a numeric dtype kind in ``kinds``, all finite, and of
+    ``shape`` when given; a :class:`MocapError` naming the file and the key otherwise."""
+    if key not in arrays:
+        raise MocapError(f"{name}: model file lacks {key!r}")
+    value = arrays[key]
+    if value.dtype.kind not in kinds or (shape is not None and value.shape != tuple(shape)) or not np.isfinite(value.astype(np.float64)).all():
+        expected = f"shape {list(shape)}" if shape is not None else "any shape"
+        raise MocapError(f"{name}: {key!r} has shape {list(value.shape)} / dtype {value.dtype}, expected finite numbers of {expected}")
+    return value
