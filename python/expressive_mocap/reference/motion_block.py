@@ -48,6 +48,8 @@ def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> n
         return np.zeros((frames, 0))
     if block.translate(None, _PLAIN):  # anything but plain numbers and blanks: check line by line
         _raise_first_problem(block, frames, channels)
+    if b"\r" in block:  # a blank like a space (loadtxt would end a line at a lone CR)
+        block = block.replace(b"\r", b" ")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # loadtxt warns on an empty block; counts are checked below
