@@ -71,9 +71,10 @@ pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, 
     if block.len() > PARALLEL_BLOCK_BYTES {
         return parse_in_parallel(block, frames, channels, sink);
     }
-    // n frame lines of `channels` numbers take n lines and at least 2 n channels - 1 bytes
-    // ("0 0\n0 0"): never allocate more frames than the block can hold, whatever Frames claims.
-    let room = frames.min((block.len() + 1) / channels.saturating_mul(2)).min(memchr::memchr_iter(b'\n', block).count() + 1);
+    // A frame line takes a line and at least 2 bytes a value ("0 0 ... 0\n"): never allocate more
+    // frames than the block can hold, whatever Frames claims. One more than the block's whole
+    // frames, so that a bad line after them is still reached and named, as the NumPy twin does.
+    let room = frames.min(block.len() / channels.saturating_mul(2) + 1).min(memchr::memchr_iter(b'\n', block).count() + 1);
     let (mut first, mut second) = outputs(room, w0, w1)?;
     let end = parse_chunk(block, channels, room, sink, &mut first, &mut second).map_err(|(line, message)| KernelError::Parse { line, message })?;
     if end.frames < frames {
@@ -320,5 +321,12 @@ mod tests {
         let e = parse_motion_block(b"\n\n", usize::MAX, 0).unwrap_err();
         assert!(e.to_string().contains("truncated"), "{e}");
         assert_eq!(parse_motion_block(b"\n\n", 3, 0).unwrap(), Vec::<f64>::new());
+    }
+
+    #[test]
+    fn a_short_line_is_named_even_when_frames_claims_more_than_the_block_holds() {
+        // Found by benches/fuzz_bvh.py --compare: a tighter allocation bound stopped before line 0.
+        let e = parse_motion_block(b"1.5 91.0\n2", 4, 6).unwrap_err();
+        assert!(matches!(e, KernelError::Parse { line: 0, ref message } if message.contains("expected 6 values")), "{e:?}");
     }
 }
