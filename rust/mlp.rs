@@ -109,7 +109,9 @@ pub fn tanh_f64(x: f64) -> f64 {
         21844.0 / 6_081_075.0,
         -929_569.0 / 638_512_875.0,
     ];
-    let a = x.abs().min(20.0); // tanh(20) = 1 - 8e-18: 1 in float64
+    // tanh(20) = 1 - 8e-18: 1 in float64. Not `min`, which would turn NaN into 20 (and
+    // tanh(NaN) into 1: found by tests/test_kernel_misuse.py).
+    let a = if x.abs() > 20.0 { 20.0 } else { x.abs() };
     let e = exp_neg(-2.0 * a);
     let big = (1.0 - e) / (1.0 + e);
     let x2 = x * x;
@@ -294,6 +296,7 @@ mod tests {
             worst64_abs = worst64_abs.max((ours - exact).abs());
             worst64_rel = worst64_rel.max((ours - exact).abs() / exact.abs().max(1e-300));
         }
+        assert!(tanh_f64(f64::NAN).is_nan() && tanh_f32(f32::NAN).is_nan());
         for x in [0.0, -0.0, 1e-300, -1e-12, 30.0, -30.0, 1e6, f64::MAX] {
             assert!((tanh_f64(x) - x.tanh()).abs() <= 1e-15 * x.tanh().abs().max(1e-300), "{x}");
             assert!((tanh_f32(x as f32) - (x as f32).tanh()).abs() <= 1e-6 * (x as f32).tanh().abs().max(1e-30), "{x}");

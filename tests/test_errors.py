@@ -51,6 +51,8 @@ CASES = {
     "not BVH text": (b"hello world\n", 1, "HIERARCHY"),
     "binary file": (bytes(range(256)) * 4, None, "binary"),
     "gzip file": (b"\x1f\x8b\x08\x00" + bytes(100), None, "binary"),
+    # Found by benches/fuzz_bvh.py: the same channel in two spellings escaped as a MocapError.
+    "channel twice in two cases": (GOOD.replace(b"Yrotation Zrotation Xrotation", b"Yrotation Zrotation ZROTATION"), 13, "lists a channel twice"),
     "Latin-1 header": (GOOD.replace(b"Spine Lower", b"Spine \xe9"), 6, "not UTF-8"),
 }
 

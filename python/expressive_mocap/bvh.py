@@ -209,7 +209,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
             except MocapError as error:
                 bad = next(k for k, n in enumerate(listed) if n.lower() not in _CHANNEL_NAMES)
                 raise tokens.error(tokens.lines[tokens.pos - len(listed) + bad], str(error)) from None
-            if len(set(listed)) != len(listed):
+            if len(set(channels[top])) != len(listed):  # canonical names: "Xrotation" and "XROTATION" are one
                 raise tokens.error(line, f"joint {names[top]!r} lists a channel twice: {' '.join(listed)}")
         elif word == "JOINT":
             open_joint(line, top)
@@ -230,13 +230,16 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
         if token == "}":
             raise tokens.error(line, "unbalanced braces: this '}' closes nothing")
         raise tokens.error(line, f"expected MOTION after the hierarchy, found {token!r}")
-    skeleton = Skeleton(
-        names=tuple(names),
-        parents=np.array(parents),
-        offsets=np.array(offsets, dtype=np.float64),
-        channels=tuple(c or () for c in channels),
-        end_sites=tuple((j, tuple(off)) for j, off in end_sites),
-    )
+    try:
+        skeleton = Skeleton(
+            names=tuple(names),
+            parents=np.array(parents),
+            offsets=np.array(offsets, dtype=np.float64),
+            channels=tuple(c or () for c in channels),
+            end_sites=tuple((j, tuple(off)) for j, off in end_sites),
+        )
+    except MocapError as error:  # the checks above should catch everything first, with a line
+        raise tokens.error(None, str(error)) from None
     return skeleton, offset_owners
 
 
