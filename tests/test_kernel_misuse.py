@@ -5,32 +5,13 @@ functions called directly: a Python exception naming the argument, or the docume
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap import kernels as k
 from expressive_mocap import reference
 
 from conftest import BACKENDS
-
-RNG = np.random.default_rng(7)
-
-
-def quats(*shape):
-    return Rotation.random(int(np.prod(shape)), random_state=3).as_quat().reshape(*shape, 4)
-
-
-def layout(joints):
-    """Decode layout of ``joints`` joints with three rotation channels each (and positions on the root)."""
-    rotation_columns = np.arange(3, 3 + 3 * joints).reshape(joints, 3)
-    position_columns = np.full((joints, 3), -1)
-    position_columns[0] = [0, 1, 2]
-    return rotation_columns, np.tile(np.array([2, 0, 1], np.uint8), (joints, 1)), position_columns, RNG.normal(size=(joints, 3))
-
-
-def mlp_args(frames, inputs=5):
-    return RNG.normal(size=(frames, inputs)), [RNG.normal(size=(inputs, 4)), RNG.normal(size=(4, 3))], [RNG.normal(size=4), RNG.normal(size=3)], ["tanh", "linear"]
-
+from kernel_cases import CORE, RNG, contacts_args, features_args, layout, mlp_args, quats
 
 # Each public wrapper: a function of (frames, joints) giving its arguments, and the arrays'
 # names in order (what an error must name when that argument is broken).
@@ -156,33 +137,6 @@ def test_nan_and_infinity_propagate_the_same_way_in_both_backends(name, bad):
 
 core = pytest.importorskip("expressive_mocap._core") if em.rust_available() else None
 rust_only = pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
-
-
-def contacts_args(frames, feet=2, points=2):
-    return (RNG.normal(size=(frames, feet, points, 3)), 1 / 30, 0.0, 0.1, 1.0, 3, False)
-
-
-def features_args(frames):
-    return (RNG.normal(size=(frames, 3, 3)), quats(frames, 2), RNG.random((frames, 2)) > 0.5, quats(1, 2)[0], 1 / 30, 1.7, 0.9, 0.0, 10)
-
-
-# Name -> (arguments for F frames, names of the array arguments in order).
-CORE = {
-    "parse_motion_block": (lambda f: (b"1 2 3\n" * f, 0, f, 3), []),
-    "format_motion_block": (lambda f: (RNG.normal(size=(f, 3)),), ["values"]),
-    "decode_channels": (lambda f: (RNG.normal(size=(f, 12)), *layout(3)), ["values", "rotation_columns", "orders", "position_columns", "offsets"]),
-    "read_motion_blocks": (lambda f: ([(b"1 2 3\n" * f, 0, f, 3, np.array([[0, 1, 2]]), *layout(1)[1:])],), []),
-    "euler_to_quat": (lambda f: (RNG.normal(size=(f, 3, 3)), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))), ["angles", "orders"]),
-    "quat_to_euler": (lambda f: (quats(f, 3), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))), ["quats", "orders"]),
-    "forward_kinematics": (lambda f: (quats(f, 3), RNG.normal(size=(f, 3, 3)), np.array([-1, 0, 1])), ["rotations", "translations", "parents"]),
-    "forward_kinematics_many": (lambda f: ([(quats(f, 3), RNG.normal(size=(f, 3, 3)), np.array([-1, 0, 1]))] * 2,), []),
-    "foot_contacts": (contacts_args, ["feet"]),
-    "air_time": (lambda f: (RNG.random((f, 2)) > 0.5, 1 / 30), ["contacts"]),
-    "dynamic_features": (features_args, ["points", "thighs", "contacts", "reference"]),
-    "mlp_forward": (lambda f: mlp_args(f), ["x"]),
-    "decouple_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0), ["original", "body"]),
-    "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
-}
 
 
 def test_every_rust_function_is_covered():
