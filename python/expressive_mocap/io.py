@@ -20,7 +20,7 @@ def atomic_write(path: str | os.PathLike, data: bytes) -> None:
     path = Path(path)
     folder = path.parent
     if not folder.is_dir():
-        raise MocapError(f"cannot write {path}: the folder {folder} does not exist")
+        raise MocapError(f"cannot write {path}: the folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}")
     try:
         handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     except OSError as error:
