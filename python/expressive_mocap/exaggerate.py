@@ -38,7 +38,7 @@ import numpy as np
 from . import quat
 from .errors import MocapError
 from .features import foot_contacts, footstrikes, mean_rotation
-from .io import atomic_write, finite_array, read_model_file
+from .io import atomic_write, check_keys, finite_array, read_model_file
 from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
 from .motion import Motion, Skeleton
 from .roles import JointRoles, actor_height
@@ -420,6 +420,7 @@ class ExaggerationModel:
         arrays, meta, name = read_model_file(source, "exaggeration model")
         if meta.get("format") != FORMAT or meta.get("version") != VERSION:
             raise MocapError(f"{name}: not an expressive-mocap exaggeration model of version {VERSION}")
+        check_keys(arrays, cls._ARRAYS, name)
         try:
             for key in ("joint_names", "dof_names"):
                 if not isinstance(meta[key], list) or not all(isinstance(n, str) for n in meta[key]):

@@ -57,20 +57,35 @@ def read_model_file(source: str | os.PathLike | bytes, what: str) -> tuple[dict[
     except OSError as error:
         raise MocapError(f"{name}: cannot read the model file: {error.strerror or error}") from None
     try:
+        _check_array_sizes(data)
         with np.load(io.BytesIO(data), allow_pickle=False) as archive:
-            if not isinstance(archive, np.lib.npyio.NpzFile):
-                raise ValueError("a single array, not an .npz archive")
-            unpacked = sum(info.file_size for info in archive.zip.infolist())
-            if unpacked > MAX_MODEL_BYTES:
-                raise ValueError(f"it unpacks to {unpacked} bytes, more than the limit of {MAX_MODEL_BYTES}")
             arrays = {k: archive[k] for k in archive.files}
         meta = json.loads(str(arrays.pop("meta")))
         if not isinstance(meta, dict):
             raise ValueError(f"the metadata is a JSON {type(meta).__name__}, not an object")
-    except (zipfile.BadZipFile, EOFError, OSError, KeyError, ValueError, TypeError, RuntimeError) as error:
+    except (zipfile.BadZipFile, EOFError, OSError, KeyError, ValueError, TypeError, RuntimeError, MemoryError) as error:
         # Damaged zips and arrays raise any of these; a pickled array raises ValueError.
         raise MocapError(f"{name}: not a readable {what} ({type(error).__name__}: {error})") from None
     return arrays, meta, name
+
+
+def _check_array_sizes(data: bytes) -> None:
+    """Read only the ``.npy`` headers of an ``.npz`` archive: refuse object arrays (pickles) and
+    arrays that would take more than :data:`MAX_MODEL_BYTES` together, before loading any."""
+    total = 0
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        for info in archive.infolist():
+            with archive.open(info) as member:
+                version = np.lib.format.read_magic(member)
+                if version not in ((1, 0), (2, 0)):
+                    raise ValueError(f"{info.filename}: .npy format version {version} is not read")
+                read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+                shape, _, dtype = read_header(member)
+            if dtype.hasobject:
+                raise ValueError(f"{info.filename} holds Python objects (pickles are never loaded)")
+            total += int(np.prod(shape, dtype=object)) * dtype.itemsize
+            if total > MAX_MODEL_BYTES:
+                raise ValueError(f"its arrays would take more than {MAX_MODEL_BYTES} bytes")
 
 
 def finite_array(arrays: dict, key: str, name: str, shape: tuple | None = None, kinds: str = "fiu") -> np.ndarray:
@@ -83,3 +98,10 @@ def finite_array(arrays: dict, key: str, name: str, shape: tuple | None = None, 
         expected = f"shape {list(shape)}" if shape is not None else "any shape"
         raise MocapError(f"{name}: {key!r} has shape {list(value.shape)} / dtype {value.dtype}, expected finite numbers of {expected}")
     return value
+
+
+def check_keys(arrays: dict, allowed, name: str) -> None:
+    """A model file holds the arrays of its format and nothing else."""
+    unknown = sorted(set(arrays) - set(allowed))
+    if unknown:
+        raise MocapError(f"{name}: unexpected arrays in the model file: {', '.join(map(repr, unknown[:5]))}")

@@ -26,7 +26,7 @@ import numpy as np
 from . import quat
 from .errors import MocapError
 from .features import FEATURE_NAMES, default_floor, dynamic_features, mean_rotation
-from .io import atomic_write, finite_array, read_model_file
+from .io import atomic_write, check_keys, finite_array, read_model_file
 from .mlp import Mlp
 from .motion import Motion
 from .roles import JointRoles
@@ -170,6 +170,8 @@ class BodyModel:
             network = Mlp.from_arrays(arrays, "network")
         except (KeyError, ValueError) as error:
             raise MocapError(f"{name}: the network's arrays are invalid ({error})") from None
+        layers = [f"network.{i}.{part}" for i in range(len(network.layers)) for part in ("weights", "bias")]
+        check_keys(arrays, ["predicted", "hemispheres", "thigh_reference", "calibration", "network.activations", *layers], name)
         n_features = len(FEATURE_NAMES)
         if network.n_inputs != n_features or network.n_outputs != 4 * len(predicted):
             raise MocapError(f"{name}: the network maps {network.n_inputs} -> {network.n_outputs}, expected {n_features} -> {4 * len(predicted)}")
