@@ -82,6 +82,14 @@ def test_bvh_error_is_a_value_error_of_the_package():
     assert issubclass(em.BVHError, em.MocapError) and issubclass(em.MocapError, ValueError)
 
 
+def test_the_hierarchy_cache_never_accepts_a_broken_hierarchy():
+    # Found by benches/fuzz_bvh.py: after a valid file with a brace glued to its OFFSET, the same
+    # hierarchy without that brace was taken from the cache of known shapes and read.
+    em.read_bvh(b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0}\nMOTION\nFrames: 1\nFrame Time: .09\n\n")
+    with pytest.raises(em.BVHError, match="never closed"):
+        em.read_bvh(b"HIERARCHY\nROOT a\n{\nOFFSET 1 0 0\nMOTION\nFrames: 1\nFrame Time: .09\n\n")
+
+
 # Huge claims (10^9 frames, 10^6 joints, ...) and their memory: tests/test_limits.py.
 
 

@@ -247,7 +247,9 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
 # changes from clip to clip). A hierarchy is cached under its exact text, and under its text with
 # the OFFSET numbers cut out: a file of a known shape then only converts its numbers. Anything
 # unusual takes the full parse, whose errors name the line.
-_OFFSET_NUMBERS = re.compile(r"(?<=OFFSET)[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)(?=[ \t]*\r?$)", re.MULTILINE)
+# A number is cut out only whole: "0}" stays in the shape (found by fuzz_bvh.py: "OFFSET 0 0 0}"
+# cached a shape that a later "OFFSET 0 0 0" without its brace matched, and was read).
+_OFFSET_NUMBERS = re.compile(r"(?<=OFFSET)[ \t]+([^\s{}]+)[ \t]+([^\s{}]+)[ \t]+([^\s{}]+)(?=[ \t]*\r?$)", re.MULTILINE)
 _SHAPES: dict[tuple[str, ...], tuple[Skeleton, np.ndarray, np.ndarray]] = {}
 _HIERARCHIES: dict[str, Skeleton] = {}
 _MAX_SHAPES = 64
