@@ -204,3 +204,10 @@ def test_rust_functions_refuse_bad_scalars_and_absurd_shapes(name, args, argumen
     with pytest.raises(ValueError) as caught:
         getattr(core, name)(*args())
     assert f"`{argument}`" in str(caught.value), str(caught.value)
+
+
+@pytest.mark.parametrize("contacts", [np.array([["x", ""]]), np.array([[None, 1]], dtype=object), np.zeros(3, bool)])
+def test_air_time_refuses_what_is_not_flags(contacts, backend):
+    # Text would have been cast to bool: "x" and "" silently True and False.
+    with pytest.raises(em.MocapError, match="`contacts`"):
+        em.features.air_time(contacts, 0.1)
