@@ -45,6 +45,7 @@ impl Zeroable for bool {}
 ///
 /// # Errors
 /// `KernelError::Argument` when `len` elements overflow or cannot be allocated.
+#[allow(clippy::same_length_and_capacity)] // the allocation holds exactly `len` zeroed elements
 pub fn zeros<T: Zeroable>(name: &'static str, len: usize) -> Result<Vec<T>> {
     let too_big = || KernelError::argument(name, format!("the output of {len} values does not fit in memory"));
     if len == 0 || std::mem::size_of::<T>() == 0 {

@@ -3,6 +3,7 @@ BVHError naming the limit, and no file under 1 MB makes the reader's peak memory
 than 100 MB. Each backend reads every file in one fresh process, its peak RSS reset between files."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -20,7 +21,7 @@ CASES = cases()
 
 @pytest.fixture(scope="module", params=BACKENDS)
 def report(request):
-    env = {"PYTHONPATH": str(Path(em.__file__).parent.parent)}
+    env = {**os.environ, "PYTHONPATH": str(Path(em.__file__).parent.parent)}
     done = subprocess.run([sys.executable, str(SCRIPT), request.param], capture_output=True, text=True, env=env, timeout=600)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
