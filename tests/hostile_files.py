@@ -51,11 +51,11 @@ def cases() -> dict[str, tuple[bytes, str]]:
         "duplicate joint names": (GOOD.replace(b"JOINT Head", b"JOINT Chest"), "more than once"),
         # At the limits: the largest files the reader accepts must still be cheap.
         "10^4 joints deep (the limits)": (chain(10_000) + motion(2, [b" ".join([b"0"] * 30_000)] * 2), "ok"),
-        "500,000 frames without channels": (star(1, b"CHANNELS 0") + motion(490_000, [b""] * 999_000)[:-1], "ok"),
-        "9000 joints decoded from one channel": (star(9_000) + motion(35, [b"1"] * 35 + [b" " * 640_000]), "ok"),
+        "330,000 frames without channels": (star(1, b"CHANNELS 0") + motion(330_000, [b""] * 999_000)[:-1], "ok"),
+        "9000 joints decoded from one channel": (star(9_000) + motion(23, [b"1"] * 23 + [b" " * 640_000]), "ok"),
         # Beyond them.
         "10^4 + 1 joints": (star(10_001, b"CHANNELS 0") + motion(1, [b""]), "more than 10000 joints"),
-        "10^6 joints (20 MB)": (star(1_000_000) + motion(1, [b"0"]), "longer than"),
+        "10^6 joints (42 MB)": (star(1_000_000) + motion(1, [b"0"]), "longer than"),
         "10^5 deep (7 MB)": (chain(100_000) + motion(1, [b"0 0 0" * 100_000]), "longer than"),
         "a 1 MB header of tokens": (one[:-2] + b"ab\n" * 340_000 + b"}\n" + motion(1, [b"0 0 0"]), "expected OFFSET"),
         "a 1 MB header of braces": (one[:-2] + b"{\n" * 500_000 + motion(1, [b"0 0 0"]), "expected OFFSET"),
@@ -69,8 +69,14 @@ def peak_mb() -> float:
 def main(backend: str) -> None:
     import expressive_mocap as em
 
+    import ctypes
+    import gc
+
+    trim = ctypes.CDLL("libc.so.6").malloc_trim
     report = {}
     for name, (data, _) in cases().items():
+        gc.collect()
+        trim(0)  # give freed memory back to the system, so the next file's peak counts in full
         Path("/proc/self/clear_refs").write_text("5")  # reset the peak RSS to the current RSS
         before = peak_mb()
         try:

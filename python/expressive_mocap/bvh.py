@@ -37,9 +37,10 @@ _FRAME_TIME = re.compile(rb"[ \t]*Frame[ \t]+Time[ \t]*:[ \t]*(\S*)[ \t]*\r?$", 
 MAX_HEADER_BYTES = 4 << 20  # the hierarchy, HIERARCHY to MOTION (a 300-joint skeleton takes ~30 KB)
 MAX_JOINTS = 10_000  # so also the depth of the hierarchy; read without recursion
 MAX_CHANNELS = 6  # per joint: 3 positions and 3 rotations
-# Frames x joints (decoded, 56 bytes a joint-frame) at most one per 2 bytes of the MOTION block
-# (a joint's 3 channels take 6 or more), or this many for tiny blocks (a skeleton without channels).
-BLOCK_BYTES_PER_JOINT_FRAME = 2
+# Frames x joints (decoded, 56 bytes a joint-frame; the NumPy twin peaks near 180) at most one per
+# 3 bytes of the MOTION block (a joint's 3 channels take 6 or more), or this many for tiny blocks
+# (a skeleton without channels).
+BLOCK_BYTES_PER_JOINT_FRAME = 3
 MIN_JOINT_FRAMES = 1 << 16
 _COUNT = re.compile(r"[0-9]{1,18}")  # ASCII digits only: str.isdigit() also takes '²'
 
