@@ -42,14 +42,15 @@ def _umask() -> int:
     return mask
 
 
-# A model file may not unpack to more than this (a zip bomb of zeros compresses 1000 to 1).
+# The arrays of a model file may not take more than this, checked from their .npy headers before
+# loading (a zip bomb of zeros compresses 1000 to 1, and a header alone can claim terabytes).
 MAX_MODEL_BYTES = 256 << 20
 
 
 def read_model_file(source: str | os.PathLike | bytes, what: str) -> tuple[dict[str, np.ndarray], dict, str]:
     """The arrays, the JSON metadata (the array ``meta``, a JSON object) and a name for errors of
-    an ``.npz`` model file, read with ``allow_pickle=False`` after checking that it unpacks to at
-    most :data:`MAX_MODEL_BYTES`. Any damage is a :class:`MocapError` naming the file and ``what``
+    an ``.npz`` model file, read with ``allow_pickle=False`` after checking from the ``.npy`` headers
+    that its arrays hold no objects and take at most :data:`MAX_MODEL_BYTES`. Any damage is a :class:`MocapError` naming the file and ``what``
     it should be; checking the arrays against the model's schema is the caller's part."""
     name = "<bytes>" if isinstance(source, (bytes, bytearray)) else str(source)
     try:
