@@ -2,7 +2,7 @@
 
 use glam::DQuat;
 
-use crate::error::{KernelError, Result};
+use crate::error::{product, zeros, KernelError, Result};
 use crate::parse::{parse_frames, FrameSink};
 use rayon::prelude::*;
 
@@ -78,12 +78,12 @@ impl FrameSink for ChannelLayout<'_> {
 /// `frames x channels` numbers.
 pub fn decode_channels(values: &[f64], frames: usize, layout: &ChannelLayout) -> Result<(Vec<f64>, Vec<f64>)> {
     layout.check()?;
-    if values.len() != frames * layout.channels {
+    if values.len() != product("values", frames, layout.channels)? {
         return Err(KernelError::argument("values", format!("expected {frames} x {} values, got {}", layout.channels, values.len())));
     }
     let (w0, w1) = layout.widths();
-    let mut rotations = vec![0.0; frames * w0];
-    let mut translations = vec![0.0; frames * w1];
+    let mut rotations = zeros("values", product("values", frames, w0)?)?;
+    let mut translations = zeros("values", product("values", frames, w1)?)?;
     let decode_frame = |(f, (rot, trans)): (usize, (&mut [f64], &mut [f64]))| {
         layout.emit(&values[f * layout.channels..(f + 1) * layout.channels], rot, trans);
     };
@@ -132,5 +132,16 @@ mod tests {
         assert!(decode_channels(&[0.0, 0.0], 1, &layout).is_err());
         let no_channels = ChannelLayout { channels: 0, rotation_columns: &[-1; 3], orders: &[[0, 1, 2]], position_columns: &[-1; 3], offsets: &[1.0; 3] };
         assert_eq!(decode_channels(&[], 2, &no_channels).unwrap().1, vec![1.0; 6]);
+    }
+
+    #[test]
+    fn a_huge_frame_count_without_channels_is_an_error_not_an_abort() {
+        let layout = ChannelLayout { channels: 0, rotation_columns: &[-1; 3], orders: &[[0, 1, 2]], position_columns: &[-1; 3], offsets: &[1.0; 3] };
+        for frames in [usize::MAX, 1 << 61] {
+            let e = decode_channels(&[], frames, &layout).unwrap_err();
+            assert!(e.to_string().contains("does not fit") || e.to_string().contains("overflow"), "{e}");
+        }
+        let e = read_motion_block(b"\n", usize::MAX, &layout).unwrap_err();
+        assert!(matches!(e, KernelError::Parse { .. }), "{e:?}");
     }
 }

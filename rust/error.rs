@@ -30,3 +30,44 @@ impl fmt::Display for KernelError {
 impl std::error::Error for KernelError {}
 
 pub type Result<T> = std::result::Result<T, KernelError>;
+
+/// Element types whose all-zero bit pattern is the value zero (or `false`).
+pub trait Zeroable: Copy {}
+impl Zeroable for f64 {}
+impl Zeroable for f32 {}
+impl Zeroable for bool {}
+
+/// `len` zeros for an output array, or an error naming `name` when that many do not fit in
+/// memory: a caller's shapes (e.g. a huge frame count with no channels, or a layer of a
+/// million outputs) must give an error, not abort the process as `vec![0.0; len]` would.
+/// Zeroed pages come from the allocator (`calloc`), as `vec!` does, so a large output is not
+/// written twice.
+///
+/// # Errors
+/// `KernelError::Argument` when `len` elements overflow or cannot be allocated.
+#[allow(clippy::same_length_and_capacity)] // the allocation holds exactly `len` zeroed elements
+pub fn zeros<T: Zeroable>(name: &'static str, len: usize) -> Result<Vec<T>> {
+    let too_big = || KernelError::argument(name, format!("the output of {len} values does not fit in memory"));
+    if len == 0 || std::mem::size_of::<T>() == 0 {
+        return Ok(Vec::new());
+    }
+    let layout = std::alloc::Layout::array::<T>(len).map_err(|_| too_big())?;
+    // SAFETY: `layout` has a non-zero size (len > 0, T not zero-sized). A non-null pointer
+    // from the global allocator with this layout holds `len` zeroed T, a valid value of every
+    // `Zeroable` type; the Vec takes ownership with the same capacity and layout.
+    unsafe {
+        let pointer = std::alloc::alloc_zeroed(layout).cast::<T>();
+        if pointer.is_null() {
+            return Err(too_big());
+        }
+        Ok(Vec::from_raw_parts(pointer, len, len))
+    }
+}
+
+/// `a * b`, or an error naming `name` when the product overflows.
+///
+/// # Errors
+/// `KernelError::Argument` on overflow.
+pub fn product(name: &'static str, a: usize, b: usize) -> Result<usize> {
+    a.checked_mul(b).ok_or_else(|| KernelError::argument(name, format!("{a} x {b} elements overflow")))
+}

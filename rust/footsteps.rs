@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 
-use crate::error::{KernelError, Result};
+use crate::error::{product, zeros, KernelError, Result};
 
 /// How contacts are detected and filtered. Lengths in the positions' units.
 #[derive(Debug, Clone, Copy)]
@@ -43,7 +43,7 @@ fn check_frame_time(frame_time: f64) -> Result<()> {
 /// `KernelError::Argument` when the length is not a multiple of `feet x points x 3`, either
 /// count is 0, `frame_time` is not positive or `min_frames` is 0.
 pub fn foot_contacts(positions: &[f64], feet: usize, points: usize, params: &ContactParams) -> Result<Vec<bool>> {
-    let per_frame = feet * points * 3;
+    let per_frame = product("feet", product("feet", feet, points)?, 3)?;
     if per_frame == 0 || positions.len() % per_frame != 0 {
         return Err(KernelError::argument("feet", format!("length {} is not frames x {feet} feet x {points} points x 3", positions.len())));
     }
@@ -52,13 +52,18 @@ pub fn foot_contacts(positions: &[f64], feet: usize, points: usize, params: &Con
         return Err(KernelError::argument("min_frames", "must be at least 1"));
     }
     let frames = positions.len() / per_frame;
+    if frames == 0 {
+        // Nothing to detect; and `feet` may be huge when there are no frames (a hang, found by
+        // `cargo fuzz`: the loop below ran once per foot).
+        return Ok(Vec::new());
+    }
     let point = |t: usize, s: usize, p: usize| DVec3::from_slice(&positions[((t * feet + s) * points + p) * 3..][..3]);
     let speed = |t: usize, s: usize, p: usize| match t {
         0 if params.causal || frames < 2 => 0.0,
         0 => point(1, s, p).distance(point(0, s, p)) / params.frame_time,
         _ => point(t, s, p).distance(point(t - 1, s, p)) / params.frame_time,
     };
-    let mut contacts = vec![false; frames * feet];
+    let mut contacts = zeros("feet", frames * feet)?;
     for s in 0..feet {
         let mut raw: Vec<bool> = (0..frames)
             .map(|t| (0..points).any(|p| point(t, s, p).y - params.floor < params.height_threshold && speed(t, s, p) < params.speed_threshold))
@@ -133,8 +138,9 @@ pub fn air_time(contacts: &[bool], feet: usize, frame_time: f64) -> Result<Vec<f
         return Err(KernelError::argument("contacts", format!("length {} is not frames x {feet} feet", contacts.len())));
     }
     check_frame_time(frame_time)?;
-    let mut out = vec![0.0; contacts.len()];
-    let mut since = vec![0_usize; feet]; // frames since the last contact
+    let mut out = zeros("contacts", contacts.len())?;
+    // Frames since the last contact, per foot (`feet` <= the length unless there are no frames).
+    let mut since = vec![0_usize; if contacts.is_empty() { 0 } else { feet }];
     for (flags, times) in contacts.chunks(feet).zip(out.chunks_mut(feet)) {
         for s in 0..feet {
             since[s] = if flags[s] { 0 } else { since[s] + 1 };
@@ -197,5 +203,15 @@ mod tests {
         assert!(foot_contacts(&[0.0; 6], 1, 1, &ContactParams { min_frames: 0, ..params }).is_err());
         assert!(foot_contacts(&[0.0; 6], 1, 1, &ContactParams { frame_time: 0.0, ..params }).is_err());
         assert!(air_time(&[true; 3], 2, 0.1).is_err());
+    }
+
+    #[test]
+    fn overflowing_counts_are_errors() {
+        let params = ContactParams { frame_time: 0.1, floor: 0.0, height_threshold: 1.0, speed_threshold: 1.0, min_frames: 3, causal: false };
+        assert!(foot_contacts(&[0.0; 6], usize::MAX / 2 + 1, 2, &params).is_err());
+        assert!(foot_contacts(&[0.0; 6], 1 << 62, 1 << 62, &params).is_err());
+        // No frames of a huge number of feet: nothing to allocate or loop over per foot.
+        assert_eq!(air_time(&[], usize::MAX, 0.1).unwrap(), Vec::<f64>::new());
+        assert_eq!(foot_contacts(&[], 1 << 61, 1, &params).unwrap(), Vec::<bool>::new());
     }
 }

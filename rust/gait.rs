@@ -103,8 +103,8 @@ pub fn clip_gait(
     features: Option<&FeatureRequest>,
     contacts: bool,
 ) -> Result<ClipGait> {
-    if joints == 0 || positions.len() % (joints * 3) != 0 || positions.is_empty() {
-        return Err(KernelError::argument("positions", format!("length {} is not frames (at least 1) x {joints} joints x 3", positions.len())));
+    if joints == 0 || positions.len() % (joints * 3) != 0 {
+        return Err(KernelError::argument("positions", format!("length {} is not frames x {joints} joints x 3", positions.len())));
     }
     let n_frames = positions.len() / (joints * 3);
     if rotations.len() != n_frames * joints * 4 {
@@ -118,6 +118,9 @@ pub fn clip_gait(
     }
     if !(frame_time.is_finite() && frame_time > 0.0) {
         return Err(KernelError::argument("frame_time", format!("must be a positive number of seconds, got {frame_time}")));
+    }
+    if n_frames == 0 {
+        return Ok(ClipGait { features: features.map(|_| Vec::new()), contacts: contacts.then(Vec::new) });
     }
     let point = |t: usize, j: usize| &positions[(t * joints + j) * 3..][..3];
     let mut toe_floor = None;
@@ -202,7 +205,8 @@ mod tests {
         assert!(clip_gait(&positions, &rotations, 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_ok());
         assert!(clip_gait(&positions[..20], &rotations, 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
         assert!(clip_gait(&positions, &rotations[..20], 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
-        assert!(clip_gait(&[], &[], 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
+        let empty = clip_gait(&[], &[], 7, 1.0 / 30.0, scale, &roles, &params, None, true).unwrap();
+        assert_eq!(empty, ClipGait { features: None, contacts: Some(Vec::new()) });
         let far = GaitJoints { toes: [5, 7], ..roles };
         assert!(clip_gait(&positions, &rotations, 7, 1.0 / 30.0, scale, &far, &params, None, true).is_err());
         assert!(clip_gait(&positions, &rotations, 7, 0.0, scale, &roles, &params, None, true).is_err());

@@ -7,7 +7,7 @@
 
 use rayon::prelude::*;
 
-use crate::error::{KernelError, Result};
+use crate::error::{product, zeros, KernelError, Result, Zeroable};
 
 /// Rows a block: big enough that a 300 x 300 GEMM amortises packing the weights (about
 /// 23 MFLOP a layer), small enough that a block's activations stay in L2.
@@ -45,7 +45,7 @@ pub struct Layer<'a, T> {
 }
 
 /// The floats a network runs in: a GEMM and a tanh.
-pub trait Scalar: Copy + Send + Sync + 'static {
+pub trait Scalar: Zeroable + Send + Sync + 'static {
     const ZERO: Self;
     /// `c = a b + c` with `a` `[m, k]`, `b` `[k, n]`, `c` `[m, n]`, all row-major and dense.
     fn gemm_acc(m: usize, k: usize, n: usize, a: &[Self], b: &[Self], c: &mut [Self]);
@@ -109,7 +109,9 @@ pub fn tanh_f64(x: f64) -> f64 {
         21844.0 / 6_081_075.0,
         -929_569.0 / 638_512_875.0,
     ];
-    let a = x.abs().min(20.0); // tanh(20) = 1 - 8e-18: 1 in float64
+    // tanh(20) = 1 - 8e-18: 1 in float64. Not `min`, which would turn NaN into 20 (and
+    // tanh(NaN) into 1: found by tests/test_kernel_misuse.py).
+    let a = if x.abs() > 20.0 { 20.0 } else { x.abs() };
     let e = exp_neg(-2.0 * a);
     let big = (1.0 - e) / (1.0 + e);
     let x2 = x * x;
@@ -166,7 +168,7 @@ pub fn check_layers<T>(layers: &[Layer<'_, T>], x_columns: usize) -> Result<()> 
             let name = if i == 0 { "x" } else { "weights" };
             return Err(KernelError::argument(name, format!("layer {i} takes {} inputs but {what}", layer.inputs)));
         }
-        if layer.weights.len() != layer.inputs * layer.outputs {
+        if layer.weights.len() != product("weights", layer.inputs, layer.outputs)? {
             return Err(KernelError::argument("weights", format!("layer {i}: {} values for shape [{}, {}]", layer.weights.len(), layer.inputs, layer.outputs)));
         }
         if layer.bias.len() != layer.outputs {
@@ -188,11 +190,11 @@ pub fn check_layers<T>(layers: &[Layer<'_, T>], x_columns: usize) -> Result<()> 
 pub fn mlp_forward<T: Scalar>(x: &[T], rows: usize, layers: &[Layer<'_, T>]) -> Result<Vec<T>> {
     let inputs = layers.first().map_or(0, |l| l.inputs);
     check_layers(layers, inputs)?;
-    if x.len() != rows * inputs {
+    if x.len() != product("x", rows, inputs)? {
         return Err(KernelError::argument("x", format!("{} values for {rows} rows of {inputs} inputs", x.len())));
     }
     let outputs = layers[layers.len() - 1].outputs;
-    let mut out = vec![T::ZERO; rows * outputs];
+    let mut out = zeros("weights", product("weights", rows, outputs)?)?;
     if rows == 0 {
         return Ok(out);
     }
@@ -203,7 +205,7 @@ pub fn mlp_forward<T: Scalar>(x: &[T], rows: usize, layers: &[Layer<'_, T>]) -> 
     };
     let flops_per_row: usize = layers.iter().map(|l| l.inputs * l.outputs).sum();
     // Parallel once there are two blocks and enough arithmetic to pay for waking threads.
-    if rows > BLOCK_ROWS && rows * flops_per_row >= 1 << 20 {
+    if rows > BLOCK_ROWS && rows.saturating_mul(flops_per_row) >= 1 << 20 {
         x.par_chunks(BLOCK_ROWS * inputs).zip(out.par_chunks_mut(BLOCK_ROWS * outputs)).for_each_init(buffers, block);
     } else {
         let mut scratch = buffers();
@@ -294,6 +296,7 @@ mod tests {
             worst64_abs = worst64_abs.max((ours - exact).abs());
             worst64_rel = worst64_rel.max((ours - exact).abs() / exact.abs().max(1e-300));
         }
+        assert!(tanh_f64(f64::NAN).is_nan() && tanh_f32(f32::NAN).is_nan());
         for x in [0.0, -0.0, 1e-300, -1e-12, 30.0, -30.0, 1e6, f64::MAX] {
             assert!((tanh_f64(x) - x.tanh()).abs() <= 1e-15 * x.tanh().abs().max(1e-300), "{x}");
             assert!((tanh_f32(x as f32) - (x as f32).tanh()).abs() <= 1e-6 * (x as f32).tanh().abs().max(1e-30), "{x}");
@@ -324,5 +327,19 @@ mod tests {
         let good = [layer(&w, &b3, 2, Activation::Tanh)];
         assert!(message(mlp_forward(&[0.0; 5], 2, &good)).contains("`x`"));
         assert!(Activation::parse("relu", 4).unwrap_err().to_string().contains("layer 4"));
+    }
+
+    #[test]
+    fn overflowing_or_unallocatable_shapes_are_errors() {
+        let w = [0.0; 2];
+        let huge = [Layer { weights: &w, bias: &w, inputs: usize::MAX / 2 + 1, outputs: 2, activation: Activation::Linear }];
+        assert!(mlp_forward(&[0.0; 2], 1, &huge).is_err());
+        // A real 1 x 2 layer fed rows that overflow rows x inputs.
+        let small = [layer(&w, &w[..2], 1, Activation::Linear)];
+        assert!(mlp_forward(&[0.0; 2], usize::MAX, &small).is_err());
+        // rows x outputs too big to allocate: an error, not an abort.
+        let wide = [Layer { weights: &w, bias: &w, inputs: 1, outputs: 2, activation: Activation::Linear }];
+        assert!(mlp_forward::<f64>(&[], 0, &wide).unwrap().is_empty());
+        assert!(crate::error::zeros::<f64>("x", usize::MAX / 4).is_err());
     }
 }

@@ -7,7 +7,7 @@
 
 use rayon::prelude::*;
 
-use crate::error::{KernelError, Result};
+use crate::error::{product, zeros, KernelError, Result};
 
 /// Blocks larger than this are split into chunks parsed in parallel.
 const PARALLEL_BLOCK_BYTES: usize = 1 << 20;
@@ -57,7 +57,12 @@ pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, 
         if let Some(line) = lines(block).position(|l| !is_blank(l)) {
             return Err(KernelError::Parse { line, message: "expected 0 values (the hierarchy has no CHANNELS)".into() });
         }
-        let (mut first, mut second) = (vec![0.0; frames * w0], vec![0.0; frames * w1]);
+        // Still one (blank) line a frame: Frames cannot claim more than the block has.
+        let found = lines(block).count();
+        if frames > found {
+            return Err(truncated(block, frames, found));
+        }
+        let (mut first, mut second) = outputs(frames, w0, w1)?;
         for f in 0..frames {
             sink.emit(&[], &mut first[f * w0..(f + 1) * w0], &mut second[f * w1..(f + 1) * w1]);
         }
@@ -66,10 +71,11 @@ pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, 
     if block.len() > PARALLEL_BLOCK_BYTES {
         return parse_in_parallel(block, frames, channels, sink);
     }
-    // A frame line takes at least 2 bytes a value ("0 0 ... 0\n"): never allocate more frames
-    // than the block can hold, whatever Frames claims.
-    let room = frames.min(block.len() / (2 * channels) + 1);
-    let (mut first, mut second) = (vec![0.0; room * w0], vec![0.0; room * w1]);
+    // A frame line takes at least 2 bytes a value ("0 0 ... 0\n"): never allocate more
+    // frames than the block can hold, whatever Frames claims. One more than the block's whole
+    // frames, so that a bad line after them is still reached and named, as the NumPy twin does.
+    let room = frames.min(block.len() / channels.saturating_mul(2) + 1);
+    let (mut first, mut second) = outputs(room, w0, w1)?;
     let end = parse_chunk(block, channels, room, sink, &mut first, &mut second).map_err(|(line, message)| KernelError::Parse { line, message })?;
     if end.frames < frames {
         return Err(truncated(block, frames, end.frames));
@@ -89,8 +95,7 @@ fn parse_in_parallel<S: FrameSink>(block: &[u8], frames: usize, channels: usize,
     let total: usize = counts.iter().map(|&(frame_lines, _)| frame_lines).sum();
     let usable = total.min(frames);
 
-    let mut first = vec![0.0; usable * w0];
-    let mut second = vec![0.0; usable * w1];
+    let (mut first, mut second) = outputs(usable, w0, w1)?;
     let mut jobs = Vec::with_capacity(chunks.len());
     let (mut rest0, mut rest1) = (first.as_mut_slice(), second.as_mut_slice());
     let (mut frames_before, mut lines_before) = (0, 0);
@@ -118,6 +123,11 @@ fn parse_in_parallel<S: FrameSink>(block: &[u8], frames: usize, channels: usize,
         return Err(truncated(block, frames, total));
     }
     Ok((first, second))
+}
+
+/// The two zeroed outputs of `frames` frames of `w0` and `w1` numbers.
+fn outputs(frames: usize, w0: usize, w1: usize) -> Result<(Vec<f64>, Vec<f64>)> {
+    Ok((zeros("frames", product("frames", frames, w0)?)?, zeros("frames", product("frames", frames, w1)?)?))
 }
 
 /// Split into about `parts` pieces, each ending just after a newline (the last at the end).
@@ -194,7 +204,8 @@ fn parse_chunk<S: FrameSink>(
     out1: &mut [f64],
 ) -> std::result::Result<ChunkEnd, (usize, String)> {
     let (w0, w1) = sink.widths();
-    let mut values = Vec::with_capacity(channels);
+    // A line cannot hold more values than half its bytes (a caller may pass any `channels`).
+    let mut values = Vec::with_capacity(channels.min(chunk.len() / 2 + 1));
     let (mut i, mut line, mut frame) = (0, 0, 0);
     while frame < take && i < chunk.len() {
         values.clear();
@@ -299,5 +310,23 @@ mod tests {
         assert_eq!(e, KernelError::Parse { line: lines, message: "\"oops\" is not a number".into() });
         let e = parse_motion_block(text.as_bytes(), 59_000, 3).unwrap_err();
         assert!(matches!(e, KernelError::Parse { line, .. } if line == 59_000 + 59), "{e:?}");
+    }
+
+    #[test]
+    fn absurd_counts_are_refused_without_allocating() {
+        // Found by `cargo fuzz` (motion_block): Vec::with_capacity(channels) panicked.
+        assert!(parse_motion_block(b"1 2\n", 1, usize::MAX).is_err());
+        assert!(parse_motion_block(b"", 0, usize::MAX / 2 + 1).unwrap().is_empty());
+        // No channels: one blank line a frame, so Frames cannot claim more lines than there are.
+        let e = parse_motion_block(b"\n\n", usize::MAX, 0).unwrap_err();
+        assert!(e.to_string().contains("truncated"), "{e}");
+        assert_eq!(parse_motion_block(b"\n\n", 3, 0).unwrap(), Vec::<f64>::new());
+    }
+
+    #[test]
+    fn a_short_line_is_named_even_when_frames_claims_more_than_the_block_holds() {
+        // Found by benches/fuzz_bvh.py --compare: a tighter allocation bound stopped before line 0.
+        let e = parse_motion_block(b"1.5 91.0\n2", 4, 6).unwrap_err();
+        assert!(matches!(e, KernelError::Parse { line: 0, ref message } if message.contains("expected 6 values")), "{e:?}");
     }
 }

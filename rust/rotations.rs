@@ -56,6 +56,9 @@ pub fn euler_to_quat_one(degrees: [f64; 3], order: Order) -> DQuat {
 #[must_use]
 #[inline]
 pub fn quat_to_euler_one(q: DQuat, order: Order) -> [f64; 3] {
+    if !q.is_finite() {
+        return [f64::NAN; 3]; // all three angles, as the NumPy twin (not a rotation at all)
+    }
     let m = DMat3::from_quat(q);
     // r(row, col) of the rotation matrix.
     let r = |row: u8, col: u8| m.col(col as usize)[row as usize];
@@ -157,6 +160,12 @@ mod tests {
         // Z 90 then (in the rotated frame) X 90: maps the x axis to y.
         let q = euler_to_quat_one([90.0, 90.0, 0.0], [2, 0, 1]);
         assert!((q * DVec3::X - DVec3::Y).length() < 1e-12);
+    }
+
+    #[test]
+    fn a_non_finite_quaternion_gives_three_nans() {
+        let e = quat_to_euler(&[f64::NAN, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, f64::INFINITY], &[[2, 0, 1]]).unwrap();
+        assert!(e.iter().all(|v| v.is_nan()), "{e:?}");
     }
 
     #[test]

@@ -102,7 +102,7 @@ def test_rust_binding_refuses_mixed_dtypes_and_non_contiguous_arrays():
         _core.mlp_forward(np.zeros((3, 4), np.float32), [w], [b], ["tanh"])
     with pytest.raises(TypeError, match="`x`: expected a 2-D float32 or float64"):
         _core.mlp_forward(np.zeros((3, 4), np.int32), [w], [b], ["tanh"])
-    with pytest.raises(TypeError):
+    with pytest.raises(TypeError, match="`x`: expected a C-contiguous array"):
         _core.mlp_forward(np.zeros((6, 4))[::2], [w], [b], ["tanh"])
 
 

@@ -12,6 +12,8 @@ from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 
+from kernel_cases import CORE
+
 pytestmark = pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
 
 
@@ -70,3 +72,32 @@ def test_concurrent_calls_match_serial_calls(mixed_path):
         np.testing.assert_array_equal(world_pos, serial[1])
     for motion in reads:
         np.testing.assert_array_equal(motion.rotations, serial_read.rotations)
+
+
+# Frames per call: enough for each kernel's parallel path (16,384 joint-frames; a MOTION block
+# over 1 MB), so Python threads and rayon threads run at once.
+BIG = {"parse_motion_block": 200_000, "read_motion_blocks": 200_000, "format_motion_block": 20_000}
+
+
+def _leaves(result):
+    if isinstance(result, (tuple, list)):
+        return [leaf for item in result for leaf in _leaves(item)]
+    return [result]
+
+
+@pytest.mark.parametrize("name", sorted(CORE))
+def test_every_kernel_gives_serial_results_from_concurrent_threads(name):
+    from expressive_mocap import _core
+
+    args = CORE[name][0](BIG.get(name, 6000))
+    kernel = getattr(_core, name)
+    serial = _leaves(kernel(*args))
+    with ThreadPoolExecutor(4) as pool:
+        concurrent = list(pool.map(lambda _: _leaves(kernel(*args)), range(8)))
+    for leaves in concurrent:
+        assert len(leaves) == len(serial)
+        for got, want in zip(leaves, serial):
+            if isinstance(want, bytes):
+                assert got == want
+            else:
+                np.testing.assert_array_equal(got, want)

@@ -32,6 +32,19 @@ _FRAMES = re.compile(rb"[ \t]*Frames[ \t]*:[ \t]*(\S*)[ \t]*\r?$", re.IGNORECASE
 _FRAME_TIME = re.compile(rb"[ \t]*Frame[ \t]+Time[ \t]*:[ \t]*(\S*)[ \t]*\r?$", re.IGNORECASE)
 
 
+# Limits of the reader (README, "Limits"): within them, memory stays proportional to the file's
+# size (a file under 1 MB never takes more than 100 MB); beyond them, a BVHError names the limit.
+MAX_HEADER_BYTES = 4 << 20  # the hierarchy, HIERARCHY to MOTION (a 300-joint skeleton takes ~30 KB)
+MAX_JOINTS = 10_000  # so also the depth of the hierarchy; read without recursion
+MAX_CHANNELS = 6  # per joint: 3 positions and 3 rotations
+# Frames x joints (decoded, 56 bytes a joint-frame; the NumPy twin peaks near 180) at most one per
+# 3 bytes of the MOTION block (a joint's 3 channels take 6 or more), or this many for tiny blocks
+# (a skeleton without channels).
+BLOCK_BYTES_PER_JOINT_FRAME = 3
+MIN_JOINT_FRAMES = 1 << 16
+_COUNT = re.compile(r"[0-9]{1,18}")  # ASCII digits only: str.isdigit() also takes '²'
+
+
 @dataclass
 class _Header:
     skeleton: Skeleton
@@ -141,8 +154,16 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
     # Stack of open blocks: a joint index, or -1 - (index into end_sites) for an End Site.
     stack: list[int] = []
 
+    first_line: dict[str, int] = {}  # of each joint name
+
     def open_joint(keyword_line: int, parent: int) -> None:
-        names.append(tokens.name_on_line(keyword_line, "joint"))
+        if len(names) == MAX_JOINTS:
+            raise tokens.error(keyword_line, f"more than {MAX_JOINTS} joints: the reader's limit (see Limits in the README)")
+        name = tokens.name_on_line(keyword_line, "joint")
+        if name in first_line:
+            raise tokens.error(keyword_line, f"joint name {name!r} appears more than once (first at line {first_line[name]})")
+        first_line[name] = keyword_line
+        names.append(name)
         parents.append(parent)
         offsets.append(None)
         channels.append(None)
@@ -177,8 +198,8 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
             if channels[top] is not None:
                 raise tokens.error(line, f"joint {names[top]!r} has a second CHANNELS line")
             count_token, count_line = tokens.next("the number of channels")
-            if not count_token.isdigit() or int(count_token) > 6:
-                raise tokens.error(count_line, f"expected a channel count from 0 to 6, found {count_token!r}")
+            if not _COUNT.fullmatch(count_token) or int(count_token) > MAX_CHANNELS:
+                raise tokens.error(count_line, f"expected a channel count from 0 to {MAX_CHANNELS}, found {count_token!r}")
             listed = tuple(tokens.words[tokens.pos : tokens.pos + int(count_token)])
             if len(listed) < int(count_token):
                 tokens.pos = len(tokens.words)
@@ -189,7 +210,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
             except MocapError as error:
                 bad = next(k for k, n in enumerate(listed) if n.lower() not in _CHANNEL_NAMES)
                 raise tokens.error(tokens.lines[tokens.pos - len(listed) + bad], str(error)) from None
-            if len(set(listed)) != len(listed):
+            if len(set(channels[top])) != len(listed):  # canonical names: "Xrotation" and "XROTATION" are one
                 raise tokens.error(line, f"joint {names[top]!r} lists a channel twice: {' '.join(listed)}")
         elif word == "JOINT":
             open_joint(line, top)
@@ -210,13 +231,16 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
         if token == "}":
             raise tokens.error(line, "unbalanced braces: this '}' closes nothing")
         raise tokens.error(line, f"expected MOTION after the hierarchy, found {token!r}")
-    skeleton = Skeleton(
-        names=tuple(names),
-        parents=np.array(parents),
-        offsets=np.array(offsets, dtype=np.float64),
-        channels=tuple(c or () for c in channels),
-        end_sites=tuple((j, tuple(off)) for j, off in end_sites),
-    )
+    try:
+        skeleton = Skeleton(
+            names=tuple(names),
+            parents=np.array(parents),
+            offsets=np.array(offsets, dtype=np.float64),
+            channels=tuple(c or () for c in channels),
+            end_sites=tuple((j, tuple(off)) for j, off in end_sites),
+        )
+    except MocapError as error:  # the checks above should catch everything first, with a line
+        raise tokens.error(None, str(error)) from None
     return skeleton, offset_owners
 
 
@@ -224,7 +248,9 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
 # changes from clip to clip). A hierarchy is cached under its exact text, and under its text with
 # the OFFSET numbers cut out: a file of a known shape then only converts its numbers. Anything
 # unusual takes the full parse, whose errors name the line.
-_OFFSET_NUMBERS = re.compile(r"(?<=OFFSET)[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)(?=[ \t]*\r?$)", re.MULTILINE)
+# A number is cut out only whole: "0}" stays in the shape (found by fuzz_bvh.py: "OFFSET 0 0 0}"
+# cached a shape that a later "OFFSET 0 0 0" without its brace matched, and was read).
+_OFFSET_NUMBERS = re.compile(r"(?<=OFFSET)[ \t]+([^\s{}]+)[ \t]+([^\s{}]+)[ \t]+([^\s{}]+)(?=[ \t]*\r?$)", re.MULTILINE)
 _SHAPES: dict[tuple[str, ...], tuple[Skeleton, np.ndarray, np.ndarray]] = {}
 _HIERARCHIES: dict[str, Skeleton] = {}
 _MAX_SHAPES = 64
@@ -295,6 +321,9 @@ def _parse_header(data: bytes, name: str) -> _Header:
     _check_text(data, name)
     motion = _MOTION.search(data)
     hierarchy_end = motion.start() if motion else len(data)
+    if hierarchy_end > MAX_HEADER_BYTES:
+        where = "the hierarchy" if motion else "the hierarchy (no MOTION line found)"
+        raise BVHError(name, None, f"{where} is longer than {MAX_HEADER_BYTES} bytes: the reader's limit (see Limits in the README)")
     try:
         text = data[:hierarchy_end].decode("utf-8")
     except UnicodeDecodeError as error:
@@ -317,15 +346,24 @@ def _parse_header(data: bytes, name: str) -> _Header:
         position = end + 1
 
     (frames_text, frames_line), (time_text, time_line) = values
-    if not frames_text.isdigit():
-        raise BVHError(name, frames_line, f"expected a whole number of frames after 'Frames:', found {frames_text!r}")
+    if not _COUNT.fullmatch(frames_text):
+        raise BVHError(name, frames_line, f"expected a whole number of frames (at most 18 digits) after 'Frames:', found {frames_text!r}")
+    frames, block_start = int(frames_text), min(position, len(data))
+    block_bytes = len(data) - block_start
+    if frames * skeleton.n_joints > max(block_bytes // BLOCK_BYTES_PER_JOINT_FRAME, MIN_JOINT_FRAMES):
+        raise BVHError(
+            name,
+            frames_line,
+            f"Frames: {frames} x {skeleton.n_joints} joints is more than the {block_bytes}-byte MOTION block can hold (the reader's "
+            f"limit: one joint-frame per {BLOCK_BYTES_PER_JOINT_FRAME} bytes of the block, or {MIN_JOINT_FRAMES}; see Limits in the README)",
+        )
     try:
         frame_time = float(time_text)
     except ValueError:
         frame_time = math.nan
     if not (math.isfinite(frame_time) and frame_time > 0):
         raise BVHError(name, time_line, f"expected a positive number of seconds after 'Frame Time:', found {time_text!r}")
-    return _Header(skeleton, int(frames_text), frame_time, min(position, len(data)), time_line + 1)
+    return _Header(skeleton, frames, frame_time, block_start, time_line + 1)
 
 
 def _block_error(name: str, header: _Header, error: Exception) -> BVHError:
@@ -417,6 +455,9 @@ def _number(value: float, decimals: int | None) -> str:
     return f"{value:.{decimals}f}"
 
 
+_MAX_INDENT = 16  # tabs: deeper joints are not indented further, so a deep chain's header stays linear
+
+
 def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
     """The text of a BVH file for ``motion``, in its skeleton's channel layout.
 
@@ -434,9 +475,9 @@ def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
 
     def close(joint: int, depth: int) -> None:
         for offset in sites.get(joint, []):
-            inner = "\t" * (depth + 1)
+            inner = "\t" * min(depth + 1, _MAX_INDENT)
             lines.extend([f"{inner}End Site", f"{inner}{{", offset_line(inner + "\t", offset), f"{inner}}}"])
-        lines.append("\t" * depth + "}")
+        lines.append("\t" * min(depth, _MAX_INDENT) + "}")
 
     open_joints: list[int] = []
     for j, parent in enumerate(skeleton.parents.tolist()):
@@ -444,7 +485,7 @@ def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
             close(open_joints.pop(), len(open_joints))
         if parent >= 0 and not open_joints:
             raise MocapError("joints must be in depth-first order (each subtree contiguous) to be written as BVH")
-        indent = "\t" * len(open_joints)
+        indent = "\t" * min(len(open_joints), _MAX_INDENT)
         lines.append(f"{indent}{'ROOT' if parent < 0 else 'JOINT'} {skeleton.names[j]}")
         lines.append(f"{indent}{{")
         lines.append(offset_line(indent + "\t", skeleton.offsets[j]))

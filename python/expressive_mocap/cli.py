@@ -599,11 +599,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _check_outputs(args) -> None:
+    """Refuse, before any work, an output whose folder is missing or unwritable: files go where
+    they are asked to (``-o``, ``--plot``), never next to an input, and the folders of ``demo``
+    and ``preprocess`` are created only inside an existing one."""
+    outputs = args.output if isinstance(getattr(args, "output", None), list) else [getattr(args, "output", None)]
+    for output in [*outputs, getattr(args, "plot", None)]:
+        if output is None:
+            continue
+        path = Path(output)
+        makes_folder = args.run in (cmd_demo, cmd_preprocess)  # their OUT is a folder, made if new
+        folder = path if makes_folder and path.is_dir() else path.parent
+        if not folder.is_dir():
+            what = "is not a folder" if folder.exists() else "does not exist"
+            raise MocapError(f"cannot write {output}: the folder {folder} {what}")
+        if not os.access(folder, os.W_OK):
+            raise MocapError(f"cannot write {output}: the folder {folder} is not writable")
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         if args.backend:
             backend.set_backend(args.backend)
+        _check_outputs(args)
         return args.run(args)
     except BrokenPipeError:
         # The reader went away (`| head`): stop quietly, and keep Python from complaining at exit.

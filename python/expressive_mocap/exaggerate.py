@@ -39,7 +39,7 @@ from . import quat
 from .errors import MocapError
 from .features import foot_contacts, footstrikes, mean_rotation
 from .ik import two_bone_ik
-from .io import atomic_write
+from .io import atomic_write, check_keys, finite_array, read_model_file
 from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
 from .motion import Motion, Skeleton
 from .roles import JointRoles, actor_height
@@ -428,21 +428,20 @@ class ExaggerationModel:
     def load(cls, source: str | os.PathLike | bytes) -> ExaggerationModel:
         """Read a model file written by :meth:`save` (``allow_pickle=False``; every array's shape is
         checked against the metadata, with a one-line error naming what is wrong)."""
-        name = "<bytes>" if isinstance(source, bytes) else str(source)
-        try:
-            data = source if isinstance(source, bytes) else Path(source).read_bytes()
-        except OSError as error:
-            raise MocapError(f"{name}: cannot read the model file: {error.strerror or error}") from None
-        try:
-            with np.load(io.BytesIO(data), allow_pickle=False) as archive:
-                arrays = {k: archive[k] for k in archive.files}
-            meta = json.loads(str(arrays.pop("meta")))
-        except Exception as error:  # damaged zips raise BadZipFile, ValueError, OSError, KeyError...
-            raise MocapError(f"{name}: not a readable exaggeration model ({type(error).__name__}: {error})") from None
-        if not isinstance(meta, dict) or meta.get("format") != FORMAT or meta.get("version") != VERSION:
+        arrays, meta, name = read_model_file(source, "exaggeration model")
+        if meta.get("format") != FORMAT or meta.get("version") != VERSION:
             raise MocapError(f"{name}: not an expressive-mocap exaggeration model of version {VERSION}")
+        check_keys(arrays, cls._ARRAYS, name)
         try:
+            for key in ("joint_names", "dof_names"):
+                if not isinstance(meta[key], list) or not all(isinstance(n, str) for n in meta[key]):
+                    raise MocapError(f"{name}: the metadata's {key} must be a list of names")
+            if not isinstance(meta.get("settings", {}), dict):
+                raise MocapError(f"{name}: the metadata's settings must be a JSON object")
             J, D = len(meta["joint_names"]), len(meta["dof_names"])
+            for key, ndim in (("basis", 2), ("trajectories", 4), ("mappings", 3)):
+                if finite_array(arrays, key, name, kinds="f").ndim != ndim:
+                    raise MocapError(f"{name}: {key!r} has shape {list(arrays[key].shape)}, expected {ndim} dimensions")
             T, r = arrays["basis"].shape
             P, K = arrays["trajectories"].shape[:2]
             degree = arrays["mappings"].shape[-1]
@@ -453,11 +452,13 @@ class ExaggerationModel:
                 "trajectories": (P, K, T, D),
             }
             for key, shape in shapes.items():
-                value = arrays[key]
-                if value.shape != shape or value.dtype.kind not in "fiub" or not np.isfinite(value.astype(np.float64)).all():
-                    raise MocapError(f"{name}: {key!r} has shape {list(value.shape)} / dtype {value.dtype}, expected finite numbers of shape {list(shape)}")
-            if D != 3 * J + 1 or meta["representation"] not in REPRESENTATIONS:
+                finite_array(arrays, key, name, shape, kinds="fiub")
+            if D != 3 * J + 1 or not isinstance(meta["representation"], str) or meta["representation"] not in REPRESENTATIONS:
                 raise MocapError(f"{name}: {D} DOFs for {J} joints in representation {meta['representation']!r}")
+            parents, orders = arrays["parents"].tolist(), arrays["orders"].tolist()
+            tree = all(p == -1 if j == 0 else p in range(j) for j, p in enumerate(parents))
+            if not tree or any(sorted(o) != [0, 1, 2] for o in orders) or int(meta["hips"]) not in range(J):
+                raise MocapError(f"{name}: the skeleton is inconsistent (parents must each come before their joint, orders be axis permutations, hips a joint)")
             return cls(
                 joint_names=tuple(meta["joint_names"]), dof_names=tuple(meta["dof_names"]), height=float(meta["height"]),
                 hips=int(meta["hips"]), representation=meta["representation"], energy=float(meta["energy"]),
@@ -466,6 +467,10 @@ class ExaggerationModel:
             )
         except KeyError as error:
             raise MocapError(f"{name}: model file lacks {error}") from None
+        except MocapError:
+            raise
+        except (TypeError, ValueError) as error:  # metadata of the wrong types, e.g. "height": "tall"
+            raise MocapError(f"{name}: invalid metadata ({type(error).__name__}: {error})") from None
 
     def check_skeleton(self, motion: Motion) -> None:
         if motion.skeleton.names != self.joint_names:

@@ -143,8 +143,8 @@ def air_time(contacts, frame_time: float) -> np.ndarray:
     """Seconds since each foot last left contact ``[F, S]`` from ``contacts bool [F, S]`` (0 in
     contact; a clip that starts in flight counts from one frame before its start)."""
     contacts = np.asarray(contacts)
-    if contacts.ndim != 2:
-        raise MocapError(f"argument `contacts`: expected shape [F, S], got {list(contacts.shape)}")
+    if contacts.ndim != 2 or contacts.dtype.kind not in "biu":
+        raise MocapError(f"argument `contacts`: expected flags [F, S] (bool or 0/1), got {contacts.dtype} of shape {list(contacts.shape)}")
     return kernels().air_time(np.ascontiguousarray(contacts, dtype=bool), _positive("frame_time", frame_time))
 
 

@@ -12,8 +12,18 @@ from .backend import kernels
 from .rotations import axes_of
 
 
+def _array(name: str, value, dtype, kinds: str = "biuf") -> np.ndarray:
+    """``value`` as a C-contiguous array of ``dtype``; a ValueError naming the argument when its
+    dtype kind is not one of ``kinds`` (numbers; integers only where indices are expected)."""
+    array = np.asarray(value)
+    if array.dtype.kind not in kinds:
+        wanted = "integers" if kinds == "iu" else "numbers"
+        raise ValueError(f"argument `{name}`: expected an array of {wanted}, got dtype {array.dtype}")
+    return np.ascontiguousarray(array, dtype=dtype)
+
+
 def _f64(name: str, array, last: int) -> np.ndarray:
-    array = np.ascontiguousarray(array, dtype=np.float64)
+    array = _array(name, array, np.float64)
     if array.ndim < 2 or array.shape[-1] != last:
         raise ValueError(f"argument `{name}`: expected shape [..., J, {last}], got {list(array.shape)}")
     return array
@@ -60,7 +70,7 @@ def forward_kinematics(rotations, translations, parents) -> tuple[np.ndarray, np
     """
     rotations = _f64("rotations", rotations, 4)
     translations = _f64("translations", translations, 3)
-    parents = np.ascontiguousarray(parents, dtype=np.int64)
+    parents = _array("parents", parents, np.int64, "iu")
     if parents.ndim != 1:
         raise ValueError(f"argument `parents`: expected shape [J], got {list(parents.shape)}")
     return kernels().forward_kinematics(rotations, translations, parents)
@@ -78,16 +88,18 @@ def decode_channels(values, rotation_columns, orders, position_columns, offsets)
 
     The layout arrays are those of :meth:`Skeleton.layout`; ``offsets [J, 3]`` are the rest offsets.
     """
-    values = np.ascontiguousarray(values, dtype=np.float64)
+    values = _array("values", values, np.float64)
     if values.ndim != 2:
         raise ValueError(f"argument `values`: expected shape [F, C], got {list(values.shape)}")
-    return kernels().decode_channels(
-        values,
-        np.ascontiguousarray(rotation_columns, dtype=np.int64),
-        np.ascontiguousarray(orders, dtype=np.uint8),
-        np.ascontiguousarray(position_columns, dtype=np.int64),
-        np.ascontiguousarray(offsets, dtype=np.float64),
-    )
+    rotation_columns = _array("rotation_columns", rotation_columns, np.int64, "iu")
+    orders = _array("orders", orders, np.uint8, "iu")
+    position_columns = _array("position_columns", position_columns, np.int64, "iu")
+    offsets = _array("offsets", offsets, np.float64)
+    joints = len(orders)
+    for name, array in (("rotation_columns", rotation_columns), ("orders", orders), ("position_columns", position_columns), ("offsets", offsets)):
+        if array.shape != (joints, 3):
+            raise ValueError(f"argument `{name}`: expected shape [{joints}, 3] (one row per joint), got {list(array.shape)}")
+    return kernels().decode_channels(values, rotation_columns, orders, position_columns, offsets)
 
 
 def decouple_rotations(original, body, gain: float = 2.0, exponent: float = 4.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -112,11 +124,10 @@ def _frames(array: np.ndarray) -> np.ndarray:
     return array.reshape(-1, *array.shape[-2:])
 
 
-def _float(array) -> np.ndarray:
-    """``array`` as a C-contiguous float32 or float64 array (float32 kept, anything else float64)."""
+def _float(name: str, array) -> np.ndarray:
+    """``array`` as a C-contiguous float32 or float64 array (float32 kept, other numbers float64)."""
     array = np.asarray(array)
-    dtype = np.float32 if array.dtype == np.float32 else np.float64
-    return np.ascontiguousarray(array, dtype=dtype)
+    return _array(name, array, np.float32 if array.dtype == np.float32 else np.float64)
 
 
 def mlp_forward(x, weights, biases, activations) -> np.ndarray:
@@ -126,7 +137,7 @@ def mlp_forward(x, weights, biases, activations) -> np.ndarray:
     folded into rows; ``weights[i] [in_i, out_i]``, ``biases[i] [out_i]`` (cast to the dtype of
     ``x``), ``activations[i]`` ``"tanh"`` or ``"linear"``. Returns ``[..., out]``.
     """
-    x = _float(x)
+    x = _float("x", x)
     if x.ndim < 1:
         raise ValueError(f"argument `x`: expected shape [..., in], got {list(x.shape)}")
     weights, biases, activations = list(weights), list(biases), [str(a) for a in activations]
@@ -138,8 +149,8 @@ def mlp_forward(x, weights, biases, activations) -> np.ndarray:
             raise ValueError(f"argument `weights`: layer {i} must be 2-D [in, out], got shape {list(np.shape(w))}")
         if np.ndim(b) != 1:
             raise ValueError(f"argument `biases`: layer {i} must be 1-D [out], got shape {list(np.shape(b))}")
-    weights = [np.ascontiguousarray(w, dtype=x.dtype) for w in weights]
-    biases = [np.ascontiguousarray(b, dtype=x.dtype) for b in biases]
+    weights = [_array("weights", w, x.dtype) for w in weights]
+    biases = [_array("biases", b, x.dtype) for b in biases]
     batch = x.shape[:-1]
     flat = x.reshape(-1, x.shape[-1])
     out = kernels().mlp_forward(flat, weights, biases, activations)

@@ -26,7 +26,7 @@ import numpy as np
 from . import quat
 from .errors import MocapError
 from .features import FEATURE_NAMES, default_floor, dynamic_features, mean_rotation
-from .io import atomic_write
+from .io import atomic_write, check_keys, finite_array, read_model_file
 from .mlp import Mlp
 from .motion import Motion
 from .roles import JointRoles
@@ -144,60 +144,46 @@ class BodyModel:
         """Read a model file (default: the model shipped with the package). Arrays only, no
         pickles; the contents are checked against the format, with a clear error otherwise."""
         if source is None:
-            data, name = shipped_model_bytes(), f"the shipped {DEFAULT_MODEL}"
-        elif isinstance(source, bytes):
-            data, name = source, "<bytes>"
-        else:
-            name = str(source)
-            try:
-                data = Path(source).read_bytes()
-            except OSError as error:
-                raise MocapError(f"{name}: cannot read the model file: {error.strerror or error}") from None
-        try:
-            with np.load(io.BytesIO(data), allow_pickle=False) as archive:
-                arrays = {k: archive[k] for k in archive.files}
-        except Exception as error:  # damaged zips raise BadZipFile, ValueError, OSError, EOFError...
-            raise MocapError(f"{name}: not a readable model file ({type(error).__name__}: {error})") from None
-        return cls._from_arrays(arrays, name)
+            arrays, meta, _ = read_model_file(shipped_model_bytes(), "model file")
+            return cls._from_arrays(arrays, meta, f"the shipped {DEFAULT_MODEL}")
+        return cls._from_arrays(*read_model_file(source, "model file"))
 
     @classmethod
-    def _from_arrays(cls, arrays: dict, name: str) -> BodyModel:
-        def need(key: str, shape: tuple | None = None) -> np.ndarray:
-            if key not in arrays:
-                raise MocapError(f"{name}: model file lacks {key!r}")
-            value = arrays[key]
-            if value.dtype.kind not in "fiu" or (shape is not None and value.shape != shape) or not np.isfinite(value).all():
-                raise MocapError(f"{name}: {key!r} has shape {value.shape} / dtype {value.dtype}, expected finite numbers of shape {shape}")
-            return value
-
-        try:
-            meta = json.loads(str(arrays["meta"]))
-        except (KeyError, ValueError) as error:
-            raise MocapError(f"{name}: model file lacks readable metadata ({error})") from None
+    def _from_arrays(cls, arrays: dict, meta: dict, name: str) -> BodyModel:
         if meta.get("format") != FORMAT or meta.get("version") != VERSION:
             raise MocapError(f"{name}: not an expressive-mocap body model of version {VERSION} (format {meta.get('format')!r}, version {meta.get('version')!r})")
         if meta.get("feature_names") != list(FEATURE_NAMES):
             raise MocapError(f"{name}: the model's features {meta.get('feature_names')} are not this version's {list(FEATURE_NAMES)}")
-        joint_names = tuple(meta.get("joint_names", ()))
-        predicted = need("predicted")
-        if predicted.ndim != 1 or len(predicted) == 0 or predicted.min() < 0 or predicted.max() >= len(joint_names):
-            raise MocapError(f"{name}: predicted joint indices do not fit the {len(joint_names)} joints")
+        joint_names = meta.get("joint_names")
+        if not isinstance(joint_names, list) or not joint_names or not all(isinstance(n, str) for n in joint_names) or len(set(joint_names)) != len(joint_names):
+            raise MocapError(f"{name}: the metadata's joint_names must be a list of distinct joint names")
+        for key in ("settings", "report"):
+            if not isinstance(meta.get(key, {}), dict):
+                raise MocapError(f"{name}: the metadata's {key} must be a JSON object")
+        predicted = finite_array(arrays, "predicted", name, kinds="iu")
+        if predicted.ndim != 1 or len(predicted) == 0 or predicted.min() < 0 or predicted.max() >= len(joint_names) or len(set(predicted.tolist())) != len(predicted):
+            raise MocapError(f"{name}: predicted joint indices must be distinct indices of the {len(joint_names)} joints")
+        for key in arrays:
+            if key.startswith("network.") and not key.endswith(".activations"):
+                finite_array(arrays, key, name, kinds="f")  # weights and biases: finite floats
         try:
             network = Mlp.from_arrays(arrays, "network")
         except (KeyError, ValueError) as error:
             raise MocapError(f"{name}: the network's arrays are invalid ({error})") from None
+        layers = [f"network.{i}.{part}" for i in range(len(network.layers)) for part in ("weights", "bias")]
+        check_keys(arrays, ["predicted", "hemispheres", "thigh_reference", "calibration", "network.activations", *layers], name)
         n_features = len(FEATURE_NAMES)
         if network.n_inputs != n_features or network.n_outputs != 4 * len(predicted):
             raise MocapError(f"{name}: the network maps {network.n_inputs} -> {network.n_outputs}, expected {n_features} -> {4 * len(predicted)}")
         return cls(
-            joint_names=joint_names,
+            joint_names=tuple(joint_names),
             predicted=predicted.astype(np.int64),
-            hemispheres=need("hemispheres", (len(predicted), 4)),
-            thigh_reference=need("thigh_reference", (2, 4)),
+            hemispheres=finite_array(arrays, "hemispheres", name, (len(predicted), 4), kinds="f"),
+            thigh_reference=finite_array(arrays, "thigh_reference", name, (2, 4), kinds="f"),
             network=network,
             settings=meta.get("settings", {}),
             report=meta.get("report", {}),
-            calibration=need("calibration", (len(joint_names), 4)) if "calibration" in arrays else None,
+            calibration=finite_array(arrays, "calibration", name, (len(joint_names), 4), kinds="f") if "calibration" in arrays else None,
         )
 
 

@@ -3,7 +3,7 @@
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use super::{array3, shape_error, to_py};
+use super::{array3, contiguous, shape_error, to_py};
 
 /// Decouple `original` from `body` rotations (both [F, J, 4], x y z w): returns the filtered
 /// expressive rotations E* [F, J, 4], the recovered body mechanics B' [F, J, 4] and the
@@ -22,7 +22,7 @@ fn decouple_rotations<'py>(
     if shape[2] != 4 || body.shape() != shape.as_slice() {
         return Err(shape_error("body", &format!("{shape:?} like `original` (quaternions [F, J, 4])"), body.shape()));
     }
-    let (o, b) = (original.as_slice()?, body.as_slice()?);
+    let (o, b) = (contiguous("original", &original)?, contiguous("body", &body)?);
     let (e, recovered, a) = py.detach(|| crate::decouple::decouple(o, b, gain, exponent)).map_err(to_py)?;
     let activity = numpy::ndarray::Array2::from_shape_vec((shape[0], shape[1]), a).map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     let dims = (shape[0], shape[1], 4);
@@ -37,7 +37,7 @@ fn compose_rotations<'py>(py: Python<'py>, expressive: PyReadonlyArray3<'py, f64
     if shape[2] != 4 || expressive.shape() != shape.as_slice() {
         return Err(shape_error("expressive", &format!("{shape:?} like `body` (quaternions [F, J, 4])"), expressive.shape()));
     }
-    let (e, b) = (expressive.as_slice()?, body.as_slice()?);
+    let (e, b) = (contiguous("expressive", &expressive)?, contiguous("body", &body)?);
     let out = py.detach(|| crate::decouple::compose(e, b, scale)).map_err(to_py)?;
     Ok(array3(out, (shape[0], shape[1], 4))?.into_pyarray(py))
 }

@@ -5,7 +5,7 @@ use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3, PyReadonl
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use super::{shape_error, to_py};
+use super::{contiguous, shape_error, to_py};
 use crate::features::{FeatureParams, N_FEATURES};
 use crate::footsteps::ContactParams;
 
@@ -32,7 +32,7 @@ fn foot_contacts<'py>(
         return Err(shape_error("feet", "[F, S, P, 3]", &shape));
     }
     let params = ContactParams { frame_time, floor, height_threshold, speed_threshold, min_frames, causal };
-    let positions = feet.as_slice()?;
+    let positions = contiguous("feet", &feet)?;
     let contacts = py.detach(|| crate::footsteps::foot_contacts(positions, shape[1], shape[2], &params)).map_err(to_py)?;
     Ok(array2(contacts, (shape[0], shape[1]))?.into_pyarray(py))
 }
@@ -44,7 +44,7 @@ fn air_time<'py>(py: Python<'py>, contacts: PyReadonlyArray2<'py, bool>, frame_t
     if shape[1] == 0 {
         return Err(shape_error("contacts", "[F, S]", &shape));
     }
-    let flags = contacts.as_slice()?;
+    let flags = contiguous("contacts", &contacts)?;
     let times = py.detach(|| crate::footsteps::air_time(flags, shape[1], frame_time)).map_err(to_py)?;
     Ok(array2(times, (shape[0], shape[1]))?.into_pyarray(py))
 }
@@ -79,7 +79,7 @@ fn dynamic_features<'py>(
         return Err(shape_error("reference", "[2, 4]", reference.shape()));
     }
     let params = FeatureParams { frame_time, height, hips_rest_height, floor, window };
-    let (p, t, c, r) = (points.as_slice()?, thighs.as_slice()?, contacts.as_slice()?, reference.as_slice()?);
+    let (p, t, c, r) = (contiguous("points", &points)?, contiguous("thighs", &thighs)?, contiguous("contacts", &contacts)?, contiguous("reference", &reference)?);
     let features = py.detach(|| crate::features::dynamic_features(p, t, c, r, &params)).map_err(to_py)?;
     Ok(array2(features, (frames, N_FEATURES))?.into_pyarray(py))
 }

@@ -5,7 +5,7 @@ use numpy::{Element, IntoPyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedA
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
-use super::{shape_error, to_py};
+use super::{contiguous, shape_error, to_py};
 use crate::mlp::{mlp_forward as forward, Activation, Layer, Scalar};
 
 fn dtype_error(name: &str, layer: usize, array: &Bound<'_, PyAny>, dtype: &str) -> PyErr {
@@ -45,9 +45,9 @@ fn forward_typed<'py, T: Scalar + Element>(
     let mut layers = Vec::with_capacity(n);
     for ((w, b), activation) in ws.iter().zip(&bs).zip(acts) {
         let (inputs, outputs) = (w.shape()[0], w.shape()[1]);
-        layers.push(Layer { weights: w.as_slice()?, bias: b.as_slice()?, inputs, outputs, activation });
+        layers.push(Layer { weights: contiguous("weights", w)?, bias: contiguous("biases", b)?, inputs, outputs, activation });
     }
-    let xs = x.as_slice()?;
+    let xs = contiguous("x", x)?;
     let out = py.detach(|| forward(xs, rows, &layers)).map_err(to_py)?;
     let outputs = layers.last().map_or(0, |l| l.outputs);
     let array = Array2::from_shape_vec((rows, outputs), out).map_err(|e| PyValueError::new_err(e.to_string()))?;

@@ -1,9 +1,9 @@
 //! PyO3 bindings: argument checks, GIL release, arrays in and out. No algorithm lives here.
 
-use numpy::ndarray::{Array2, Array3};
-use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::ndarray::{Array2, Array3, Dimension};
+use numpy::{Element, IntoPyArray, PyReadonlyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::create_exception;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
@@ -28,11 +28,17 @@ fn shape_error(name: &str, expected: &str, got: &[usize]) -> PyErr {
     PyValueError::new_err(format!("argument `{name}`: expected shape {expected}, got {got:?}"))
 }
 
+/// The elements of a C-contiguous array, or a TypeError naming the argument (the numpy crate's
+/// own error does not say which argument).
+fn contiguous<'a, T: Element, D: Dimension>(name: &str, array: &'a PyReadonlyArray<'_, T, D>) -> PyResult<&'a [T]> {
+    array.as_slice().map_err(|_| PyTypeError::new_err(format!("argument `{name}`: expected a C-contiguous array (see numpy.ascontiguousarray)")))
+}
+
 fn orders_from(orders: &PyReadonlyArray2<'_, u8>) -> PyResult<Vec<Order>> {
     if orders.shape()[1] != 3 {
         return Err(shape_error("orders", "[J, 3]", orders.shape()));
     }
-    Ok(orders.as_slice()?.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
+    Ok(contiguous("orders", orders)?.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
 }
 
 fn array3(values: Vec<f64>, shape: (usize, usize, usize)) -> PyResult<Array3<f64>> {
@@ -71,10 +77,10 @@ impl OwnedLayout {
         let (rotation_columns, orders, position_columns, offsets) = arrays;
         Ok(Self {
             channels,
-            rotation_columns: rotation_columns.as_slice()?.to_vec(),
+            rotation_columns: contiguous("rotation_columns", rotation_columns)?.to_vec(),
             orders: orders_from(orders)?,
-            position_columns: position_columns.as_slice()?.to_vec(),
-            offsets: offsets.as_slice()?.to_vec(),
+            position_columns: contiguous("position_columns", position_columns)?.to_vec(),
+            offsets: contiguous("offsets", offsets)?.to_vec(),
         })
     }
 
@@ -110,7 +116,7 @@ fn decode_channels<'py>(
 ) -> PyResult<Py<PyAny>> {
     let (frames, channels) = (values.shape()[0], values.shape()[1]);
     let layout = OwnedLayout::new(channels, &(rotation_columns, orders, position_columns, offsets))?;
-    let slice = values.as_slice()?;
+    let slice = contiguous("values", &values)?;
     let decoded = py.detach(|| crate::decode::decode_channels(slice, frames, &layout.view())).map_err(to_py)?;
     motion_arrays(py, frames, layout.orders.len(), decoded)
 }
@@ -143,7 +149,9 @@ fn read_motion_blocks<'py>(
         .zip(&jobs)
         .map(|(result, (_, _, frames, layout))| match result {
             Ok(decoded) => motion_arrays(py, *frames, layout.orders.len(), decoded),
-            Err(error) => Ok(to_py(error).into_value(py).into_any()),
+            // A malformed block is that block's result; a bad argument is the caller's error.
+            Err(error @ KernelError::Parse { .. }) => Ok(to_py(error).into_value(py).into_any()),
+            Err(error) => Err(to_py(error)),
         })
         .collect()
 }
@@ -156,7 +164,7 @@ fn euler_to_quat<'py>(py: Python<'py>, angles: PyReadonlyArray3<'py, f64>, order
     if shape[1] != order_list.len() || shape[2] != 3 {
         return Err(shape_error("angles", &format!("[F, {}, 3]", order_list.len()), &shape));
     }
-    let values = angles.as_slice()?;
+    let values = contiguous("angles", &angles)?;
     let out = py.detach(|| crate::rotations::euler_to_quat(values, &order_list)).map_err(to_py)?;
     Ok(array3(out, (shape[0], shape[1], 4))?.into_pyarray(py))
 }
@@ -169,7 +177,7 @@ fn quat_to_euler<'py>(py: Python<'py>, quats: PyReadonlyArray3<'py, f64>, orders
     if shape[1] != order_list.len() || shape[2] != 4 {
         return Err(shape_error("quats", &format!("[F, {}, 4]", order_list.len()), &shape));
     }
-    let values = quats.as_slice()?;
+    let values = contiguous("quats", &quats)?;
     let out = py.detach(|| crate::rotations::quat_to_euler(values, &order_list)).map_err(to_py)?;
     Ok(array3(out, (shape[0], shape[1], 3))?.into_pyarray(py))
 }
@@ -191,7 +199,7 @@ fn forward_kinematics<'py>(
     if ts != [rs[0], joints, 3] {
         return Err(shape_error("translations", &format!("[{}, {joints}, 3]", rs[0]), &ts));
     }
-    let (r, t, p) = (rotations.as_slice()?, translations.as_slice()?, parents.as_slice()?);
+    let (r, t, p) = (contiguous("rotations", &rotations)?, contiguous("translations", &translations)?, contiguous("parents", &parents)?);
     let (world_rot, world_pos) = py.detach(|| crate::fk::forward_kinematics(r, t, p)).map_err(to_py)?;
     Ok((array3(world_rot, (rs[0], joints, 4))?.into_pyarray(py), array3(world_pos, (rs[0], joints, 3))?.into_pyarray(py)))
 }
@@ -215,7 +223,7 @@ fn forward_kinematics_many<'py>(
                 "argument `clips`: clip {index} has rotations {rs:?} and translations {ts:?} for {joints} parents, expected [F, {joints}, 4] and [F, {joints}, 3]"
             )));
         }
-        jobs.push((rotations.as_slice()?, translations.as_slice()?, parents.as_slice()?, rs[0]));
+        jobs.push((contiguous("clips", rotations)?, contiguous("clips", translations)?, contiguous("clips", parents)?, rs[0]));
     }
     let results: Vec<Result<(Vec<f64>, Vec<f64>), KernelError>> =
         py.detach(|| jobs.par_iter().map(|(r, t, p, _)| crate::fk::forward_kinematics(r, t, p)).collect());
@@ -231,7 +239,7 @@ fn forward_kinematics_many<'py>(
 #[pyo3(signature = (values, decimals=None))]
 fn format_motion_block<'py>(py: Python<'py>, values: PyReadonlyArray2<'py, f64>, decimals: Option<usize>) -> PyResult<Bound<'py, PyBytes>> {
     let channels = values.shape()[1];
-    let slice = values.as_slice()?;
+    let slice = contiguous("values", &values)?;
     let text = py.detach(|| crate::format::format_motion_block(slice, channels, decimals)).map_err(to_py)?;
     Ok(PyBytes::new(py, text.as_bytes()))
 }

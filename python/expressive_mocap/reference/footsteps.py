@@ -35,6 +35,8 @@ def foot_contacts(
     if not (np.isfinite(frame_time) and frame_time > 0):
         raise ValueError(f"argument `frame_time`: must be a positive number of seconds, got {frame_time}")
     min_frames = _check_min_frames(min_frames)
+    if len(feet) == 0:
+        return np.zeros((0, feet.shape[1]), dtype=bool)
     speed = np.zeros(feet.shape[:3])
     speed[1:] = np.linalg.norm(feet[1:] - feet[:-1], axis=-1) / frame_time
     if len(feet) > 1 and not causal:

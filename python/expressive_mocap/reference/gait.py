@@ -55,13 +55,13 @@ def clip_gait_many(
 def _clip(positions, rotations, frame_time, roles, height, hips_rest_height, height_threshold, speed_threshold,
           min_duration, floor_percentile, want_features, want_contacts, feature_floor, thigh_reference):
     frames, joints = positions.shape[:2]
-    if frames == 0:
-        raise ValueError("argument `positions`: no frames")
     for name, index in zip(("hips", "upper_legs", "upper_legs", "feet", "feet", "toes", "toes"), roles):
         if not 0 <= index < joints:
             raise ValueError(f"argument `{name}`: joint {index} out of range for {joints} joints")
     if not (np.isfinite(frame_time) and frame_time > 0):
         raise ValueError(f"argument `frame_time`: must be a positive number of seconds, got {frame_time}")
+    if frames == 0:
+        return (np.zeros((0, 19)) if want_features else None), (np.zeros((0, 2), bool) if want_contacts else None)
     hips, left_leg, right_leg, left_foot, right_foot, left_toe, right_toe = roles
     toe_floor = float(np.percentile(positions[:, [left_toe, right_toe], 1], floor_percentile))
     feet = np.ascontiguousarray(positions[:, [[left_foot, left_toe], [right_foot, right_toe]]])

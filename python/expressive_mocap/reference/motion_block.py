@@ -38,13 +38,18 @@ def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> n
         raise ValueError("argument `start`: past the end of `data`")
     block = data[start:]
     if channels == 0:
-        # Frame lines of a skeleton without channels are blank.
-        for index, line in enumerate(block.split(b"\n")):
+        # Frame lines of a skeleton without channels are blank, still one line a frame.
+        lines = block.split(b"\n")
+        for index, line in enumerate(lines):
             if _tokens(line):
                 raise ParseError("expected 0 values (the hierarchy has no CHANNELS)", index)
+        if frames > len(lines):
+            _raise_truncated(block, frames, len(lines))
         return np.zeros((frames, 0))
     if block.translate(None, _PLAIN):  # anything but plain numbers and blanks: check line by line
         _raise_first_problem(block, frames, channels)
+    if b"\r" in block:  # a blank like a space (loadtxt would end a line at a lone CR)
+        block = block.replace(b"\r", b" ")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # loadtxt warns on an empty block; counts are checked below
@@ -108,10 +113,15 @@ def _raise_first_problem(block: bytes, frames: int, channels: int) -> None:
             raise ParseError(f"more frame lines than Frames says ({frames})", index)
         found += 1
     if found < frames:
-        # Point at the last line of the block, where the missing frames should have been.
-        line_count = len(lines) - 1 if block.endswith(b"\n") else len(lines)
-        raise ParseError(f"truncated MOTION block: Frames says {frames}, but only {found} frame lines follow", max(line_count - 1, 0))
+        _raise_truncated(block, frames, found)
     raise ParseError("the MOTION block could not be parsed", 0)
+
+
+def _raise_truncated(block: bytes, frames: int, found: int) -> None:
+    """Fewer frame lines than ``frames``: point at the last line of the block, where the missing
+    frames should have been."""
+    lines = block.count(b"\n") + (1 if block and not block.endswith(b"\n") else 0)
+    raise ParseError(f"truncated MOTION block: Frames says {frames}, but only {found} frame lines follow", max(lines - 1, 0))
 
 
 def format_motion_block(values: np.ndarray, decimals: int | None = None) -> bytes:

@@ -1,0 +1,57 @@
+"""Arguments for every kernel, shared by the misuse and thread tests: ``CORE[name](frames)``
+gives the arguments of ``_core.name`` (and of its NumPy twin) for that many frames, with the
+names of its array arguments."""
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+RNG = np.random.default_rng(7)
+
+
+def quats(*shape):
+    return Rotation.random(int(np.prod(shape)), random_state=3).as_quat().reshape(*shape, 4)
+
+
+def layout(joints):
+    """Decode layout of ``joints`` joints with three rotation channels each (and positions on the root)."""
+    rotation_columns = np.arange(3, 3 + 3 * joints).reshape(joints, 3)
+    position_columns = np.full((joints, 3), -1)
+    position_columns[0] = [0, 1, 2]
+    return rotation_columns, np.tile(np.array([2, 0, 1], np.uint8), (joints, 1)), position_columns, RNG.normal(size=(joints, 3))
+
+
+def mlp_args(frames, inputs=5):
+    return RNG.normal(size=(frames, inputs)), [RNG.normal(size=(inputs, 4)), RNG.normal(size=(4, 3))], [RNG.normal(size=4), RNG.normal(size=3)], ["tanh", "linear"]
+
+
+def contacts_args(frames, feet=2, points=2):
+    return (RNG.normal(size=(frames, feet, points, 3)), 1 / 30, 0.0, 0.1, 1.0, 3, False)
+
+
+def features_args(frames):
+    return (RNG.normal(size=(frames, 3, 3)), quats(frames, 2), RNG.random((frames, 2)) > 0.5, quats(1, 2)[0], 1 / 30, 1.7, 0.9, 0.0, 10)
+
+
+def gait_args(frames, joints=7):
+    clip = (RNG.normal(size=(frames, joints, 3)), quats(frames, joints), 1 / 30, 1.7, 0.9)
+    return ([clip, clip], list(range(joints)), 0.05, 0.5, 0.1, 5.0, True, True)
+
+
+# Name -> (arguments for F frames, names of the array arguments in order).
+CORE = {
+    "parse_motion_block": (lambda f: (b"1 2 3\n" * f, 0, f, 3), []),
+    "format_motion_block": (lambda f: (RNG.normal(size=(f, 3)),), ["values"]),
+    "decode_channels": (lambda f: (RNG.normal(size=(f, 12)), *layout(3)), ["values", "rotation_columns", "orders", "position_columns", "offsets"]),
+    "read_motion_blocks": (lambda f: ([(b"1 2 3\n" * f, 0, f, 3, np.array([[0, 1, 2]]), *layout(1)[1:])],), []),
+    "euler_to_quat": (lambda f: (RNG.normal(size=(f, 3, 3)), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))), ["angles", "orders"]),
+    "quat_to_euler": (lambda f: (quats(f, 3), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))), ["quats", "orders"]),
+    "forward_kinematics": (lambda f: (quats(f, 3), RNG.normal(size=(f, 3, 3)), np.array([-1, 0, 1])), ["rotations", "translations", "parents"]),
+    "forward_kinematics_many": (lambda f: ([(quats(f, 3), RNG.normal(size=(f, 3, 3)), np.array([-1, 0, 1]))] * 2,), []),
+    "foot_contacts": (contacts_args, ["feet"]),
+    "air_time": (lambda f: (RNG.random((f, 2)) > 0.5, 1 / 30), ["contacts"]),
+    "dynamic_features": (features_args, ["points", "thighs", "contacts", "reference"]),
+    "clip_gait_many": (gait_args, []),
+    "mlp_forward": (lambda f: mlp_args(f), ["x"]),
+    "decouple_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0), ["original", "body"]),
+    "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
+}
