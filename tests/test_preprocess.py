@@ -10,6 +10,7 @@ import json
 import os
 import shutil
 import tarfile
+import time
 import zipfile
 
 import numpy as np
@@ -20,6 +21,7 @@ from expressive_mocap.cli import main
 from expressive_mocap.decouple import decompose
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.model import BodyModel
+import expressive_mocap.preprocess as preprocess_module
 from expressive_mocap.preprocess import load_dataset, preprocess
 
 BROKEN = b"HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 2 Xposition\n}\n"
@@ -137,6 +139,20 @@ def test_mixed_orders_file_positions_and_rotations(mixed_path, tmp_path):
     np.testing.assert_allclose(ds.clip(0)["rotations"], motion.rotations.astype(np.float32), rtol=2e-7, atol=1e-7)
     run(folder, tmp_path / "feat", keep="features")
     assert load_dataset(tmp_path / "feat").failures[0]["name"] == "mixed_orders"
+
+
+def test_batches_parsed_out_of_order_are_written_in_order(archive, tmp_path, monkeypatch):
+    run(archive / "clips", tmp_path / "one_batch")
+    parse = preprocess_module.read_bvh_many
+
+    def first_batch_slow(sources, **options):
+        if any(str(s).endswith("broken.bvh") for s in sources):  # the first clip in name order
+            time.sleep(0.3)  # the second reader thread finishes the next batch first
+        return parse(sources, **options)
+
+    monkeypatch.setattr(preprocess_module, "read_bvh_many", first_batch_slow)
+    run(archive / "clips", tmp_path / "one_clip_a_batch", batch_mb=1e-6)
+    assert_same_dataset(load_dataset(tmp_path / "one_batch"), load_dataset(tmp_path / "one_clip_a_batch"))
 
 
 def test_interrupted_run_resumes_without_redoing_finished_clips(archive, tmp_path):
