@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import io
 import json
 import os
 import platform
@@ -84,6 +85,44 @@ def child(src: str, out: str, model: str | None) -> None:
     }))
 
 
+def kernels_child(folder: str) -> None:
+    """The scaling ceiling: the two biggest kernels alone (the Rust reader on the files' bytes
+    already in memory, FK of every clip), best of 3; prints one JSON line."""
+    from expressive_mocap.bvh import read_bvh_many
+    from expressive_mocap.kernels import forward_kinematics_many
+
+    paths = sorted(Path(folder).glob("*.bvh"))
+    blobs = [p.read_bytes() for p in paths]
+
+    def sources():
+        out = []
+        for path, blob in zip(paths, blobs):
+            handle = io.BytesIO(blob)
+            handle.name = str(path)
+            out.append(handle)
+        return out
+
+    read, fk = [], []
+    for _ in range(3):
+        batch = sources()
+        start = time.perf_counter()
+        motions = read_bvh_many(batch)
+        read.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        forward_kinematics_many(motions)
+        fk.append(time.perf_counter() - start)
+    print(json.dumps({"read": min(read), "fk": min(fk)}))
+
+
+def run_kernels_child(folder: Path, cores: int | None) -> dict:
+    pin = (lambda: os.sched_setaffinity(0, set(sorted(os.sched_getaffinity(0))[:cores]))) if cores else None
+    environment = {**os.environ, "PYTHONPATH": str(REPO / "python")}
+    result = subprocess.run([sys.executable, __file__, "--child-kernels", str(folder)], env=environment, capture_output=True, text=True, preexec_fn=pin)
+    if result.returncode != 0:
+        raise SystemExit(f"kernel ceiling run failed:\n{result.stderr}")
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
 def run_child(name: str, sources: dict, work: Path) -> dict:
     kind, env, model, cores = CONFIGS[name]
     out = work / "out"
@@ -120,11 +159,14 @@ def main() -> None:
     parser.add_argument("--no-numpy", action="store_true", help="skip the NumPy-twin run")
     parser.add_argument("--out", default=str(REPO / "benches" / "RESULTS.md"), help="markdown file to append the section to")
     parser.add_argument("--child", help=argparse.SUPPRESS)
+    parser.add_argument("--child-kernels", help=argparse.SUPPRESS)
     parser.add_argument("--child-out", help=argparse.SUPPRESS)
     parser.add_argument("--child-model", choices=["float64", "float32"], help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         return child(args.child, args.child_out, args.child_model)
+    if args.child_kernels:
+        return kernels_child(args.child_kernels)
 
     started, t0 = datetime.datetime.now(), time.perf_counter()
     info = machine()
@@ -159,16 +201,18 @@ def main() -> None:
                 runs[name].append(run_child(name, sources, work))
         if not args.no_numpy:
             runs["folder, NumPy twins, 2 cores"].append(run_child("folder, NumPy twins, 2 cores", sources, work))
+        ceiling = {cores: run_kernels_child(folder, cores) for cores in (1, None)}
+        log(f"kernels alone: {ceiling}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    text = report(args, info, started, time.perf_counter() - t0, len(paths), size, zip_size, zip_seconds, runs)
+    text = report(args, info, started, time.perf_counter() - t0, len(paths), size, zip_size, zip_seconds, runs, ceiling)
     print(text)
     with open(args.out, "a") as out:
         out.write("\n" + text)
     log(f"appended to {args.out}")
 
 
-def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, runs) -> str:
+def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, runs, ceiling) -> str:
     med = lambda name, key: statistics.median(r[key] for r in runs[name])  # noqa: E731
     frames = next(r["frames"] for rs in runs.values() for r in rs)
     lines = [
@@ -212,6 +256,14 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
     targets.append(("near-linear 1 -> 2 workers (>= 1.7x)", None, one / folder >= 1.7, f"{one / folder:.2f}x faster on 2 cores than on 1 ({one:.2f} s -> {folder:.2f} s)"))
     lines += ["", "| target | measured | result |", "|---|---|---|"]
     lines += [f"| {t} | {shown} | {'**pass**' if ok else '**FAIL**'} |" for t, _, ok, shown in targets]
+    one_core, all_cores = ceiling[1], ceiling[None]
+    lines += [
+        "",
+        "The scaling ceiling on this machine, same run: the biggest kernels alone, 1 core -> 2 cores "
+        f"(best of 3): the Rust reader on the files' bytes already in memory {one_core['read']:.2f} s -> "
+        f"{all_cores['read']:.2f} s ({one_core['read'] / all_cores['read']:.2f}x), FK of every clip "
+        f"{one_core['fk']:.3f} s -> {all_cores['fk']:.3f} s ({one_core['fk'] / all_cores['fk']:.2f}x; little arithmetic per byte moved).",
+    ]
     return "\n".join(lines) + "\n"
 
 
