@@ -69,11 +69,10 @@ def test_non_contiguous_inputs_give_the_contiguous_result(name, backend):
         np.testing.assert_array_equal(a, b)
 
 
-@pytest.mark.parametrize("name", WRAPPERS)
+# Integer quaternions are not unit quaternions: the wrappers that take rotations are left out.
+@pytest.mark.parametrize("name", [n for n in WRAPPERS if n not in ("quat_to_euler", "decouple_rotations", "compose_rotations", "forward_kinematics")])
 def test_integer_arrays_are_converted_like_floats(name, backend):
     args = WRAPPERS[name][1](3, 2)
-    if name in ("quat_to_euler", "decouple_rotations", "compose_rotations", "forward_kinematics"):
-        pytest.skip("integer quaternions are not unit quaternions")
     rounded = tuple(np.round(a).astype(np.int32) if isinstance(a, np.ndarray) and a.dtype.kind == "f" else a for a in args)
     as_float = tuple(a.astype(np.float64) if isinstance(a, np.ndarray) and a.dtype == np.int32 else a for a in rounded)
     for a, b in zip(outputs(call(name, rounded)), outputs(call(name, as_float))):

@@ -68,12 +68,17 @@ def test_unreadable_or_foreign_metadata_is_refused(kind, meta, words):
     refused(kind, npz(MODELS[kind][0], meta), words)
 
 
-@pytest.mark.parametrize("kind", LOAD)
-@pytest.mark.parametrize("field, value", [("joint_names", 3), ("joint_names", ["a", 1]), ("settings", [1]), ("height", "tall"), ("hips", 9), ("representation", [])])
+@pytest.mark.parametrize(
+    "kind, field, value",
+    [
+        (kind, field, value)
+        for kind in LOAD
+        for field, value in [("joint_names", 3), ("joint_names", ["a", 1]), ("settings", [1]), ("height", "tall"), ("hips", 9), ("representation", [])]
+        if field in MODELS[kind][1]  # the fields each kind of model has
+    ],
+)
 def test_metadata_of_the_wrong_type_is_refused(kind, field, value):
     arrays, meta = MODELS[kind]
-    if field not in meta:
-        pytest.skip(f"the {kind} model has no {field}")
     refused(kind, npz(arrays, {**meta, field: value}), "")
 
 
