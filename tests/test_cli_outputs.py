@@ -125,3 +125,17 @@ def test_an_interrupted_write_leaves_no_partial_file(name, inputs, tmp_path, cap
     files = [p for p in tmp_path.rglob("*") if p.is_file()]
     # Only preprocess keeps finished batches, to resume from them (not a dataset without its manifest).
     assert files == [] or (name == "preprocess" and not any(p.name == "manifest.json" for p in files)), files
+
+
+def test_decouple_writes_its_three_files_together_or_not_at_all(inputs, tmp_path, capsys, monkeypatch):
+    real_fdopen, opened = em_io.os.fdopen, []
+
+    def third_write_fails(fd, mode):
+        opened.append(fd)
+        handle = real_fdopen(fd, mode)
+        return _FailingFile(handle) if len(opened) == 3 else handle
+
+    monkeypatch.setattr(em_io.os, "fdopen", third_write_fails)
+    status, err, _ = run("decouple", inputs, tmp_path, capsys)
+    assert status == 1 and "No space left" in err, err
+    assert len(opened) == 3 and list(tmp_path.iterdir()) == [], "the two files written before the failure must not appear"

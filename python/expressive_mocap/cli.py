@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__, backend
-from .bvh import read_bvh, write_bvh
+from .bvh import bvh_bytes, read_bvh, write_bvh
 from .errors import MocapError
-from .io import atomic_write
+from .io import atomic_write, atomic_write_all
 from .motion import Motion
 from .rotations import ORDERS
 
@@ -241,12 +241,14 @@ def cmd_decouple(args) -> int:
     motion = read_bvh(args.input)
     parts = decompose(motion, _model(args), args.gain, args.exponent)
     prefix = str(args.output)
-    write_bvh(parts.body_motion(), prefix + "_body.bvh")
-    write_bvh(parts.expressive_motion(), prefix + "_expressive.bvh")
     names = motion.skeleton.names
     table = io.StringIO()
     np.savetxt(table, parts.activity, fmt="%.5f", delimiter=",", header=",".join(names), comments="")
-    atomic_write(prefix + "_activity.csv", table.getvalue().encode())
+    atomic_write_all({  # the three belong together: all of them or none
+        prefix + "_body.bvh": bvh_bytes(parts.body_motion()),
+        prefix + "_expressive.bvh": bvh_bytes(parts.expressive_motion()),
+        prefix + "_activity.csv": table.getvalue().encode(),
+    })
     print(f"wrote {prefix}_body.bvh, {prefix}_expressive.bvh (E* on the mean body pose), {prefix}_activity.csv")
     print("mean activity per joint (0 = body mechanics only, 1 = fully expressive):")
     for name, value in zip(names, parts.activity.mean(axis=0)):

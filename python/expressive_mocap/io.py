@@ -17,7 +17,26 @@ from .errors import MocapError
 
 def atomic_write(path: str | os.PathLike, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
-    path = Path(path)
+    atomic_write_all({path: data})
+
+
+def atomic_write_all(files: dict) -> None:
+    """Write files that belong together (``{path: bytes}``): every one to a temporary file in its
+    folder first, then all renamed into place; if any cannot be written, none appears."""
+    temporaries: list[tuple[str, Path]] = []
+    try:
+        for path, data in files.items():
+            temporaries.append((_temporary(Path(path), data), Path(path)))
+        for temporary, path in temporaries:
+            os.replace(temporary, path)
+    except BaseException:
+        for temporary, _ in temporaries:
+            Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+def _temporary(path: Path, data: bytes) -> str:
+    """``data`` in a new temporary file beside ``path``, with the permissions a plain open() gives."""
     folder = path.parent
     if not folder.is_dir():
         raise MocapError(f"cannot write {path}: the folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}")
@@ -28,12 +47,11 @@ def atomic_write(path: str | os.PathLike, data: bytes) -> None:
     try:
         with os.fdopen(handle, "wb") as out:
             out.write(data)
-        # mkstemp makes the file private; give it the permissions a plain open() would.
-        os.chmod(temporary, 0o666 & ~_umask())
-        os.replace(temporary, path)
+        os.chmod(temporary, 0o666 & ~_umask())  # mkstemp makes the file private
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
+    return temporary
 
 
 def _umask() -> int:
