@@ -4,6 +4,8 @@ touched, and a write interrupted midway leaves no partial file."""
 
 import argparse
 import hashlib
+import os
+from pathlib import Path
 
 import pytest
 
@@ -139,3 +141,15 @@ def test_decouple_writes_its_three_files_together_or_not_at_all(inputs, tmp_path
     status, err, _ = run("decouple", inputs, tmp_path, capsys)
     assert status == 1 and "No space left" in err, err
     assert len(opened) == 3 and list(tmp_path.iterdir()) == [], "the two files written before the failure must not appear"
+
+
+@pytest.mark.parametrize("name", WRITERS)
+def test_an_unwritable_output_folder_is_a_one_line_error(name, inputs, tmp_path, capsys, monkeypatch):
+    # The tests run as root, which chmod cannot stop: the permission check is made to say no.
+    import expressive_mocap.cli as cli
+
+    real_access = os.access
+    monkeypatch.setattr(cli.os, "access", lambda path, mode: False if Path(path) == tmp_path else real_access(path, mode))
+    status, err, _ = run(name, inputs, tmp_path, capsys)
+    assert status == 1 and err.count("\n") == 1 and "is not writable" in err, err
+    assert list(tmp_path.iterdir()) == []
