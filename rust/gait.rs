@@ -86,11 +86,11 @@ fn check_index(name: &'static str, index: usize, joints: usize) -> Result<()> {
 }
 
 /// Gait arrays of one clip from world `positions` `[F, J, 3]` and local `rotations`
-/// `[F, J, 4]` (x, y, z, w).
+/// `[F, J, 4]` (x, y, z, w); a clip of no frames has empty ones.
 ///
 /// # Errors
-/// `KernelError::Argument` when the lengths disagree with `joints`, there are no frames, a
-/// joint index is out of range, or a parameter is out of range (see the two kernels).
+/// `KernelError::Argument` when the lengths disagree with `joints`, a joint index is out of
+/// range, or a parameter is out of range (see the two kernels).
 #[allow(clippy::too_many_arguments)]
 pub fn clip_gait(
     positions: &[f64],
