@@ -103,11 +103,12 @@ pub fn clip_gait(
     features: Option<&FeatureRequest>,
     contacts: bool,
 ) -> Result<ClipGait> {
-    if joints == 0 || positions.len() % (joints * 3) != 0 {
+    let per_frame = joints.checked_mul(3).filter(|&n| n > 0);
+    let Some(per_frame) = per_frame.filter(|&n| positions.len() % n == 0) else {
         return Err(KernelError::argument("positions", format!("length {} is not frames x {joints} joints x 3", positions.len())));
-    }
-    let n_frames = positions.len() / (joints * 3);
-    if rotations.len() != n_frames * joints * 4 {
+    };
+    let n_frames = positions.len() / per_frame;
+    if rotations.len() / 4 != n_frames * joints || rotations.len() % 4 != 0 {
         return Err(KernelError::argument("rotations", format!("expected {n_frames} x {joints} x 4 values, got {}", rotations.len())));
     }
     for (name, index) in [("hips", roles.hips), ("upper_legs", roles.upper_legs[0]), ("upper_legs", roles.upper_legs[1])] {
@@ -118,6 +119,9 @@ pub fn clip_gait(
     }
     if !(frame_time.is_finite() && frame_time > 0.0) {
         return Err(KernelError::argument("frame_time", format!("must be a positive number of seconds, got {frame_time}")));
+    }
+    if !(0.0..=100.0).contains(&params.floor_percentile) {
+        return Err(KernelError::argument("floor_percentile", format!("must be within 0 and 100, got {}", params.floor_percentile)));
     }
     if n_frames == 0 {
         return Ok(ClipGait { features: features.map(|_| Vec::new()), contacts: contacts.then(Vec::new) });
@@ -211,5 +215,10 @@ mod tests {
         let far = GaitJoints { toes: [5, 7], ..roles };
         assert!(clip_gait(&positions, &rotations, 7, 1.0 / 30.0, scale, &far, &params, None, true).is_err());
         assert!(clip_gait(&positions, &rotations, 7, 0.0, scale, &roles, &params, None, true).is_err());
+        assert!(clip_gait(&positions, &rotations, usize::MAX, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
+        for q in [f64::NAN, -1.0, 100.5] {
+            let params = GaitParams { floor_percentile: q, ..params };
+            assert!(clip_gait(&positions, &rotations, 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
+        }
     }
 }
