@@ -160,6 +160,20 @@ def test_rust_functions_name_a_broken_array_argument(name, index, argument, how)
     assert argument in str(caught.value), str(caught.value)
 
 
+@rust_only
+@pytest.mark.parametrize(
+    "name, index, argument",
+    [(n, i, a) for n, (make, names) in CORE.items() for i, a in enumerate(names) if np.ndim(make(6)[i]) >= 2],
+)
+def test_rust_functions_refuse_fortran_ordered_arrays(name, index, argument):
+    # Contiguous, but in the other order: read as C order its numbers would come transposed.
+    args = list(CORE[name][0](6))
+    args[index] = np.asfortranarray(args[index])
+    assert not args[index].flags.c_contiguous
+    with pytest.raises(TypeError, match=f"`{argument}`"):
+        getattr(core, name)(*args)
+
+
 def flatten(result):
     if isinstance(result, (tuple, list)):
         return [leaf for item in result for leaf in flatten(item)]

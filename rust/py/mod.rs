@@ -31,7 +31,12 @@ fn shape_error(name: &str, expected: &str, got: &[usize]) -> PyErr {
 /// The elements of a C-contiguous array, or a TypeError naming the argument (the numpy crate's
 /// own error does not say which argument).
 fn contiguous<'a, T: Element, D: Dimension>(name: &str, array: &'a PyReadonlyArray<'_, T, D>) -> PyResult<&'a [T]> {
-    array.as_slice().map_err(|_| PyTypeError::new_err(format!("argument `{name}`: expected a C-contiguous array (see numpy.ascontiguousarray)")))
+    // as_slice alone also takes Fortran-ordered arrays, whose elements it would hand over transposed.
+    let refused = || PyTypeError::new_err(format!("argument `{name}`: expected a C-contiguous array (see numpy.ascontiguousarray)"));
+    if !array.is_c_contiguous() {
+        return Err(refused());
+    }
+    array.as_slice().map_err(|_| refused())
 }
 
 fn orders_from(orders: &PyReadonlyArray2<'_, u8>) -> PyResult<Vec<Order>> {
