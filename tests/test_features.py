@@ -343,5 +343,8 @@ def test_gait_many_asks_only_for_what_is_wanted_and_names_bad_input(backend):
     positions = walk.positions()
     with pytest.raises(ValueError, match="clip 0"):
         kernels().clip_gait_many([(positions, walk.rotations[:, :3], walk.frame_time, 140.0, 90.0)], [0] * 7, 0.05, 0.5, 0.1, 5.0, True, True)
+    if em.get_backend() == "rust":  # a strided array is named, as by every Rust kernel (the twin takes it)
+        with pytest.raises(TypeError, match="`clips`"):
+            kernels().clip_gait_many([(np.asfortranarray(positions), walk.rotations, walk.frame_time, 140.0, 90.0)], [0] * 7, 0.05, 0.5, 0.1, 5.0, True, True)
     with pytest.raises(ValueError, match="clip 0.*`toes`"):
         kernels().clip_gait_many([(positions, walk.rotations, walk.frame_time, 140.0, 90.0)], [0, 1, 2, 3, 4, 5, 99], 0.05, 0.5, 0.1, 5.0, True, True)

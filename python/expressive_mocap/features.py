@@ -102,12 +102,17 @@ def _contacts(motion, positions, roles, floor, causal, height, height_threshold,
     )
 
 
+def _roles(motion: Motion, roles) -> JointRoles:
+    if roles is None:
+        return JointRoles.find(motion.skeleton)
+    if not isinstance(roles, JointRoles):
+        raise MocapError(f"argument `roles`: expected JointRoles, got {type(roles).__name__}")
+    return roles
+
+
 def _setup(motion, roles, height):
     motion = _motion(motion)
-    if roles is None:
-        roles = JointRoles.find(motion.skeleton)
-    elif not isinstance(roles, JointRoles):
-        raise MocapError(f"argument `roles`: expected JointRoles, got {type(roles).__name__}")
+    roles = _roles(motion, roles)
     height = actor_height(motion.skeleton, roles) if height is None else _positive("height", height)
     return motion, roles, height
 
@@ -269,7 +274,7 @@ def gait_many(
     if other is not None:
         raise MocapError(f"argument `motions`: every motion needs the same joints; {len(other.skeleton.names)} joints "
                          f"({', '.join(other.skeleton.names[:3])}, ...) differ from the first motion's")
-    roles = _setup(motions[0], roles, 1.0)[1]
+    roles = _roles(motions[0], roles)
     if floor is not None and not np.isfinite(float(floor)):
         raise MocapError(f"argument `floor`: must be a finite height or None, got {floor}")
     if thigh_reference is not None:

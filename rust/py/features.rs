@@ -118,7 +118,7 @@ fn clip_gait_many<'py>(
         None => None,
         Some(array) if array.shape() == [2, 4] => {
             let mut values = [0.0; 8];
-            values.copy_from_slice(array.as_slice()?);
+            values.copy_from_slice(contiguous("thigh_reference", array)?);
             Some(values)
         }
         Some(array) => return Err(shape_error("thigh_reference", "[2, 4]", array.shape())),
@@ -134,7 +134,7 @@ fn clip_gait_many<'py>(
             )));
         }
         let scale = BodyScale { height: *height, hips_rest_height: *hips_rest_height };
-        jobs.push((positions.as_slice()?, rotations.as_slice()?, ps[1], *frame_time, scale));
+        jobs.push((contiguous("clips", positions)?, contiguous("clips", rotations)?, ps[1], *frame_time, scale));
     }
     let results: Vec<_> = py.detach(|| {
         jobs.par_iter().map(|&(p, r, j, ft, scale)| clip_gait(p, r, j, ft, scale, &joints, &params, request.as_ref(), contacts)).collect()
