@@ -169,7 +169,7 @@ def reader_breakdown(paths) -> tuple[list, str]:
     core = em.backend._core
     spots = [
         (B, "_load", "read the files (Python)"),
-        (B, "_parse_header", "header: hierarchy, Frames, Frame Time (Python)"),
+        (B, "parse_header", "header: hierarchy, Frames, Frame Time (Python)"),
         (B, "_decode", "kernel call with its arguments (`_decode`, in the decoder thread)"),
         (B, "_collect", "wait for a batch's kernels, then build Motions (`_collect`, main thread)"),
         (core, "read_motion_blocks", "MOTION numbers + decode: `read_motion_blocks` (Rust, parallel across files)"),

@@ -79,7 +79,7 @@ def child(src: str, out: str, model: str | None) -> None:
                          cluster=os.environ.get("BENCH_CLUSTER"))
     wall = time.perf_counter() - start
     print(json.dumps({
-        "wall": wall, "parse": summary.parse_s, "kernels": summary.kernels_s, "write": summary.write_s,
+        "wall": wall, "headers": summary.headers_s, "kernels": summary.kernels_s, "write": summary.write_s,
         "clips": summary.clips_ok, "failed": summary.clips_failed, "frames": summary.frames, "bytes": summary.bytes_read,
         "peak": peak_rss(), "backend": em.get_backend(), "threads": getattr(em.backend._core, "num_threads", None),
     }))
@@ -136,7 +136,7 @@ def run_child(name: str, sources: dict, work: Path) -> dict:
     figures = json.loads(result.stdout.strip().splitlines()[-1])
     figures["out_bytes"] = sum(p.stat().st_size for p in out.iterdir())
     shutil.rmtree(out, ignore_errors=True)
-    log(f"{name}: {figures['wall']:.2f} s (parse {figures['parse']:.2f}, kernels {figures['kernels']:.2f}, write {figures['write']:.2f}), peak {figures['peak'] / MB:.0f} MB")
+    log(f"{name}: {figures['wall']:.2f} s (headers {figures['headers']:.2f}, kernels {figures['kernels']:.2f}, write {figures['write']:.2f}), peak {figures['peak'] / MB:.0f} MB")
     return figures
 
 
@@ -228,7 +228,7 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
         "(positions, features, contacts[, activity]) to a local folder; page cache warm",
         f"- {CITATION}",
         "",
-        "| configuration | runs | wall s | MB/s | frames/s | parsing s | kernels s | writing s | peak RSS | output |",
+        "| configuration | runs | wall s | MB/s | frames/s | headers s | kernels s | writing s | peak RSS | output |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, rs in runs.items():
@@ -236,7 +236,7 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
             continue
         wall = med(name, "wall")
         lines.append(
-            f"| {name} | {len(rs)} | {wall:.2f} | {size / MB / wall:.0f} | {frames / wall / 1e3:.0f} k | {med(name, 'parse'):.2f} | "
+            f"| {name} | {len(rs)} | {wall:.2f} | {size / MB / wall:.0f} | {frames / wall / 1e3:.0f} k | {med(name, 'headers'):.2f} | "
             f"{med(name, 'kernels'):.2f} | {med(name, 'write'):.2f} | {max(r['peak'] for r in rs) / MB:.0f} MB | {rs[0]['out_bytes'] / MB:.0f} MB |"
         )
     folder = med("folder, Rust, 2 cores", "wall")

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use crate::rotations::{check_orders, euler_to_quat_one, Order, PARALLEL_MIN_ITEMS};
 
 /// Where each joint's numbers sit in a frame of channel values.
+#[derive(Debug, Clone, Copy)]
 pub struct ChannelLayout<'a> {
     /// Values per frame.
     pub channels: usize,

@@ -37,7 +37,16 @@ def gait_args(frames, joints=7):
     return ([clip, clip], list(range(joints)), 0.05, 0.5, 0.1, 5.0, True, True)
 
 
-# Name -> (arguments for F frames, names of the array arguments in order).
+def pipeline_args(frames, joints=3):
+    """Two clips of ``frames`` frames (MOTION text with positions on the root), every output asked for."""
+    rotation_columns, orders, position_columns, offsets = layout(joints)
+    block = b"".join(b" ".join(b"%.4f" % v for v in RNG.normal(scale=20, size=3 + 3 * joints)) + b"\n" for _ in range(frames))
+    clip = (block, 0, frames, 3 + 3 * joints, rotation_columns, orders, position_columns, offsets, 1 / 30, 1.7, 0.9)
+    requests = [(0.0, None), (None, quats(2))]
+    return ([clip, clip], np.arange(joints) - 1, [0, 1, 2, 1, 2, 2, 1], 0.05, 0.5, 0.1, 5.0, True, True, requests, True, False)
+
+
+# Name -> (arguments for F frames, names of the array arguments by position; None: not an array).
 CORE = {
     "parse_motion_block": (lambda f: (b"1 2 3\n" * f, 0, f, 3), []),
     "format_motion_block": (lambda f: (RNG.normal(size=(f, 3)),), ["values"]),
@@ -51,6 +60,7 @@ CORE = {
     "air_time": (lambda f: (RNG.random((f, 2)) > 0.5, 1 / 30), ["contacts"]),
     "dynamic_features": (features_args, ["points", "thighs", "contacts", "reference"]),
     "clip_gait_many": (gait_args, []),
+    "clip_pipeline_many": (pipeline_args, [None, "parents"]),
     "mlp_forward": (lambda f: mlp_args(f), ["x"]),
     "decouple_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0), ["original", "body"]),
     "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),

@@ -141,16 +141,16 @@ def test_mixed_orders_file_positions_and_rotations(mixed_path, tmp_path):
     assert load_dataset(tmp_path / "feat").failures[0]["name"] == "mixed_orders"
 
 
-def test_batches_parsed_out_of_order_are_written_in_order(archive, tmp_path, monkeypatch):
+def test_batches_read_out_of_order_are_written_in_order(archive, tmp_path, monkeypatch):
     run(archive / "clips", tmp_path / "one_batch")
-    parse = preprocess_module.read_bvh_many
+    headers = preprocess_module._headers
 
-    def first_batch_slow(sources, **options):
-        if any(str(s).endswith("broken.bvh") for s in sources):  # the first clip in name order
-            time.sleep(0.3)  # the second reader thread finishes the next batch first
-        return parse(sources, **options)
+    def first_batch_slow(batch):
+        if any(item.name == "broken" for item in batch):  # the first clip in name order
+            time.sleep(0.3)  # the second header thread finishes the next batch first
+        return headers(batch)
 
-    monkeypatch.setattr(preprocess_module, "read_bvh_many", first_batch_slow)
+    monkeypatch.setattr(preprocess_module, "_headers", first_batch_slow)
     run(archive / "clips", tmp_path / "one_clip_a_batch", batch_mb=1e-6)
     assert_same_dataset(load_dataset(tmp_path / "one_batch"), load_dataset(tmp_path / "one_clip_a_batch"))
 
@@ -195,7 +195,7 @@ def test_resume_refuses_other_options_and_finished_output_needs_overwrite(archiv
 def test_cli(archive, tmp_path, capsys):
     assert main(["preprocess", str(archive / "clips.zip"), "-o", str(tmp_path / "ds"), "--keep", "positions,contacts", "-q"]) == 0
     out = capsys.readouterr().out
-    assert "3 clips ok, 1 failed" in out and "parsing" in out and "failed: " in out
+    assert "3 clips ok, 1 failed" in out and "headers" in out and "failed: " in out
     assert main(["preprocess", str(archive / "nothing"), "-o", str(tmp_path / "x")]) == 1
     assert "no such folder or archive" in capsys.readouterr().err
     assert main(["preprocess", str(archive / "clips"), "-o", str(tmp_path / "y"), "--keep", "activity"]) == 1

@@ -317,7 +317,9 @@ def _next_content_line(data: bytes, position: int) -> tuple[int, int]:
     return len(data), len(data)
 
 
-def _parse_header(data: bytes, name: str) -> _Header:
+def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
+    """The header of the BVH text ``data``; ``size``: the whole file's length when ``data`` is
+    only its beginning (see :func:`read_header`)."""
     _check_text(data, name)
     motion = _MOTION.search(data)
     hierarchy_end = motion.start() if motion else len(data)
@@ -349,7 +351,7 @@ def _parse_header(data: bytes, name: str) -> _Header:
     if not _COUNT.fullmatch(frames_text):
         raise BVHError(name, frames_line, f"expected a whole number of frames (at most 18 digits) after 'Frames:', found {frames_text!r}")
     frames, block_start = int(frames_text), min(position, len(data))
-    block_bytes = len(data) - block_start
+    block_bytes = (len(data) if size is None else size) - block_start
     if frames * skeleton.n_joints > max(block_bytes // BLOCK_BYTES_PER_JOINT_FRAME, MIN_JOINT_FRAMES):
         raise BVHError(
             name,
@@ -366,7 +368,38 @@ def _parse_header(data: bytes, name: str) -> _Header:
     return _Header(skeleton, frames, frame_time, block_start, time_line + 1)
 
 
-def _block_error(name: str, header: _Header, error: Exception) -> BVHError:
+HEADER_PREFIX = 1 << 16  # bytes read first for a header; hierarchies are a few kilobytes
+
+
+def read_header(path: str | os.PathLike) -> tuple[_Header, bytes | None]:
+    """The header of the BVH file at ``path`` and, only where it needed them, the file's bytes.
+
+    The header is parsed from the file's first 64 KB when it fits there (the usual case): the
+    caller then reads the MOTION block itself (``preprocess`` does, in Rust, in parallel), and
+    ``None`` is returned for the bytes. A header that does not fit, or an error, is taken from the
+    whole file, so the result and any error are those of :func:`read_bvh`. Raises BVHError.
+    """
+    name = str(path)
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(HEADER_PREFIX)
+            if len(data) == HEADER_PREFIX:  # maybe more: try the header from this beginning
+                size = os.fstat(handle.fileno()).st_size
+                try:
+                    header = parse_header(data, name, size)
+                except BVHError:
+                    header = None
+                # The Frame Time line must have ended inside the beginning: a number cut by the
+                # 64 KB boundary would otherwise be read short.
+                if header is not None and header.block_start < len(data):
+                    return header, None
+                data += handle.read()
+    except OSError as error:
+        raise BVHError(name, None, f"cannot read the file: {error.strerror or error}") from None
+    return parse_header(data, name), data
+
+
+def block_error(name: str, header: _Header, error: Exception) -> BVHError:
     message, line_in_block = error.args
     return BVHError(name, header.block_line + line_in_block, message)
 
@@ -379,7 +412,7 @@ def read_bvh(source: Source) -> Motion:
     """
     data, name = _load(source)
     results: list = [None]
-    _collect(batch := [(0, name, _parse_header(data, name), data)], _decode(batch), results)
+    _collect(batch := [(0, name, parse_header(data, name), data)], _decode(batch), results)
     if isinstance(results[0], BVHError):
         raise results[0]
     return results[0]
@@ -418,7 +451,7 @@ def _batches(sources: Iterable[Source], batch_bytes: int, results: list):
     for source in sources:
         try:
             data, name = _load(source)
-            header = _parse_header(data, name)
+            header = parse_header(data, name)
         except BVHError as error:
             results.append(error)
             continue
@@ -444,7 +477,7 @@ def _collect(batch: list, decoded: Future | list, results: list) -> None:
         decoded = decoded.result()
     for (index, name, header, _), result in zip(batch, decoded):
         if isinstance(result, PARSE_ERRORS):
-            results[index] = _block_error(name, header, result)
+            results[index] = block_error(name, header, result)
         else:
             results[index] = Motion(header.skeleton, *result, header.frame_time)
 

@@ -28,7 +28,7 @@ from .errors import MocapError
 from .features import FEATURE_NAMES, default_floor, dynamic_features, mean_rotation
 from .io import atomic_write, check_keys, finite_array, read_model_file
 from .mlp import Mlp
-from .motion import Motion
+from .motion import Motion, Skeleton
 from .roles import JointRoles
 
 FORMAT = "expressive-mocap body model"
@@ -58,9 +58,9 @@ class BodyModel:
 
     # ---------------------------------------------------------------- prediction
 
-    def check_skeleton(self, motion: Motion) -> None:
-        """Refuse a motion of another skeleton, naming the difference."""
-        names = motion.skeleton.names
+    def check_skeleton(self, motion: Motion | Skeleton) -> None:
+        """Refuse a motion (or skeleton) of another skeleton, naming the difference."""
+        names = (motion.skeleton if isinstance(motion, Motion) else motion).names
         if names != self.joint_names:
             missing = [n for n in self.joint_names if n not in names]
             extra = [n for n in names if n not in self.joint_names]

@@ -61,22 +61,22 @@ import tarfile
 import threading
 import time
 import zipfile
-from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
 
 import numpy as np
 
-from .backend import get_backend
-from .bvh import read_bvh_many
-from .errors import MocapError
+from .backend import get_backend, kernels
+from .bvh import block_error, parse_header, read_header
+from .errors import BVHError, MocapError
 from .decouple import EXPONENT, GAIN
-from .features import FEATURE_NAMES, gait_many
+from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from .io import atomic_write
-from .kernels import decouple_rotations, forward_kinematics_many
-from .motion import Motion
-from .roles import JointRoles
+from .kernels import decouple_rotations
+from .roles import JointRoles, actor_height, hips_rest_height
 
 FORMAT = "expressive-mocap dataset"
 VERSION = 1
@@ -105,13 +105,14 @@ class _Item:
     member: str | None = None
     data: bytes | None = None
 
-    def open(self):
-        """What read_bvh_many takes: a path, or a named in-memory file."""
+    def header(self):
+        """The clip's BVH header and its text for the kernel: the file's path when the header
+        came from the file's beginning (the kernel reads the rest), else the bytes."""
         if self.data is None and self.member is None:
-            return self.path
-        handle = io.BytesIO(self.data if self.data is not None else _zip(self.path).read(self.member))
-        handle.name = self.source  # read_bvh_many names the file in its errors with this
-        return handle
+            header, data = read_header(self.path)
+            return header, self.path if data is None else data
+        data = self.data if self.data is not None else _zip(self.path).read(self.member)
+        return parse_header(data, self.source), data
 
 
 _ZIPS: dict[str, zipfile.ZipFile] = {}
@@ -249,38 +250,6 @@ def _kinds(keep: tuple[str, ...], joints: int) -> list[_Kind]:
 # ----------------------------------------------------------------------------- per-clip work
 
 
-def clip_arrays(motions: list[Motion], keep: tuple[str, ...], fk=None, roles=None) -> list[dict[str, np.ndarray]]:
-    """The arrays of clips of one hierarchy for the kinds in ``keep`` other than the model's
-    (dtypes as stored): positions, rotations, ``dynamic_features(m)`` and ``foot_contacts(m)``,
-    the last two in one kernel call for all the clips (:func:`~expressive_mocap.features.gait_many`).
-    ``fk``: the clips' (world rotations, positions) if already computed; ``roles``: their
-    JointRoles if already found."""
-    fk = fk if fk is not None else [m.fk() for m in motions]
-    out: list[dict[str, np.ndarray]] = [{} for _ in motions]
-    for values, motion, (_, positions) in zip(out, motions, fk):
-        if "positions" in keep:
-            values["positions"] = positions.astype(np.float32)
-        if "rotations" in keep:
-            values["rotations"] = motion.rotations.astype(np.float32)
-    if "features" in keep or "contacts" in keep:
-        gait = gait_many(motions, roles, features="features" in keep, contacts="contacts" in keep, fk=fk)
-        for values, (features, contacts) in zip(out, gait):
-            if features is not None:
-                values["features"] = features.astype(np.float32)
-            if contacts is not None:
-                values["contacts"] = contacts
-    return out
-
-
-def _model_features(motions: list[Motion], fk, model, roles) -> list[np.ndarray]:
-    """``model.features(m)`` of each clip (see :func:`expressive_mocap.model.model_features`:
-    causal, floor = the clip's toe-height percentile, the model's thigh reference), in one
-    kernel call."""
-    model.check_skeleton(motions[0])  # the clips share one hierarchy
-    gait = gait_many(motions, roles, contacts=False, floor=None, thigh_reference=model.thigh_reference, fk=fk)
-    return [features for features, _ in gait]
-
-
 def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], model, float32: bool = False) -> list[dict[str, np.ndarray]]:
     """``decompose`` of many clips at once, from each clip's local ``rotations [F, J, 4]`` and
     model ``features [F, 19]``: one network call for all their frames (the network and the
@@ -308,8 +277,9 @@ def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], mode
 @dataclass
 class Summary:
     """What a run did: clips ok / failed (this run and earlier ones it resumed), frames,
-    bytes of BVH text read, seconds in total and split into parsing, kernels and writing
-    (parsing and kernels summed over the threads or workers that ran them: they overlap)."""
+    bytes of BVH text read, seconds in total and split into reading headers, kernels (reading
+    and parsing the MOTION blocks, FK, features, contacts, model) and writing (headers and
+    kernels summed over the threads or workers that ran them: they overlap)."""
 
     out: str
     clips_ok: int = 0
@@ -318,7 +288,7 @@ class Summary:
     frames: int = 0
     bytes_read: int = 0
     seconds: float = 0.0
-    parse_s: float = 0.0
+    headers_s: float = 0.0
     kernels_s: float = 0.0
     write_s: float = 0.0
     batches: int = 0
@@ -335,8 +305,8 @@ class Summary:
             f"{self.out}: {state}; {self.clips_ok} clips ok, {self.clips_failed} failed"
             + (f" ({self.clips_resumed} done by an earlier run)" if self.clips_resumed else ""),
             f"  {self.frames:,} frames, {self.bytes_read / MB:.1f} MB of BVH read this run in {self.seconds:.2f} s ({self.mb_per_s:.0f} MB/s)",
-            f"  time: reading and parsing {self.parse_s:.2f} s, kernels (FK, features, contacts, model) {self.kernels_s:.2f} s, "
-            f"writing {self.write_s:.2f} s (parsing runs in another thread or on a cluster's workers, overlapping the rest)",
+            f"  time: headers {self.headers_s:.2f} s, kernels (MOTION blocks, FK, features, contacts, model) {self.kernels_s:.2f} s, "
+            f"writing {self.write_s:.2f} s (headers and kernels run in two threads or on a cluster's workers, overlapping the writing)",
         ]
         for failure in self.failures[:10]:
             out.append(f"  failed: {failure['error']}")
@@ -498,7 +468,7 @@ def preprocess(
             results = _local(batches, max_batches, stopped, keep, body_model, model_float32)
         else:
             results = _on_cluster(batches, max_batches, stopped, client, (keep, model, model_float32, get_backend()))
-        for batch, outcomes, parse_s, kernels_s in results:
+        for batch, outcomes, headers_s, kernels_s in results:
             record = {"batch": batch_number, "items": [item.source for item in batch], "clips": [], "failures": []}
             times = [time.perf_counter()]
             arrays, rows, skeleton = _collect(batch, outcomes, skeleton, keep, record, rows)
@@ -520,7 +490,7 @@ def preprocess(
             failures += record["failures"]
             frames = sum(c["frames"] for c in record["clips"])
             nbytes = sum(item.size for item in batch)
-            summary.parse_s += parse_s
+            summary.headers_s += headers_s
             summary.kernels_s += kernels_s
             summary.write_s += times[1] - times[0]
             summary.frames += frames
@@ -581,11 +551,41 @@ def _batched(items: Iterator[_Item], batch_bytes: float) -> Iterator[list[_Item]
 
 
 def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tuple]:
-    """``(batch, outcomes, seconds parsing, seconds in the kernels)`` of each batch, on this machine."""
-    for batch, motions, parse_s in _parsed(batches, limit, stopped):
-        start = time.perf_counter()
-        outcomes = _compute(batch, motions, keep, model, model_float32)
-        yield batch, outcomes, parse_s, time.perf_counter() - start
+    """``(batch, outcomes, seconds reading headers, seconds in the kernels)`` of each batch in
+    order, on this machine, up to ``limit`` batches (``stopped`` gets an entry if more were left).
+
+    A pipeline of threads: header threads take the next batches (from a zip or tar: decompress
+    them) and read their headers, one kernel thread runs each batch's kernel call, whose Rust
+    threads use every core, and the caller writes the batch before. Headers and writing are
+    Python and hold the GIL, the kernels do not: separate threads keep the cores busy with
+    kernels while they run. (When each thread did a whole batch, the threads fell into step,
+    reading headers at the same time on one core and then running kernels at the same time:
+    0.92 s for dataset-2 against 0.80 s.) Two header threads on two cores or more decompress
+    two batches of a zip at once."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    in_flight = 3  # batches read ahead of the one being written: bounds memory
+    running: deque = deque()
+
+    with ThreadPoolExecutor(max_workers=min(2, cores)) as header_pool, ThreadPoolExecutor(max_workers=1) as kernel_pool:
+
+        def submit_next() -> None:
+            batch = next(batches, None)  # taken here, in order (a tar stream is read here)
+            if batch is not None:
+                headers = header_pool.submit(_headers, batch)
+                running.append((batch, kernel_pool.submit(lambda: _kernels(batch, headers.result(), keep, model, model_float32))))
+
+        for _ in range(in_flight):
+            submit_next()
+        for count in itertools.count():
+            if not running:
+                return
+            if limit is not None and count >= limit:
+                stopped.append(True)
+                return
+            batch, computed = running.popleft()
+            result = computed.result()
+            submit_next()
+            yield (batch, *result)
 
 
 def _client(cluster):
@@ -613,17 +613,14 @@ _MODELS: dict = {}
 
 
 def _remote_batch(batch: list[_Item], keep, model, model_float32: bool, backend: str) -> tuple[list[dict], float, float]:
-    """What a cluster's worker does with one batch: parse it and compute its outcomes."""
+    """What a cluster's worker does with one batch: :func:`_compute`, with the model loaded
+    once per worker process and the client's backend."""
     from .backend import use_backend
 
-    if model is not None and model not in _MODELS:  # loaded once per worker process
+    if model is not None and model not in _MODELS:
         _MODELS[model] = _load_model(model)
     with use_backend(backend):
-        start = time.perf_counter()
-        motions = read_bvh_many([item.open() for item in batch], errors="return")
-        parsed = time.perf_counter()
-        outcomes = _compute(batch, motions, keep, _MODELS.get(model), model_float32)
-    return outcomes, parsed - start, time.perf_counter() - parsed
+        return _compute(batch, keep, _MODELS.get(model), model_float32)
 
 
 def _on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
@@ -646,83 +643,100 @@ def _on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
         yield (done, *future.result())
 
 
-def _parsed(batches: Iterator[list[_Item]], limit: int | None, stopped: list) -> Iterator[tuple]:
-    """``(batch, motions or BVHErrors, seconds reading and parsing)`` for each batch in order,
-    up to ``limit`` batches (``stopped`` gets an entry if more were left). Reader threads take
-    the next batches (from a tar: decompress them) and parse them while the caller works on
-    this one: the Rust parser and the decompressors release the GIL. With two readers (on two
-    or more cores) one's decompressing or Python work overlaps the other's parsing: a .zip of
-    dataset-2 takes 1.85 s instead of 2.30 s (a folder the same 1.15 s); on one core a second
-    reader only adds switching, so there is one."""
-    readers = min(2, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
-    take = threading.Lock()
-    numbers = itertools.count()
-
-    def read_next():
-        start = time.perf_counter()
-        with take:  # batches are taken in order; each is numbered as it is taken
-            number, batch = next(numbers), next(batches, None)
-        if batch is None:
-            return number, None
-        motions = read_bvh_many([item.open() for item in batch], errors="return")
-        return number, (batch, motions, time.perf_counter() - start)
-
-    with ThreadPoolExecutor(max_workers=readers) as pool:
-        running = {pool.submit(read_next) for _ in range(readers)}
-        ready: dict[int, tuple | None] = {}
-        for count in itertools.count():
-            while count not in ready:
-                done, running = wait(running, return_when=FIRST_COMPLETED)
-                for future in done:
-                    number, result = future.result()
-                    ready[number] = result
-                    if result is not None:
-                        running.add(pool.submit(read_next))
-            result = ready.pop(count)
-            if result is None:
-                return
-            if limit is not None and count >= limit:
-                stopped.append(True)
-                return
-            yield result
+def _compute(batch: list[_Item], keep: tuple[str, ...], model, model_float32: bool) -> tuple[list[dict], float, float]:
+    """The work on one batch, one outcome per item: ``{"error": text}`` for a clip that failed,
+    else ``frames``, ``fps``, ``frame_time`` and ``values`` (kind -> array as stored);
+    ``skeleton`` (names, parents) for every clip whose header was read. Plain values, so a
+    cluster's worker can send them back. Returns the outcomes and the seconds spent reading
+    headers and in the kernels. The two steps, :func:`_headers` and :func:`_kernels`, are run by
+    different threads on this machine."""
+    return _kernels(batch, _headers(batch), keep, model, model_float32)
 
 
-def _compute(batch: list[_Item], motions: list, keep: tuple[str, ...], model, model_float32: bool) -> list[dict]:
-    """The work on one parsed batch (FK, features, contacts, model), one outcome per item:
-    ``{"error": text}`` for a clip that failed, else ``frames``, ``fps``, ``frame_time`` and
-    ``values`` (kind -> array as stored); ``skeleton`` (names, parents) for every parsed clip.
-    Plain values, so a cluster's worker can send them back. Clips are grouped by hierarchy,
-    each group's kernels run in one call (in parallel across its clips)."""
-    outcomes: list[dict] = [{"error": str(m)} if not isinstance(m, Motion) else {} for m in motions]
-    parsed = [(k, m) for k, m in enumerate(motions) if isinstance(m, Motion)]
-    fks = forward_kinematics_many([m for _, m in parsed])
+@dataclass
+class _Headers:
+    """A batch's clips with their headers read: outcomes so far (errors, skeletons), clips by
+    hierarchy ``(names, parents) -> [(index, header, text for the kernel)]``, seconds taken."""
+
+    outcomes: list[dict]
+    groups: dict[tuple, list]
+    seconds: float
+
+
+def _headers(batch: list[_Item]) -> _Headers:
+    """The headers of a batch's clips, from the files' first 64 KB
+    (:func:`~expressive_mocap.bvh.read_header`; zip and tar members are decompressed here)."""
+    start = time.perf_counter()
+    outcomes: list[dict] = [{} for _ in batch]
+    groups: dict[tuple, list] = {}
+    for k, item in enumerate(batch):
+        try:
+            header, text = item.header()
+        except BVHError as error:
+            outcomes[k]["error"] = str(error)
+            continue
+        shape = (tuple(header.skeleton.names), tuple(header.skeleton.parents.tolist()))
+        outcomes[k]["skeleton"] = shape
+        groups.setdefault(shape, []).append((k, header, text))
+    return _Headers(outcomes, groups, time.perf_counter() - start)
+
+
+def _kernels(batch: list[_Item], headers: _Headers, keep: tuple[str, ...], model, model_float32: bool) -> tuple[list[dict], float, float]:
+    """Everything else of each clip (reading the file, its MOTION block, FK, features, contacts)
+    as one task of one kernel call per hierarchy, clips in parallel (``clip_pipeline_many``; the
+    NumPy twin composes the other kernels' twins), then the model on the whole batch."""
+    start = time.perf_counter()
+    outcomes, groups = headers.outcomes, headers.groups
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
-    groups: dict[tuple, list] = {}  # hierarchy (names, parents) -> [(index, motion, fk)]
-    for (k, motion), fk in zip(parsed, fks):
-        shape = (tuple(motion.skeleton.names), tuple(motion.skeleton.parents.tolist()))
-        outcomes[k]["skeleton"] = shape
-        groups.setdefault(shape, []).append((k, motion, fk))
-    kept, model_inputs = [], []
+    kept = []  # (index, local rotations, model features) of each clip for the model
     for group in groups.values():
-        indices, clips, fk = (list(column) for column in zip(*group))
+        skeleton = group[0][1].skeleton
         try:
-            roles = JointRoles.find(clips[0].skeleton) if needs_roles else None
-            values = clip_arrays(clips, keep, fk, roles)
-            inputs = _model_features(clips, fk, model, roles) if use_model else [None] * len(clips)
+            roles = JointRoles.find(skeleton) if needs_roles else None
+            if use_model:
+                model.check_skeleton(skeleton)
         except MocapError as error:  # the hierarchy lacks a role, or does not fit the model
-            for k in indices:
+            for k, _, _ in group:
                 outcomes[k]["error"] = f"{batch[k].source}: {error}"
             continue
-        for k, motion, clip_values, clip_inputs in zip(indices, clips, values, inputs):
-            outcomes[k].update(frames=motion.n_frames, fps=motion.fps, frame_time=motion.frame_time, values=clip_values)
-            kept.append((k, motion.rotations))
-            model_inputs.append(clip_inputs)
+        requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
+        # Without features or contacts the gait joints and body scale are not used.
+        scale = (lambda s: (actor_height(s, roles), hips_rest_height(s, roles))) if roles else (lambda s: (1.0, 1.0))
+        clips = [
+            (text, h.block_start, h.frames, h.skeleton.n_channels, *h.skeleton.layout(), h.skeleton.offsets, h.frame_time, *scale(h.skeleton))
+            for _, h, text in group
+        ]
+        gait_joints = [roles.hips, *roles.upper_legs, *roles.feet, *roles.toes] if roles else [0] * 7
+        results = kernels().clip_pipeline_many(
+            clips, np.ascontiguousarray(skeleton.parents, dtype=np.int64), gait_joints,
+            HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE,
+            "positions" in keep, "rotations" in keep or use_model, requests, "contacts" in keep, not use_model,
+        )
+        for (k, header, text), result in zip(group, results):
+            if isinstance(result, Exception):
+                outcomes[k]["error"] = str(_clip_error(batch[k], header, result))
+                continue
+            positions, rotations, features, contacts = result
+            values = {"positions": positions, "rotations": rotations, "contacts": contacts}
+            if "features" in keep:
+                values["features"] = features[0]
+            outcomes[k].update(frames=header.frames, fps=1.0 / header.frame_time, frame_time=header.frame_time,
+                               values={kind: v.astype(np.float32) if v.dtype == np.float64 else v for kind, v in values.items() if kind in keep})
+            if use_model:
+                kept.append((k, rotations, features[-1]))
     if use_model:
-        parts = decompose_many([r for _, r in kept], model_inputs, model, model_float32)
-        for (k, _), clip_parts in zip(kept, parts):
+        parts = decompose_many([r for _, r, _ in kept], [f for _, _, f in kept], model, model_float32)
+        for (k, _, _), clip_parts in zip(kept, parts):
             outcomes[k]["values"].update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
-    return outcomes
+    return outcomes, headers.seconds, time.perf_counter() - start
+
+
+def _clip_error(item: _Item, header, error: Exception) -> BVHError:
+    """The BVHError of a clip whose number block (ParseError) or file (OSError) could not be read."""
+    if isinstance(error, OSError):
+        return BVHError(item.source, None, f"cannot read the file: {error}")
+    return block_error(item.source, header, error)
 
 
 def _collect(batch: list[_Item], outcomes: list[dict], skeleton, keep, record: dict, rows: int) -> tuple[dict, int, dict | None]:
@@ -879,4 +893,4 @@ def load_dataset(folder: str | os.PathLike, mmap: bool = True) -> Dataset:
     return Dataset(folder, mmap)
 
 
-__all__ = ["KINDS", "Dataset", "Summary", "clip_arrays", "load_dataset", "open_source", "preprocess"]
+__all__ = ["KINDS", "Dataset", "Summary", "load_dataset", "open_source", "preprocess"]

@@ -85,7 +85,7 @@ fn dynamic_features<'py>(
 }
 
 /// Joint order of `clip_gait_many`'s `roles`.
-const GAIT_ROLES: &str = "[hips, left upper leg, right upper leg, left foot, right foot, left toe, right toe]";
+pub(super) const GAIT_ROLES: &str = "[hips, left upper leg, right upper leg, left foot, right foot, left toe, right toe]";
 
 /// Gait arrays of many clips, clips in parallel: each clip `(positions [F, J, 3] world,
 /// rotations [F, J, 4] local, frame_time, height, hips_rest_height)`; `roles`: 7 joint indices (see `GAIT_ROLES`).

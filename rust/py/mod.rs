@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
 use crate::error::KernelError;
+mod clip;
 mod decouple;
 mod features;
 mod mlp;
@@ -69,7 +70,7 @@ fn parse_motion_block<'py>(
 /// The arrays of a channel layout, borrowed from NumPy.
 type LayoutArrays<'py> = (PyReadonlyArray2<'py, i64>, PyReadonlyArray2<'py, u8>, PyReadonlyArray2<'py, i64>, PyReadonlyArray2<'py, f64>);
 
-struct OwnedLayout {
+pub(super) struct OwnedLayout {
     channels: usize,
     rotation_columns: Vec<i64>,
     orders: Vec<Order>,
@@ -78,7 +79,7 @@ struct OwnedLayout {
 }
 
 impl OwnedLayout {
-    fn new(channels: usize, arrays: &LayoutArrays<'_>) -> PyResult<Self> {
+    pub(super) fn new(channels: usize, arrays: &LayoutArrays<'_>) -> PyResult<Self> {
         let (rotation_columns, orders, position_columns, offsets) = arrays;
         Ok(Self {
             channels,
@@ -89,7 +90,7 @@ impl OwnedLayout {
         })
     }
 
-    fn view(&self) -> ChannelLayout<'_> {
+    pub(super) fn view(&self) -> ChannelLayout<'_> {
         ChannelLayout {
             channels: self.channels,
             rotation_columns: &self.rotation_columns,
@@ -262,6 +263,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(format_motion_block, m)?)?;
     m.add("num_threads", rayon::current_num_threads())?;
     features::register(m)?;
+    clip::register(m)?;
     mlp::register(m)?;
     decouple::register(m)?;
     Ok(())

@@ -7,6 +7,7 @@ rotates by ``q2`` then ``q1``; an Euler order is three axis indices (0 = X, 1 = 
 written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in degrees.
 """
 
+from .clip import clip_pipeline_many
 from .decouple import compose_rotations, decouple_rotations
 from .features import dynamic_features
 from .gait import clip_gait_many
@@ -22,6 +23,7 @@ __all__ = [
     "ParseError",
     "air_time",
     "clip_gait_many",
+    "clip_pipeline_many",
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
