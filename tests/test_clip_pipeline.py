@@ -1,0 +1,168 @@
+"""The whole per-clip work of preprocessing in one kernel call (``clip_pipeline_many``, Rust
+``rust/clip.rs`` and its NumPy twin), and headers read from a file's beginning
+(``bvh.read_header``), which the Rust kernel then reads whole."""
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap import bvh, reference
+from expressive_mocap.backend import kernels
+from expressive_mocap.demo import procedural_walk
+from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
+
+GAIT = (HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
+
+
+def pipeline_input(source, data: bytes):
+    """``clip_pipeline_many``'s per-clip tuple, parents and gait joints for a clip whose text is ``data``."""
+    header = bvh.parse_header(data, "clip")
+    skeleton = header.skeleton
+    roles = JointRoles.find(skeleton)
+    clip = (source, header.block_start, header.frames, skeleton.n_channels, *skeleton.layout(), skeleton.offsets,
+            header.frame_time, actor_height(skeleton, roles), hips_rest_height(skeleton, roles))
+    return clip, np.ascontiguousarray(skeleton.parents, dtype=np.int64), [roles.hips, *roles.upper_legs, *roles.feet, *roles.toes]
+
+
+@pytest.fixture(scope="module")
+def walks(tmp_path_factory):
+    """Two procedural walks (one waving) as files: (path, bytes) each."""
+    folder = tmp_path_factory.mktemp("walks")
+    out = []
+    for name, motion in (("plain", procedural_walk(seconds=1.5)), ("wave", procedural_walk(seconds=1.2, speed=1.2, wave="left"))):
+        path = folder / f"{name}.bvh"
+        em.write_bvh(motion, path)
+        out.append((path, path.read_bytes()))
+    return out
+
+
+def run(module, walks, float32=False, by_path=True):
+    clips = []
+    for path, data in walks:
+        clip, parents, joints = pipeline_input(str(path) if by_path else data, data)
+        clips.append(clip)
+    requests = [(0.0, None), (None, np.array([[0, 0, 0, 1.0], [0, 0, 0, 1.0]]))]
+    return module.clip_pipeline_many(clips, parents, joints, *GAIT, True, True, requests, True, float32)
+
+
+def test_the_numpy_twin_is_the_package_per_clip(walks):
+    # The twin is the composition of the per-clip functions the rest of the package uses.
+    for (path, _), (positions, rotations, features, contacts) in zip(walks, run(reference, walks)):
+        motion = em.read_bvh(path)
+        with em.use_backend("numpy"):
+            np.testing.assert_allclose(positions, motion.positions(), atol=1e-9)
+            np.testing.assert_array_equal(rotations, motion.rotations)
+            np.testing.assert_allclose(features[0], em.dynamic_features(motion, floor=0.0), atol=1e-9)
+            np.testing.assert_array_equal(contacts, em.foot_contacts(motion))
+
+
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+@pytest.mark.parametrize("by_path", [True, False])
+@pytest.mark.parametrize("float32", [False, True])
+def test_rust_matches_its_twin_and_the_kernels_one_by_one(walks, by_path, float32):
+    from expressive_mocap import _core as core
+
+    rust, twin = run(core, walks, float32, by_path), run(reference, walks, float32, by_path)
+    dtype = np.float32 if float32 else np.float64
+    for (path, data), got, expected in zip(walks, rust, twin):
+        assert got[0].dtype == got[1].dtype == got[2][0].dtype == dtype and got[3].dtype == bool
+        np.testing.assert_allclose(got[0], expected[0], atol=2e-5 if float32 else 1e-9)  # float32 positions ~100 cm
+        np.testing.assert_allclose(got[1], expected[1], atol=1e-7 if float32 else 1e-12)
+        for ours, theirs in zip(got[2], expected[2]):
+            np.testing.assert_allclose(ours, theirs, atol=1e-6 if float32 else 1e-9)
+        np.testing.assert_array_equal(got[3], expected[3])
+        if not float32:  # the same Rust kernels called one by one: the same numbers, bit for bit
+            clip, parents, joints = pipeline_input(data, data)
+            ((local, translations),) = core.read_motion_blocks([clip[:8]])
+            ((_, world),) = core.forward_kinematics_many([(local, translations, parents)])
+            gait = core.clip_gait_many([(world, local, *clip[8:])], joints, *GAIT, True, True, 0.0)
+            np.testing.assert_array_equal(got[0], world)
+            np.testing.assert_array_equal(got[1], local)
+            np.testing.assert_array_equal(got[2][0], gait[0][0])
+            np.testing.assert_array_equal(got[3], gait[0][1])
+
+
+def test_a_bad_block_and_a_missing_file_are_that_clips_result(walks, tmp_path, backend):
+    path, data = walks[0]
+    clip, parents, joints = pipeline_input(data, data)
+    block = data[clip[1]:].split(b"\n")
+    block[2] = block[2].replace(b" ", b" x ", 1)  # the third frame line: not a number
+    broken = (data[: clip[1]] + b"\n".join(block), *clip[1:])
+    missing = (str(tmp_path / "gone.bvh"), *clip[1:])
+    good, bad, gone = kernels().clip_pipeline_many([clip, broken, missing], parents, joints, *GAIT, True, False, [], True, True)
+    assert isinstance(good, tuple) and good[1] is None and good[2] == []
+    assert isinstance(bad, em.backend.PARSE_ERRORS) and bad.args == ('"x" is not a number', 2)
+    assert isinstance(gone, OSError) and "No such file" in str(gone)
+
+
+def test_the_body_scale_and_roles_must_fit_the_skeleton(walks, backend):
+    path, data = walks[0]
+    clip, parents, joints = pipeline_input(data, data)
+    with pytest.raises(ValueError, match="`toes`"):
+        kernels().clip_pipeline_many([clip], parents, joints[:6] + [99], *GAIT, True, False, [], True, False)
+    with pytest.raises(ValueError, match="`roles`"):
+        kernels().clip_pipeline_many([clip], parents, joints[:6], *GAIT, True, False, [], True, False)
+
+
+# ----------------------------------------------------------------------------- read_header
+
+
+def header_fields(header):
+    return (header.skeleton.names, header.skeleton.offsets.tolist(), header.frames, header.frame_time, header.block_start, header.block_line)
+
+
+def padded_clip(pad: int) -> bytes:
+    """A walk whose OFFSET line of the root carries ``pad`` extra spaces: moves the MOTION,
+    Frames and Frame Time lines across the 64 KB boundary of read_header."""
+    text = em.bvh_bytes(procedural_walk(seconds=0.5))
+    return text.replace(b"OFFSET", b"OFFSET" + b" " * pad, 1)
+
+
+def test_read_header_takes_the_beginning_only_when_the_header_fits(tmp_path):
+    base = padded_clip(0)
+    motion_at = base.index(b"MOTION")
+    block_at = bvh.parse_header(base, "x").block_start
+    # Cuts at the 64 KB boundary through the MOTION line, the Frames line, the Frame Time line
+    # (number cut short: 0.0333 read as 0.03 would be wrong), its newline, and just after.
+    for cut in sorted({motion_at + 3, motion_at + 12, block_at - 4, block_at - 1, block_at, block_at + 1}):
+        data = padded_clip(bvh.HEADER_PREFIX - cut)
+        path = tmp_path / f"cut{cut}.bvh"
+        path.write_bytes(data)
+        header, whole = bvh.read_header(path)
+        assert header_fields(header) == header_fields(bvh.parse_header(data, str(path)))
+        starts_in_beginning = header.block_start < bvh.HEADER_PREFIX
+        assert (whole is None) == starts_in_beginning and (whole is None or whole == data)
+    assert bvh.HEADER_PREFIX - (block_at - 1) < 1 << 20  # the cases above did cross the boundary
+
+
+def test_read_header_errors_are_read_bvh_errors(tmp_path):
+    big = padded_clip(bvh.HEADER_PREFIX)  # a header longer than the beginning
+    path = tmp_path / "big.bvh"
+    path.write_bytes(big)
+    header, whole = bvh.read_header(path)
+    assert whole == big and header.frames == em.read_bvh(path).n_frames
+    # A clip whose frame count is only plausible for the whole file's size (frames x joints
+    # above 65,536 and above a third of the beginning's bytes): read from the beginning.
+    long = em.bvh_bytes(procedural_walk(seconds=120))
+    path = tmp_path / "long.bvh"
+    path.write_bytes(long)
+    header, whole = bvh.read_header(path)
+    assert whole is None and header.frames == em.read_bvh(path).n_frames
+    assert header.frames * header.skeleton.n_joints > max(bvh.HEADER_PREFIX // 3, 65536)
+    # Errors: a Frames count the file cannot hold (small and large files), blank beginnings.
+    frames = f"Frames: {header.frames}".encode()
+    claims = long.replace(frames, b"Frames: 99999999", 1)
+    short = padded_clip(0)
+    short = short.replace(short[short.index(b"Frames:"):].split(b"\n", 1)[0], b"Frames: 9999", 1)
+    cases = (("claims.bvh", claims), ("short.bvh", short), ("empty.bvh", b" " * (bvh.HEADER_PREFIX + 10)), ("late.bvh", b"\n" * bvh.HEADER_PREFIX + short))
+    for name, data in cases:
+        path = tmp_path / name
+        path.write_bytes(data)
+        with pytest.raises(em.BVHError) as expected:
+            em.read_bvh(path)
+        with pytest.raises(em.BVHError) as got:
+            bvh.read_header(path)
+        assert str(got.value) == str(expected.value)
+    with pytest.raises(em.BVHError, match="cannot read the file"):
+        bvh.read_header(tmp_path / "missing.bvh")
