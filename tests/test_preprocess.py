@@ -143,14 +143,14 @@ def test_mixed_orders_file_positions_and_rotations(mixed_path, tmp_path):
 
 def test_batches_read_out_of_order_are_written_in_order(archive, tmp_path, monkeypatch):
     run(archive / "clips", tmp_path / "one_batch")
-    headers = preprocess_module._headers
+    prepare = preprocess_module._prepare
 
-    def first_batch_slow(batch):
+    def first_batch_slow(batch, *args):
         if any(item.name == "broken" for item in batch):  # the first clip in name order
             time.sleep(0.3)  # the second header thread finishes the next batch first
-        return headers(batch)
+        return prepare(batch, *args)
 
-    monkeypatch.setattr(preprocess_module, "_headers", first_batch_slow)
+    monkeypatch.setattr(preprocess_module, "_prepare", first_batch_slow)
     run(archive / "clips", tmp_path / "one_clip_a_batch", batch_mb=1e-6)
     assert_same_dataset(load_dataset(tmp_path / "one_batch"), load_dataset(tmp_path / "one_clip_a_batch"))
 

@@ -368,7 +368,7 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
     return _Header(skeleton, frames, frame_time, block_start, time_line + 1)
 
 
-HEADER_PREFIX = 1 << 16  # bytes read first for a header; hierarchies are a few kilobytes
+HEADER_PREFIX = 1 << 14  # bytes read first for a header: hierarchies are a few kilobytes (Bandai 3.4-4 KB)
 
 
 def read_header(path: str | os.PathLike) -> tuple[_Header, bytes | None]:

@@ -2,14 +2,13 @@
 
 Per clip: parse, forward kinematics (world positions), dynamic features, foot contacts and,
 with a body-mechanics model, the decomposition's activity per joint (optionally its body and
-expressive rotations). Clips are read in batches, each kernel called once per batch with the
-clips in parallel inside it: the Rust reader parses a batch's files
-(:func:`~expressive_mocap.bvh.read_bvh_many`), then FK
-(:func:`~expressive_mocap.kernels.forward_kinematics_many`), features and contacts
-(:func:`~expressive_mocap.features.gait_many`) and the network run on the whole batch. Reader
-threads parse the next batches while the main thread computes and appends this one's rows to
-the output, so memory stays bounded and both cores stay busy (the kernels release the
-GIL; what is left in Python per clip is a few array conversions).
+expressive rotations). Clips are read in batches. Python reads each clip's header from the
+file's first bytes (:func:`~expressive_mocap.bvh.read_header`); everything else of a clip
+(reading the file, its MOTION block, FK, features, contacts, float32 outputs) is one task of
+one Rust call per batch, clips in parallel (``clip_pipeline_many``), then the network runs on
+the whole batch. Header threads prepare the next batches while a kernel thread runs this one's
+kernels and the main thread appends the previous one's rows to the output, so memory stays
+bounded and both cores stay busy (the kernels release the GIL).
 
 The output format: a folder ::
 
@@ -554,8 +553,8 @@ def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tupl
     """``(batch, outcomes, seconds reading headers, seconds in the kernels)`` of each batch in
     order, on this machine, up to ``limit`` batches (``stopped`` gets an entry if more were left).
 
-    A pipeline of threads: header threads take the next batches (from a zip or tar: decompress
-    them) and read their headers, one kernel thread runs each batch's kernel call, whose Rust
+    A pipeline of threads: header threads read the next batches' headers (from a zip: decompress
+    them) and prepare the kernel's arguments (:func:`_prepare`), one kernel thread runs each batch's kernel call, whose Rust
     threads use every core, and the caller writes the batch before. Headers and writing are
     Python and hold the GIL, the kernels do not: separate threads keep the cores busy with
     kernels while they run. (When each thread did a whole batch, the threads fell into step,
@@ -571,8 +570,8 @@ def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tupl
         def submit_next() -> None:
             batch = next(batches, None)  # taken here, in order (a tar stream is read here)
             if batch is not None:
-                headers = header_pool.submit(_headers, batch)
-                running.append((batch, kernel_pool.submit(lambda: _kernels(batch, headers.result(), keep, model, model_float32))))
+                prepared = header_pool.submit(_prepare, batch, keep, model)
+                running.append((batch, kernel_pool.submit(lambda: _kernels(batch, prepared.result(), keep, model, model_float32))))
 
         for _ in range(in_flight):
             submit_next()
@@ -647,28 +646,40 @@ def _compute(batch: list[_Item], keep: tuple[str, ...], model, model_float32: bo
     """The work on one batch, one outcome per item: ``{"error": text}`` for a clip that failed,
     else ``frames``, ``fps``, ``frame_time`` and ``values`` (kind -> array as stored);
     ``skeleton`` (names, parents) for every clip whose header was read. Plain values, so a
-    cluster's worker can send them back. Returns the outcomes and the seconds spent reading
-    headers and in the kernels. The two steps, :func:`_headers` and :func:`_kernels`, are run by
-    different threads on this machine."""
-    return _kernels(batch, _headers(batch), keep, model, model_float32)
+    cluster's worker can send them back. Returns the outcomes and the seconds spent preparing
+    (headers) and in the kernels. The two steps, :func:`_prepare` and :func:`_kernels`, are run
+    by different threads on this machine."""
+    return _kernels(batch, _prepare(batch, keep, model), keep, model, model_float32)
 
 
 @dataclass
-class _Headers:
-    """A batch's clips with their headers read: outcomes so far (errors, skeletons), clips by
-    hierarchy ``(names, parents) -> [(index, header, text for the kernel)]``, seconds taken."""
+class _Group:
+    """The clips of one hierarchy in a batch, ready for one kernel call: their indices in the
+    batch, headers, the kernel's per-clip tuples, the skeleton's parents and gait joints."""
+
+    indices: list[int]
+    headers: list
+    clips: list[tuple]
+    parents: np.ndarray
+    gait_joints: list[int]
+
+
+@dataclass
+class _Prepared:
+    """A batch with its headers read: outcomes so far (errors, skeletons), its groups, seconds taken."""
 
     outcomes: list[dict]
-    groups: dict[tuple, list]
+    groups: list[_Group]
     seconds: float
 
 
-def _headers(batch: list[_Item]) -> _Headers:
-    """The headers of a batch's clips, from the files' first 64 KB
-    (:func:`~expressive_mocap.bvh.read_header`; zip and tar members are decompressed here)."""
+def _prepare(batch: list[_Item], keep: tuple[str, ...], model) -> _Prepared:
+    """The Python work before a batch's kernels: the clips' headers, from the files' first bytes
+    (:func:`~expressive_mocap.bvh.read_header`; zip and tar members are decompressed here), each
+    hierarchy's joint roles and each clip's body scale and channel layout."""
     start = time.perf_counter()
     outcomes: list[dict] = [{} for _ in batch]
-    groups: dict[tuple, list] = {}
+    by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
     for k, item in enumerate(batch):
         try:
             header, text = item.header()
@@ -677,43 +688,47 @@ def _headers(batch: list[_Item]) -> _Headers:
             continue
         shape = (tuple(header.skeleton.names), tuple(header.skeleton.parents.tolist()))
         outcomes[k]["skeleton"] = shape
-        groups.setdefault(shape, []).append((k, header, text))
-    return _Headers(outcomes, groups, time.perf_counter() - start)
-
-
-def _kernels(batch: list[_Item], headers: _Headers, keep: tuple[str, ...], model, model_float32: bool) -> tuple[list[dict], float, float]:
-    """Everything else of each clip (reading the file, its MOTION block, FK, features, contacts)
-    as one task of one kernel call per hierarchy, clips in parallel (``clip_pipeline_many``; the
-    NumPy twin composes the other kernels' twins), then the model on the whole batch."""
-    start = time.perf_counter()
-    outcomes, groups = headers.outcomes, headers.groups
+        by_hierarchy.setdefault(shape, []).append((k, header, text))
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
-    kept = []  # (index, local rotations, model features) of each clip for the model
-    for group in groups.values():
-        skeleton = group[0][1].skeleton
+    groups = []
+    for members in by_hierarchy.values():
+        skeleton = members[0][1].skeleton
         try:
             roles = JointRoles.find(skeleton) if needs_roles else None
             if use_model:
                 model.check_skeleton(skeleton)
         except MocapError as error:  # the hierarchy lacks a role, or does not fit the model
-            for k, _, _ in group:
+            for k, _, _ in members:
                 outcomes[k]["error"] = f"{batch[k].source}: {error}"
             continue
-        requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
         # Without features or contacts the gait joints and body scale are not used.
         scale = (lambda s: (actor_height(s, roles), hips_rest_height(s, roles))) if roles else (lambda s: (1.0, 1.0))
         clips = [
             (text, h.block_start, h.frames, h.skeleton.n_channels, *h.skeleton.layout(), h.skeleton.offsets, h.frame_time, *scale(h.skeleton))
-            for _, h, text in group
+            for _, h, text in members
         ]
         gait_joints = [roles.hips, *roles.upper_legs, *roles.feet, *roles.toes] if roles else [0] * 7
+        groups.append(_Group([k for k, _, _ in members], [h for _, h, _ in members], clips,
+                             np.ascontiguousarray(skeleton.parents, dtype=np.int64), gait_joints))
+    return _Prepared(outcomes, groups, time.perf_counter() - start)
+
+
+def _kernels(batch: list[_Item], prepared: _Prepared, keep: tuple[str, ...], model, model_float32: bool) -> tuple[list[dict], float, float]:
+    """Everything else of each clip (reading the file, its MOTION block, FK, features, contacts)
+    as one task of one kernel call per hierarchy, clips in parallel (``clip_pipeline_many``; the
+    NumPy twin composes the other kernels' twins), then the model on the whole batch."""
+    start = time.perf_counter()
+    outcomes = prepared.outcomes
+    use_model = any(k in MODEL_KINDS for k in keep)
+    requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
+    kept = []  # (index, local rotations, model features) of each clip for the model
+    for group in prepared.groups:
         results = kernels().clip_pipeline_many(
-            clips, np.ascontiguousarray(skeleton.parents, dtype=np.int64), gait_joints,
-            HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE,
+            group.clips, group.parents, group.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE,
             "positions" in keep, "rotations" in keep or use_model, requests, "contacts" in keep, not use_model,
         )
-        for (k, header, text), result in zip(group, results):
+        for k, header, result in zip(group.indices, group.headers, results):
             if isinstance(result, Exception):
                 outcomes[k]["error"] = str(_clip_error(batch[k], header, result))
                 continue
@@ -729,7 +744,7 @@ def _kernels(batch: list[_Item], headers: _Headers, keep: tuple[str, ...], model
         parts = decompose_many([r for _, r, _ in kept], [f for _, _, f in kept], model, model_float32)
         for (k, _, _), clip_parts in zip(kept, parts):
             outcomes[k]["values"].update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
-    return outcomes, headers.seconds, time.perf_counter() - start
+    return outcomes, prepared.seconds, time.perf_counter() - start
 
 
 def _clip_error(item: _Item, header, error: Exception) -> BVHError:
