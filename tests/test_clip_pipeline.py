@@ -3,6 +3,8 @@
 (``bvh.read_header``), which the Rust kernel then reads whole."""
 
 import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
 import pytest
 
 import expressive_mocap as em
@@ -166,3 +168,19 @@ def test_read_header_errors_are_read_bvh_errors(tmp_path):
         assert str(got.value) == str(expected.value)
     with pytest.raises(em.BVHError, match="cannot read the file"):
         bvh.read_header(tmp_path / "missing.bvh")
+
+
+@settings(max_examples=3000, deadline=None, derandomize=True)
+@given(st.lists(st.sampled_from([b"MOTION", b"motion", b"MoTiOn", b"MOTIONS", b" ", b"\t", b"\n", b"\r", b"\r\n", b"x", b"Mot", b"ion"]), max_size=16),
+       st.integers(0, 5000))
+def test_the_motion_line_is_found_as_the_regex_finds_it(pieces, padding):
+    # Padding moves the candidates across the first 4 KB window when there is no upper-case MOTION.
+    for data in (b"".join(pieces), b"x" * padding + b"".join(pieces), b"\n" * padding + b"".join(pieces)):
+        expected, found = bvh._MOTION.search(data), bvh._find_motion_line(data)
+        assert (found is None) == (expected is None) and (found is None or found.span() == expected.span())
+
+
+def test_finding_the_motion_line_stays_linear_on_hostile_headers():
+    # Millions of candidates on one line, or one line each: each line is matched once.
+    for data in (b"motion" * 600_000, b" " * 2_000_000 + b"motion" * 300_000, b"\n motion x" * 400_000):
+        assert bvh._find_motion_line(data) is None and bvh._MOTION.search(data) is None

@@ -317,11 +317,41 @@ def _next_content_line(data: bytes, position: int) -> tuple[int, int]:
     return len(data), len(data)
 
 
+def _find_motion_line(data: bytes) -> re.Match | None:
+    """The first line that is MOTION (any case): ``_MOTION.search(data)``, about 4x faster.
+
+    The case-insensitive regex tries every byte of the hierarchy (a fifth of the Python time of
+    reading an archive's headers), so candidates are found with ``bytes.find`` in lower-cased
+    windows (every MOTION line contains "motion") and only their lines are matched. The first
+    window ends after the first upper-case MOTION, usually the line. Each byte is lowered,
+    searched for newlines and matched at most a bounded number of times: linear on any input."""
+    exact = data.find(b"MOTION")
+    start, end = 0, exact + 6 if exact >= 0 else 1 << 12
+    line_start, scanned, tried = 0, 0, -1
+    while True:
+        lower = data[start:end].lower()
+        position = lower.find(b"motion")
+        while position >= 0:
+            newline = data.rfind(b"\n", scanned, start + position)
+            scanned = start + position
+            if newline >= 0:
+                line_start = newline + 1
+            if line_start != tried:  # each line is matched once, however many candidates it holds
+                tried = line_start
+                match = _MOTION.match(data, line_start)
+                if match is not None:
+                    return match
+            position = lower.find(b"motion", position + 1)
+        if end >= len(data):
+            return None
+        start, end = end - 5, 4 * end  # the next window repeats 5 bytes: a candidate may cross the end
+
+
 def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
     """The header of the BVH text ``data``; ``size``: the whole file's length when ``data`` is
     only its beginning (see :func:`read_header`)."""
     _check_text(data, name)
-    motion = _MOTION.search(data)
+    motion = _find_motion_line(data)
     hierarchy_end = motion.start() if motion else len(data)
     if hierarchy_end > MAX_HEADER_BYTES:
         where = "the hierarchy" if motion else "the hierarchy (no MOTION line found)"
