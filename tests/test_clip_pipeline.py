@@ -116,7 +116,7 @@ def header_fields(header):
 
 def padded_clip(pad: int) -> bytes:
     """A walk whose OFFSET line of the root carries ``pad`` extra spaces: moves the MOTION,
-    Frames and Frame Time lines across the 64 KB boundary of read_header."""
+    Frames and Frame Time lines across the boundary of what read_header reads first (HEADER_PREFIX)."""
     text = em.bvh_bytes(procedural_walk(seconds=0.5))
     return text.replace(b"OFFSET", b"OFFSET" + b" " * pad, 1)
 
@@ -125,7 +125,7 @@ def test_read_header_takes_the_beginning_only_when_the_header_fits(tmp_path):
     base = padded_clip(0)
     motion_at = base.index(b"MOTION")
     block_at = bvh.parse_header(base, "x").block_start
-    # Cuts at the 64 KB boundary through the MOTION line, the Frames line, the Frame Time line
+    # Cuts at that boundary through the MOTION line, the Frames line, the Frame Time line
     # (number cut short: 0.0333 read as 0.03 would be wrong), its newline, and just after.
     for cut in sorted({motion_at + 3, motion_at + 12, block_at - 4, block_at - 1, block_at, block_at + 1}):
         data = padded_clip(bvh.HEADER_PREFIX - cut)

@@ -404,7 +404,7 @@ HEADER_PREFIX = 1 << 14  # bytes read first for a header: hierarchies are a few 
 def read_header(path: str | os.PathLike) -> tuple[_Header, bytes | None]:
     """The header of the BVH file at ``path`` and, only where it needed them, the file's bytes.
 
-    The header is parsed from the file's first 64 KB when it fits there (the usual case): the
+    The header is parsed from the file's first 16 KB when it fits there (the usual case): the
     caller then reads the MOTION block itself (``preprocess`` does, in Rust, in parallel), and
     ``None`` is returned for the bytes. A header that does not fit, or an error, is taken from the
     whole file, so the result and any error are those of :func:`read_bvh`. Raises BVHError.
@@ -420,7 +420,7 @@ def read_header(path: str | os.PathLike) -> tuple[_Header, bytes | None]:
                 except BVHError:
                     header = None
                 # The Frame Time line must have ended inside the beginning: a number cut by the
-                # 64 KB boundary would otherwise be read short.
+                # boundary of those bytes would otherwise be read short.
                 if header is not None and header.block_start < len(data):
                     return header, None
                 data += handle.read()
