@@ -95,185 +95,162 @@ mod tests {
     use super::*;
     use crate::rotations::Order;
 
-    /// Two joints in a chain, each with a ZXY rotation and the root with a position.
-    fn layout() -> (Vec<i64>, Vec<Order>, Vec<i64>, Vec<f64>) {
-        (
+    // Two joints play every role: the kernels only need valid indices here.
+    const ROLES: GaitJoints = GaitJoints {
+        hips: 0,
+        upper_legs: [0, 1],
+        feet: [1, 1],
+        toes: [1, 0],
+    };
+    const PARAMS: GaitParams = GaitParams {
+        height_threshold: 0.05,
+        speed_threshold: 0.5,
+        min_duration: 0.1,
+        floor_percentile: 5.0,
+    };
+    const SCALE: BodyScale = BodyScale {
+        height: 170.0,
+        hips_rest_height: 90.0,
+    };
+    const PARENTS: [i64; 2] = [-1, 0];
+    const BLOCK: &[u8] =
+        b"0 90 0 10 20 30 5 0 0\n1 90 2 12 18 33 -5 1 0\n2 91 4 14 16 36 -15 2 0\n";
+
+    /// `f` given two joints in a chain, each with a ZXY rotation, the root with a position.
+    fn with_layout<R>(f: impl FnOnce(ChannelLayout<'_>) -> R) -> R {
+        let (rotation_columns, orders, position_columns, offsets): (
+            Vec<i64>,
+            Vec<Order>,
+            Vec<i64>,
+            Vec<f64>,
+        ) = (
             vec![3, 4, 5, 6, 7, 8],
             vec![[2, 0, 1]; 2],
             vec![0, 1, 2, -1, -1, -1],
             vec![0.0, 90.0, 0.0, 0.0, 40.0, 0.0],
-        )
+        );
+        f(ChannelLayout {
+            channels: 9,
+            rotation_columns: &rotation_columns,
+            orders: &orders,
+            position_columns: &position_columns,
+            offsets: &offsets,
+        })
+    }
+
+    fn request(features: &[FeatureRequest]) -> ClipRequest<'_> {
+        ClipRequest {
+            parents: &PARENTS,
+            roles: ROLES,
+            params: PARAMS,
+            positions: true,
+            rotations: true,
+            features,
+            contacts: true,
+        }
     }
 
     #[test]
     fn outputs_are_those_of_the_kernels_one_by_one() {
-        let (rotation_columns, orders, position_columns, offsets) = layout();
-        let layout = ChannelLayout {
-            channels: 9,
-            rotation_columns: &rotation_columns,
-            orders: &orders,
-            position_columns: &position_columns,
-            offsets: &offsets,
-        };
-        let block = b"0 90 0 10 20 30 5 0 0\n1 90 2 12 18 33 -5 1 0\n2 91 4 14 16 36 -15 2 0\n";
-        let parents = [-1, 0];
-        // Two joints play every role: the kernels only need valid indices here.
-        let roles = GaitJoints {
-            hips: 0,
-            upper_legs: [0, 1],
-            feet: [1, 1],
-            toes: [1, 0],
-        };
-        let params = GaitParams {
-            height_threshold: 0.05,
-            speed_threshold: 0.5,
-            min_duration: 0.1,
-            floor_percentile: 5.0,
-        };
-        let scale = BodyScale {
-            height: 170.0,
-            hips_rest_height: 90.0,
-        };
-        let features = [
-            FeatureRequest {
-                floor: Some(0.0),
-                thigh_reference: None,
-            },
-            FeatureRequest {
-                floor: None,
-                thigh_reference: None,
-            },
-        ];
-        let request = ClipRequest {
-            parents: &parents,
-            roles,
-            params,
-            positions: true,
-            rotations: true,
-            features: &features,
-            contacts: true,
-        };
-        let clip = ClipInput {
-            block,
-            frames: 3,
-            layout,
-            frame_time: 1.0 / 30.0,
-            scale,
-        };
-        let out = clip_outputs(&clip, &request).unwrap();
+        with_layout(|layout| {
+            let features = [
+                FeatureRequest {
+                    floor: Some(0.0),
+                    thigh_reference: None,
+                },
+                FeatureRequest {
+                    floor: None,
+                    thigh_reference: None,
+                },
+            ];
+            let clip = ClipInput {
+                block: BLOCK,
+                frames: 3,
+                layout,
+                frame_time: 1.0 / 30.0,
+                scale: SCALE,
+            };
+            let out = clip_outputs(&clip, &request(&features)).unwrap();
 
-        let (rotations, translations) = read_motion_block(block, 3, &layout).unwrap();
-        let (_, positions) = forward_kinematics(&rotations, &translations, &parents).unwrap();
-        let alone = |f: Option<&FeatureRequest>, c| {
-            clip_gait(
-                &positions,
-                &rotations,
-                2,
-                1.0 / 30.0,
-                scale,
-                &roles,
-                &params,
-                f,
-                c,
-            )
-            .unwrap()
-        };
-        assert_eq!(out.positions.as_ref(), Some(&positions));
-        assert_eq!(out.rotations.as_ref(), Some(&rotations));
-        assert_eq!(
-            out.features,
-            vec![
-                alone(Some(&features[0]), false).features.unwrap(),
-                alone(Some(&features[1]), false).features.unwrap()
-            ]
-        );
-        assert_eq!(out.contacts, alone(None, true).contacts);
+            let (rotations, translations) = read_motion_block(BLOCK, 3, &layout).unwrap();
+            let (_, positions) = forward_kinematics(&rotations, &translations, &PARENTS).unwrap();
+            let alone = |f: Option<&FeatureRequest>, c| {
+                clip_gait(
+                    &positions,
+                    &rotations,
+                    2,
+                    1.0 / 30.0,
+                    SCALE,
+                    &ROLES,
+                    &PARAMS,
+                    f,
+                    c,
+                )
+                .unwrap()
+            };
+            assert_eq!(out.positions.as_ref(), Some(&positions));
+            assert_eq!(out.rotations.as_ref(), Some(&rotations));
+            let expected: Vec<_> = features
+                .iter()
+                .map(|f| alone(Some(f), false).features.unwrap())
+                .collect();
+            assert_eq!(out.features, expected);
+            assert_eq!(out.contacts, alone(None, true).contacts);
 
-        let only_contacts = ClipRequest {
-            positions: false,
-            rotations: false,
-            features: &[],
-            ..request
-        };
-        let out = clip_outputs(&clip, &only_contacts).unwrap();
-        assert_eq!(
-            out,
-            ClipOutputs {
-                contacts: alone(None, true).contacts,
-                ..ClipOutputs::default()
-            }
-        );
+            let only_contacts = ClipRequest {
+                positions: false,
+                rotations: false,
+                ..request(&[])
+            };
+            let out = clip_outputs(&clip, &only_contacts).unwrap();
+            assert_eq!(
+                out,
+                ClipOutputs {
+                    contacts: alone(None, true).contacts,
+                    ..ClipOutputs::default()
+                }
+            );
+        });
     }
 
     #[test]
     fn a_bad_block_or_skeleton_is_an_error() {
-        let (rotation_columns, orders, position_columns, offsets) = layout();
-        let layout = ChannelLayout {
-            channels: 9,
-            rotation_columns: &rotation_columns,
-            orders: &orders,
-            position_columns: &position_columns,
-            offsets: &offsets,
-        };
-        let roles = GaitJoints {
-            hips: 0,
-            upper_legs: [0, 1],
-            feet: [1, 1],
-            toes: [1, 0],
-        };
-        let params = GaitParams {
-            height_threshold: 0.05,
-            speed_threshold: 0.5,
-            min_duration: 0.1,
-            floor_percentile: 5.0,
-        };
-        let scale = BodyScale {
-            height: 170.0,
-            hips_rest_height: 90.0,
-        };
-        let request = ClipRequest {
-            parents: &[-1, 0],
-            roles,
-            params,
-            positions: true,
-            rotations: false,
-            features: &[],
-            contacts: true,
-        };
-        let short = ClipInput {
-            block: b"0 90 0 10 20 30 5 0\n",
-            frames: 1,
-            layout,
-            frame_time: 1.0 / 30.0,
-            scale,
-        };
-        assert!(matches!(
-            clip_outputs(&short, &request),
-            Err(crate::error::KernelError::Parse { line: 0, .. })
-        ));
-        let clip = ClipInput {
-            block: b"0 90 0 10 20 30 5 0 0\n",
-            ..short
-        };
-        assert!(clip_outputs(
-            &clip,
-            &ClipRequest {
-                parents: &[-1, 5],
-                ..request.clone()
-            }
-        )
-        .is_err());
-        let far = GaitJoints {
-            toes: [1, 2],
-            ..roles
-        };
-        assert!(clip_outputs(
-            &clip,
-            &ClipRequest {
-                roles: far,
-                ..request
-            }
-        )
-        .is_err());
+        with_layout(|layout| {
+            let short = ClipInput {
+                block: b"0 90 0 10 20 30 5 0\n",
+                frames: 1,
+                layout,
+                frame_time: 1.0 / 30.0,
+                scale: SCALE,
+            };
+            assert!(matches!(
+                clip_outputs(&short, &request(&[])),
+                Err(crate::error::KernelError::Parse { line: 0, .. })
+            ));
+            let clip = ClipInput {
+                block: b"0 90 0 10 20 30 5 0 0\n",
+                ..short
+            };
+            assert!(clip_outputs(
+                &clip,
+                &ClipRequest {
+                    parents: &[-1, 5],
+                    ..request(&[])
+                }
+            )
+            .is_err());
+            let far = GaitJoints {
+                toes: [1, 2],
+                ..ROLES
+            };
+            assert!(clip_outputs(
+                &clip,
+                &ClipRequest {
+                    roles: far,
+                    ..request(&[])
+                }
+            )
+            .is_err());
+        });
     }
 }

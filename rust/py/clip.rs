@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use numpy::ndarray::{Array2, Array3};
+use numpy::ndarray::{Array, Array2, Dimension, Ix2, Ix3};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -48,31 +48,15 @@ impl Floats {
         }
     }
 
-    fn into_py2(self, py: Python<'_>, shape: (usize, usize)) -> PyResult<Py<PyAny>> {
+    fn into_py<D: Dimension>(self, py: Python<'_>, shape: D) -> PyResult<Py<PyAny>> {
         let error = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
         Ok(match self {
-            Self::F64(v) => Array2::from_shape_vec(shape, v)
+            Self::F64(v) => Array::from_shape_vec(shape, v)
                 .map_err(error)?
                 .into_pyarray(py)
                 .into_any()
                 .unbind(),
-            Self::F32(v) => Array2::from_shape_vec(shape, v)
-                .map_err(error)?
-                .into_pyarray(py)
-                .into_any()
-                .unbind(),
-        })
-    }
-
-    fn into_py3(self, py: Python<'_>, shape: (usize, usize, usize)) -> PyResult<Py<PyAny>> {
-        let error = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
-        Ok(match self {
-            Self::F64(v) => Array3::from_shape_vec(shape, v)
-                .map_err(error)?
-                .into_pyarray(py)
-                .into_any()
-                .unbind(),
-            Self::F32(v) => Array3::from_shape_vec(shape, v)
+            Self::F32(v) => Array::from_shape_vec(shape, v)
                 .map_err(error)?
                 .into_pyarray(py)
                 .into_any()
@@ -275,16 +259,16 @@ fn clip_pipeline_many<'py>(
                 let frames = *frames;
                 let positions = out
                     .positions
-                    .map(|p| p.into_py3(py, (frames, joints, 3)))
+                    .map(|p| p.into_py(py, Ix3(frames, joints, 3)))
                     .transpose()?;
                 let rotations = out
                     .rotations
-                    .map(|r| r.into_py3(py, (frames, joints, 4)))
+                    .map(|r| r.into_py(py, Ix3(frames, joints, 4)))
                     .transpose()?;
                 let features = out
                     .features
                     .into_iter()
-                    .map(|f| f.into_py2(py, (frames, N_FEATURES)))
+                    .map(|f| f.into_py(py, Ix2(frames, N_FEATURES)))
                     .collect::<PyResult<Vec<_>>>()?;
                 let contacts = match out.contacts {
                     Some(c) => Some(
