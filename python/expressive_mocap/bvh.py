@@ -318,10 +318,10 @@ def _next_content_line(data: bytes, position: int) -> tuple[int, int]:
 
 
 def _find_motion_line(data: bytes) -> re.Match | None:
-    """The first line that is MOTION (any case): ``_MOTION.search(data)``, about 4x faster.
+    """The first line that is MOTION (any case): ``_MOTION.search(data)``, 3.5x faster.
 
-    The case-insensitive regex tries every byte of the hierarchy (a fifth of the Python time of
-    reading an archive's headers), so candidates are found with ``bytes.find`` in lower-cased
+    The case-insensitive regex tries every byte of the hierarchy (on dataset-2's 2,902 headers:
+    55 ms of the 76 ms that parsing them took; with this, 16 ms of 37 ms), so candidates are found with ``bytes.find`` in lower-cased
     windows (every MOTION line contains "motion") and only their lines are matched. The first
     window ends after the first upper-case MOTION, usually the line. Each byte is lowered,
     searched for newlines and matched at most a bounded number of times: linear on any input."""
