@@ -112,7 +112,6 @@ def kernels_child(folder: str) -> None:
         posed = timed("fk", lambda: core.forward_kinematics_many([(r, t, group.parents) for r, t in decoded]))
         gait = [(world, local, *clip[8:]) for (_, world), (local, _), clip in zip(posed, decoded, group.clips)]
         timed("gait", lambda: core.clip_gait_many(gait, group.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE, True, True, 0.0))
-        del texts, decoded, posed, gait
     print(json.dumps(best))
 
 

@@ -18,7 +18,6 @@ import json
 import os
 from dataclasses import dataclass, field, replace
 from importlib import resources
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np

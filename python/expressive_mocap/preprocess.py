@@ -57,7 +57,6 @@ import shutil
 import struct
 import sys
 import tarfile
-import threading
 import time
 import zipfile
 from collections import deque
