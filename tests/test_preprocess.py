@@ -101,6 +101,30 @@ def test_a_bad_clip_is_reported_and_the_others_are_fine(archive, tmp_path):
     assert len(ds) == 3 and len(ds["positions"]) == sum(c["frames"] for c in ds.clips)
 
 
+def test_a_clip_that_cannot_be_read_is_a_failure_not_the_end(archive, tmp_path, monkeypatch):
+    folder = tmp_path / "clips"
+    shutil.copytree(archive / "clips", folder)
+    os.symlink(tmp_path / "nowhere.bvh", folder / "dangling.bvh")  # listed, never readable
+    summary = run(folder, tmp_path / "ds")
+    errors = {f["name"]: f["error"] for f in load_dataset(tmp_path / "ds").failures}
+    assert summary.finished and sorted(errors) == ["broken", "dangling"]
+    assert errors["dangling"] == f"{folder / 'dangling.bvh'}: cannot read the file: No such file or directory"
+    # A file that goes away after its header was read: the kernel's own read fails, that clip only.
+    prepare = preprocess_module._prepare
+
+    def prepare_then_remove(batch, *args):
+        prepared = prepare(batch, *args)
+        (folder / "walk_b.bvh").unlink(missing_ok=True)
+        return prepared
+
+    monkeypatch.setattr(preprocess_module, "_prepare", prepare_then_remove)
+    run(folder, tmp_path / "gone")
+    gone = load_dataset(tmp_path / "gone")
+    errors = {f["name"]: f["error"] for f in gone.failures}
+    assert sorted(errors) == ["broken", "dangling", "walk_b"] and gone.names == ["more/walk_c", "walk_a"]
+    assert errors["walk_b"] == f"{folder / 'walk_b.bvh'}: cannot read the file: No such file or directory"
+
+
 def assert_same_dataset(a, b):
     assert a.names == b.names and a.manifest["skeleton"] == b.manifest["skeleton"]
     assert [c["frames"] for c in a.clips] == [c["frames"] for c in b.clips]

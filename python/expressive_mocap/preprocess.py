@@ -140,7 +140,11 @@ def _folder(root: Path) -> list[_Item]:
         for name in names:
             if name.lower().endswith(".bvh"):
                 path = os.path.join(folder, name)
-                items.append(_Item(_clip_name(path[len(prefix):].replace(os.sep, "/")), path, os.stat(path).st_size, path=path))
+                try:
+                    size = os.stat(path).st_size
+                except OSError:  # a dangling link, or gone since listed: its clip fails when read, with the reason
+                    size = 0
+                items.append(_Item(_clip_name(path[len(prefix):].replace(os.sep, "/")), path, size, path=path))
     return sorted(items, key=lambda i: i.name)
 
 
@@ -749,7 +753,7 @@ def _kernels(batch: list[_Item], prepared: _Prepared, keep: tuple[str, ...], mod
 def _clip_error(item: _Item, header, error: Exception) -> BVHError:
     """The BVHError of a clip whose number block (ParseError) or file (OSError) could not be read."""
     if isinstance(error, OSError):
-        return BVHError(item.source, None, f"cannot read the file: {error}")
+        return BVHError(item.source, None, f"cannot read the file: {error.strerror or error}")
     return block_error(item.source, header, error)
 
 

@@ -290,11 +290,25 @@ fn clip_pipeline_many<'py>(
                 Ok(to_py(error).into_value(py).into_any())
             }
             Err(Failure::Kernel(error)) => Err(to_py(error)),
-            Err(Failure::Read(error)) => Ok(PyOSError::new_err(error.to_string())
-                .into_value(py)
-                .into_any()),
+            Err(Failure::Read(error)) => Ok(os_error(&error).into_value(py).into_any()),
         })
         .collect()
+}
+
+/// An `OSError` with `errno` and `strerror` as Python's own `open` gives them (Rust's message
+/// without its " (os error N)" suffix), so both backends name a failed read the same way.
+fn os_error(error: &std::io::Error) -> PyErr {
+    match error.raw_os_error() {
+        Some(code) => {
+            let text = error.to_string();
+            let suffix = format!(" (os error {code})");
+            PyOSError::new_err((
+                code,
+                text.strip_suffix(&suffix).unwrap_or(&text).to_string(),
+            ))
+        }
+        None => PyOSError::new_err(error.to_string()),
+    }
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

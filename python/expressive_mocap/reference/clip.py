@@ -43,7 +43,7 @@ def clip_pipeline_many(
                 with open(source, "rb") as handle:
                     source = handle.read()
             except OSError as error:
-                out.append(OSError(str(error)))
+                out.append(OSError(error.errno, error.strerror) if error.errno is not None else error)
                 continue
         if start > len(source):
             raise ValueError("argument `start`: past the end of the clip's text")
