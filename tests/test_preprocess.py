@@ -125,6 +125,21 @@ def test_a_clip_that_cannot_be_read_is_a_failure_not_the_end(archive, tmp_path, 
     assert errors["walk_b"] == f"{folder / 'walk_b.bvh'}: cannot read the file: No such file or directory"
 
 
+def test_a_damaged_zip_member_is_a_failure_not_the_end(archive, tmp_path):
+    damaged = tmp_path / "damaged.zip"
+    with zipfile.ZipFile(damaged, "w", zipfile.ZIP_STORED) as z:
+        for name in ("walk_a.bvh", "walk_b.bvh"):
+            z.write(archive / "clips" / name, name)
+    data = bytearray(damaged.read_bytes())
+    at = data.index(b"HIERARCHY", data.index(b"walk_b.bvh")) + 200  # inside walk_b's stored bytes
+    data[at] ^= 0x01  # its CRC no longer matches
+    damaged.write_bytes(bytes(data))
+    summary = run(damaged, tmp_path / "ds")
+    ds = load_dataset(tmp_path / "ds")
+    assert summary.finished and ds.names == ["walk_a"]
+    assert ds.failures[0]["error"].startswith(f"{damaged}:walk_b.bvh: cannot read the archive member: Bad CRC-32")
+
+
 def assert_same_dataset(a, b):
     assert a.names == b.names and a.manifest["skeleton"] == b.manifest["skeleton"]
     assert [c["frames"] for c in a.clips] == [c["frames"] for c in b.clips]

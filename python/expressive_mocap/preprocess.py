@@ -59,6 +59,7 @@ import sys
 import tarfile
 import time
 import zipfile
+import zlib
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -109,7 +110,12 @@ class _Item:
         if self.data is None and self.member is None:
             header, data = read_header(self.path)
             return header, self.path if data is None else data
-        data = self.data if self.data is not None else _zip(self.path).read(self.member)
+        if self.data is not None:
+            return parse_header(self.data, self.source), self.data
+        try:
+            data = _zip(self.path).read(self.member)
+        except (zipfile.BadZipFile, zlib.error, OSError, EOFError, NotImplementedError) as error:  # a damaged member fails alone
+            raise BVHError(self.source, None, f"cannot read the archive member: {error}") from None
         return parse_header(data, self.source), data
 
 
