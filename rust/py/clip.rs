@@ -2,18 +2,18 @@
 
 use std::path::PathBuf;
 
-use numpy::ndarray::{Array, Array2, Dimension, Ix2, Ix3};
-use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::ndarray::{Array, Dimension, Ix2, Ix3};
+use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList};
 
-use super::features::GAIT_ROLES;
-use super::{contiguous, shape_error, to_py, OwnedLayout};
+use super::features::{array2, gait_joints, thigh_reference_values};
+use super::{contiguous, to_py, OwnedLayout};
 use crate::clip::{clip_outputs, ClipInput, ClipOutputs, ClipRequest};
 use crate::error::KernelError;
 use crate::features::N_FEATURES;
-use crate::gait::{BodyScale, FeatureRequest, GaitJoints, GaitParams};
+use crate::gait::{BodyScale, FeatureRequest, GaitParams};
 
 /// Where a clip's text is: in memory, or in a file this call reads (inside the parallel work,
 /// so an archive's files are read on every core without the GIL).
@@ -120,29 +120,10 @@ fn clip_pipeline_many<'py>(
     float32: bool,
 ) -> PyResult<Vec<Py<PyAny>>> {
     use rayon::prelude::*;
-    let [hips, left_leg, right_leg, left_foot, right_foot, left_toe, right_toe] = roles[..] else {
-        return Err(PyValueError::new_err(format!(
-            "argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {}",
-            roles.len()
-        )));
-    };
     let mut requests = Vec::with_capacity(features.len());
     for (floor, reference) in &features {
-        let thigh_reference = match reference {
-            None => None,
-            Some(array) if array.shape() == [2, 4] => {
-                let mut values = [0.0; 8];
-                values.copy_from_slice(contiguous("features", array)?);
-                Some(values)
-            }
-            Some(array) => {
-                return Err(shape_error(
-                    "features",
-                    "[2, 4] thigh reference",
-                    array.shape(),
-                ))
-            }
-        };
+        let thigh_reference =
+            thigh_reference_values("features", "[2, 4] thigh reference", reference.as_ref())?;
         requests.push(FeatureRequest {
             floor: *floor,
             thigh_reference,
@@ -151,12 +132,7 @@ fn clip_pipeline_many<'py>(
     let parents = contiguous("parents", &parents)?;
     let request = ClipRequest {
         parents,
-        roles: GaitJoints {
-            hips,
-            upper_legs: [left_leg, right_leg],
-            feet: [left_foot, right_foot],
-            toes: [left_toe, right_toe],
-        },
+        roles: gait_joints(&roles)?,
         params: GaitParams {
             height_threshold,
             speed_threshold,
@@ -270,16 +246,10 @@ fn clip_pipeline_many<'py>(
                     .into_iter()
                     .map(|f| f.into_py(py, Ix2(frames, N_FEATURES)))
                     .collect::<PyResult<Vec<_>>>()?;
-                let contacts = match out.contacts {
-                    Some(c) => Some(
-                        Array2::from_shape_vec((frames, 2), c)
-                            .map_err(|e| PyValueError::new_err(e.to_string()))?
-                            .into_pyarray(py)
-                            .into_any()
-                            .unbind(),
-                    ),
-                    None => None,
-                };
+                let contacts = out
+                    .contacts
+                    .map(|c| array2(c, (frames, 2)).map(|a| a.into_pyarray(py)))
+                    .transpose()?;
                 Ok((positions, rotations, PyList::new(py, features)?, contacts)
                     .into_pyobject(py)?
                     .into_any()

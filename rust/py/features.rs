@@ -9,7 +9,7 @@ use super::{contiguous, shape_error, to_py};
 use crate::features::{FeatureParams, N_FEATURES};
 use crate::footsteps::ContactParams;
 
-fn array2<T: numpy::Element>(values: Vec<T>, shape: (usize, usize)) -> PyResult<Array2<T>> {
+pub(super) fn array2<T: numpy::Element>(values: Vec<T>, shape: (usize, usize)) -> PyResult<Array2<T>> {
     Array2::from_shape_vec(shape, values).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
@@ -85,7 +85,29 @@ fn dynamic_features<'py>(
 }
 
 /// Joint order of `clip_gait_many`'s `roles`.
-pub(super) const GAIT_ROLES: &str = "[hips, left upper leg, right upper leg, left foot, right foot, left toe, right toe]";
+const GAIT_ROLES: &str = "[hips, left upper leg, right upper leg, left foot, right foot, left toe, right toe]";
+
+/// The 7 gait joints `roles` in `GAIT_ROLES` order, or a ValueError naming the argument.
+pub(super) fn gait_joints(roles: &[usize]) -> PyResult<crate::gait::GaitJoints> {
+    let [hips, left_leg, right_leg, left_foot, right_foot, left_toe, right_toe] = roles[..] else {
+        return Err(PyValueError::new_err(format!("argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {}", roles.len())));
+    };
+    Ok(crate::gait::GaitJoints { hips, upper_legs: [left_leg, right_leg], feet: [left_foot, right_foot], toes: [left_toe, right_toe] })
+}
+
+/// The 8 numbers of a thigh reference `[2, 4]` (None stays None), or an error naming the
+/// argument `name` and the `expected` shape.
+pub(super) fn thigh_reference_values(name: &str, expected: &str, array: Option<&PyReadonlyArray2<'_, f64>>) -> PyResult<Option<[f64; 8]>> {
+    match array {
+        None => Ok(None),
+        Some(array) if array.shape() == [2, 4] => {
+            let mut values = [0.0; 8];
+            values.copy_from_slice(contiguous(name, array)?);
+            Ok(Some(values))
+        }
+        Some(array) => Err(shape_error(name, expected, array.shape())),
+    }
+}
 
 /// Gait arrays of many clips, clips in parallel: each clip `(positions [F, J, 3] world,
 /// rotations [F, J, 4] local, frame_time, height, hips_rest_height)`; `roles`: 7 joint indices (see `GAIT_ROLES`).
@@ -108,21 +130,10 @@ fn clip_gait_many<'py>(
     feature_floor: Option<f64>,
     thigh_reference: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<Vec<(Option<Bound<'py, PyArray2<f64>>>, Option<Bound<'py, PyArray2<bool>>>)>> {
-    use crate::gait::{clip_gait, BodyScale, FeatureRequest, GaitJoints, GaitParams};
+    use crate::gait::{clip_gait, BodyScale, FeatureRequest, GaitParams};
     use rayon::prelude::*;
-    let [hips, left_leg, right_leg, left_foot, right_foot, left_toe, right_toe] = roles[..] else {
-        return Err(PyValueError::new_err(format!("argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {}", roles.len())));
-    };
-    let joints = GaitJoints { hips, upper_legs: [left_leg, right_leg], feet: [left_foot, right_foot], toes: [left_toe, right_toe] };
-    let reference = match &thigh_reference {
-        None => None,
-        Some(array) if array.shape() == [2, 4] => {
-            let mut values = [0.0; 8];
-            values.copy_from_slice(contiguous("thigh_reference", array)?);
-            Some(values)
-        }
-        Some(array) => return Err(shape_error("thigh_reference", "[2, 4]", array.shape())),
-    };
+    let joints = gait_joints(&roles)?;
+    let reference = thigh_reference_values("thigh_reference", "[2, 4]", thigh_reference.as_ref())?;
     let request = features.then_some(FeatureRequest { floor: feature_floor, thigh_reference: reference });
     let params = GaitParams { height_threshold, speed_threshold, min_duration, floor_percentile };
     let mut jobs = Vec::with_capacity(clips.len());
