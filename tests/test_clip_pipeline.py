@@ -27,7 +27,7 @@ def pipeline_input(source, data: bytes):
     roles = JointRoles.find(skeleton)
     clip = (source, header.block_start, header.frames, skeleton.n_channels, *skeleton.layout(), skeleton.offsets,
             header.frame_time, actor_height(skeleton, roles), hips_rest_height(skeleton, roles))
-    return clip, np.ascontiguousarray(skeleton.parents, dtype=np.int64), [roles.hips, *roles.upper_legs, *roles.feet, *roles.toes]
+    return clip, np.ascontiguousarray(skeleton.parents, dtype=np.int64), roles.gait_joints
 
 
 @pytest.fixture(scope="module")

@@ -62,7 +62,7 @@ def _load(source: Source) -> tuple[bytes, str]:
         try:
             return Path(source).read_bytes(), str(source)
         except OSError as error:
-            raise BVHError(source, None, f"cannot read the file: {error.strerror or error}") from None
+            raise read_error(source, error) from None
     if hasattr(source, "read"):
         name = str(getattr(source, "name", "<file object>"))
         data = source.read()
@@ -425,8 +425,13 @@ def read_header(path: str | os.PathLike) -> tuple[_Header, bytes | None]:
                     return header, None
                 data += handle.read()
     except OSError as error:
-        raise BVHError(name, None, f"cannot read the file: {error.strerror or error}") from None
+        raise read_error(name, error) from None
     return parse_header(data, name), data
+
+
+def read_error(name: str | os.PathLike, error: OSError) -> BVHError:
+    """The BVHError of a file that could not be read (Python's or the Rust kernel's OSError)."""
+    return BVHError(name, None, f"cannot read the file: {error.strerror or error}")
 
 
 def block_error(name: str, header: _Header, error: Exception) -> BVHError:

@@ -287,9 +287,8 @@ def gait_many(
     for motion, (_, positions) in zip(motions, fk):
         skeleton = motion.skeleton
         clips.append((positions, motion.rotations, motion.frame_time, actor_height(skeleton, roles), hips_rest_height(skeleton, roles)))
-    joints = [roles.hips, *roles.upper_legs, *roles.feet, *roles.toes]
     return kernels().clip_gait_many(
-        clips, joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE, features, contacts,
+        clips, roles.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE, features, contacts,
         None if floor is None else float(floor), thigh_reference,
     )
 

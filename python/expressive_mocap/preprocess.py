@@ -69,7 +69,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from .backend import get_backend, kernels
-from .bvh import block_error, parse_header, read_header
+from .bvh import block_error, parse_header, read_error, read_header
 from .errors import BVHError, MocapError
 from .decouple import EXPONENT, GAIN
 from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
@@ -717,7 +717,7 @@ def _prepare(batch: list[_Item], keep: tuple[str, ...], model) -> _Prepared:
             (text, h.block_start, h.frames, h.skeleton.n_channels, *h.skeleton.layout(), h.skeleton.offsets, h.frame_time, *scale(h.skeleton))
             for _, h, text in members
         ]
-        gait_joints = [roles.hips, *roles.upper_legs, *roles.feet, *roles.toes] if roles else [0] * 7
+        gait_joints = roles.gait_joints if roles else [0] * 7
         groups.append(_Group([k for k, _, _ in members], [h for _, h, _ in members], clips,
                              np.ascontiguousarray(skeleton.parents, dtype=np.int64), gait_joints))
     return _Prepared(outcomes, groups, time.perf_counter() - start)
@@ -759,7 +759,7 @@ def _kernels(batch: list[_Item], prepared: _Prepared, keep: tuple[str, ...], mod
 def _clip_error(item: _Item, header, error: Exception) -> BVHError:
     """The BVHError of a clip whose number block (ParseError) or file (OSError) could not be read."""
     if isinstance(error, OSError):
-        return BVHError(item.source, None, f"cannot read the file: {error.strerror or error}")
+        return read_error(item.source, error)
     return block_error(item.source, header, error)
 
 

@@ -55,6 +55,12 @@ class JointRoles:
     feet: tuple[int, int]
     toes: tuple[int, int]
 
+    @property
+    def gait_joints(self) -> list[int]:
+        """The seven joints the whole-clip gait kernels read, in their order (``clip_gait_many``,
+        ``clip_pipeline_many``): hips, left and right upper leg, left and right foot, left and right toe."""
+        return [self.hips, *self.upper_legs, *self.feet, *self.toes]
+
     @classmethod
     def find(cls, skeleton: Skeleton, **overrides: int | str) -> JointRoles:
         """Roles of ``skeleton`` by joint name. ``overrides`` give any role (names in
