@@ -69,12 +69,12 @@ def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", he
 
 def right_to_dofs(rotations, reference, representation, orders):
     """Rotation vector of ``q m^-1`` (the deviation in the parent's frame) instead of ``m^-1 q``."""
-    return ex._log(quat.mul(rotations, quat.conjugate(reference)[None])).reshape(len(rotations), -1)
+    return quat.log(quat.mul(rotations, quat.conjugate(reference)[None])).reshape(len(rotations), -1)
 
 
 def right_to_rotations(dofs, reference, representation, orders):
     dofs = dofs.reshape(len(dofs), -1, 3)
-    return quat.mul(ex._exp(dofs), reference[None])
+    return quat.mul(quat.exp(dofs), reference[None])
 
 
 def children_weights(skeleton):

@@ -17,7 +17,6 @@ from expressive_mocap.exaggerate import (
     stance_foot_speed,
     swap_test,
     subtree_weights,
-    _log,
     to_cycle_timing,
     train,
 )
@@ -167,7 +166,7 @@ def lean(motion, walk, frames=slice(None)):
     loaded_walk leans by turning the spine -4 degrees per unit of k about its local Z."""
     j = motion.skeleton.names.index("Spine")
     change = quat.mul(quat.conjugate(walk.rotations[frames, j]), motion.rotations[frames, j])
-    return -float(np.degrees(_log(change)[:, 2]).mean())
+    return -float(np.degrees(quat.log(change)[:, 2]).mean())
 
 
 def test_exaggeration_follows_the_training_series_and_extrapolates(clean_model, walk):

@@ -126,21 +126,6 @@ def dof_names(skeleton: Skeleton, representation: str = "rotvec") -> list[str]:
     return names + ["Hips.height"]
 
 
-def _log(q: np.ndarray) -> np.ndarray:
-    """Rotation vectors ``[..., 3]`` of unit quaternions (shortest arc: w >= 0)."""
-    q = np.where(q[..., 3:] < 0, -q, q)
-    sin_half = np.linalg.norm(q[..., :3], axis=-1, keepdims=True)
-    angle = 2.0 * np.arctan2(sin_half, q[..., 3:])
-    return q[..., :3] * np.where(sin_half < 1e-12, 2.0, angle / np.where(sin_half < 1e-12, 1.0, sin_half))
-
-
-def _exp(v: np.ndarray) -> np.ndarray:
-    """Unit quaternions of rotation vectors ``[..., 3]``."""
-    angle = np.linalg.norm(v, axis=-1, keepdims=True)
-    scale = np.where(angle < 1e-12, 0.5, np.sin(angle / 2) / np.where(angle < 1e-12, 1.0, angle))
-    return np.concatenate([v * scale, np.cos(angle / 2)], axis=-1)
-
-
 def _wrap(a: np.ndarray) -> np.ndarray:
     return (a + np.pi) % (2 * np.pi) - np.pi
 
@@ -150,7 +135,7 @@ def rotations_to_dofs(rotations: np.ndarray, reference: np.ndarray, representati
     ``reference [J, 4]`` (rotation vector of ``ref^-1 q``, or Euler angles minus the reference's,
     wrapped to (-pi, pi], radians)."""
     if representation == "rotvec":
-        return _log(quat.mul(quat.conjugate(reference)[None], rotations)).reshape(len(rotations), -1)
+        return quat.log(quat.mul(quat.conjugate(reference)[None], rotations)).reshape(len(rotations), -1)
     angles = np.radians(quat_to_euler(rotations, orders)) - np.radians(quat_to_euler(reference[None], orders))
     return _wrap(angles).reshape(len(rotations), -1)
 
@@ -159,7 +144,7 @@ def dofs_to_rotations(dofs: np.ndarray, reference: np.ndarray, representation: s
     """The inverse of :func:`rotations_to_dofs`: ``[N, 3 J]`` -> ``[N, J, 4]``."""
     dofs = dofs.reshape(len(dofs), -1, 3)
     if representation == "rotvec":
-        return quat.mul(reference[None], _exp(dofs))
+        return quat.mul(reference[None], quat.exp(dofs))
     angles = np.degrees(dofs + np.radians(quat_to_euler(reference[None], orders)))
     return euler_to_quat(angles, orders)
 

@@ -91,3 +91,18 @@ def power(q: np.ndarray, s) -> np.ndarray:
     axis = q[..., :3] / np.where(sin_half < 1e-15, 1.0, sin_half)
     out = np.concatenate([axis * np.sin(half), np.cos(half)], axis=-1)
     return np.where(sin_half < 1e-15, np.array([0.0, 0.0, 0.0, 1.0]), out)
+
+
+def log(q: np.ndarray) -> np.ndarray:
+    """Rotation vectors ``[..., 3]`` (axis times angle, radians) of unit quaternions (shortest arc: w >= 0)."""
+    q = np.where(q[..., 3:] < 0, -q, q)
+    sin_half = np.linalg.norm(q[..., :3], axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(sin_half, q[..., 3:])
+    return q[..., :3] * np.where(sin_half < 1e-12, 2.0, angle / np.where(sin_half < 1e-12, 1.0, sin_half))
+
+
+def exp(v: np.ndarray) -> np.ndarray:
+    """Unit quaternions of rotation vectors ``[..., 3]``: the inverse of :func:`log`."""
+    angle = np.linalg.norm(v, axis=-1, keepdims=True)
+    scale = np.where(angle < 1e-12, 0.5, np.sin(angle / 2) / np.where(angle < 1e-12, 1.0, angle))
+    return np.concatenate([v * scale, np.cos(angle / 2)], axis=-1)
