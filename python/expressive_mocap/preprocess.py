@@ -563,8 +563,9 @@ def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tupl
     order, on this machine, up to ``limit`` batches (``stopped`` gets an entry if more were left).
 
     A pipeline of threads: header threads read the next batches' headers (from a zip: decompress
-    them) and prepare the kernel's arguments (:func:`_prepare`), one kernel thread runs each batch's kernel call, whose Rust
-    threads use every core, and the caller writes the batch before. Headers and writing are
+    them) and prepare the kernel's arguments (:func:`_prepare`), one kernel thread runs each
+    batch's kernel call, whose Rust threads use every core, and the caller writes the batch
+    before (and takes the next batches: a tar stream is decompressed there). Headers and writing are
     Python and hold the GIL, the kernels do not: separate threads keep the cores busy with
     kernels while they run. (When each thread did a whole batch, the threads fell into step,
     reading headers at the same time on one core and then running kernels at the same time:
@@ -684,8 +685,9 @@ class _Prepared:
 
 def _prepare(batch: list[_Item], keep: tuple[str, ...], model) -> _Prepared:
     """The Python work before a batch's kernels: the clips' headers, from the files' first bytes
-    (:func:`~expressive_mocap.bvh.read_header`; zip and tar members are decompressed here), each
-    hierarchy's joint roles and each clip's body scale and channel layout."""
+    (:func:`~expressive_mocap.bvh.read_header`; zip members are decompressed here, a tar's
+    members come already read), each hierarchy's joint roles and each clip's body scale and
+    channel layout."""
     start = time.perf_counter()
     outcomes: list[dict] = [{} for _ in batch]
     by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
