@@ -5,7 +5,7 @@ variant and cycle choice; benches/exaggeration_experiment.py writes the same mea
 benches/EXAGGERATION.md ("Readings checked against METHODS.md part 1 and the paper").
 
     PYTHONPATH=python python benches/exaggeration_variants.py [DATA_DIR] [VARIANT ...]
-    PYTHONPATH=python python benches/exaggeration_variants.py [DATA_DIR] --cycles middle 0 -2 mean
+    PYTHONPATH=python python benches/exaggeration_variants.py [DATA_DIR] --cycles all middle 0 -2
 
 Each variant swaps one piece of the module for the alternative reading (monkeypatched here, the
 package is unchanged) and runs train, swap_test, leave_one_out and rank_agreement as the
@@ -34,13 +34,16 @@ from exaggeration_experiment import DEFAULT_DATA, LEVELS, PEOPLE, STYLES, clip  
 ORIGINAL = {name: getattr(ex, name) for name in ("fit", "rotations_to_dofs", "dofs_to_rotations", "_key_set", "subtree_weights")}
 
 
-def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", height_weight: float | None = None):
+def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", height_weight: float | None = None, samples: str = "cycles"):
     """``fit`` with predictability weighted by ``s`` / ``s2`` (eigenvalues) of the ``kept`` vectors or
-    of ``all`` of them, observability over the ``kept`` basis or ``all`` vectors, and optionally
-    the hips height DOF's weight replaced (a factor of the default)."""
+    of ``all`` of them and measured over every ``cycles`` or over the ``performances`` (each the mean
+    of its cycles), observability over the ``kept`` basis or ``all`` vectors, and optionally the hips
+    height DOF's weight replaced (a factor of the default)."""
 
-    def fit(trajectories, levels, weights, *, share=0.9, energy=0.99, rank=None, degree=1):
-        out = ORIGINAL["fit"](trajectories, levels, weights, share=share, energy=energy, rank=rank, degree=degree)
+    def fit(trajectories, levels, weights, *, cycles=None, share=0.9, energy=0.99, rank=None, degree=1):
+        if samples == "performances":
+            cycles = None
+        out = ORIGINAL["fit"](trajectories, levels, weights, cycles=cycles, share=share, energy=energy, rank=rank, degree=degree)
         P, K, T, D = trajectories.shape
         levels = np.asarray(levels, dtype=np.float64)
         w = weights.copy()
@@ -53,8 +56,7 @@ def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", he
         Co = np.einsum("tr,pktd->pkdr", Uo, trajectories)
         observability = np.linalg.norm(Co[:, 0] - Co[:, -1], axis=-1) * w
         n = len(s) if over == "all" else r
-        C = np.einsum("tr,pktd->pkdr", U[:, :n], trajectories)
-        rho = ex._correlation(C.transpose(1, 0, 2, 3), levels)
+        rho = ex._cycle_correlation(U[:, :n], ex._single_cycles(trajectories) if cycles is None else cycles, levels, P)
         weight = s[:n] ** (2 if weighting == "s2" else 1)
         predictability = np.abs(rho) @ (weight / weight.sum())
         E = observability * predictability**2
@@ -100,6 +102,8 @@ def key_before_crossing(values, share):
 # name: (what is read differently, module patches, train options)
 VARIANTS = {
     "default": ("METHODS.md part 1 as implemented", {}, {}),
+    "P-over-performances": ("predictability over the performances (each the mean of its cycles) instead of over every cycle",
+                            {"fit": make_fit(samples="performances")}, {}),
     "mean-right": ("rotation vector of `q m^-1` (deviation in the parent's frame) instead of `m^-1 q`",
                    {"rotations_to_dofs": right_to_dofs, "dofs_to_rotations": right_to_rotations}, {}),
     "euler": ("Euler channels relative to the mean (METHODS' option) instead of rotation vectors", {}, {"representation": "euler"}),
@@ -130,7 +134,7 @@ def patched(names: dict):
             setattr(ex, name, value)
 
 
-def measure(people, name: str = "default", cycle="middle") -> dict:
+def measure(people, name: str = "default", cycle="all") -> dict:
     """Train with variant ``name`` and run the validation: the numbers of one row."""
     _, patches, options = VARIANTS[name]
     with patched(patches):
@@ -165,7 +169,7 @@ def summary(m: dict) -> str:
 def main() -> None:
     args = sys.argv[1:]
     data = Path(args.pop(0)) if args and Path(args[0]).is_dir() else DEFAULT_DATA
-    cycles = ("middle", "mean")
+    cycles = ("all", "middle")
     if args and args[0] == "--cycles":  # the default method on other cycle choices
         args.pop(0)
         cycles = tuple(int(c) if c.lstrip("-").isdigit() else c for c in args)

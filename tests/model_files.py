@@ -32,6 +32,7 @@ def small_models() -> dict[str, tuple[dict, dict]]:
         "key": np.ones(D, bool), "person_key": np.ones((P, D), bool), "mappings": rng.normal(size=(D, r, 2)),
         "reference": np.tile([0.0, 0.0, 0.0, 1.0], (J, 1)), "person_reference": np.tile([0.0, 0.0, 0.0, 1.0], (P, J, 1)),
         "lower": -np.ones(D), "upper": np.ones(D), "trajectories": rng.normal(size=(P, K, T, D)),
+        "cycle_trajectories": rng.normal(size=(5, T, D)), "cycle_performance": np.array([[0, 0], [0, 1], [1, 0], [1, 1], [1, 1]]),
     }
     exag_meta = {
         "format": exaggerate.FORMAT, "version": exaggerate.VERSION, "joint_names": ["Hips", "Spine"],

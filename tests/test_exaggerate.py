@@ -12,6 +12,7 @@ from expressive_mocap.exaggerate import (
     ExaggerationModel,
     exaggerate,
     find_cycles,
+    fit,
     lock_stance_feet,
     normalise_cycle,
     stance_foot_speed,
@@ -112,6 +113,55 @@ def test_the_swap_metric_on_the_synthetic_series_is_small(clean_model, model):
     for r in results:
         assert r.ratio < 0.3 and r.ratio_positions < 0.15, r
         assert r.ratio < r.random - 0.5 and r.ratio_positions < r.random_positions - 0.5, r
+
+
+def test_predictability_is_measured_over_every_cycle():
+    """Two DOFs whose performances (the means of their cycles) are equal and change with intensity:
+    one steady from cycle to cycle, one scattered around the same means. Over the performances alone
+    they tie; over every cycle the steady one is the more predictable. The correlations are SciPy's."""
+    from scipy.stats import pearsonr
+
+    rng = np.random.default_rng(3)
+    levels, T, n = np.array([1.0, 2.0, 3.0]), 20, 6
+    shape = np.sin(np.linspace(0, 2 * np.pi, T))
+    spread = rng.normal(size=(3, n, T))
+    spread -= spread.mean(axis=1, keepdims=True)  # zero mean per performance: the means stay equal
+    cycles = np.zeros((3, n, T, 3))
+    for i, k in enumerate(levels):
+        cycles[i, :, :, 0] = k * shape + 0.01 * spread[i]
+        cycles[i, :, :, 1] = k * shape + 5.0 * spread[i]
+        cycles[i, :, :, 2] = rng.normal(size=(n, T)) * 0.1
+    performances = cycles.mean(axis=1)[None]  # [P = 1, K, T, D]
+    owners = np.stack([np.zeros(3 * n, int), np.repeat(np.arange(3), n)], axis=1)
+    weights = np.ones(3)
+    over_cycles = fit(performances, levels, weights, cycles=(cycles.reshape(3 * n, T, 3), owners), rank=2)
+    over_performances = fit(performances, levels, weights, rank=2)
+    E = over_performances["expressiveness"][0]
+    assert E[0] == pytest.approx(E[1], rel=1e-9)
+    E = over_cycles["expressiveness"][0]
+    assert E[0] > 2 * E[1] > 0
+    # The predictability behind it: SciPy's Pearson correlation over the cycles' coefficients.
+    u = over_cycles["basis"][:, 0]
+    rho = [abs(pearsonr(cycles[..., d].reshape(3 * n, T) @ u, levels[owners[:, 1]])[0]) for d in (0, 1)]
+    assert rho[0] > 0.99 and rho[1] < 0.8
+
+
+def test_leave_one_out_fits_on_the_other_peoples_cycles():
+    """Person p's warp uses exactly what training on the other people (every one of their cycles) gives."""
+    from expressive_mocap.exaggerate import leave_one_out
+
+    people = [[loaded_walk(k, seconds=3.5 + p, wobble=0.3, seed=10 * p + i) for i, k in enumerate(LEVELS)] for p in range(3)]
+    model = train(people, LEVELS)
+    counts = np.bincount(model.cycle_performance[:, 0])
+    assert len(set(counts)) == 3 and counts.min() >= 6  # several cycles a clip, a different number for each person
+    warps = leave_one_out(model)
+    for p in (0, 1, 2):
+        others = train([people[q] for q in range(3) if q != p], LEVELS)
+        change = (others.predict_coefficients(LEVELS[-1]) - others.predict_coefficients(LEVELS[0])) * others.key[:, None]
+        light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
+        warped = light + others.basis @ change.T
+        assert warps[p].key == int(others.key.sum())
+        assert warps[p].ratio == pytest.approx(np.linalg.norm(warped - heavy) / np.linalg.norm(light - heavy), rel=1e-9)
 
 
 def test_zero_length_joints_get_no_weight_and_are_reported(clean_model):
@@ -260,6 +310,20 @@ def test_foot_locking_on_a_real_walk(bandai2_dir):
     assert locked.stance_speed_output <= 1.2 * locked.stance_speed_input
 
 
+def test_the_issue_targets_on_real_walks(bandai2_dir):
+    """The paper's validation on dataset-2's walks, takes 1-8 as people (benches/EXAGGERATION.md has
+    the full tables): the issue's bars for the swap test and the leave-one-person-out warp."""
+    from expressive_mocap.exaggerate import leave_one_out
+
+    read = lambda name: em.read_bvh(bandai2_dir / f"dataset-2_walk_{name}.bvh")  # noqa: E731
+    model = train([[read(f"{style}_{p:03d}") for style in ("exhausted", "normal", "active")] for p in range(1, 9)], LEVELS)
+    *per_person, union = swap_test(model, draws=100)
+    for r in per_person:
+        assert r.ratio <= 0.40 and r.ratio <= r.random - 0.3, r
+    assert union.ratio <= 0.30 and union.ratio_positions <= 0.10, union
+    assert np.mean([w.ratio for w in leave_one_out(model)]) <= 0.45
+
+
 def test_the_cycles_start_at_the_footstrikes_of_the_trained_foot(walk):
     right = train([[loaded_walk(k) for k in LEVELS]], LEVELS, foot=1)
     assert right.settings["foot"] == 1
@@ -363,6 +427,7 @@ def test_rank_exaggerate_validate_commands(tmp_path, capsys):
     assert main(["rank", *levels, "-o", str(plot), "-o", str(saved)]) == 0
     out = capsys.readouterr().out
     assert "key DOFs" in out and "person 1:" in out and plot.stat().st_size > 1000
+    assert main(["rank", *levels, "--cycle", "0"]) == 0 and "key DOFs" in capsys.readouterr().out  # a cycle by index
     walk = tmp_path / "walk.bvh"
     em.write_bvh(loaded_walk(2.0, 4.0), walk)
     result = tmp_path / "out.bvh"
@@ -385,6 +450,9 @@ def test_commands_fail_in_one_line(tmp_path, capsys):
     assert "same number of files" in capsys.readouterr().err
     assert main(["rank", "--level", "1", str(walk), "--level", "2", str(walk), "-o", "x.txt"]) == 1
     assert ".png" in capsys.readouterr().err
+    assert main(["rank", "--level", "1", str(walk), "--level", "2", str(walk), "--cycle", "best"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cycle must be one of all, middle" in err
     assert main(["exaggerate", "--model", str(tmp_path / "none.npz"), "--input", str(walk), "--to", "2", "-o", str(tmp_path / "o.bvh")]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "cannot read" in err

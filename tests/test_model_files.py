@@ -91,6 +91,11 @@ def test_inconsistent_skeleton_or_indices_are_refused(kind):
     else:
         refused(kind, npz({**arrays, "parents": np.array([0, -1])}, meta), "inconsistent")
         refused(kind, npz({**arrays, "orders": np.array([[0, 0, 1], [2, 0, 1]], np.uint8)}, meta), "inconsistent")
+        owners = arrays["cycle_performance"]
+        refused(kind, npz({**arrays, "cycle_performance": owners + [[2, 0]]}, meta), "cycle_performance")  # no such person
+        refused(kind, npz({**arrays, "cycle_performance": owners[[0, 1, 2, 2, 2]]}, meta), "cycle_performance")  # a performance without cycles
+        refused(kind, npz({**arrays, "cycle_performance": owners - 1}, meta), "cycle_performance")
+        refused(kind, npz({**arrays, "cycle_performance": owners.astype(float)}, meta), "cycle_performance")
 
 
 @pytest.mark.parametrize("kind", LOAD)

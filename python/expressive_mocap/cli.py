@@ -355,7 +355,7 @@ def _train_from_args(args):
     if getattr(args, "model", None):
         return ExaggerationModel.load(args.model), None
     people, levels, paths = _levels(args)
-    cycle = args.cycle if args.cycle in ("middle", "first", "mean", "whole") else int(args.cycle)
+    cycle = int(args.cycle) if args.cycle.lstrip("-").isdigit() else args.cycle  # names are checked by train
     model = train(
         people, levels, samples=args.samples, share=args.share, energy=args.energy, rank=args.rank, degree=args.degree,
         representation="euler" if args.euler else "rotvec", cycle=cycle, foot=("left", "right").index(args.foot),
@@ -421,7 +421,8 @@ def _add_training_options(p, model: bool = False) -> None:
     p.add_argument("--rank", type=_positive(int), help="number of basis vectors (default: by --energy)")
     p.add_argument("--degree", type=int, default=1, help="degree of the intensity-to-coefficient mappings (default 1: lines)")
     p.add_argument("--samples", type=_positive(int), default=50, help="samples per time-normalised cycle T (default 50)")
-    p.add_argument("--cycle", default="middle", help="cycle of each clip: middle (default), first, mean (all, averaged), whole (not a walk), or an index")
+    p.add_argument("--cycle", default="all", help="cycles of each clip: all (default: their mean is the performance, predictability is measured over "
+                   "every one), middle (METHODS' single cycle), first, whole (not a walk), or an index")
     p.add_argument("--foot", choices=["left", "right"], default="left", help="walking cycles run from one footstrike of this foot to the next (default left)")
     p.add_argument("--euler", action="store_true", help="DOFs are the Euler channels (relative to the mean) instead of rotation vectors")
 

@@ -17,7 +17,13 @@ Pipeline and shapes (``T`` samples a cycle, ``D`` DOFs, ``K`` intensities, ``P``
 3. ``A [T, P K D]``, thin SVD, ``U [T, r]`` keeping 99% of ``sum(s^2)``; coefficients ``U^T x``;
 4. observability ``O_d = ||c_d(k_1) - c_d(k_K)|| w_j`` (``w_j`` the summed bone lengths below
    joint ``j``), predictability ``P_d = sum_i s_i / sum(s) |rho(c_{d,i}(k), k)|``,
-   ``E_d = O_d P_d^2``, normalised and accumulated to ``share`` (0.9): key features;
+   ``E_d = O_d P_d^2``, normalised and accumulated to ``share`` (0.9): key features.
+   By default (``cycle="all"``) a performance is the mean of every cycle of its clip (in DOF
+   space) and ``rho`` is taken over every cycle, each at its clip's intensity. With one sample
+   per intensity (METHODS' "one cycle"; ``cycle="middle"``) three points decide ``rho``, and for
+   three points the correlation of pure noise follows the arcsine law (median ``|rho|`` 0.71), so
+   a DOF that only varies scores almost as predictable as one that follows the intensity; over
+   every cycle (about 20 a person on the Bandai walks) ``rho`` also sees the step-to-step spread;
 5. least-squares lines ``c_{d,i}(k)``, averaged over people;
 6. a new motion, per cycle: ``x' = x + U (f(k1) - f(k0))`` on the key DOFs, mapped back onto each
    cycle's own frames, cross-faded at cycle boundaries, clamped to the training range plus a
@@ -44,9 +50,11 @@ from .motion import Motion, Skeleton
 from .roles import JointRoles, actor_height
 
 FORMAT = "expressive-mocap exaggeration model"
-VERSION = 2  # 2: lower / upper measured from the people's mean rotations (1: from each person's own)
+# 3: every training cycle kept (cycle_trajectories, cycle_performance); 2: lower / upper measured
+# from the people's mean rotations (1: from each person's own)
+VERSION = 3
 REPRESENTATIONS = ("rotvec", "euler")
-CYCLE_CHOICES = ("middle", "first", "mean", "whole")
+CYCLE_CHOICES = ("all", "middle", "first", "whole")
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 # --------------------------------------------------------------------------- cycles
@@ -199,9 +207,9 @@ def _sample_cycles(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], s
 
 
 def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple, foot: int = 0) -> list[Cycle]:
-    """The cycles of a training clip for ``cycle`` = "middle" (the one nearest the clip's middle:
-    steady walking), "first", "mean" (all, averaged later), "whole" (the clip), an index, or a
-    ``(start, end)`` frame range; walking cycles run from one footstrike of ``foot`` to the next."""
+    """The cycles of a training clip for ``cycle`` = "all" (every one), "middle" (the one nearest the
+    clip's middle: steady walking), "first", "whole" (the clip), an index, or a ``(start, end)``
+    frame range; walking cycles run from one footstrike of ``foot`` to the next."""
     if isinstance(cycle, tuple):
         start, end = (int(v) for v in cycle)
         return [Cycle(start, end)]
@@ -217,7 +225,7 @@ def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple, 
         )
     if cycle == "first":
         return cycles[:1]
-    if cycle == "mean":
+    if cycle == "all":
         return cycles
     if cycle == "middle":
         middle = motion.n_frames / 2
@@ -245,8 +253,10 @@ class ExaggerationModel:
     people); ``reference [J, 4]`` (mean rotations over people); ``lower, upper [D]`` (the range of
     each DOF over every training sample, with rotations measured from ``reference``, the
     parameterisation :func:`exaggerate` edits in by default); ``trajectories [P, K, T, D]`` (the
-    training DOFs, each person's rotations measured from their own mean, for validation);
-    ``person_reference [P, J, 4]`` (those means).
+    training performances, each person's rotations measured from their own mean, for validation),
+    ``cycle_trajectories [N, T, D]`` (every cycle they were averaged from) with
+    ``cycle_performance [N, 2]`` (the person and intensity index of each); ``person_reference
+    [P, J, 4]`` (the people's means).
     """
 
     joint_names: tuple[str, ...]
@@ -272,6 +282,8 @@ class ExaggerationModel:
     lower: np.ndarray
     upper: np.ndarray
     trajectories: np.ndarray
+    cycle_trajectories: np.ndarray
+    cycle_performance: np.ndarray
     settings: dict = field(default_factory=dict)
 
     # ------------------------------------------------------------ derived
@@ -291,7 +303,7 @@ class ExaggerationModel:
         :func:`exaggerate` measures a motion with ``reference``: from the people's mean rotations
         (``"model"``: :attr:`lower`, :attr:`upper`) or each from its own mean (``"own"``)."""
         if reference == "own":
-            return self.trajectories.min(axis=(0, 1, 2)), self.trajectories.max(axis=(0, 1, 2))
+            return self.cycle_trajectories.min(axis=(0, 1)), self.cycle_trajectories.max(axis=(0, 1))
         return self.lower, self.upper
 
     def joint_of(self, d: int) -> str:
@@ -384,7 +396,8 @@ class ExaggerationModel:
 
     _ARRAYS = (
         "parents", "offsets", "orders", "weights", "levels", "basis", "singular_values", "expressiveness", "overall", "key",
-        "person_key", "mappings", "reference", "person_reference", "lower", "upper", "trajectories",
+        "person_key", "mappings", "reference", "person_reference", "lower", "upper", "trajectories", "cycle_trajectories",
+        "cycle_performance",
     )
 
     def to_bytes(self) -> bytes:
@@ -423,20 +436,24 @@ class ExaggerationModel:
             if not isinstance(meta.get("settings", {}), dict):
                 raise MocapError(f"{name}: the metadata's settings must be a JSON object")
             J, D = len(meta["joint_names"]), len(meta["dof_names"])
-            for key, ndim in (("basis", 2), ("trajectories", 4), ("mappings", 3)):
+            for key, ndim in (("basis", 2), ("trajectories", 4), ("mappings", 3), ("cycle_trajectories", 3)):
                 if finite_array(arrays, key, name, kinds="f").ndim != ndim:
                     raise MocapError(f"{name}: {key!r} has shape {list(arrays[key].shape)}, expected {ndim} dimensions")
             T, r = arrays["basis"].shape
             P, K = arrays["trajectories"].shape[:2]
             degree = arrays["mappings"].shape[-1]
+            N = arrays["cycle_trajectories"].shape[0]
             shapes = {
                 "parents": (J,), "offsets": (J, 3), "orders": (J, 3), "weights": (D,), "levels": (K,), "basis": (T, r),
                 "singular_values": (r,), "expressiveness": (P, D), "overall": (D,), "key": (D,), "person_key": (P, D),
                 "mappings": (D, r, degree), "reference": (J, 4), "person_reference": (P, J, 4), "lower": (D,), "upper": (D,),
-                "trajectories": (P, K, T, D),
+                "trajectories": (P, K, T, D), "cycle_trajectories": (N, T, D), "cycle_performance": (N, 2),
             }
             for key, shape in shapes.items():
                 finite_array(arrays, key, name, shape, kinds="fiub")
+            owners = arrays["cycle_performance"]
+            if owners.dtype.kind not in "iu" or not ((owners >= 0) & (owners < [P, K])).all() or len(np.unique(owners[:, 0] * K + owners[:, 1])) != P * K:
+                raise MocapError(f"{name}: 'cycle_performance' must give every cycle a person < {P} and an intensity index < {K}, and every performance a cycle")
             if D != 3 * J + 1 or not isinstance(meta["representation"], str) or meta["representation"] not in REPRESENTATIONS:
                 raise MocapError(f"{name}: {D} DOFs for {J} joints in representation {meta['representation']!r}")
             parents, orders = arrays["parents"].tolist(), arrays["orders"].tolist()
@@ -467,19 +484,34 @@ class ExaggerationModel:
 # --------------------------------------------------------------------------- training
 
 
-def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cycle, representation: str, foot: int) -> tuple[np.ndarray, np.ndarray]:
-    """DOF trajectories ``[K, T, D]`` of one person's clips and the person's mean rotations ``[J, 4]``
-    (over every sample of every clip; cycles averaged in DOF space when ``cycle="mean"``)."""
+@dataclass
+class _PersonDofs:
+    """One person's training DOFs: each performance's trajectory ``[K, T, D]`` (the mean of its
+    cycles in DOF space), every cycle ``[N, T, D]`` with its performance's index ``[N]``, and the
+    person's mean rotations ``[J, 4]`` (over every sample of every clip) they are measured from."""
+
+    performances: np.ndarray
+    cycles: np.ndarray
+    cycle_level: np.ndarray
+    reference: np.ndarray
+
+
+def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cycle, representation: str, foot: int) -> _PersonDofs:
     sampled = [_sample_cycles(m, roles, _choose_cycles(m, roles, cycle, foot), samples) for m in motions]
     everything = np.concatenate([s.rotations.reshape(-1, *s.rotations.shape[2:]) for s in sampled])
     reference = mean_rotation(everything)
     orders = motions[0].skeleton.euler_orders
-    out = []
+    per_clip = []
     for s in sampled:
         C, T, J, _ = s.rotations.shape
         rot = rotations_to_dofs(s.rotations.reshape(C * T, J, 4), reference, representation, orders).reshape(C, T, 3 * J)
-        out.append(np.concatenate([rot, s.heights[..., None]], axis=-1).mean(axis=0))
-    return np.stack(out), reference
+        per_clip.append(np.concatenate([rot, s.heights[..., None]], axis=-1))
+    return _PersonDofs(
+        performances=np.stack([c.mean(axis=0) for c in per_clip]),
+        cycles=np.concatenate(per_clip),
+        cycle_level=np.repeat(np.arange(len(per_clip)), [len(c) for c in per_clip]),
+        reference=reference,
+    )
 
 
 def _key_set(values: np.ndarray, share: float) -> np.ndarray:
@@ -499,19 +531,37 @@ def _correlation(c: np.ndarray, k: np.ndarray) -> np.ndarray:
     return np.where(denominator > 1e-12 * max(1.0, float(np.abs(c).max(initial=0.0))), (dc * dk).sum(axis=0) / np.where(denominator > 0, denominator, 1.0), 0.0)
 
 
+def _single_cycles(trajectories: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each performance of ``trajectories [P, K, T, D]`` as its only cycle: ``(cycles [P K, T, D],
+    performance [P K, 2])``."""
+    P, K, T, D = trajectories.shape
+    return trajectories.reshape(P * K, T, D), np.stack(np.unravel_index(np.arange(P * K), (P, K)), axis=1)
+
+
+def _cycle_correlation(basis: np.ndarray, cycles: tuple[np.ndarray, np.ndarray], levels: np.ndarray, people: int) -> np.ndarray:
+    """``rho [P, D, r]``: per person, the correlation of every cycle's coefficients with its intensity."""
+    coefficients = np.einsum("tr,ntd->ndr", basis, cycles[0])
+    person, level = cycles[1].T
+    return np.stack([_correlation(coefficients[person == p], levels[level[person == p]]) for p in range(people)])
+
+
 def fit(
     trajectories: np.ndarray,
     levels: np.ndarray,
     weights: np.ndarray,
     *,
+    cycles: tuple[np.ndarray, np.ndarray] | None = None,
     share: float = 0.9,
     energy: float = 0.99,
     rank: int | None = None,
     degree: int = 1,
 ) -> dict:
     """The method on DOF trajectories ``[P, K, T, D]`` at intensities ``levels [K]`` with DOF
-    weights ``[D]``: basis, expressiveness, key sets, mappings. Returns a dict of the model's
-    arrays (``basis, singular_values, energy, expressiveness, overall, key, person_key, mappings``)."""
+    weights ``[D]``: basis, expressiveness, key sets, mappings. ``cycles``: every cycle the
+    performances were averaged from, ``(trajectories [N, T, D], performance [N, 2])`` (person and
+    intensity index of each), over which predictability is measured; by default each performance
+    is its only cycle. Returns a dict of the model's arrays (``basis, singular_values, energy,
+    expressiveness, overall, key, person_key, mappings``)."""
     P, K, T, D = trajectories.shape
     levels = np.asarray(levels, dtype=np.float64)
     A = trajectories.transpose(2, 0, 1, 3).reshape(T, P * K * D)  # intensity after intensity, person after person
@@ -523,7 +573,7 @@ def fit(
     U, s = U[:, :rank], s[:rank]
     C = np.einsum("tr,pktd->pkdr", U, trajectories)  # coefficients [P, K, D, r]
     observability = np.linalg.norm(C[:, 0] - C[:, -1], axis=-1) * weights  # [P, D]
-    rho = _correlation(C.transpose(1, 0, 2, 3), levels)  # [P, D, r]
+    rho = _cycle_correlation(U, _single_cycles(trajectories) if cycles is None else cycles, levels, P)  # [P, D, r]
     predictability = np.abs(rho) @ (s / s.sum())
     E = observability * predictability**2
     sums = E.sum(axis=1, keepdims=True)
@@ -555,16 +605,17 @@ def train(
     rank: int | None = None,
     degree: int = 1,
     representation: str = "rotvec",
-    cycle: str | int | tuple = "middle",
+    cycle: str | int | tuple = "all",
     foot: int = 0,
     roles: JointRoles | None = None,
 ) -> ExaggerationModel:
     """Rank the expressive features of one action and fit the intensity mappings.
 
     ``people[p][k]`` is person ``p``'s performance at intensity ``levels[k]`` (one list per person;
-    one person is ``[[light, medium, heavy]]``). ``cycle`` picks each clip's cycle (see
-    :func:`_choose_cycles`: "middle" by default; "whole" or ``(start, end)`` for actions that
-    are not walks). ``samples`` is ``T``; ``energy`` the basis' share of ``sum(s^2)`` unless
+    one person is ``[[light, medium, heavy]]``). ``cycle`` picks each clip's cycles (see
+    :func:`_choose_cycles`): "all" by default (the performance is their mean; predictability is
+    measured over every one), "middle" for METHODS' single cycle, "whole" or ``(start, end)`` for
+    actions that are not walks. ``samples`` is ``T``; ``energy`` the basis' share of ``sum(s^2)`` unless
     ``rank`` is given; ``share`` the expressiveness accumulated into the key set; ``degree`` the
     mappings' polynomial degree (< number of intensities); ``foot`` (0 = left, 1 = right) the foot
     whose footstrikes start a walking cycle, here and in :func:`exaggerate` (the basis is phase-aligned
@@ -595,22 +646,24 @@ def train(
         raise MocapError("every clip must have the same skeleton (joint names) as the first")
     roles = roles or JointRoles.find(skeleton)
     per_person = [_person_dofs(p, roles, int(samples), cycle, representation, int(foot)) for p in people]
-    X = np.stack([x for x, _ in per_person])
-    refs = np.stack([r for _, r in per_person])
+    X = np.stack([d.performances for d in per_person])
+    refs = np.stack([d.reference for d in per_person])
+    cycle_trajectories = np.concatenate([d.cycles for d in per_person])
+    cycle_performance = np.concatenate([np.stack([np.full(len(d.cycles), p), d.cycle_level], axis=1) for p, d in enumerate(per_person)])
     w = subtree_weights(skeleton)
     weights = np.append(np.repeat(w, 3), w[0] if skeleton.parents[roles.hips] < 0 else w[roles.hips])
-    fitted = fit(X, levels, weights, share=share, energy=energy, rank=rank, degree=int(degree))
+    fitted = fit(X, levels, weights, cycles=(cycle_trajectories, cycle_performance), share=share, energy=energy, rank=rank, degree=int(degree))
     reference = mean_rotation(refs)
-    # The training range in the parameterisation a new motion is edited in: rotations from the
-    # people's mean (X measures each person's from their own mean, which may differ by degrees).
+    # The training range in the parameterisation a new motion is edited in: every cycle's
+    # rotations from the people's mean (each person's are measured from their own mean, which may
+    # differ by degrees).
     orders = np.asarray(skeleton.euler_orders).astype(np.int64)
-    P, K, T, D = X.shape
     J = skeleton.n_joints
     common = np.concatenate(
-        [rotations_to_dofs(dofs_to_rotations(X[p, ..., :-1].reshape(K * T, 3 * J), refs[p], representation, orders), reference, representation, orders)
-         for p in range(P)]
+        [rotations_to_dofs(dofs_to_rotations(d.cycles[..., :-1].reshape(-1, 3 * J), d.reference, representation, orders), reference, representation, orders)
+         for d in per_person]
     )
-    common = np.concatenate([common, X[..., -1].reshape(-1, 1)], axis=1)
+    common = np.concatenate([common, cycle_trajectories[..., -1].reshape(-1, 1)], axis=1)
     return ExaggerationModel(
         joint_names=skeleton.names,
         parents=np.asarray(skeleton.parents),
@@ -627,6 +680,8 @@ def train(
         lower=common.min(axis=0),
         upper=common.max(axis=0),
         trajectories=X,
+        cycle_trajectories=cycle_trajectories,
+        cycle_performance=cycle_performance,
         settings={"samples": int(samples), "share": share, "energy": energy, "rank": rank, "degree": int(degree), "cycle": str(cycle), "foot": int(foot)},
         **fitted,
     )
@@ -1046,7 +1101,9 @@ def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
     results = []
     for p in range(P):
         others = model.trajectories[[q for q in range(P) if q != p]]
-        fitted = fit(others, model.levels, model.weights, share=settings.get("share", 0.9), energy=settings.get("energy", 0.99),
+        mine = model.cycle_performance[:, 0] == p
+        owners = model.cycle_performance[~mine] - [[1, 0]] * (model.cycle_performance[~mine, :1] > p)  # people renumbered without p
+        fitted = fit(others, model.levels, model.weights, cycles=(model.cycle_trajectories[~mine], owners), share=settings.get("share", 0.9), energy=settings.get("energy", 0.99),
                      rank=settings.get("rank"), degree=settings.get("degree", 1))
         k = np.array([model.levels[0], model.levels[-1]])
         powers = k[:, None] ** np.arange(fitted["mappings"].shape[-1] - 1, -1, -1)
