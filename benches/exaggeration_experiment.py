@@ -72,12 +72,6 @@ def union_pooled(model) -> tuple[float, float]:
     return tuple(np.sqrt(top / bottom))
 
 
-def person_cycles(model, p: int) -> tuple[np.ndarray, np.ndarray]:
-    """Person ``p``'s cycles in the form :func:`fit` takes for a single person."""
-    mine = model.cycle_performance[:, 0] == p
-    return model.cycle_trajectories[mine], model.cycle_performance[mine] * [0, 1]
-
-
 def elbow_flexion(motion: em.Motion) -> np.ndarray:
     """Degrees ``[F, 2]`` (left, right) between the upper-arm and forearm bones (0 = straight arm)."""
     names, p = motion.skeleton.names, motion.positions()
@@ -222,7 +216,7 @@ def main() -> None:
         report += [f"### cycle = `{cycle}` ({CYCLE_MEANING[cycle]})", "", "```", validation_table(*tests[cycle]), "```", ""]
     default = models["all"]
     pooled = union_pooled(default)
-    own_basis = np.any([fit(default.trajectories[p : p + 1], default.levels, default.weights, cycles=person_cycles(default, p))["key"] for p in range(PEOPLE)], axis=0)
+    own_basis = np.any([fit(default.trajectories[p : p + 1], default.levels, default.weights, cycles=default.cycles_of([p]))["key"] for p in range(PEOPLE)], axis=0)
     union = tests["all"][0][-1]
     report += [
         "### The union's size",

@@ -297,13 +297,20 @@ def test_foot_locking_pins_the_stance_foot(walk):
     assert step(locked)[:, legs].max() < step(edited)[:, legs].max() + 4.0
 
 
+def real_walk(data, name):
+    return em.read_bvh(data / f"dataset-2_walk_{name}.bvh")
+
+
+def real_walk_people(data, takes):
+    """Dataset-2's walks, take ``p`` of each style as person ``p``, styles in intensity order."""
+    return [[real_walk(data, f"{style}_{p:03d}") for style in ("exhausted", "normal", "active")] for p in takes]
+
+
 def test_foot_locking_on_a_real_walk(bandai2_dir):
     """Two takes of dataset-2's walks as people; a third take's normal walk exaggerated far beyond
     'active': without locking its stance feet slide about 3x as fast as in the input."""
-    read = lambda name: em.read_bvh(bandai2_dir / f"dataset-2_walk_{name}.bvh")  # noqa: E731
-    people = [[read(f"{style}_{p:03d}") for style in ("exhausted", "normal", "active")] for p in (1, 2)]
-    model = train(people, LEVELS)
-    walk = read("normal_012")
+    model = train(real_walk_people(bandai2_dir, (1, 2)), LEVELS)
+    walk = real_walk(bandai2_dir, "normal_012")
     _, locked = exaggerate(model, walk, 4.0)
     _, loose = exaggerate(model, walk, 4.0, lock_feet=False)
     assert loose.stance_speed_output > 1.5 * loose.stance_speed_input
@@ -315,8 +322,7 @@ def test_the_issue_targets_on_real_walks(bandai2_dir):
     the full tables): the issue's bars for the swap test and the leave-one-person-out warp."""
     from expressive_mocap.exaggerate import leave_one_out
 
-    read = lambda name: em.read_bvh(bandai2_dir / f"dataset-2_walk_{name}.bvh")  # noqa: E731
-    model = train([[read(f"{style}_{p:03d}") for style in ("exhausted", "normal", "active")] for p in range(1, 9)], LEVELS)
+    model = train(real_walk_people(bandai2_dir, range(1, 9)), LEVELS)
     *per_person, union = swap_test(model, draws=100)
     for r in per_person:
         assert r.ratio <= 0.40 and r.ratio <= r.random - 0.3, r

@@ -306,6 +306,15 @@ class ExaggerationModel:
             return self.cycle_trajectories.min(axis=(0, 1)), self.cycle_trajectories.max(axis=(0, 1))
         return self.lower, self.upper
 
+    def cycles_of(self, people: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+        """The training cycles of ``people`` (increasing indices), in the form :func:`fit` takes for
+        the trajectories ``self.trajectories[people]``: the people renumbered 0, 1, ..."""
+        people = np.asarray(people, dtype=np.int64)
+        chosen = np.isin(self.cycle_performance[:, 0], people)
+        owners = self.cycle_performance[chosen].copy()
+        owners[:, 0] = np.searchsorted(people, owners[:, 0])
+        return self.cycle_trajectories[chosen], owners
+
     def joint_of(self, d: int) -> str:
         return self.dof_names[d].split(".")[0]
 
@@ -1100,10 +1109,8 @@ def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
     settings = model.settings
     results = []
     for p in range(P):
-        others = model.trajectories[[q for q in range(P) if q != p]]
-        mine = model.cycle_performance[:, 0] == p
-        owners = model.cycle_performance[~mine] - [[1, 0]] * (model.cycle_performance[~mine, :1] > p)  # people renumbered without p
-        fitted = fit(others, model.levels, model.weights, cycles=(model.cycle_trajectories[~mine], owners), share=settings.get("share", 0.9), energy=settings.get("energy", 0.99),
+        others = [q for q in range(P) if q != p]
+        fitted = fit(model.trajectories[others], model.levels, model.weights, cycles=model.cycles_of(others), share=settings.get("share", 0.9), energy=settings.get("energy", 0.99),
                      rank=settings.get("rank"), degree=settings.get("degree", 1))
         k = np.array([model.levels[0], model.levels[-1]])
         powers = k[:, None] ** np.arange(fitted["mappings"].shape[-1] - 1, -1, -1)
