@@ -333,9 +333,7 @@ class ExaggerationModel:
 
     def predict_coefficients(self, k) -> np.ndarray:
         """``f(k) [..., D, r]``: the mapped coefficients at intensity ``k`` (scalar or array)."""
-        k = np.asarray(k, dtype=np.float64)
-        powers = k[..., None] ** np.arange(self.mappings.shape[-1] - 1, -1, -1)
-        return np.einsum("dip,...p->...di", self.mappings, powers)
+        return _mapped(self.mappings, k)
 
     def estimate_intensity(self, coefficients: np.ndarray) -> float:
         """Least-squares intensity of coefficients ``[D, r]`` over the key DOFs: the ``k`` whose
@@ -538,6 +536,12 @@ def _correlation(c: np.ndarray, k: np.ndarray) -> np.ndarray:
     dk = (k - k.mean()).reshape((-1,) + (1,) * (c.ndim - 1))
     denominator = np.sqrt((dc * dc).sum(axis=0) * (dk * dk).sum())
     return np.where(denominator > 1e-12 * max(1.0, float(np.abs(c).max(initial=0.0))), (dc * dk).sum(axis=0) / np.where(denominator > 0, denominator, 1.0), 0.0)
+
+
+def _mapped(mappings: np.ndarray, k) -> np.ndarray:
+    """``f(k) [..., D, r]``: polynomial mappings ``[D, r, degree + 1]`` (highest power first) at ``k``."""
+    k = np.asarray(k, dtype=np.float64)
+    return np.einsum("dip,...p->...di", mappings, k[..., None] ** np.arange(mappings.shape[-1] - 1, -1, -1))
 
 
 def _single_cycles(trajectories: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1112,10 +1116,7 @@ def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
         others = [q for q in range(P) if q != p]
         fitted = fit(model.trajectories[others], model.levels, model.weights, cycles=model.cycles_of(others), share=settings.get("share", 0.9), energy=settings.get("energy", 0.99),
                      rank=settings.get("rank"), degree=settings.get("degree", 1))
-        k = np.array([model.levels[0], model.levels[-1]])
-        powers = k[:, None] ** np.arange(fitted["mappings"].shape[-1] - 1, -1, -1)
-        f = np.einsum("dip,kp->kdi", fitted["mappings"], powers)
-        change = (f[1] - f[0]) * fitted["key"][:, None]
+        change = (_mapped(fitted["mappings"], model.levels[-1]) - _mapped(fitted["mappings"], model.levels[0])) * fitted["key"][:, None]
         light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
         warped = light + fitted["basis"] @ change.T
         reference = model.person_reference[p]
