@@ -7,19 +7,19 @@ file's bytes, by the kernel ``read_motion_blocks`` (Rust, or its NumPy twin). Ev
 
 from __future__ import annotations
 
+import errno
 import math
 import os
 import re
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
-from pathlib import Path
 from typing import BinaryIO, Iterable, Union
 
 import numpy as np
 
 from .backend import PARSE_ERRORS, kernels
 from .errors import BVHError, MocapError
-from .io import atomic_write
+from .io import MAX_INPUT_BYTES, atomic_write, open_input, read_input
 from .motion import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton, canonical_channels
 
 Source = Union[str, os.PathLike, bytes, bytearray, memoryview, BinaryIO]
@@ -60,7 +60,7 @@ def _load(source: Source) -> tuple[bytes, str]:
         return bytes(source), "<bytes>"
     if isinstance(source, (str, os.PathLike)):
         try:
-            return Path(source).read_bytes(), str(source)
+            return read_input(source), str(source)
         except OSError as error:
             raise read_error(source, error) from None
     if hasattr(source, "read"):
@@ -411,7 +411,7 @@ def read_header(path: str | os.PathLike) -> tuple[_Header, bytes | None]:
     """
     name = str(path)
     try:
-        with open(path, "rb") as handle:
+        with open_input(path) as handle:
             data = handle.read(HEADER_PREFIX)
             if len(data) == HEADER_PREFIX:  # maybe more: try the header from this beginning
                 size = os.fstat(handle.fileno()).st_size
@@ -423,7 +423,9 @@ def read_header(path: str | os.PathLike) -> tuple[_Header, bytes | None]:
                 # boundary of those bytes would otherwise be read short.
                 if header is not None and header.block_start < len(data):
                     return header, None
-                data += handle.read()
+                data += handle.read(MAX_INPUT_BYTES + 1 - len(data))
+                if len(data) > MAX_INPUT_BYTES:
+                    raise OSError(errno.EFBIG, f"more than the {MAX_INPUT_BYTES:,} bytes read at most", name)
     except OSError as error:
         raise read_error(name, error) from None
     return parse_header(data, name), data

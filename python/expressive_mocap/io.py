@@ -1,11 +1,14 @@
-"""Files: writing outputs safely (a complete file appears at the destination, or nothing does),
-and reading model files as data (``.npz`` of plain arrays plus one JSON object, never pickles)."""
+"""Files: reading inputs safely (regular files of a bounded size only), writing outputs safely
+(a complete file appears at the destination, or nothing does), and reading model files as data
+(``.npz`` of plain arrays plus one JSON object, never pickles)."""
 
 from __future__ import annotations
 
+import errno
 import io
 import json
 import os
+import stat
 import tempfile
 import zipfile
 from pathlib import Path
@@ -13,6 +16,52 @@ from pathlib import Path
 import numpy as np
 
 from .errors import MocapError
+
+
+# The largest BVH file or archive member read (README, "Limits"): 512 MiB of text is over half an
+# hour of a 60-joint skeleton at 120 fps, and decodes to about 1.2 GB of arrays. Checked before
+# reading, so a 1 GiB member of a 1 MB zip, or a link to /dev/zero, is refused without reading it.
+MAX_INPUT_BYTES = 512 << 20
+
+
+def file_kind(mode: int) -> str:
+    """What a file of this ``st_mode`` is, in words, for errors ("a FIFO", "a folder", ...)."""
+    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def open_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES):
+    """A binary file object of the regular file at ``path`` (symlinks followed), checked on the
+    descriptor that will be read, so nothing can be swapped in between: a FIFO, device, socket
+    or folder is refused without blocking (opening a FIFO to read waits for a writer, and
+    /dev/zero never ends), and so is a file larger than ``limit`` bytes. Refusals are OSErrors
+    with errno and a ``strerror`` that says what was found, like any other unreadable file."""
+    handle = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        info = os.fstat(handle)
+        if not stat.S_ISREG(info.st_mode):
+            code = errno.EISDIR if stat.S_ISDIR(info.st_mode) else errno.EINVAL
+            raise OSError(code, f"{file_kind(info.st_mode)}, not a regular file: only regular files are read", str(path))
+        if info.st_size > limit:
+            raise OSError(errno.EFBIG, f"{info.st_size:,} bytes, more than the {limit:,} bytes read at most", str(path))
+        os.set_blocking(handle, True)
+        return os.fdopen(handle, "rb")
+    except BaseException:
+        os.close(handle)
+        raise
+
+
+def read_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES) -> bytes:
+    """The bytes of the regular file at ``path`` (see :func:`open_input`), at most ``limit`` of
+    them: a file that grows past the bound while it is read is refused too."""
+    with open_input(path, limit) as handle:
+        data = handle.read(limit + 1)
+    if len(data) > limit:
+        raise OSError(errno.EFBIG, f"more than the {limit:,} bytes read at most", str(path))
+    return data
 
 
 def atomic_write(path: str | os.PathLike, data: bytes) -> None:
@@ -63,6 +112,7 @@ def _umask() -> int:
 # The arrays of a model file may not take more than this, checked from their .npy headers before
 # loading (a zip bomb of zeros compresses 1000 to 1, and a header alone can claim terabytes).
 MAX_MODEL_BYTES = 256 << 20
+MODEL_ZIP_SLACK = 1 << 20  # a model file is its arrays plus the zip's own headers
 
 
 def read_model_file(source: str | os.PathLike | bytes, what: str) -> tuple[dict[str, np.ndarray], dict, str]:
@@ -72,7 +122,7 @@ def read_model_file(source: str | os.PathLike | bytes, what: str) -> tuple[dict[
     it should be; checking the arrays against the model's schema is the caller's part."""
     name = "<bytes>" if isinstance(source, (bytes, bytearray)) else str(source)
     try:
-        data = bytes(source) if isinstance(source, (bytes, bytearray)) else Path(source).read_bytes()
+        data = bytes(source) if isinstance(source, (bytes, bytearray)) else read_input(source, MAX_MODEL_BYTES + MODEL_ZIP_SLACK)
     except OSError as error:
         raise MocapError(f"{name}: cannot read the model file: {error.strerror or error}") from None
     try:
