@@ -48,7 +48,7 @@ def open_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES):
         if info.st_size > limit:
             raise OSError(errno.EFBIG, f"{info.st_size:,} bytes, more than the {limit:,} bytes read at most", str(path))
         os.set_blocking(handle, True)
-        return os.fdopen(handle, "rb")
+        return open(handle, "rb")  # the caller closes it
     except BaseException:
         os.close(handle)
         raise
