@@ -40,6 +40,14 @@ the manifest written last: a folder with a ``manifest.json`` is a complete datas
 half-written one. (An interrupted process loses nothing; the journal is not synced per batch,
 so after a power cut mid-run delete ``OUT/.partial`` and run again.)
 
+Safety (:mod:`expressive_mocap.dataset`): a run holds an advisory lock on ``OUT/.lock`` from start
+to end, so a second run on the same OUT fails at once naming the first; OUT must be new, empty,
+or one of our datasets (finished or unfinished), never a folder of the user's own files; a rerun
+over a finished dataset never rewrites it (``overwrite`` redoes it, deleting only the format's
+own file names); clips are keyed by name, so a resumed run may spell SRC otherwise, and a
+second clip of a name already taken is a failure; the manifest records each file's size and
+mtime, and :func:`load_dataset` refuses files that do not match it.
+
 Clips are taken in sorted path order from folders, globs and zips, in archive order from tars
 (a compressed tar is read as a stream, once; reading it out of order would decompress it again
 and again).
@@ -53,14 +61,13 @@ import io
 import itertools
 import json
 import os
-import shutil
 import struct
 import sys
 import tarfile
 import time
 import zipfile
 import zlib
-from collections import deque
+from collections import Counter, deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -70,6 +77,8 @@ import numpy as np
 
 from .backend import get_backend, kernels
 from .bvh import block_error, parse_header, read_error, read_header
+from .dataset import (FORMAT, JOURNAL, KINDS, MANIFEST, OFFSETS, PARTIAL, RUN, VERSION, Dataset, FolderLock, data_file,
+                      file_record, finished_manifest, load_dataset, read_manifest, remove_dataset, remove_partial, verify)
 from .errors import BVHError, MocapError
 from .decouple import EXPONENT, GAIN
 from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
@@ -77,12 +86,8 @@ from .io import atomic_write
 from .kernels import decouple_rotations
 from .roles import JointRoles, actor_height, hips_rest_height
 
-FORMAT = "expressive-mocap dataset"
-VERSION = 1
-KINDS = ("positions", "rotations", "features", "contacts", "activity", "body", "expressive")
 MODEL_KINDS = ("activity", "body", "expressive")
 DEFAULT_KEEP = ("positions", "features", "contacts")  # + activity with a model
-PARTIAL = ".partial"
 MB = 1e6
 _HEADER_BYTES = 128  # room reserved at the start of each data file for its .npy header
 
@@ -423,24 +428,54 @@ def preprocess(
     if batch_mb <= 0:
         raise MocapError(f"batch_mb must be positive, got {batch_mb}")
     body_model = _load_model(model) if model is not None else None
-    options = {"keep": list(keep), "model": _model_label(model), "model_float32": bool(model_float32), "source": str(Path(src).resolve()) if Path(src).exists() else str(src),
+    # The source in one canonical form (a resumed run may spell it otherwise: relative, through a link).
+    source = os.path.realpath(src) if Path(src).exists() else os.path.abspath(src)
+    options = {"keep": list(keep), "model": _model_label(model), "model_float32": bool(model_float32), "source": source,
                "backend": get_backend()}
 
-    partial = out / PARTIAL
-    if (out / "manifest.json").exists() and not partial.exists():
-        if not overwrite:
-            raise MocapError(f"{out} already holds a finished dataset (manifest.json); use --overwrite to redo it")
-        _remove_dataset(out)
+    finished_manifest(out)  # refuse a folder that is not ours before putting a lock file in it
     out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out):  # held to the end: a second run on OUT fails at once
+        manifest = finished_manifest(out)  # again: another run may have changed it meanwhile
+        if manifest is not None:
+            if not overwrite:
+                return _already_finished(out, manifest, options, started)
+            remove_partial(out)
+            remove_dataset(out)
+        return _run(src, out, keep, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress, started)
+
+
+def _already_finished(out: Path, manifest: dict, options: dict, started: float) -> Summary:
+    """A rerun over a finished dataset never rewrites it. After a run killed between putting its
+    manifest in place and removing ``.partial``, the same command finishes the cleanup and says
+    what the dataset holds; otherwise redoing it needs ``overwrite``."""
+    if not (out / PARTIAL).exists():
+        raise MocapError(f"{out} already holds a finished dataset (manifest.json); use --overwrite to redo it")
+    if manifest.get("options") != options:
+        raise MocapError(f"{out} holds a finished dataset made with other options ({manifest.get('options')}); "
+                         "use --overwrite to redo it with these")
+    verify(out, manifest)
+    remove_partial(out)
+    return _summary_of(out, manifest, started)
+
+
+def _summary_of(out: Path, manifest: dict, started: float) -> Summary:
+    """The summary of a dataset an earlier run finished."""
+    done = len(manifest["clips"]) + len(manifest["failures"])
+    return Summary(str(out), clips_ok=len(manifest["clips"]), clips_failed=len(manifest["failures"]), clips_resumed=done,
+                   failures=manifest["failures"], finished=True, seconds=time.perf_counter() - started)
+
+
+def _run(src, out: Path, keep, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress, started) -> Summary:
+    """The run itself, in ``out`` locked and free of other datasets: start or resume the journal
+    in ``out/.partial``, process what it has not done, then move the finished files into place."""
+    partial = out / PARTIAL
     partial.mkdir(exist_ok=True)
+    if (partial / MANIFEST).exists():  # interrupted while moving the finished files into place
+        return _summary_of(out, _move_into_place(out), started)
 
     summary = Summary(str(out))
-    if (partial / "manifest.json").exists():  # interrupted while moving the finished files into place
-        _move_into_place(out)
-        summary.finished, summary.seconds = True, time.perf_counter() - started
-        return summary
-
-    run_file = partial / "run.json"
+    run_file = partial / RUN
     if run_file.exists():
         previous = json.loads(run_file.read_text())
         if previous.get("options") != options:
@@ -449,14 +484,15 @@ def preprocess(
     else:
         atomic_write(run_file, json.dumps({"options": options}).encode())
 
-    journal = partial / "journal.jsonl"
+    journal = partial / JOURNAL
     entries = _journal_entries(journal)
-    done = {key for e in entries for key in e["items"]}
+    done = Counter(name for e in entries for name in e["items"])
     clips = [c for e in entries for c in e["clips"]]
     failures = [f for e in entries for f in e["failures"]]
+    taken = {c["name"] for c in clips} | {f["name"] for f in failures}  # a second clip of a name fails
     skeleton = next((e["skeleton"] for e in entries if e.get("skeleton")), None)
     rows = entries[-1]["rows"] if entries else 0
-    summary.clips_resumed = len(done)
+    summary.clips_resumed = sum(done.values())
     kinds = _kinds(keep, len(skeleton["names"])) if skeleton else None
     if kinds:
         _cut_data_files(partial, kinds, rows)
@@ -465,31 +501,34 @@ def preprocess(
     client, close_client = _client(cluster) if cluster is not None else (None, lambda: None)
     syncer = ThreadPoolExecutor(max_workers=1)  # flushes each batch's rows to disk in the background
     try:
-        todo = (item for item in source if item.source not in done)
-        total_bytes = sum(i.size for i in source.items if i.source not in done) if source.items is not None else None
+        if source.items is not None:
+            todo = iter(list(_not_done(source.items, done)))
+            total_bytes = sum(i.size for i in _not_done(source.items, done))
+        else:
+            todo, total_bytes = _not_done(source, done), None
         total_files = len(source.items) if source.items is not None else None
         bar = _Progress(total_bytes, total_files, progress)
         batch_number = len(entries)
         stopped: list[bool] = []
+        flushes: list = []
         batches = _batched(todo, batch_mb * MB)
         if cluster is None:
             results = _local(batches, max_batches, stopped, keep, body_model, model_float32)
         else:
             results = _on_cluster(batches, max_batches, stopped, client, (keep, model, model_float32, get_backend()))
         for batch, outcomes, headers_s, kernels_s in results:
-            record = {"batch": batch_number, "items": [item.source for item in batch], "clips": [], "failures": []}
+            record = {"batch": batch_number, "items": [item.name for item in batch], "clips": [], "failures": []}
             times = [time.perf_counter()]
-            arrays, rows, skeleton = _collect(batch, outcomes, skeleton, keep, record, rows)
+            arrays, rows, skeleton = _collect(batch, outcomes, skeleton, keep, record, rows, taken)
             if "skeleton" in record:  # the first clip parsed: now the row shapes are known
                 kinds = _kinds(keep, len(skeleton["names"]))
                 _cut_data_files(partial, kinds, 0)
             for kind in kinds or ():
                 if record["clips"]:
-                    with open(partial / f"{kind.name}.npy", "ab") as handle:
-                        for values in arrays[kind.name]:
-                            handle.write(np.ascontiguousarray(values, dtype=kind.dtype).data)  # no copy
+                    _append_rows(partial / data_file(kind.name), arrays[kind.name], kind.dtype)
             if record["clips"]:
-                syncer.submit(_flush, [partial / f"{kind.name}.npy" for kind in kinds])
+                flushes.append(syncer.submit(_flush, [partial / data_file(kind.name) for kind in kinds]))
+            _raise_failed_flush(flushes)  # before the journal vouches for rows the disk did not take
             record["rows"] = rows
             _append_line(journal, record)
             times.append(time.perf_counter())
@@ -512,6 +551,7 @@ def preprocess(
         if not stopped:
             t0 = time.perf_counter()
             syncer.shutdown()
+            _raise_failed_flush(flushes, wait=True)
             _finish(out, kinds or [], clips, failures, skeleton, rows, options)
             summary.write_s += time.perf_counter() - t0
             summary.finished = True
@@ -765,13 +805,18 @@ def _clip_error(item: _Item, header, error: Exception) -> BVHError:
     return block_error(item.source, header, error)
 
 
-def _collect(batch: list[_Item], outcomes: list[dict], skeleton, keep, record: dict, rows: int) -> tuple[dict, int, dict | None]:
+def _collect(batch: list[_Item], outcomes: list[dict], skeleton, keep, record: dict, rows: int, taken: set) -> tuple[dict, int, dict | None]:
     """The batch's outcomes in order: clips and failures into ``record`` (a clip of another
-    skeleton than the dataset's, the first parsed clip's, is a failure), their arrays per kind.
-    Returns the arrays, the row count after the batch and the dataset's skeleton."""
+    skeleton than the dataset's, the first parsed clip's, is a failure; so is a clip whose name
+    ``taken``, the names taken so far, already holds), their arrays per kind. Returns the
+    arrays, the row count after the batch and the dataset's skeleton."""
     arrays: dict[str, list] = {k: [] for k in keep}
     for item, outcome in zip(batch, outcomes):
         shape, error = outcome.get("skeleton"), outcome.get("error")
+        if item.name in taken:
+            shape, error = None, (f"{item.source}: a clip named {item.name!r} is already in the dataset "
+                                  "(names are paths below the source without .bvh; one dataset holds each name once)")
+        taken.add(item.name)
         if shape is not None:
             names, parents = list(shape[0]), list(shape[1])
             if skeleton is None:
@@ -794,39 +839,77 @@ def _cut_data_files(partial: Path, kinds: list[_Kind], rows: int) -> None:
     """Each data file holding its reserved header and exactly ``rows`` rows (a resumed run cuts
     off what an interrupted batch appended after the last journal line)."""
     for kind in kinds:
-        path = partial / f"{kind.name}.npy"
+        path = partial / data_file(kind.name)
         with open(path, "r+b" if path.exists() else "w+b") as handle:
             handle.truncate(_HEADER_BYTES + rows * kind.row_bytes)
             handle.seek(0)
             handle.write(_npy_header(kind.dtype, (0, *kind.row)))  # a placeholder until the end
 
 
+def _not_done(items, done: Counter) -> Iterator[_Item]:
+    """The items an earlier run has not journaled: ``done`` counts the names journaled (a name
+    twice when a second clip of that name failed as a duplicate)."""
+    left = Counter(done)
+    for item in items:
+        if left[item.name] > 0:
+            left[item.name] -= 1
+            continue
+        yield item
+
+
+def _append_rows(path: Path, values: list[np.ndarray], dtype: np.dtype) -> None:
+    """Append clips' rows to a data file; a failure (a full disk) names the file, and the run
+    resumes from its last journaled batch."""
+    try:
+        with open(path, "ab") as handle:
+            for array in values:
+                handle.write(np.ascontiguousarray(array, dtype=dtype).data)  # no copy
+    except OSError as error:
+        raise MocapError(f"cannot write {path}: {error.strerror or error} (rerun the same command to resume)") from None
+
+
+def _raise_failed_flush(flushes: list, wait: bool = False) -> None:
+    """Raise the error of a background flush that failed (a disk reports a full or failing
+    device when data are synced, and only once), dropping those that succeeded."""
+    for future in list(flushes):
+        if wait or future.done():
+            flushes.remove(future)
+            future.result()
+
+
 def _flush(paths: list[Path]) -> None:
     """Have the disk write these files' data now (fdatasync), in the background while the next
     batches are computed: otherwise it all waits for the final sync, which nothing overlaps."""
     for path in paths:
-        handle = os.open(path, os.O_RDONLY)
         try:
-            getattr(os, "fdatasync", os.fsync)(handle)  # macOS has no fdatasync
-        finally:
-            os.close(handle)
+            handle = os.open(path, os.O_RDONLY)
+            try:
+                getattr(os, "fdatasync", os.fsync)(handle)  # macOS has no fdatasync
+            finally:
+                os.close(handle)
+        except OSError as error:
+            raise MocapError(f"cannot write {path}: {error.strerror or error} (rerun the same command to resume)") from None
 
 
 def _finish(out: Path, kinds: list[_Kind], clips: list, failures: list, skeleton, rows: int, options: dict) -> None:
-    """Headers into the data files, offsets and manifest into .partial, then everything renamed
-    into ``out``, manifest last."""
+    """Headers into the data files, offsets and manifest (with each file's size and mtime) into
+    .partial, then everything renamed into ``out``, manifest last."""
     from . import __version__
 
     partial = out / PARTIAL
     for kind in kinds:
-        with open(partial / f"{kind.name}.npy", "r+b") as handle:
-            handle.write(_npy_header(kind.dtype, (rows, *kind.row)))
-            handle.flush()
-            os.fsync(handle.fileno())
+        path = partial / data_file(kind.name)
+        try:
+            with open(path, "r+b") as handle:
+                handle.write(_npy_header(kind.dtype, (rows, *kind.row)))
+                handle.flush()
+                os.fsync(handle.fileno())
+        except OSError as error:
+            raise MocapError(f"cannot write {path}: {error.strerror or error} (rerun the same command to resume)") from None
     offsets = np.array([c["start"] for c in clips] + [rows], dtype=np.int64)
     buffer = io.BytesIO()
     np.save(buffer, offsets)
-    atomic_write(partial / "offsets.npy", buffer.getvalue())
+    atomic_write(partial / OFFSETS, buffer.getvalue())
     manifest = {
         "format": FORMAT,
         "version": VERSION,
@@ -835,88 +918,28 @@ def _finish(out: Path, kinds: list[_Kind], clips: list, failures: list, skeleton
         "options": options,
         "skeleton": skeleton,
         "frames": rows,
-        "kinds": {k.name: {"file": f"{k.name}.npy", "dtype": k.dtype.name, "shape": [rows, *k.row], "description": k.description} for k in kinds},
+        "kinds": {k.name: {"file": data_file(k.name), "dtype": k.dtype.name, "shape": [rows, *k.row], "description": k.description} for k in kinds},
+        "files": file_record(partial, [OFFSETS] + [data_file(k.name) for k in kinds]),
         "feature_names": list(FEATURE_NAMES) if any(k.name == "features" for k in kinds) else None,
         "clips": clips,
         "failures": failures,
     }
-    atomic_write(partial / "manifest.json", json.dumps(manifest, indent=1).encode())
+    atomic_write(partial / MANIFEST, json.dumps(manifest, indent=1).encode())
     _move_into_place(out)
 
 
-def _move_into_place(out: Path) -> None:
+def _move_into_place(out: Path) -> dict:
     """Rename the finished files of ``out/.partial`` into ``out`` (manifest last), then drop
-    .partial. Safe to repeat after a crash: files already moved are skipped."""
+    .partial; returns the manifest. Safe to repeat after a crash: files already moved are
+    skipped. Only the fixed names of the format move: a manifest cannot name others."""
     partial = out / PARTIAL
-    manifest = json.loads((partial / "manifest.json").read_text())
-    for name in [k["file"] for k in manifest["kinds"].values()] + ["offsets.npy"]:
+    manifest = read_manifest(partial / MANIFEST)
+    for name in [data_file(k) for k in manifest["kinds"]] + [OFFSETS]:
         if (partial / name).exists():
             os.replace(partial / name, out / name)
-    os.replace(partial / "manifest.json", out / "manifest.json")
-    shutil.rmtree(partial, ignore_errors=True)
-
-
-def _remove_dataset(out: Path) -> None:
-    """Unmake a finished dataset before redoing it: the manifest first (so no reader sees old
-    and new files mixed), then its files."""
-    manifest = json.loads((out / "manifest.json").read_text())
-    (out / "manifest.json").unlink()
-    for kind in manifest.get("kinds", {}).values():
-        (out / kind["file"]).unlink(missing_ok=True)
-    (out / "offsets.npy").unlink(missing_ok=True)
-
-
-# ----------------------------------------------------------------------------- loading
-
-
-class Dataset:
-    """A preprocessed dataset: ``arrays[kind]`` (memory-mapped, rows of every clip in order),
-    ``offsets [C + 1]``, ``clips`` (manifest records), ``names``, ``failures``, ``manifest``.
-
-    ``ds["positions"]`` is the whole array; ``ds.clip("walk_001")`` (or ``ds.clip(3)``) the
-    per-kind views of one clip, e.g. ``ds.clip(3)["positions"] ==
-    ds["positions"][ds.offsets[3]:ds.offsets[4]]``.
-    """
-
-    def __init__(self, folder: str | os.PathLike, mmap: bool = True):
-        folder = Path(folder)
-        path = folder / "manifest.json"
-        if not path.exists():
-            hint = " (an interrupted run: rerun preprocess to finish it)" if (folder / PARTIAL).exists() else ""
-            raise MocapError(f"{folder} is not a finished expressive-mocap dataset: no manifest.json{hint}")
-        self.folder = folder
-        self.manifest = json.loads(path.read_text())
-        if self.manifest.get("format") != FORMAT:
-            raise MocapError(f"{path}: not an {FORMAT} (format {self.manifest.get('format')!r})")
-        self.offsets = np.load(folder / "offsets.npy")
-        self.clips = self.manifest["clips"]
-        self.names = [c["name"] for c in self.clips]
-        self.failures = self.manifest["failures"]
-        self.skeleton = self.manifest["skeleton"]
-        mode = "r" if mmap else None
-        self.arrays = {k: np.load(folder / v["file"], mmap_mode=mode) for k, v in self.manifest["kinds"].items()}
-        self._index = {n: i for i, n in enumerate(self.names)}
-
-    def __getitem__(self, kind: str) -> np.ndarray:
-        return self.arrays[kind]
-
-    def __len__(self) -> int:
-        return len(self.clips)
-
-    def __repr__(self) -> str:
-        return f"Dataset({len(self)} clips, {int(self.offsets[-1]):,} frames, kinds {', '.join(self.arrays)}; {len(self.failures)} failures)"
-
-    def clip(self, which: int | str) -> dict[str, np.ndarray]:
-        """The rows of one clip (by index or name) of every kind: views, no copy."""
-        i = self._index[which] if isinstance(which, str) else int(which)
-        start, end = self.offsets[i], self.offsets[i + 1]
-        return {k: a[start:end] for k, a in self.arrays.items()}
-
-
-def load_dataset(folder: str | os.PathLike, mmap: bool = True) -> Dataset:
-    """Open the dataset written by :func:`preprocess` in ``folder`` (arrays memory-mapped unless
-    ``mmap=False``)."""
-    return Dataset(folder, mmap)
+    os.replace(partial / MANIFEST, out / MANIFEST)
+    remove_partial(out)
+    return manifest
 
 
 __all__ = ["KINDS", "Dataset", "Summary", "load_dataset", "open_source", "preprocess"]
