@@ -28,14 +28,16 @@ BACKENDS = ("auto", "rust", "numpy")
 PARSE_ERRORS: tuple[type[Exception], ...] = (reference.ParseError,) + ((_core.ParseError,) if _core else ())
 
 
-def _checked(name: str) -> str:
+def _checked(name: str, source: str = "set_backend") -> str:
     name = name.strip().lower()
     if name not in BACKENDS:
-        raise MocapError(f"backend must be one of {', '.join(BACKENDS)}, got {name!r} (from {ENV_VAR} or set_backend)")
+        raise MocapError(f"backend must be one of {', '.join(BACKENDS)}, got {name!r} (from {source})")
     return name
 
 
-_selected = _checked(os.environ.get(ENV_VAR, "auto") or "auto")
+# The environment's choice, checked when a kernel is first needed rather than at import: a bad
+# value is then an error of the command that uses it, not a traceback of `import expressive_mocap`.
+_selected = os.environ.get(ENV_VAR, "auto") or "auto"
 
 
 def rust_available() -> bool:
@@ -69,6 +71,9 @@ def use_backend(name: str) -> Iterator[None]:
 
 def kernels() -> ModuleType:
     """The module whose functions implement the kernels under the current choice."""
+    global _selected
+    if _selected not in BACKENDS:
+        _selected = _checked(_selected, f"the environment variable {ENV_VAR}")
     if _selected == "numpy" or (_selected == "auto" and _core is None):
         return reference
     if _core is None:

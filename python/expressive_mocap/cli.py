@@ -599,6 +599,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seconds", type=_positive(float), default=4.0, help="length of the walk (default: 4)")
     p.add_argument("--wave", choices=["left", "right"], default="right", help="arm that waves in walk_wave.bvh (default: right)")
     p.set_defaults(run=cmd_demo)
+    # --backend is also taken after the command (`info FILE --backend numpy`); SUPPRESS keeps a
+    # command without it from overwriting the value given before the command.
+    for command in commands.choices.values():
+        command.add_argument("--backend", choices=backend.BACKENDS, default=argparse.SUPPRESS, help="kernels to use (as before the command)")
     return parser
 
 
@@ -625,6 +629,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.backend:
             backend.set_backend(args.backend)
+        backend.kernels()  # a bad $EXPRESSIVE_MOCAP_BACKEND fails here, in one line
         _check_outputs(args)
         return args.run(args)
     except BrokenPipeError:
