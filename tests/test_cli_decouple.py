@@ -113,3 +113,29 @@ def test_bad_input_is_one_line(files, mixed_path, tmp_path, args, words):
     assert result.returncode != 0 and "Traceback" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_a_model_no_better_than_the_mean_pose_is_refused_or_written_with_a_warning(files, capsys):
+    args = ["train", str(files / "walk.bvh"), str(files / "slow.bvh"), "--hidden", "20", "--regression-hidden", "20", "--max-iter", "2", "-q"]
+    out = files / "poor.npz"
+    assert main([*args, "-o", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert not out.exists()
+    assert captured.err.count("\n") == 1 and "no better than the mean training pose" in captured.err and "--allow-poor" in captured.err
+    assert captured.out.count("fine_tuned") == 1  # the report once, on stdout
+    assert main([*args, "-o", str(out), "--allow-poor"]) == 0
+    assert "warning:" in capsys.readouterr().err and out.exists()
+    # Using it says so too, in one line.
+    assert main(["decouple", str(files / "wave.bvh"), "--model", str(out), "-o", str(files / "poor")]) == 0
+    warned = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert warned == [f"expressive-mocap: warning: {out}: a poor model: " + warned[0].split("a poor model: ", 1)[1]]
+    assert "decompositions are unreliable" in warned[0]
+
+
+def test_training_shows_progress_within_each_stage(files, capsys):
+    assert main(["train", str(files / "walk.bvh"), str(files / "slow.bvh"), str(files / "wave.bvh"), "--hidden", "6",
+                 "--regression-hidden", "6", "--max-iter", "8", "--allow-poor", "-o", str(files / "p.npz")]) == 0
+    err = capsys.readouterr().err
+    for stage in ("autoencoder H=6 round 1/4", "regression", "fine-tuning"):
+        assert any(line.startswith(f"{stage}: ") and "iterations, loss" in line for line in err.splitlines()), err
+    assert "reading neutral clips" in err

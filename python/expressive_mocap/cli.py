@@ -10,6 +10,7 @@ import argparse
 import io
 import os
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -301,26 +302,32 @@ def cmd_calibrate(args) -> int:
 
 
 def cmd_train(args) -> int:
-    from .model import train_model
+    from .model import poor_fit, train_model
+    from .progress import Progress, line_log
     from .train import format_report
 
     def read_all(paths, what):
-        motions = []
-        for k, path in enumerate(paths, 1):
-            motions.append(read_bvh(path))
-            if k % 200 == 0 or k == len(paths):
-                print(f"read {k}/{len(paths)} {what} clips", file=sys.stderr, flush=True)
+        with Progress(len(paths), f"reading {what} clips", "files", enabled=bool(paths) and not args.quiet) as bar:
+            motions = []
+            for path in paths:
+                motions.append(read_bvh(path))
+                bar.update()
         return motions
 
     neutral = read_all(args.neutral, "neutral")
     unlabelled = read_all(args.unlabelled or [], "unlabelled")
-    log = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
     model = train_model(
         neutral, unlabelled, hidden=args.hidden, regression_hidden=args.regression_hidden, unlabelled_frames=args.unlabelled_frames,
-        seed=args.seed, max_iter=args.max_iter, log=log,
+        seed=args.seed, max_iter=args.max_iter, log=line_log(not args.quiet),
     )
-    model.save(args.output)
     print(format_report(model.report))
+    problem = poor_fit(model.report)
+    if problem and not args.allow_poor:
+        raise MocapError(f"not writing {args.output}: the model is of no use: {problem}; train on more neutral clips "
+                         "(see `train --help`), or pass --allow-poor to write it anyway")
+    model.save(args.output)
+    if problem:
+        print(f"{PROG}: warning: {args.output} is a poor model: {problem}", file=sys.stderr)
     print(f"wrote {args.output}")
     return 0
 
@@ -523,6 +530,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--unlabelled-frames", type=_positive(int), default=40_000, help="frames drawn from the unlabelled clips (default 40000)")
     p.add_argument("--max-iter", type=_positive(int), default=400, help="L-BFGS iterations per stage (default 400)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--allow-poor", action="store_true", help="write the model even if it predicts held-out poses no better than the mean pose")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(run=cmd_train)
 
     p = commands.add_parser("calibrate", help="calibrate the body-mechanics model to an actor or capture session")
@@ -624,8 +633,18 @@ def _check_outputs(args) -> None:
             raise MocapError(f"cannot write {output}: the folder {folder} is not writable")
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"{PROG}: warning: {message}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    with warnings.catch_warnings():  # the package's warnings as one line each, like its errors
+        warnings.showwarning = _show_warning
+        return _run(args)
+
+
+def _run(args) -> int:
     try:
         if args.backend:
             backend.set_backend(args.backend)

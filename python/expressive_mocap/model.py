@@ -16,6 +16,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import warnings
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from typing import Sequence
@@ -145,7 +146,12 @@ class BodyModel:
         if source is None:
             arrays, meta, _ = read_model_file(shipped_model_bytes(), "model file")
             return cls._from_arrays(arrays, meta, f"the shipped {DEFAULT_MODEL}")
-        return cls._from_arrays(*read_model_file(source, "model file"))
+        arrays, meta, name = read_model_file(source, "model file")
+        model = cls._from_arrays(arrays, meta, name)
+        problem = poor_fit(model.report)
+        if problem:  # loading it is allowed (to inspect it), but its results mean little
+            warnings.warn(f"{name}: a poor model: {problem}; its decompositions are unreliable", stacklevel=2)
+        return model
 
     @classmethod
     def _from_arrays(cls, arrays: dict, meta: dict, name: str) -> BodyModel:
@@ -184,6 +190,17 @@ class BodyModel:
             report=meta.get("report", {}),
             calibration=finite_array(arrays, "calibration", name, (len(joint_names), 4), kinds="f") if "calibration" in arrays else None,
         )
+
+
+def poor_fit(report: dict) -> str | None:
+    """Why a trained body-mechanics model is of no use, or None: its network must predict the
+    held-out clips' poses better than their mean training pose does (a network trained on too
+    few clips, or for too few iterations, may not)."""
+    final, baseline = report.get("fine_tuned"), report.get("mean_pose")
+    if not final or not baseline or final["test_mse"] < baseline["test_mse"]:
+        return None
+    return (f"its held-out pose error {final['test_mse']:.3g} is no better than the mean training pose's "
+            f"{baseline['test_mse']:.3g} (test variance explained {final['test_variance_explained']:.2f})")
 
 
 def shipped_model_bytes() -> bytes:

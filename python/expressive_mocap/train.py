@@ -24,20 +24,19 @@ afresh for each of a few rounds (L-BFGS needs a fixed objective within a round).
 
 from __future__ import annotations
 
-import sys
 import time
 from typing import Callable, Sequence
 
 import numpy as np
 
 from .mlp import Layer, Mlp
+from .progress import line_log
 
 Log = Callable[[str], None]
 Params = list[tuple[np.ndarray, np.ndarray]]  # per layer (weights [in, out], bias [out])
 
 
-def _stderr(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
+_stderr = line_log()  # progress lines on stderr, the running ones redrawn on a terminal
 
 
 # --- splitting ---------------------------------------------------------------------------------
@@ -120,10 +119,10 @@ def fit(
     weight_decay: float,
     name: str,
     log: Log | None = _stderr,
-    log_every: int = 50,
 ) -> tuple[Params, int]:
     """Minimise :func:`loss_and_grad` with L-BFGS from ``params``; returns the fitted
-    parameters and the number of iterations run."""
+    parameters and the number of iterations run. Progress goes to ``log``: a running line
+    (ending in ``\\r``) at each iteration with the time left, then the stage's last line."""
     from scipy.optimize import minimize
 
     state = {"loss": np.nan, "iter": 0, "start": time.perf_counter()}
@@ -135,13 +134,17 @@ def fit(
 
     def progress(_flat):
         state["iter"] += 1
-        if log and state["iter"] % log_every == 0:
-            log(f"{name}: iteration {state['iter']}/{max_iter}, loss {state['loss']:.4g} ({time.perf_counter() - state['start']:.1f} s)")
+        if log:
+            seconds = time.perf_counter() - state["start"]
+            left = seconds / state["iter"] * (max_iter - state["iter"])
+            log(f"{name}: iteration {state['iter']}/{max_iter}, loss {state['loss']:.4g}, {seconds:.1f} s, at most {left:.0f} s left\r")
 
     result = minimize(
         objective, _pack(params), jac=True, method="L-BFGS-B", callback=progress,
         options={"maxiter": max_iter, "maxcor": 20, "ftol": 1e-12, "gtol": 1e-9},
     )  # fmt: skip
+    if log:
+        log(f"{name}: {int(result.nit)} iterations, loss {state['loss']:.4g}, {time.perf_counter() - state['start']:.1f} s")
     return [(w.copy(), b.copy()) for w, b in _unpack(result.x, params)], int(result.nit)
 
 
@@ -315,8 +318,6 @@ def train_body_mechanics(
         start = time.perf_counter()
         plain = train_plain(X[train], P[train], hidden, seed=seed, max_iter=max_iter, **common)
         report["plain"] = _stage(plain, X, P, train, test, variance, seconds=time.perf_counter() - start, hidden=hidden)
-    if log:
-        log(format_report(report))
     return net, report
 
 
