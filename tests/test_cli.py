@@ -105,3 +105,25 @@ def test_help_reads_well():
     for command in ["info", "positions", "convert", "render", "demo"]:
         assert command in result.stdout
     assert "--order" in run("convert", "--help").stdout
+
+
+def test_positions_csv_is_csv_and_other_extensions_are_refused(tmp_path, mixed_path, capsys):
+    motion = em.read_bvh(mixed_path)
+    assert main(["positions", str(mixed_path), "-o", str(tmp_path / "p.csv")]) == 0
+    table = np.loadtxt(tmp_path / "p.csv", delimiter=",", skiprows=1, ndmin=2)
+    header = (tmp_path / "p.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["time", f"{motion.skeleton.names[0]}_x", f"{motion.skeleton.names[0]}_y", f"{motion.skeleton.names[0]}_z"]
+    np.testing.assert_allclose(table[:, 0], np.arange(motion.n_frames) * motion.frame_time, rtol=1e-8)
+    np.testing.assert_allclose(table[:, 1:].reshape(motion.n_frames, -1, 3), motion.positions(), rtol=1e-8, atol=1e-9)
+    capsys.readouterr()
+    assert main(["positions", str(mixed_path), "-o", str(tmp_path / "p.txt")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ".npz" in err and ".csv" in err and not (tmp_path / "p.txt").exists()
+
+
+def test_decouple_output_ending_in_bvh_is_a_prefix(tmp_path, capsys):
+    from expressive_mocap.demo import walk_and_wave
+
+    em.write_bvh(walk_and_wave(seconds=1.0).waving, tmp_path / "wave.bvh")
+    assert main(["decouple", str(tmp_path / "wave.bvh"), "-o", str(tmp_path / "out.bvh")]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out_activity.csv", "out_body.bvh", "out_expressive.bvh", "wave.bvh"]

@@ -101,7 +101,7 @@ def test_render_decoupled_and_modulated(files):
 @pytest.mark.parametrize(
     "args, words",
     [
-        (["mix", "--body", "WALK", "--expressive", "OTHER", "-o", "x.bvh"], "different skeletons"),
+        (["mix", "--body", "WALK", "--expressive", "OTHER", "-o", "x.bvh"], "this body model was trained on"),
         (["decouple", "OTHER", "-o", "x"], "22-joint skeleton"),
         (["blend", "WALK", "WALK", "--body-window", "9:3", "-o", "x.bvh"], "START <= END"),
         (["decouple", "WALK", "--model", "missing.npz", "-o", "x"], "cannot read the model file"),
@@ -139,3 +139,25 @@ def test_training_shows_progress_within_each_stage(files, capsys):
     for stage in ("autoencoder H=6 round 1/4", "regression", "fine-tuning"):
         assert any(line.startswith(f"{stage}: ") and "iterations, loss" in line for line in err.splitlines()), err
     assert "reading neutral clips" in err
+
+
+@pytest.mark.parametrize("command", ["decouple", "modulate", "calibrate", "mix"])
+def test_a_clip_of_another_skeleton_is_named_with_what_to_do(command, files, mixed_path, capsys):
+    args = {
+        "decouple": ["decouple", str(mixed_path), "-o", str(files / "x")],
+        "modulate": ["modulate", str(mixed_path), "--scale", "2", "-o", str(files / "x.bvh")],
+        "calibrate": ["calibrate", str(mixed_path), "-o", str(files / "x.npz")],
+        "mix": ["mix", "--body", str(files / "walk.bvh"), "--expressive", str(mixed_path), "-o", str(files / "x.bvh")],
+    }[command]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"expressive-mocap: error: {mixed_path}: this body model was trained on")
+    assert "`expressive-mocap train`" in err and "`calibrate`" in err
+
+
+def test_a_model_file_given_to_calibrate_says_which_option_takes_it(files, capsys):
+    assert main(["calibrate", str(files / "walk.bvh"), "-o", str(files / "cal2.npz")]) == 0
+    capsys.readouterr()
+    assert main(["modulate", str(files / "wave.bvh"), "--scale", "2", "--calibrate", str(files / "cal2.npz"), "-o", str(files / "m.bvh")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "a model file" in err and "goes to --model" in err

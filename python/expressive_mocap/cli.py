@@ -18,7 +18,7 @@ import numpy as np
 from . import __version__, backend
 from .bvh import bvh_bytes, read_bvh, write_bvh
 from .errors import MocapError
-from .io import atomic_write, atomic_write_all
+from .io import atomic_write, atomic_write_all, open_input
 from .motion import Motion
 from .rotations import ORDERS
 
@@ -63,8 +63,15 @@ def cmd_info(args) -> int:
 
 
 def cmd_positions(args) -> int:
+    kind = Path(args.output).suffix.lower()
+    if kind not in (".npz", ".csv"):
+        raise MocapError(f"-o {args.output}: positions writes .npz (every array) or .csv (positions, a row per frame), by the name's extension")
     motion = read_bvh(args.file)
     rotations, positions = motion.fk()
+    if kind == ".csv":
+        atomic_write(args.output, _positions_csv(motion, positions))
+        print(f"wrote {args.output}: positions of {motion.skeleton.n_joints} joints x {motion.n_frames} frames (world, file units)")
+        return 0
     buffer = io.BytesIO()
     np.savez(
         buffer,
@@ -77,6 +84,15 @@ def cmd_positions(args) -> int:
     atomic_write(args.output, buffer.getvalue())
     print(f"wrote {args.output}: positions and rotations of {motion.skeleton.n_joints} joints x {motion.n_frames} frames (world, x,y,z,w)")
     return 0
+
+
+def _positions_csv(motion: Motion, positions: np.ndarray) -> bytes:
+    """World positions as CSV: a header row, then per frame its time and x, y, z of every joint."""
+    columns = ["time"] + [f"{name}_{axis}" for name in motion.skeleton.names for axis in "xyz"]
+    table = np.column_stack([np.arange(motion.n_frames) * motion.frame_time, positions.reshape(motion.n_frames, -1)])
+    text = io.StringIO()
+    np.savetxt(text, table, fmt="%.9g", delimiter=",", header=",".join(columns), comments="")
+    return text.getvalue().encode()
 
 
 def cmd_convert(args) -> int:
@@ -221,8 +237,32 @@ def _model(args):
 
     model = BodyModel.load(args.model)
     if getattr(args, "calibrate", None):
-        model = model.calibrated([read_bvh(path) for path in args.calibrate])
+        for path in args.calibrate:
+            if _is_model_file(path):
+                raise MocapError(f"--calibrate {path}: a model file; --calibrate takes neutral BVH clips, and a calibrated model goes to --model")
+        model = model.calibrated([_read_for_model(path, model) for path in args.calibrate])
     return model
+
+
+def _is_model_file(path: str) -> bool:
+    """A zip archive (what .npz model files are), by its first bytes."""
+    try:
+        with open_input(path) as handle:
+            return handle.read(4) == b"PK\x03\x04"
+    except OSError:
+        return False  # the reader says why, with the file's name
+
+
+def _read_for_model(path: str, model, what: str = "the body-mechanics model") -> Motion:
+    """A BVH file that the model can take: another skeleton is an error naming the file and
+    what to do about it."""
+    motion = read_bvh(path)
+    try:
+        model.check_skeleton(motion)
+    except MocapError as error:
+        raise MocapError(f"{path}: {error}: {what} applies to its own skeleton only; train one on clips of this "
+                         "skeleton (`expressive-mocap train`), then calibrate it to a session if needed (`calibrate`)") from None
+    return motion
 
 
 def _window(text: str) -> tuple[int, int]:
@@ -239,9 +279,12 @@ def _window(text: str) -> tuple[int, int]:
 def cmd_decouple(args) -> int:
     from .decouple import decompose
 
-    motion = read_bvh(args.input)
-    parts = decompose(motion, _model(args), args.gain, args.exponent)
+    model = _model(args)
+    motion = _read_for_model(args.input, model)
+    parts = decompose(motion, model, args.gain, args.exponent)
     prefix = str(args.output)
+    if prefix.lower().endswith(".bvh"):  # -o out.bvh means the prefix out, not out.bvh_body.bvh
+        prefix = prefix[:-4]
     names = motion.skeleton.names
     table = io.StringIO()
     np.savetxt(table, parts.activity, fmt="%.5f", delimiter=",", header=",".join(names), comments="")
@@ -260,7 +303,8 @@ def cmd_decouple(args) -> int:
 def cmd_modulate(args) -> int:
     from .decouple import modulate
 
-    out = modulate(read_bvh(args.input), args.scale, _model(args), args.gain, args.exponent)
+    model = _model(args)
+    out = modulate(_read_for_model(args.input, model), args.scale, model, args.gain, args.exponent)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: expressiveness x {args.scale:g}")
     return 0
@@ -269,7 +313,8 @@ def cmd_modulate(args) -> int:
 def cmd_mix(args) -> int:
     from .decouple import mix
 
-    out = mix(read_bvh(args.body), read_bvh(args.expressive), _model(args), args.align, args.offset, args.gain, args.exponent)
+    model = _model(args)
+    out = mix(_read_for_model(args.body, model), _read_for_model(args.expressive, model), model, args.align, args.offset, args.gain, args.exponent)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: body mechanics of {args.body}, expressiveness of {args.expressive}")
     return 0
@@ -291,7 +336,8 @@ def cmd_blend(args) -> int:
 def cmd_calibrate(args) -> int:
     from .model import BodyModel
 
-    model = BodyModel.load(args.model).calibrated([read_bvh(path) for path in args.neutral])
+    model = BodyModel.load(args.model)
+    model = model.calibrated([_read_for_model(path, model) for path in args.neutral])
     model.save(args.output)
     angles = model.calibration_angles()
     largest = sorted(angles.items(), key=lambda kv: -kv[1])[:5]
@@ -464,7 +510,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = commands.add_parser("positions", help="world positions and rotations of every joint, to an .npz file")
     p.add_argument("file", metavar="FILE", help="BVH file")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.npz", help="arrays positions [F,J,3], rotations [F,J,4] (x,y,z,w), joints, parents, frame_time")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.npz|OUT.csv", help=".npz: arrays positions [F,J,3], rotations [F,J,4] (x,y,z,w), joints, parents, frame_time; .csv: time and x,y,z of every joint, a row per frame")
     p.set_defaults(run=cmd_positions)
 
     p = commands.add_parser("convert", help="rewrite a BVH file, optionally resampled, scaled or in another rotation order")
@@ -491,7 +537,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = commands.add_parser("decouple", help="split a motion into body mechanics and expressiveness (BVH + activity per joint)")
     p.add_argument("input", metavar="IN", help="BVH file (the model's skeleton)")
-    p.add_argument("-o", "--output", required=True, metavar="PREFIX", help="writes PREFIX_body.bvh, PREFIX_expressive.bvh, PREFIX_activity.csv")
+    p.add_argument("-o", "--output", required=True, metavar="PREFIX", help="writes PREFIX_body.bvh, PREFIX_expressive.bvh, PREFIX_activity.csv (a .bvh ending is dropped from PREFIX)")
     _add_model_options(p)
     p.set_defaults(run=cmd_decouple)
 
