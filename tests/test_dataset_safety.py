@@ -54,7 +54,7 @@ def same_dataset(a: Path, b: Path) -> None:
     np.testing.assert_array_equal(x.offsets, y.offsets)
     assert x.arrays.keys() == y.arrays.keys()
     for kind in x.arrays:
-        np.testing.assert_array_equal(x[kind], y[kind])
+        np.testing.assert_array_equal(x.arrays[kind], y.arrays[kind])
 
 
 def snapshot(folder: Path) -> dict:
@@ -106,7 +106,7 @@ def test_two_runs_started_together_leave_one_good_dataset(tmp_path):
     loser = next(err for code, err in results if code == 1)
     assert "being written by another run" in loser or "already holds a finished dataset" in loser
     ds = load_dataset(out)  # verified against its manifest
-    assert len(ds) == 150 and ds["positions"].shape[0] == sum(10 + k % 20 for k in range(150))
+    assert len(ds) == 150 and ds.positions.shape[0] == sum(10 + k % 20 for k in range(150))
     np.testing.assert_array_equal(ds.clip("clip_007")["positions"], walk[:17].positions().astype(np.float32))
 
 
@@ -271,7 +271,7 @@ def test_load_dataset_refuses_files_the_manifest_does_not_vouch_for(clips, tmp_p
     with pytest.raises(em.MocapError, match=expected):
         load_dataset(out)
     if damage == "touched":  # a copy that did not keep times can opt out of the time check only
-        assert load_dataset(out, check_times=False)["positions"].shape[0] > 0
+        assert load_dataset(out, check_times=False).positions.shape[0] > 0
 
 
 # ----------------------------------------------------------------------------- a full disk

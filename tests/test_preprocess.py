@@ -77,7 +77,7 @@ def test_values_equal_the_packages_own_per_clip_results(archive, tmp_path):
         for kind, values in expected.items():
             got = clip[kind]
             assert got.dtype == (bool if kind == "contacts" else np.float32), kind
-            np.testing.assert_array_equal(got, ds[kind][ds.offsets[i] : ds.offsets[i + 1]])
+            np.testing.assert_array_equal(got, ds.arrays[kind][ds.offsets[i] : ds.offsets[i + 1]])
             if kind == "contacts":
                 np.testing.assert_array_equal(got, values)
             else:  # float32 precision of values up to ~300 (cm)
@@ -85,7 +85,7 @@ def test_values_equal_the_packages_own_per_clip_results(archive, tmp_path):
     assert ds.skeleton["names"] == list(em.read_bvh(archive / "clips" / "walk_a.bvh").skeleton.names)
     assert ds.manifest["options"]["keep"] == KEEP.split(",")
     assert ds.manifest["package_version"] == em.__version__
-    assert isinstance(ds["positions"], np.memmap)
+    assert isinstance(ds.positions, np.memmap)
 
 
 def test_a_bad_clip_is_reported_and_the_others_are_fine(archive, tmp_path):
@@ -98,7 +98,7 @@ def test_a_bad_clip_is_reported_and_the_others_are_fine(archive, tmp_path):
         em.read_bvh(archive / "clips" / "broken.bvh")
     assert error == str(raised.value)
     assert summary.failures[0]["error"] == error
-    assert len(ds) == 3 and len(ds["positions"]) == sum(c["frames"] for c in ds.clips)
+    assert len(ds) == 3 and len(ds.positions) == sum(c["frames"] for c in ds.clips)
 
 
 def test_a_clip_that_cannot_be_read_is_a_failure_not_the_end(archive, tmp_path, monkeypatch):
@@ -147,7 +147,7 @@ def assert_same_dataset(a, b):
     np.testing.assert_array_equal(a.offsets, b.offsets)
     assert a.arrays.keys() == b.arrays.keys()
     for kind in a.arrays:
-        np.testing.assert_array_equal(a[kind], b[kind])
+        np.testing.assert_array_equal(a.arrays[kind], b.arrays[kind])
 
 
 def test_folder_zip_and_tar_give_the_same_dataset(archive, tmp_path):
@@ -269,8 +269,8 @@ def test_model_in_float32_stays_close_to_float64(archive, tmp_path):
     run(archive / "clips", tmp_path / "f32", keep="activity,body", model="", model_float32=True)
     a, b = load_dataset(tmp_path / "f64"), load_dataset(tmp_path / "f32")
     assert b.manifest["options"]["model_float32"] and a.names == b.names
-    np.testing.assert_allclose(b["activity"], a["activity"], atol=1e-4)
-    np.testing.assert_allclose(b["body"], a["body"], atol=1e-5)
+    np.testing.assert_allclose(b.activity, a.activity, atol=1e-4)
+    np.testing.assert_allclose(b.body, a.body, atol=1e-5)
 
 
 def test_a_dask_cluster_writes_the_single_machine_dataset(archive, tmp_path):

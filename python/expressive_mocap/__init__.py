@@ -15,8 +15,36 @@ from .roles import JointRoles, actor_height
 
 __version__ = "0.1.0"
 
+# Heavier parts load on first use, so ``import expressive_mocap`` stays as cheap as reading BVH.
+_LAZY = {
+    "BodyModel": "model",
+    "Dataset": "dataset",
+    "Decomposition": "decouple",
+    "ExaggerationModel": "exaggerate",
+    "decompose": "decouple",
+    "load_dataset": "dataset",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value  # later look-ups skip this function
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 __all__ = [
     "BVHError",
+    "BodyModel",
+    "Dataset",
+    "Decomposition",
+    "ExaggerationModel",
     "FEATURE_NAMES",
     "JointRoles",
     "MocapError",
@@ -27,6 +55,7 @@ __all__ = [
     "actor_height",
     "bvh_bytes",
     "contact_intervals",
+    "decompose",
     "dynamic_features",
     "euler_to_quat",
     "foot_contacts",
@@ -34,6 +63,7 @@ __all__ = [
     "forward_kinematics",
     "forward_kinematics_many",
     "get_backend",
+    "load_dataset",
     "mlp_forward",
     "quat_to_euler",
     "read_bvh",

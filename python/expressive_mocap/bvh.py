@@ -575,4 +575,9 @@ def write_bvh(motion: Motion, path: str | os.PathLike, decimals: int | None = No
 
     See :func:`bvh_bytes` for ``decimals``.
     """
+    if not isinstance(motion, Motion):
+        got = f"an array {list(motion.shape)}" if isinstance(motion, np.ndarray) else f"a {type(motion).__name__}"
+        # The likely slip: Decomposition.body / .expressive are rotation arrays, its motions come from methods.
+        raise MocapError(f"write_bvh needs a Motion, got {got}; for a Decomposition use parts.body_motion(), "
+                         "parts.expressive_motion() or parts.recompose(scale)")
     atomic_write(path, bvh_bytes(motion, decimals))

@@ -125,9 +125,9 @@ def cmd_render(args) -> int:
             motions, titles = [parts.recompose(s) for s in (0.5, 1.0, 1.5)], ["50% expressive", "100% (original)", "150% expressive"]
     if args.start or args.end:
         motions = [m[args.start : args.end] for m in motions]
-    options = {"poses": args.poses} if args.output.lower().endswith(".png") else {}
-    render(motions, args.output, titles=titles, view=args.view, **options)
-    print(f"wrote {args.output}")
+    options = {"poses": args.poses} if args.output.lower().endswith(".png") else {"speed": args.speed}
+    played = render(motions, args.output, titles=titles, view=args.view, **options)
+    print(f"wrote {args.output}" + (f": {played}" if played else ""))
     return 0
 
 
@@ -525,8 +525,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = commands.add_parser("render", help="stick figures side by side: poses as PNG or an animated GIF")
     p.add_argument("files", nargs="+", metavar="FILE", help="BVH files, one panel each")
     p.add_argument("-o", "--output", required=True, metavar="OUT.png|OUT.gif", help="picture to write")
-    p.add_argument("--view", choices=["side", "front"], default="side", help="camera (default: side)")
+    p.add_argument("--view", choices=["side", "front"], default="side",
+                   help="camera, relative to the walker's heading: side (walking to the right) or front (default: side)")
     p.add_argument("--poses", type=_positive(int), default=8, help="poses per panel in a PNG (default: 8)")
+    p.add_argument("--speed", type=_positive(float), default=1.0, help="GIF playback speed, 1 = real time (default: 1)")
     p.add_argument("--start", type=int, default=0, help="first frame (default: 0)")
     p.add_argument("--end", type=int, help="frame to stop before (default: the end)")
     what = p.add_mutually_exclusive_group()

@@ -56,6 +56,14 @@ class BodyModel:
     report: dict = field(default_factory=dict)
     calibration: np.ndarray | None = None
 
+    def __repr__(self) -> str:
+        # One line: the dataclass default prints every weight.
+        sizes = [self.network.layers[0].weights.shape[0]] + [layer.weights.shape[1] for layer in self.network.layers]
+        mse = self.report.get("fine_tuned", {}).get("test_mse")
+        return (f"BodyModel({len(self.joint_names)}-joint skeleton (root {self.joint_names[0]!r}), {len(self.predicted)} joints predicted, "
+                f"network {'-'.join(map(str, sizes))}, test MSE {'?' if mse is None else f'{mse:.3g}'}"
+                f"{', calibrated' if self.calibration is not None else ''})")
+
     # ---------------------------------------------------------------- prediction
 
     def check_skeleton(self, motion: Motion | Skeleton) -> None:

@@ -133,6 +133,11 @@ class Skeleton:
         object.__setattr__(self, "channels", channels)
         object.__setattr__(self, "end_sites", end_sites)
 
+    def __repr__(self) -> str:
+        # One line: the dataclass default prints every offset.
+        sites = f", {len(self.end_sites)} End Sites" if self.end_sites else ""
+        return f"Skeleton({self.n_joints} joints, root {self.names[0]!r}{sites}, {self.n_channels} channels)"
+
     @property
     def n_joints(self) -> int:
         return len(self.names)

@@ -1,15 +1,18 @@
 """Stick-figure pictures of motions, side by side: a PNG of poses or an animated GIF.
 
-Orthographic views with Y up: ``"side"`` looks along -X (Z to the right), ``"front"`` looks
-along -Z (X to the left, as a mirror would show the actor). Panels share one scale.
+Orthographic views with Y up, named after the walker, not the world: ``"side"`` looks at the
+walker's left side, its direction of travel to the right; ``"front"`` looks at its face, its
+left on the picture's left (as a mirror would show the actor). The heading is the hips' travel
+from the first frame to the last or, where they barely travel, the facing of the line between
+the upper legs (:func:`heading`). Sizes (margins, line widths) follow the figure's own size, so
+a file in metres draws as one in centimetres; GIFs play in real time whatever the frame rate.
 """
 
 from __future__ import annotations
 
 import io
+import math
 import os
-import tempfile
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
@@ -18,7 +21,32 @@ from .errors import MocapError
 from .io import atomic_write
 from .motion import Motion
 
-_VIEWS = {"side": (2, 1), "front": (0, 1)}
+VIEWS = ("side", "front")
+MARGIN = 0.06  # of the figure's height, around every panel
+MIN_GIF_DELAY = 0.02  # s: browsers play shorter GIF frame delays as 0.1 s
+
+
+def heading(motion: Motion, positions: np.ndarray | None = None) -> np.ndarray:
+    """The walker's forward direction, a horizontal unit vector ``[3]``: the hips' travel from the
+    first frame to the last, or their facing where they barely travel (the yaw of
+    :func:`~expressive_mocap.exaggerate.cycle_heading` over the whole clip); +Z when the
+    skeleton's hips and upper legs cannot be told by name."""
+    from .exaggerate import Cycle, cycle_heading
+    from .roles import JointRoles
+
+    try:
+        roles = JointRoles.find(motion.skeleton)
+    except MocapError:
+        return np.array([0.0, 0.0, 1.0])
+    yaw = np.radians(cycle_heading(motion, roles, Cycle(0, motion.n_frames - 1), positions))
+    return np.array([np.sin(yaw), 0.0, np.cos(yaw)])
+
+
+def _horizontal_axis(forward: np.ndarray, view: str) -> np.ndarray:
+    """The world direction drawn to the right: forward in the side view, the walker's right in the
+    (mirrored) front view."""
+    left = np.array([forward[2], 0.0, -forward[0]])  # forward turned 90 degrees about +Y
+    return forward if view == "side" else -left
 
 
 def _segments(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
@@ -41,10 +69,30 @@ def _segments(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
     return bones, positions
 
 
-def _project(points: np.ndarray, view: str) -> np.ndarray:
-    horizontal, vertical = _VIEWS[view]
-    sign = -1.0 if view == "front" else 1.0
-    return np.stack([sign * points[..., horizontal], points[..., vertical]], axis=-1)
+def project(motion: Motion, view: str = "side") -> tuple[np.ndarray, np.ndarray]:
+    """The motion as drawn: bone ends ``[F, B, 2, 2]`` (picture x to the right, y up, file
+    units) and the horizontal picture position of the hips ``[F]`` (the GIF's camera follows them)."""
+    bones, positions = _segments(motion)
+    axis = _horizontal_axis(heading(motion, positions), view)
+    from .roles import JointRoles
+
+    try:
+        hips = JointRoles.find(motion.skeleton).hips
+    except MocapError:
+        hips = 0
+    flat = np.stack([bones @ axis, bones[..., 1]], axis=-1)
+    return flat, positions[:, hips] @ axis
+
+
+def _vertical_range(flat: Sequence[np.ndarray]) -> tuple[float, float]:
+    """Floor (or lowest point) to the top of every drawn figure."""
+    low = min(0.0, min(float(f[..., 1].min()) for f in flat))
+    return low, max(float(f[..., 1].max()) for f in flat)
+
+
+def _line_width(figure_points: float) -> float:
+    """Line width (points) for a figure drawn ``figure_points`` tall: thin lines on a small one."""
+    return float(np.clip(0.009 * figure_points, 0.6, 2.2))
 
 
 def _figure(panels: int, width: float = 3.2, height: float = 4.0, stacked: bool = False):
@@ -65,90 +113,147 @@ def _figure(panels: int, width: float = 3.2, height: float = 4.0, stacked: bool 
 def _check(motions: Sequence[Motion], titles: Sequence[str] | None, view: str) -> list[str]:
     if not motions:
         raise MocapError("nothing to render: give at least one motion")
-    if view not in _VIEWS:
-        raise MocapError(f"view must be one of {', '.join(_VIEWS)}, got {view!r}")
+    if view not in VIEWS:
+        raise MocapError(f"view must be one of {', '.join(VIEWS)}, got {view!r}")
     titles = list(titles) if titles is not None else [""] * len(motions)
     if len(titles) != len(motions):
         raise MocapError(f"{len(titles)} titles for {len(motions)} motions")
     return titles
 
 
+def _shade(k: int, n: int) -> float:
+    """0.25 .. 1 from the first of ``n`` poses to the last: later poses darker."""
+    return 0.25 + 0.75 * (k + 1) / n
+
+
+def pose_figure(motions: Sequence[Motion], titles: Sequence[str] | None = None, poses: int = 8, view: str = "side"):
+    """The matplotlib Figure :func:`render_poses` saves: one panel per motion, each showing
+    ``poses`` evenly spaced frames where they happened (a chronophotograph: a walk spreads along
+    its path), later poses darker, and a legend saying so."""
+    from matplotlib.lines import Line2D
+    from matplotlib.transforms import blended_transform_factory
+
+    titles = _check(motions, titles, view)
+    frames = [np.linspace(0, m.n_frames - 1, min(poses, m.n_frames)).round().astype(int) for m in motions]
+    drawn = [project(m, view)[0][f] for m, f in zip(motions, frames)]
+    low, top = _vertical_range(drawn)
+    margin = MARGIN * (top - low)
+    spans = [np.ptp(d[..., 0]) + 2 * margin for d in drawn]
+    height_span = top - low + 2 * margin
+    aspect = max(spans) / height_span
+    width, height = float(np.clip(aspect * 2.6, 2.5, 14.0)), 2.8
+    stacked = aspect > 2.5
+    plt, fig, axes = _figure(len(motions), width=width, height=height, stacked=stacked)
+    # Aspect is equal: the panel's tighter dimension sets the scale, and so the figure's size in points.
+    inches_per_unit = min(width / max(spans), height / height_span)
+    lw = _line_width((top - low) * inches_per_unit * 72)
+    cmap = plt.cm.viridis
+    for ax, flat, title in zip(axes, drawn, titles):
+        for k, pose in enumerate(flat):
+            colour = cmap(1 - _shade(k, len(flat)))
+            for a, b in pose:
+                ax.plot([a[0], b[0]], [a[1], b[1]], color=colour, lw=lw, solid_capstyle="round")
+        ax.axhline(0.0, color="0.7", lw=0.8)
+        middle = (flat[..., 0].min() + flat[..., 0].max()) / 2
+        ax.set_xlim(middle - max(spans) / 2, middle + max(spans) / 2)  # one scale for every panel
+        ax.set_ylim(low - margin, top + margin)
+        ax.set_title(title, fontsize=10)
+    n = max(len(f) for f in frames)
+    handles = [Line2D([], [], color=cmap(1 - _shade(k, n)), lw=2) for k in (0, n - 1)]
+    under = blended_transform_factory(fig.transFigure, axes[-1].transAxes)  # centred, just below the last panel
+    fig.legend(handles, ["first frame", "last frame"], loc="upper center", bbox_to_anchor=(0.5, -0.02), bbox_transform=under, ncol=2,
+               fontsize=8, frameon=False, title=f"{n} poses evenly spaced in time, later ones darker", title_fontsize=8)
+    return fig
+
+
 def render_poses(
     motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, poses: int = 8, view: str = "side"
 ) -> None:
-    """PNG with one panel per motion, each showing ``poses`` evenly spaced frames where they
-    happened (a chronophotograph: a walk spreads along its path), older poses lighter."""
-    titles = _check(motions, titles, view)
-    all_bones = [_segments(motion)[0] for motion in motions]
-    spans = [np.ptp(_project(b.reshape(-1, 3), view), axis=0) for b in all_bones]
-    aspect = max(x / max(y, 1e-9) for x, y in spans)
-    width = float(np.clip(aspect * 2.6, 2.5, 14.0))
-    plt, fig, axes = _figure(len(motions), width=width, height=2.8, stacked=aspect > 2.5)
-    for ax, motion, bones, title in zip(axes, motions, all_bones, titles):
-        frames = np.linspace(0, motion.n_frames - 1, min(poses, motion.n_frames)).round().astype(int)
-        for k, f in enumerate(frames):
-            shade = 0.25 + 0.75 * (k + 1) / len(frames)
-            for a, b in _project(bones[f], view):
-                ax.plot([a[0], b[0]], [a[1], b[1]], color=plt.cm.viridis(1 - shade), lw=1.6, solid_capstyle="round")
-        ground = _project(bones.reshape(-1, 3), view)
-        ax.axhline(0.0, color="0.7", lw=0.8)
-        ax.set_xlim(ground[:, 0].min() - 10, ground[:, 0].max() + 10)
-        ax.set_title(title, fontsize=10)
-    _save(fig, plt, path)
+    """PNG of :func:`pose_figure`."""
+    import matplotlib.pyplot as plt
+
+    _save(pose_figure(motions, titles, poses, view), plt, path)
+
+
+def gif_timing(fps: Sequence[float], seconds: float, speed: float = 1.0) -> tuple[np.ndarray, np.ndarray, int]:
+    """When each GIF frame is taken and how long it shows, for clips at frame rates ``fps`` lasting
+    ``seconds`` (the longest), played at ``speed`` x real time: clip times ``[K]`` (s) and delays
+    ``[K]`` (ms, whole 10 ms: GIFs count hundredths), and the step in frames of the fastest clip.
+
+    The GIF takes every ``step``-th frame of the fastest clip, the fewest that keeps delays at
+    least 20 ms, and rounds the running time, not each delay, to 10 ms: a 30 fps clip plays with
+    delays 30, 30, 40 ms..., ending within 20 ms of real time instead of 10% early."""
+    rate = max(fps)
+    step = math.ceil(MIN_GIF_DELAY * rate * speed - 1e-9)
+    period = step / rate  # of clip time per GIF frame
+    frames = max(1, math.ceil(seconds / period - 1e-9))
+    times = np.arange(frames) * period
+    ends = times + period
+    ends[-1] = max(seconds, times[-1] + MIN_GIF_DELAY * speed)  # the last frame ends with the clip
+    shown = np.floor(np.concatenate([[0.0], ends]) / speed * 100 + 0.5)  # running time, hundredths
+    return times, np.diff(shown).astype(int) * 10, step
 
 
 def render_animation(
-    motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", fps: float | None = None
-) -> None:
-    """Animated GIF, one panel per motion, the camera following each root horizontally.
-    Motions are played frame by frame in step; shorter ones hold their last pose."""
-    from matplotlib.animation import FuncAnimation, PillowWriter
+    motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", speed: float = 1.0
+) -> str:
+    """Animated GIF, one panel per motion, the camera following each walker's hips horizontally.
+    Motions play on one clock at ``speed`` x real time (each its own frame rate, see
+    :func:`gif_timing`); shorter ones hold their last pose. Returns a line saying how it plays."""
+    from PIL import Image
 
     titles = _check(motions, titles, view)
-    plt, fig, axes = _figure(len(motions))
+    if not (np.isfinite(speed) and speed > 0):
+        raise MocapError(f"speed must be a positive number, got {speed}")
+    seconds = max(m.n_frames * m.frame_time for m in motions)
+    times, delays, step = gif_timing([m.fps for m in motions], seconds, speed)
     projected = []
     for motion in motions:
-        bones, positions = _segments(motion)
-        flat = _project(bones, view)
-        centre = _project(positions[:, 0], view)[:, 0]
-        flat[..., 0] -= centre[:, None, None]
-        projected.append(flat)
-    extent = max(np.abs(p[..., 0]).max() for p in projected) + 5
-    top = max(p[..., 1].max() for p in projected) + 5
+        flat, centre = project(motion, view)
+        index = np.minimum(np.floor(times * motion.fps + 1e-6).astype(int), motion.n_frames - 1)
+        projected.append(flat[index] - np.stack([centre[index], np.zeros(len(index))], -1)[:, None, None])
+    low, top = _vertical_range(projected)
+    margin = MARGIN * (top - low)
+    extent = max(float(np.abs(p[..., 0]).max()) for p in projected) + margin
+    width, height = 3.2, 4.0
+    plt, fig, axes = _figure(len(motions), width, height)
+    lw = _line_width((top - low) * min(width / (2 * extent), height / (top - low + 2 * margin)) * 72)
     lines = []
     for ax, flat, title in zip(axes, projected, titles):
         ax.set_xlim(-extent, extent)
-        ax.set_ylim(min(0.0, min(p[..., 1].min() for p in projected)) - 5, top)
+        ax.set_ylim(low - margin, top + margin)
         ax.axhline(0.0, color="0.7", lw=0.8)
         ax.set_title(title, fontsize=10)
-        lines.append([ax.plot([], [], color="tab:blue", lw=2)[0] for _ in range(flat.shape[1])])
-    frames = max(len(p) for p in projected)
-
-    def draw(f: int):
+        lines.append([ax.plot([], [], color="tab:blue", lw=lw, solid_capstyle="round")[0] for _ in range(flat.shape[1])])
+    clock = fig.text(0.02, 0.02, "", fontsize=8, color="0.4")
+    fig.tight_layout()
+    images = []
+    for k, t in enumerate(times):
         for flat, panel in zip(projected, lines):
-            for (a, b), line in zip(flat[min(f, len(flat) - 1)], panel):
+            for (a, b), line in zip(flat[k], panel):
                 line.set_data([a[0], b[0]], [a[1], b[1]])
-        return [line for panel in lines for line in panel]
-
-    rate = fps or motions[0].fps
-    animation = FuncAnimation(fig, draw, frames=frames, blit=True)
-    # PillowWriter needs a file name: render into a scratch folder, then write atomically.
-    with tempfile.TemporaryDirectory() as scratch:
-        scratch_file = os.path.join(scratch, "animation.gif")
-        animation.save(scratch_file, writer=PillowWriter(fps=min(rate, 50)))
-        data = Path(scratch_file).read_bytes()
+        clock.set_text(f"{t:.1f} s" + (f" (x{speed:g})" if speed != 1 else ""))
+        fig.canvas.draw()
+        images.append(Image.frombuffer("RGBA", fig.canvas.get_width_height(), fig.canvas.buffer_rgba(), "raw", "RGBA", 0, 1).convert("RGB"))
     plt.close(fig)
-    atomic_write(path, data)
+    buffer = io.BytesIO()
+    images[0].save(buffer, format="GIF", save_all=True, append_images=images[1:], duration=delays.tolist(), loop=0)
+    atomic_write(path, buffer.getvalue())
+    played = delays.sum() / 1000
+    rates = " and ".join(sorted({f"{m.fps:.4g}" for m in motions}, key=float))
+    taken = "every frame" if step == 1 else f"every {step} frames"
+    return (f"{len(times)} frames ({taken} of {rates} fps) playing {played:.2f} s for {seconds:.2f} s of motion: "
+            f"{seconds / played:.3f} x real time" + (f" (asked {speed:g})" if speed != 1 else ""))
 
 
-def render(motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", **options) -> None:
-    """Render to ``path``: a GIF animation if it ends in ``.gif``, otherwise a PNG of poses."""
+def render(motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", **options) -> str | None:
+    """Render to ``path``: a GIF animation if it ends in ``.gif`` (returns how it plays), otherwise
+    a PNG of poses."""
     if str(path).lower().endswith(".gif"):
-        render_animation(motions, path, titles, view, **options)
-    elif str(path).lower().endswith(".png"):
-        render_poses(motions, path, titles, view=view, **options)
-    else:
-        raise MocapError(f"render: the output must end in .png or .gif, got {path}")
+        return render_animation(motions, path, titles, view, **options)
+    if str(path).lower().endswith(".png"):
+        return render_poses(motions, path, titles, view=view, **options)
+    raise MocapError(f"render: the output must end in .png or .gif, got {path}")
 
 
 def _save(fig, plt, path: str | os.PathLike) -> None:
