@@ -7,6 +7,7 @@ traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import io
 import os
 import sys
@@ -17,7 +18,7 @@ import numpy as np
 from . import __version__, backend
 from .bvh import bvh_bytes, read_bvh, write_bvh
 from .errors import MocapError
-from .io import atomic_write, atomic_write_all
+from .io import atomic_write, atomic_write_all, file_kind, is_standard_output, output_target
 from .motion import Motion
 from .rotations import ORDERS
 
@@ -235,6 +236,9 @@ def _window(text: str) -> tuple[int, int]:
     return start, end
 
 
+DECOUPLE_SUFFIXES = ("_body.bvh", "_expressive.bvh", "_activity.csv")
+
+
 def cmd_decouple(args) -> int:
     from .decouple import decompose
 
@@ -244,11 +248,8 @@ def cmd_decouple(args) -> int:
     names = motion.skeleton.names
     table = io.StringIO()
     np.savetxt(table, parts.activity, fmt="%.5f", delimiter=",", header=",".join(names), comments="")
-    atomic_write_all({  # the three belong together: all of them or none
-        prefix + "_body.bvh": bvh_bytes(parts.body_motion()),
-        prefix + "_expressive.bvh": bvh_bytes(parts.expressive_motion()),
-        prefix + "_activity.csv": table.getvalue().encode(),
-    })
+    contents = (bvh_bytes(parts.body_motion()), bvh_bytes(parts.expressive_motion()), table.getvalue().encode())
+    atomic_write_all({prefix + suffix: data for suffix, data in zip(DECOUPLE_SUFFIXES, contents)})  # all of them or none
     print(f"wrote {prefix}_body.bvh, {prefix}_expressive.bvh (E* on the mean body pose), {prefix}_activity.csv")
     print("mean activity per joint (0 = body mechanics only, 1 = fully expressive):")
     for name, value in zip(names, parts.activity.mean(axis=0)):
@@ -602,17 +603,40 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _check_outputs(args) -> None:
-    """Refuse, before any work, an output whose folder is missing or unwritable: files go where
-    they are asked to (``-o``, ``--plot``), never next to an input, and the folders of ``demo``
-    and ``preprocess`` are created only inside an existing one."""
+# Commands whose one output may be standard output (`-o -` or `-o /dev/stdout`): a BVH or .npz
+# streamed as it is; their report lines then go to stderr. Pictures pick their format from the
+# name, decouple writes three files and demo/preprocess a folder, so they take none.
+_STREAMING = ("convert", "positions", "modulate", "mix", "blend", "exaggerate", "calibrate", "train")
+
+
+def _output_paths(args) -> list[str]:
+    """The files a command will write, as given (``-o``, ``--plot``; decouple's three)."""
     outputs = args.output if isinstance(getattr(args, "output", None), list) else [getattr(args, "output", None)]
-    for output in [*outputs, getattr(args, "plot", None)]:
-        if output is None:
+    outputs = [o for o in [*outputs, getattr(args, "plot", None)] if o is not None]
+    if args.run is cmd_decouple and not is_standard_output(outputs[0]):  # `-o -` is refused, not "-_body.bvh"
+        outputs = [f"{outputs[0]}{suffix}" for suffix in DECOUPLE_SUFFIXES]
+    return [str(o) for o in outputs]
+
+
+def _check_outputs(args) -> None:
+    """Refuse, before any work, an output whose folder is missing or unwritable, or that is
+    anything but a regular file or a new one (a folder, FIFO, socket, device, or a symlink to
+    one: :func:`expressive_mocap.io.output_target`): files go where they are asked to (``-o``,
+    ``--plot``), never next to an input, and the folders of ``demo`` and ``preprocess`` are
+    created only inside an existing one. ``-`` is standard output for the commands that stream."""
+    makes_folder = args.run in (cmd_demo, cmd_preprocess)  # their OUT is a folder, made if new
+    for output in _output_paths(args):
+        if is_standard_output(output):
+            if args.command not in _STREAMING:
+                raise MocapError(f"cannot write {output}: {args.command} does not write to standard output (these do: {', '.join(_STREAMING)})")
             continue
         path = Path(output)
-        makes_folder = args.run in (cmd_demo, cmd_preprocess)  # their OUT is a folder, made if new
-        folder = path if makes_folder and path.is_dir() else path.parent
+        if makes_folder:
+            if path.exists() and not path.is_dir():
+                raise MocapError(f"cannot write {output}: it is {file_kind(path.stat().st_mode)}, not a folder")
+            folder = path if path.is_dir() else path.parent
+        else:
+            folder = output_target(path).parent  # a symlink to a regular file is written through
         if not folder.is_dir():
             what = "is not a folder" if folder.exists() else "does not exist"
             raise MocapError(f"cannot write {output}: the folder {folder} {what}")
@@ -626,7 +650,10 @@ def main(argv: list[str] | None = None) -> int:
         if args.backend:
             backend.set_backend(args.backend)
         _check_outputs(args)
-        return args.run(args)
+        # Streaming an output (`-o -`): standard output carries the data alone, reports go to stderr.
+        streaming = any(is_standard_output(output) for output in _output_paths(args))
+        with contextlib.redirect_stdout(sys.stderr) if streaming else contextlib.nullcontext():
+            return args.run(args)
     except BrokenPipeError:
         # The reader went away (`| head`): stop quietly, and keep Python from complaining at exit.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -15,7 +15,7 @@ from typing import Sequence
 import numpy as np
 
 from .errors import MocapError
-from .io import atomic_write
+from .io import atomic_write, output_target
 from .motion import Motion
 
 _VIEWS = {"side": (2, 1), "front": (0, 1)}
@@ -133,16 +133,22 @@ def render_animation(
     rate = fps or motions[0].fps
     animation = FuncAnimation(fig, draw, frames=frames, blit=True)
     # PillowWriter needs a file name: render into a scratch folder, then write atomically.
-    with tempfile.TemporaryDirectory() as scratch:
-        scratch_file = os.path.join(scratch, "animation.gif")
-        animation.save(scratch_file, writer=PillowWriter(fps=min(rate, 50)))
-        data = Path(scratch_file).read_bytes()
-    plt.close(fig)
+    try:
+        with tempfile.TemporaryDirectory() as scratch:
+            scratch_file = os.path.join(scratch, "animation.gif")
+            animation.save(scratch_file, writer=PillowWriter(fps=min(rate, 50)))
+            data = Path(scratch_file).read_bytes()
+    except OSError as error:  # e.g. the temporary folder is full: say which file was being made, and where
+        raise MocapError(f"cannot write {path}: making the GIF in {tempfile.gettempdir()} failed: {error.strerror or error}") from None
+    finally:
+        plt.close(fig)
     atomic_write(path, data)
 
 
 def render(motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", **options) -> None:
-    """Render to ``path``: a GIF animation if it ends in ``.gif``, otherwise a PNG of poses."""
+    """Render to ``path``: a GIF animation if it ends in ``.gif``, otherwise a PNG of poses.
+    ``path`` is checked before drawing (:func:`expressive_mocap.io.output_target`)."""
+    output_target(path)
     if str(path).lower().endswith(".gif"):
         render_animation(motions, path, titles, view, **options)
     elif str(path).lower().endswith(".png"):
