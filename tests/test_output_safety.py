@@ -196,3 +196,144 @@ def test_a_full_standard_output_is_named(monkeypatch):
     monkeypatch.setattr(em_io.os, "write", lambda fd, data: (_ for _ in ()).throw(OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))))
     with pytest.raises(MocapError, match="^cannot write to standard output: No space left on device$"):
         em_io.atomic_write("-", b"data")
+
+
+# --- resampling is bounded before it allocates ----------------------------------------------
+
+TWO_JOINTS = (b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\nJOINT b\n{\nOFFSET 0 %s 0\n"
+              b"CHANNELS 3 Zrotation Xrotation Yrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\n}\nMOTION\nFrames: 2\nFrame Time: %s\n%s\n%s\n")
+
+
+def tiny(tmp_path, frame_time=b"0.1", offset=b"1", first=b"0 0 0 0 0 0", second=b"1 1 1 10 10 10", name="tiny.bvh") -> Path:
+    path = tmp_path / name
+    path.write_bytes(TWO_JOINTS % (offset, frame_time, first, second))
+    return path
+
+
+@pytest.mark.parametrize("frame_time", [b"1000000", b"1e300", b"1e308"])
+def test_convert_fps_on_a_huge_frame_time_is_a_one_line_error(frame_time, tmp_path, capsys):
+    path = tiny(tmp_path, frame_time=frame_time)  # a 230-byte file; at 120 fps 10^6 s would be 7 GiB of frames
+    status = main(["convert", str(path), "--fps", "120", "-o", str(tmp_path / "out.bvh")])
+    err = capsys.readouterr().err
+    assert status == 1 and err.count("\n") == 1 and err.startswith(f"expressive-mocap: error: {path}: --fps 120: ") and "joint-frames" in err, err
+    assert not (tmp_path / "out.bvh").exists()
+
+
+@pytest.mark.parametrize("frame_time", [b"1000000", b"1e300"])
+def test_resample_refuses_before_allocating(frame_time, tmp_path):
+    import tracemalloc
+
+    motion = em.read_bvh(tiny(tmp_path, frame_time=frame_time))
+    tracemalloc.start()  # NumPy reports its allocations to tracemalloc
+    try:
+        with pytest.raises(MocapError, match="joint-frames"):
+            motion.resample(fps=120)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 1 << 20, f"{peak:,} bytes allocated before refusing"
+
+
+@pytest.mark.parametrize("fps", [0, -30, float("nan"), float("inf"), 1e-320, True, "30"])
+def test_resample_refuses_a_bad_fps(fps, walk):
+    with pytest.raises(MocapError, match="^resample: .*fps"):
+        em.read_bvh(walk).resample(fps=fps)
+
+
+@pytest.mark.parametrize("n_frames", [1, 0, -5, 2.5, float("nan"), float("inf"), True, 10**12])
+def test_resample_refuses_a_bad_frame_count(n_frames, walk):
+    with pytest.raises(MocapError, match="^resample: n_frames"):
+        em.read_bvh(walk).resample(n_frames=n_frames)
+
+
+def test_resample_at_the_bound_and_beyond(walk, monkeypatch):
+    from expressive_mocap import motion as em_motion
+
+    monkeypatch.setattr(em_motion, "MAX_RESAMPLED_JOINT_FRAMES", 22 * 100)
+    motion = em.read_bvh(walk)  # 22 joints
+    assert motion.resample(n_frames=100).n_frames == 100
+    with pytest.raises(MocapError, match="101 frames x 22 joints, more than the 2,200 joint-frames"):
+        motion.resample(n_frames=101)
+
+
+def test_resampling_in_blocks_gives_the_same_frames(walk, monkeypatch):
+    from expressive_mocap import motion as em_motion
+
+    motion = em.read_bvh(walk)
+    whole = motion.resample(fps=97.0)
+    monkeypatch.setattr(em_motion, "_RESAMPLE_BLOCK", 22 * 7)  # blocks of 7 frames
+    blocks = motion.resample(fps=97.0)
+    assert whole.n_frames > 7 * 3 and np.array_equal(whole.rotations, blocks.rotations) and np.array_equal(whole.translations, blocks.translations)
+
+
+# --- nothing non-finite is written; numeric options say what they expect ---------------------
+
+def test_convert_scale_past_float64_is_refused_naming_the_file_and_option(tmp_path, capsys):
+    path = tiny(tmp_path, offset=b"1e308")
+    status = main(["convert", str(path), "--scale", "10", "-o", str(tmp_path / "out.bvh")])
+    err = capsys.readouterr().err
+    assert status == 1 and err.count("\n") == 1 and err.startswith(f"expressive-mocap: error: {path}: --scale 10: ") and "finite" in err, err
+    assert not (tmp_path / "out.bvh").exists()
+
+
+@pytest.mark.parametrize("where", ["translation", "End Site"])
+def test_scaled_refuses_lengths_that_overflow(where, tmp_path):
+    if where == "translation":
+        path = tiny(tmp_path, first=b"0 1e308 0 0 0 0")
+    else:
+        path = tmp_path / "site.bvh"
+        path.write_bytes(b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\nEnd Site\n{\nOFFSET 0 1e308 0\n}\n}\n"
+                         b"MOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0\n")
+    motion = em.read_bvh(path)
+    with pytest.raises(MocapError, match=r"^scaled: x 10 takes an? \w+ beyond float64 \(the largest is 1e\+308\)"):
+        motion.scaled(10)
+    assert np.isfinite(motion.scaled(0.5).translations).all()
+
+
+@pytest.mark.parametrize("bad", [np.inf, np.nan])
+def test_write_bvh_refuses_non_finite_values_naming_the_path_frame_and_channel(bad, walk, tmp_path):
+    motion = em.read_bvh(walk)
+    translations = motion.translations.copy()
+    translations[3, 0, 1] = bad
+    destination = tmp_path / "out.bvh"
+    destination.write_bytes(b"the user's file")
+    with pytest.raises(MocapError, match=rf"^cannot write {destination}: frame 3, joint_Root Yposition is {bad}: a BVH file holds finite numbers only$"):
+        em.write_bvh(em.Motion(motion.skeleton, motion.rotations, translations, motion.frame_time), destination)
+    assert destination.read_bytes() == b"the user's file"
+
+
+def test_an_infinite_end_site_is_refused_when_the_skeleton_is_made(walk):
+    skeleton = em.read_bvh(walk).skeleton
+    with pytest.raises(MocapError, match="End Site offsets must be finite"):
+        em.Skeleton(skeleton.names, skeleton.parents, skeleton.offsets, skeleton.channels, [(skeleton.end_sites[0][0], (0.0, np.inf, 0.0))])
+
+
+def test_positions_past_float64_are_refused_not_written(tmp_path, capsys):
+    path = tiny(tmp_path, offset=b"1e308", first=b"0 1e308 0 0 0 0")
+    status = main(["positions", str(path), "-o", str(tmp_path / "p.npz")])
+    err = capsys.readouterr().err
+    assert status == 1 and err.count("\n") == 1 and f"{path}: the position of b at frame 0 is not finite" in err, err
+    assert not (tmp_path / "p.npz").exists()
+
+
+@pytest.mark.parametrize("argv", [
+    ["convert", "{walk}", "-o", "{out}", "--fps", "nan"], ["convert", "{walk}", "-o", "{out}", "--fps", "inf"],
+    ["convert", "{walk}", "-o", "{out}", "--scale", "0"], ["convert", "{walk}", "-o", "{out}", "--scale", "nan"],
+    ["convert", "{walk}", "-o", "{out}", "--scale", "inf"], ["convert", "{walk}", "-o", "{out}", "--scale", "-2"],
+    ["modulate", "{walk}", "--scale", "nan", "-o", "{out}"], ["modulate", "{walk}", "--scale", "inf", "-o", "{out}"],
+    ["exaggerate", "--model", "m.npz", "--input", "{walk}", "--to", "nan", "-o", "{out}"],
+    ["exaggerate", "--model", "m.npz", "--input", "{walk}", "--to", "2", "--fade", "inf", "-o", "{out}"],
+    ["footsteps", "{walk}", "--floor", "nan"], ["render", "{walk}", "--poses", "0", "-o", "{out}"],
+])
+def test_numeric_options_are_finite_or_a_one_line_usage_error(argv, walk, tmp_path, capsys):
+    out = tmp_path / "out.bvh"
+    with pytest.raises(SystemExit) as exit_:
+        main([a.format(walk=walk, out=out) for a in argv])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and err.count("\n") == 1 and "must be a" in err and "finite number" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_level_intensity_must_be_finite(walk, capsys):
+    assert main(["rank", "--level", "nan", str(walk), "--level", "2", str(walk)]) == 1
+    assert "--level nan: the first value is the intensity, a finite number" in capsys.readouterr().err

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import math
 import os
 import sys
 from pathlib import Path
@@ -32,11 +33,22 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+def _finite(text: str) -> float:
+    """A float option: "nan" and "inf" parse as floats, and are refused here, before any work."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+    return value
+
+
+_finite.__name__ = "float"  # argparse's "invalid float value: 'x'"
+
+
 def _positive(kind):
     def parse(text: str):
         value = kind(text)
-        if not value > 0:
-            raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+        if not (math.isfinite(value) and value > 0):  # float("inf") and float("nan") parse
+            raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text}")
         return value
 
     parse.__name__ = kind.__name__
@@ -65,6 +77,9 @@ def cmd_info(args) -> int:
 def cmd_positions(args) -> int:
     motion = read_bvh(args.file)
     rotations, positions = motion.fk()
+    if not np.isfinite(positions).all():  # offsets near 1e308 add up past float64
+        frame, joint = np.argwhere(~np.isfinite(positions))[0, :2]
+        raise MocapError(f"{args.file}: the position of {motion.skeleton.names[joint]} at frame {frame} is not finite (beyond float64): nothing written")
     buffer = io.BytesIO()
     np.savez(
         buffer,
@@ -79,12 +94,23 @@ def cmd_positions(args) -> int:
     return 0
 
 
+@contextlib.contextmanager
+def _option(path: str, option: str, value):
+    """An edit's MocapError, naming the file and the option it came from."""
+    try:
+        yield
+    except MocapError as error:
+        raise MocapError(f"{path}: {option} {value:g}: {str(error).removeprefix('resample: ').removeprefix('scaled: ')}") from None
+
+
 def cmd_convert(args) -> int:
     motion = read_bvh(args.input)
     if args.fps:
-        motion = motion.resample(fps=args.fps)
+        with _option(args.input, "--fps", args.fps):
+            motion = motion.resample(fps=args.fps)
     if args.scale:
-        motion = motion.scaled(args.scale)
+        with _option(args.input, "--scale", args.scale):
+            motion = motion.scaled(args.scale)
     if args.order:
         motion = motion.with_rotation_order(args.order)
     write_bvh(motion, args.output, decimals=args.decimals)
@@ -248,8 +274,14 @@ def cmd_decouple(args) -> int:
     names = motion.skeleton.names
     table = io.StringIO()
     np.savetxt(table, parts.activity, fmt="%.5f", delimiter=",", header=",".join(names), comments="")
-    contents = (bvh_bytes(parts.body_motion()), bvh_bytes(parts.expressive_motion()), table.getvalue().encode())
-    atomic_write_all({prefix + suffix: data for suffix, data in zip(DECOUPLE_SUFFIXES, contents)})  # all of them or none
+    files = {}
+    for suffix, part in zip(DECOUPLE_SUFFIXES[:2], (parts.body_motion(), parts.expressive_motion())):
+        try:
+            files[prefix + suffix] = bvh_bytes(part)
+        except MocapError as error:
+            raise MocapError(f"cannot write {prefix + suffix}: {error}") from None
+    files[prefix + DECOUPLE_SUFFIXES[2]] = table.getvalue().encode()
+    atomic_write_all(files)  # the three belong together: all of them or none
     print(f"wrote {prefix}_body.bvh, {prefix}_expressive.bvh (E* on the mean body pose), {prefix}_activity.csv")
     print("mean activity per joint (0 = body mechanics only, 1 = fully expressive):")
     for name, value in zip(names, parts.activity.mean(axis=0)):
@@ -334,9 +366,9 @@ def _levels(args) -> tuple[list[list[Motion]], list[float], list[list[str]]]:
     levels = []
     for values in args.level:
         try:
-            k = float(values[0])
-        except ValueError:
-            raise MocapError(f"--level {values[0]}: the first value is the intensity, a number") from None
+            k = _finite(values[0])
+        except (ValueError, argparse.ArgumentTypeError):
+            raise MocapError(f"--level {values[0]}: the first value is the intensity, a finite number") from None
         if len(values) < 2:
             raise MocapError(f"--level {values[0]}: give at least one BVH file after the intensity")
         levels.append((k, values[1:]))
@@ -491,7 +523,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = commands.add_parser("modulate", help="scale the expressiveness of a motion (1 = unchanged, 0 = body mechanics only)")
     p.add_argument("input", metavar="IN", help="BVH file")
-    p.add_argument("--scale", type=float, required=True, help="expressiveness factor, e.g. 0.5 or 1.5")
+    p.add_argument("--scale", type=_finite, required=True, help="expressiveness factor, e.g. 0.5 or 1.5")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     _add_model_options(p)
     p.set_defaults(run=cmd_modulate)
@@ -541,14 +573,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = commands.add_parser("exaggerate", help="exaggerate or diminish a motion with a model from `rank -o MODEL.npz`")
     p.add_argument("--model", required=True, metavar="MODEL.npz", help="exaggeration model")
     p.add_argument("--input", required=True, metavar="IN.bvh", help="the motion (same skeleton and action)")
-    p.add_argument("--from", dest="current", type=float, metavar="K0", help="its current intensity (default: estimated from the mappings)")
-    p.add_argument("--to", type=float, required=True, metavar="K1", help="target intensity (beyond the trained range extrapolates)")
+    p.add_argument("--from", dest="current", type=_finite, metavar="K0", help="its current intensity (default: estimated from the mappings)")
+    p.add_argument("--to", type=_finite, required=True, metavar="K1", help="target intensity (beyond the trained range extrapolates)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
-    p.add_argument("--margin", type=float, default=0.1, help="DOFs stay within the training range widened by this share of its width (default 0.1)")
-    p.add_argument("--fade", type=float, default=0.15, help="cross-fade at cycle boundaries, seconds (default 0.15)")
+    p.add_argument("--margin", type=_finite, default=0.1, help="DOFs stay within the training range widened by this share of its width (default 0.1)")
+    p.add_argument("--fade", type=_finite, default=0.15, help="cross-fade at cycle boundaries, seconds (default 0.15)")
     p.add_argument("--reference", choices=["model", "own"], default="model", help="rotations measured from the training mean pose (default) or the motion's own")
     p.add_argument("--no-foot-lock", action="store_true", help="do not pin the stance feet with leg IK during contacts")
-    p.add_argument("--blend", type=float, default=0.1, help="foot locking eases in and out over this many seconds (default 0.1)")
+    p.add_argument("--blend", type=_finite, default=0.1, help="foot locking eases in and out over this many seconds (default 0.1)")
     p.set_defaults(run=cmd_exaggerate)
 
     p = commands.add_parser("validate", help="the swap test (with random and best same-size sets) and the leave-one-person-out warp")
@@ -569,7 +601,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--causal", action="store_true", help="streaming detector: frame t sees frames <= t only (hold filter, floor 0)")
     p.add_argument("--height-threshold", type=_positive(float), default=0.05, metavar="X", help="contact below X x actor height above the floor (default: 0.05)")
     p.add_argument("--speed-threshold", type=_positive(float), default=0.5, metavar="X", help="contact below X x actor height per second (default: 0.5)")
-    p.add_argument("--floor", type=float, metavar="Y", help="floor height in file units (default: 5th percentile of toe heights; 0 with --causal)")
+    p.add_argument("--floor", type=_finite, metavar="Y", help="floor height in file units (default: 5th percentile of toe heights; 0 with --causal)")
     p.set_defaults(run=cmd_footsteps)
 
     p = commands.add_parser(
