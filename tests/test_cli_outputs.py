@@ -86,6 +86,10 @@ def test_outputs_go_only_where_asked(name, inputs, tmp_path, capsys):
     assert status == 0, err
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(expected)
     assert not [p for p in tmp_path.rglob("*.tmp")], "a temporary file was left behind"
+    if name == "demo":  # the list its outputs are checked from before any work
+        from expressive_mocap.cli import DEMO_FILES
+
+        assert sorted(p.name for p in (tmp_path / "demo").iterdir()) == sorted(DEMO_FILES)
 
 
 @pytest.mark.parametrize("problem", ["missing", "a file"])
@@ -185,3 +189,15 @@ def test_an_output_that_is_not_a_regular_file_is_refused_before_any_work(name, k
     after = os.lstat(special)
     assert (stat.S_IFMT(after.st_mode), after.st_ino, after.st_rdev) == (stat.S_IFMT(before.st_mode), before.st_ino, before.st_rdev)
     assert [p.name for p in tmp_path.iterdir()] == [special.name]
+
+
+def test_demo_checks_every_file_it_will_write_in_an_existing_folder(tmp_path, capsys, monkeypatch):
+    import expressive_mocap.demo as demo
+
+    (tmp_path / "demo").mkdir()
+    os.mkfifo(tmp_path / "demo" / "decouple.gif")  # the last file demo writes
+    monkeypatch.setattr(demo, "walk_and_wave", _no_work)
+    assert main(["demo", "-o", str(tmp_path / "demo")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"cannot write {tmp_path / 'demo' / 'decouple.gif'}: it is a FIFO" in err, err
+    assert [p.name for p in (tmp_path / "demo").iterdir()] == ["decouple.gif"]

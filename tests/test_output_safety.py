@@ -122,6 +122,15 @@ def test_positions_stream_an_npz(walk, tmp_path, capfdbinary, monkeypatch):
         assert arrays["positions"].shape == (em.read_bvh(walk).n_frames, 22, 3)
 
 
+def test_calibrate_streams_the_model_and_reports_on_stderr(walk, tmp_path, capfdbinary, monkeypatch):
+    from expressive_mocap.model import BodyModel
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["calibrate", str(walk), "-o", "-"]) == 0
+    out, err = capfdbinary.readouterr()
+    assert BodyModel.load(out).calibration_angles() and b"largest corrections" in err and list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("argv", [["render", "{walk}", "-o", "-"], ["decouple", "{walk}", "-o", "-"], ["footsteps", "{walk}", "--plot", "-"],
                                   ["demo", "-o", "-"], ["render", "{walk}", "-o", "/dev/stdout"]])
 def test_commands_that_cannot_stream_refuse_standard_output(argv, walk, tmp_path, capfd, monkeypatch):
@@ -330,7 +339,7 @@ def test_numeric_options_are_finite_or_a_one_line_usage_error(argv, walk, tmp_pa
     with pytest.raises(SystemExit) as exit_:
         main([a.format(walk=walk, out=out) for a in argv])
     err = capsys.readouterr().err
-    assert exit_.value.code == 2 and err.count("\n") == 1 and "must be a" in err and "finite number" in err, err
+    assert exit_.value.code == 2 and err.count("\n") == 1 and "must be " in err and "finite, got " in err, err
     assert list(tmp_path.iterdir()) == []
 
 

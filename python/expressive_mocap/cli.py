@@ -37,7 +37,7 @@ def _finite(text: str) -> float:
     """A float option: "nan" and "inf" parse as floats, and are refused here, before any work."""
     value = float(text)
     if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
     return value
 
 
@@ -48,7 +48,7 @@ def _positive(kind):
     def parse(text: str):
         value = kind(text)
         if not (math.isfinite(value) and value > 0):  # float("inf") and float("nan") parse
-            raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text}")
+            raise argparse.ArgumentTypeError(f"must be positive and finite, got {text}")
         return value
 
     parse.__name__ = kind.__name__
@@ -177,6 +177,11 @@ def cmd_footsteps(args) -> int:
         plot_contacts(contacts, dt, args.plot, title=title)
         print(f"wrote {args.plot}")
     return 0
+
+
+# Every file demo writes in its folder (cmd_demo, _demo_decoupling), checked before any work.
+DEMO_FILES = ("walk.bvh", "walk_wave.bvh", "walk.png", "walk.gif", "walk_wave_body.bvh", "walk_wave_expressive.bvh",
+              "walk_wave_x0.5.bvh", "walk_wave_x1.5.bvh", "decouple.png", "modulate.png", "decouple.gif")
 
 
 def cmd_demo(args) -> int:
@@ -667,6 +672,9 @@ def _check_outputs(args) -> None:
             if path.exists() and not path.is_dir():
                 raise MocapError(f"cannot write {output}: it is {file_kind(path.stat().st_mode)}, not a folder")
             folder = path if path.is_dir() else path.parent
+            if path.is_dir() and args.run is cmd_demo:
+                for name in DEMO_FILES:
+                    output_target(path / name)
         else:
             folder = output_target(path).parent  # a symlink to a regular file is written through
         if not folder.is_dir():
