@@ -500,7 +500,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = commands.add_parser("convert", help="rewrite a BVH file, optionally resampled, scaled or in another rotation order")
     p.add_argument("input", metavar="IN", help="BVH file")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write (atomically)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write (atomically; - for standard output)")
     p.add_argument("--fps", type=_positive(float), help="resample to this frame rate (slerp)")
     p.add_argument("--scale", type=_positive(float), help="multiply every length, e.g. 0.01 for cm to m")
     p.add_argument("--order", type=str.upper, choices=ORDERS, help="write every joint's rotation channels in this order")
