@@ -86,6 +86,10 @@ def test_outputs_go_only_where_asked(name, inputs, tmp_path, capsys):
     assert status == 0, err
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(expected)
     assert not [p for p in tmp_path.rglob("*.tmp")], "a temporary file was left behind"
+    if name == "demo":  # the list its outputs are checked from before any work
+        from expressive_mocap.cli import DEMO_FILES
+
+        assert sorted(p.name for p in (tmp_path / "demo").iterdir()) == sorted(DEMO_FILES)
 
 
 @pytest.mark.parametrize("problem", ["missing", "a file"])
@@ -120,10 +124,13 @@ class _FailingFile:
 @pytest.mark.parametrize("name", WRITERS)
 def test_an_interrupted_write_leaves_no_partial_file(name, inputs, tmp_path, capsys, monkeypatch):
     real_fdopen = em_io.os.fdopen
-    monkeypatch.setattr(em_io.os, "fdopen", lambda fd, mode: _FailingFile(real_fdopen(fd, mode)))
+    # Inputs are opened with os.fdopen too (io.open_input): only files opened to write fail.
+    monkeypatch.setattr(em_io.os, "fdopen", lambda fd, mode: _FailingFile(real_fdopen(fd, mode)) if "w" in mode else real_fdopen(fd, mode))
     status, err, _ = run(name, inputs, tmp_path, capsys)
     # Progress lines (train) may come first; the error is the last line, and one line.
     assert status == 1 and err.splitlines()[-1].startswith("expressive-mocap: error:") and "No space left" in err.splitlines()[-1], err
+    # ... and names the file it was writing (preprocess's own journal writes are not in io.py).
+    assert name == "preprocess" or f"cannot write {tmp_path}{os.sep}" in err.splitlines()[-1], err
     files = [p for p in tmp_path.rglob("*") if p.is_file()]
     # Only preprocess keeps finished batches, to resume from them (not a dataset without its manifest).
     assert files == [] or (name == "preprocess" and not any(p.name == "manifest.json" for p in files)), files
@@ -133,8 +140,10 @@ def test_decouple_writes_its_three_files_together_or_not_at_all(inputs, tmp_path
     real_fdopen, opened = em_io.os.fdopen, []
 
     def third_write_fails(fd, mode):
-        opened.append(fd)
         handle = real_fdopen(fd, mode)
+        if "w" not in mode:
+            return handle  # an input (io.open_input)
+        opened.append(fd)
         return _FailingFile(handle) if len(opened) == 3 else handle
 
     monkeypatch.setattr(em_io.os, "fdopen", third_write_fails)
@@ -153,3 +162,42 @@ def test_an_unwritable_output_folder_is_a_one_line_error(name, inputs, tmp_path,
     status, err, _ = run(name, inputs, tmp_path, capsys)
     assert status == 1 and err.count("\n") == 1 and "is not writable" in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def _no_work(*args, **kwargs):
+    raise AssertionError("the command started working before refusing its output")
+
+
+@pytest.mark.parametrize(("name", "kind"), [(name, kind) for name in WRITERS for kind in ("FIFO", "folder", "character device")
+                                             if not (kind == "folder" and name in ("demo", "preprocess"))])  # their OUT is a folder
+def test_an_output_that_is_not_a_regular_file_is_refused_before_any_work(name, kind, inputs, tmp_path, capsys, monkeypatch):
+    import stat
+
+    import expressive_mocap.cli as cli
+    import expressive_mocap.demo as demo
+    import expressive_mocap.preprocess as preprocess
+
+    if kind == "character device" and os.geteuid() != 0:
+        pytest.skip("mknod needs root")
+    special = tmp_path / command(name, inputs, tmp_path)[1][0]  # decouple: PREFIX_body.bvh
+    {"FIFO": os.mkfifo, "folder": os.mkdir, "character device": lambda p: os.mknod(p, stat.S_IFCHR | 0o666, os.makedev(1, 3))}[kind](special)
+    before = os.lstat(special)
+    for module, function in ((cli, "read_bvh"), (demo, "walk_and_wave"), (preprocess, "preprocess")):
+        monkeypatch.setattr(module, function, _no_work)
+    status, err, _ = run(name, inputs, tmp_path, capsys)
+    assert status == 1 and err.count("\n") == 1 and f"cannot write {special}: it is a {kind}, not a " in err, err
+    after = os.lstat(special)
+    assert (stat.S_IFMT(after.st_mode), after.st_ino, after.st_rdev) == (stat.S_IFMT(before.st_mode), before.st_ino, before.st_rdev)
+    assert [p.name for p in tmp_path.iterdir()] == [special.name]
+
+
+def test_demo_checks_every_file_it_will_write_in_an_existing_folder(tmp_path, capsys, monkeypatch):
+    import expressive_mocap.demo as demo
+
+    (tmp_path / "demo").mkdir()
+    os.mkfifo(tmp_path / "demo" / "decouple.gif")  # the last file demo writes
+    monkeypatch.setattr(demo, "walk_and_wave", _no_work)
+    assert main(["demo", "-o", str(tmp_path / "demo")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"cannot write {tmp_path / 'demo' / 'decouple.gif'}: it is a FIFO" in err, err
+    assert [p.name for p in (tmp_path / "demo").iterdir()] == ["decouple.gif"]

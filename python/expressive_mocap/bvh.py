@@ -567,11 +567,19 @@ def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
     header = "\n".join(lines).encode("utf-8")
     if skeleton.n_channels == 0 or motion.n_frames == 0:
         return header + b"\n" * motion.n_frames
-    return header + kernels().format_motion_block(motion.channel_values(), decimals)
+    values = motion.channel_values()
+    if not np.isfinite(values).all():  # "inf"/"nan" in a file is refused by every reader, ours too
+        frame, column = (int(i) for i in np.argwhere(~np.isfinite(values))[0])
+        joint = np.searchsorted(np.cumsum([len(cs) for cs in skeleton.channels]), column, side="right")
+        channel = skeleton.channels[joint][column - sum(len(cs) for cs in skeleton.channels[:joint])]
+        raise MocapError(f"frame {frame}, {skeleton.names[joint]} {channel} is {values[frame, column]}: a BVH file holds finite numbers only")
+    return header + kernels().format_motion_block(values, decimals)
 
 
 def write_bvh(motion: Motion, path: str | os.PathLike, decimals: int | None = None) -> None:
-    """Write ``motion`` as a BVH file at ``path``, atomically (a complete file or none).
+    """Write ``motion`` as a BVH file at ``path``, atomically (a complete file or none; see
+    :func:`expressive_mocap.io.atomic_write_all` for what ``path`` may be). A non-finite value
+    is refused, naming ``path``, the frame and the channel, before anything is written.
 
     See :func:`bvh_bytes` for ``decimals``.
     """
@@ -580,4 +588,8 @@ def write_bvh(motion: Motion, path: str | os.PathLike, decimals: int | None = No
         # The likely slip: Decomposition.body / .expressive are rotation arrays, its motions come from methods.
         raise MocapError(f"write_bvh needs a Motion, got {got}; for a Decomposition use parts.body_motion(), "
                          "parts.expressive_motion() or parts.recompose(scale)")
-    atomic_write(path, bvh_bytes(motion, decimals))
+    try:
+        data = bvh_bytes(motion, decimals)
+    except MocapError as error:
+        raise MocapError(f"cannot write {path}: {error}") from None
+    atomic_write(path, data)

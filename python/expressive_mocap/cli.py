@@ -7,7 +7,9 @@ traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import io
+import math
 import os
 import sys
 import warnings
@@ -18,7 +20,7 @@ import numpy as np
 from . import __version__, backend
 from .bvh import bvh_bytes, read_bvh, write_bvh
 from .errors import MocapError
-from .io import atomic_write, atomic_write_all, open_input
+from .io import atomic_write, atomic_write_all, file_kind, is_standard_output, open_input, output_target
 from .motion import Motion
 from .rotations import ORDERS
 
@@ -32,11 +34,22 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+def _finite(text: str) -> float:
+    """A float option: "nan" and "inf" parse as floats, and are refused here, before any work."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
+    return value
+
+
+_finite.__name__ = "float"  # argparse's "invalid float value: 'x'"
+
+
 def _positive(kind):
     def parse(text: str):
         value = kind(text)
-        if not value > 0:
-            raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+        if not (math.isfinite(value) and value > 0):  # float("inf") and float("nan") parse
+            raise argparse.ArgumentTypeError(f"must be positive and finite, got {text}")
         return value
 
     parse.__name__ = kind.__name__
@@ -63,11 +76,14 @@ def cmd_info(args) -> int:
 
 
 def cmd_positions(args) -> int:
-    kind = Path(args.output).suffix.lower()
+    kind = ".npz" if is_standard_output(args.output) else Path(args.output).suffix.lower()
     if kind not in (".npz", ".csv"):
         raise MocapError(f"-o {args.output}: positions writes .npz (every array) or .csv (positions, a row per frame), by the name's extension")
     motion = read_bvh(args.file)
     rotations, positions = motion.fk()
+    if not np.isfinite(positions).all():  # offsets near 1e308 add up past float64
+        frame, joint = np.argwhere(~np.isfinite(positions))[0, :2]
+        raise MocapError(f"{args.file}: the position of {motion.skeleton.names[joint]} at frame {frame} is not finite (beyond float64): nothing written")
     if kind == ".csv":
         atomic_write(args.output, _positions_csv(motion, positions))
         print(f"wrote {args.output}: positions of {motion.skeleton.n_joints} joints x {motion.n_frames} frames (world, file units)")
@@ -95,12 +111,23 @@ def _positions_csv(motion: Motion, positions: np.ndarray) -> bytes:
     return text.getvalue().encode()
 
 
+@contextlib.contextmanager
+def _option(path: str, option: str, value):
+    """An edit's MocapError, naming the file and the option it came from."""
+    try:
+        yield
+    except MocapError as error:
+        raise MocapError(f"{path}: {option} {value:g}: {str(error).removeprefix('resample: ').removeprefix('scaled: ')}") from None
+
+
 def cmd_convert(args) -> int:
     motion = read_bvh(args.input)
     if args.fps:
-        motion = motion.resample(fps=args.fps)
+        with _option(args.input, "--fps", args.fps):
+            motion = motion.resample(fps=args.fps)
     if args.scale:
-        motion = motion.scaled(args.scale)
+        with _option(args.input, "--scale", args.scale):
+            motion = motion.scaled(args.scale)
     if args.order:
         motion = motion.with_rotation_order(args.order)
     write_bvh(motion, args.output, decimals=args.decimals)
@@ -167,6 +194,11 @@ def cmd_footsteps(args) -> int:
         plot_contacts(contacts, dt, args.plot, title=title)
         print(f"wrote {args.plot}")
     return 0
+
+
+# Every file demo writes in its folder (cmd_demo, _demo_decoupling), checked before any work.
+DEMO_FILES = ("walk.bvh", "walk_wave.bvh", "walk.png", "walk.gif", "walk_wave_body.bvh", "walk_wave_expressive.bvh",
+              "walk_wave_x0.5.bvh", "walk_wave_x1.5.bvh", "decouple.png", "modulate.png", "decouple.gif")
 
 
 def cmd_demo(args) -> int:
@@ -276,6 +308,9 @@ def _window(text: str) -> tuple[int, int]:
     return start, end
 
 
+DECOUPLE_SUFFIXES = ("_body.bvh", "_expressive.bvh", "_activity.csv")
+
+
 def cmd_decouple(args) -> int:
     from .decouple import decompose
 
@@ -288,11 +323,14 @@ def cmd_decouple(args) -> int:
     names = motion.skeleton.names
     table = io.StringIO()
     np.savetxt(table, parts.activity, fmt="%.5f", delimiter=",", header=",".join(names), comments="")
-    atomic_write_all({  # the three belong together: all of them or none
-        prefix + "_body.bvh": bvh_bytes(parts.body_motion()),
-        prefix + "_expressive.bvh": bvh_bytes(parts.expressive_motion()),
-        prefix + "_activity.csv": table.getvalue().encode(),
-    })
+    files = {}
+    for suffix, part in zip(DECOUPLE_SUFFIXES[:2], (parts.body_motion(), parts.expressive_motion())):
+        try:
+            files[prefix + suffix] = bvh_bytes(part)
+        except MocapError as error:
+            raise MocapError(f"cannot write {prefix + suffix}: {error}") from None
+    files[prefix + DECOUPLE_SUFFIXES[2]] = table.getvalue().encode()
+    atomic_write_all(files)  # the three belong together: all of them or none
     print(f"wrote {prefix}_body.bvh, {prefix}_expressive.bvh (E* on the mean body pose), {prefix}_activity.csv")
     print("mean activity per joint (0 = body mechanics only, 1 = fully expressive):")
     for name, value in zip(names, parts.activity.mean(axis=0)):
@@ -386,9 +424,9 @@ def _levels(args) -> tuple[list[list[Motion]], list[float], list[list[str]]]:
     levels = []
     for values in args.level:
         try:
-            k = float(values[0])
-        except ValueError:
-            raise MocapError(f"--level {values[0]}: the first value is the intensity, a number") from None
+            k = _finite(values[0])
+        except (ValueError, argparse.ArgumentTypeError):
+            raise MocapError(f"--level {values[0]}: the first value is the intensity, a finite number") from None
         if len(values) < 2:
             raise MocapError(f"--level {values[0]}: give at least one BVH file after the intensity")
         levels.append((k, values[1:]))
@@ -515,7 +553,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = commands.add_parser("convert", help="rewrite a BVH file, optionally resampled, scaled or in another rotation order")
     p.add_argument("input", metavar="IN", help="BVH file")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write (atomically)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write (atomically; - for standard output)")
     p.add_argument("--fps", type=_positive(float), help="resample to this frame rate (slerp)")
     p.add_argument("--scale", type=_positive(float), help="multiply every length, e.g. 0.01 for cm to m")
     p.add_argument("--order", type=str.upper, choices=ORDERS, help="write every joint's rotation channels in this order")
@@ -545,7 +583,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = commands.add_parser("modulate", help="scale the expressiveness of a motion (1 = unchanged, 0 = body mechanics only)")
     p.add_argument("input", metavar="IN", help="BVH file")
-    p.add_argument("--scale", type=float, required=True, help="expressiveness factor, e.g. 0.5 or 1.5")
+    p.add_argument("--scale", type=_finite, required=True, help="expressiveness factor, e.g. 0.5 or 1.5")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     _add_model_options(p)
     p.set_defaults(run=cmd_modulate)
@@ -597,14 +635,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = commands.add_parser("exaggerate", help="exaggerate or diminish a motion with a model from `rank -o MODEL.npz`")
     p.add_argument("--model", required=True, metavar="MODEL.npz", help="exaggeration model")
     p.add_argument("--input", required=True, metavar="IN.bvh", help="the motion (same skeleton and action)")
-    p.add_argument("--from", dest="current", type=float, metavar="K0", help="its current intensity (default: estimated from the mappings)")
-    p.add_argument("--to", type=float, required=True, metavar="K1", help="target intensity (beyond the trained range extrapolates)")
+    p.add_argument("--from", dest="current", type=_finite, metavar="K0", help="its current intensity (default: estimated from the mappings)")
+    p.add_argument("--to", type=_finite, required=True, metavar="K1", help="target intensity (beyond the trained range extrapolates)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
-    p.add_argument("--margin", type=float, default=0.1, help="DOFs stay within the training range widened by this share of its width (default 0.1)")
-    p.add_argument("--fade", type=float, default=0.15, help="cross-fade at cycle boundaries, seconds (default 0.15)")
+    p.add_argument("--margin", type=_finite, default=0.1, help="DOFs stay within the training range widened by this share of its width (default 0.1)")
+    p.add_argument("--fade", type=_finite, default=0.15, help="cross-fade at cycle boundaries, seconds (default 0.15)")
     p.add_argument("--reference", choices=["model", "own"], default="model", help="rotations measured from the training mean pose (default) or the motion's own")
     p.add_argument("--no-foot-lock", action="store_true", help="do not pin the stance feet with leg IK during contacts")
-    p.add_argument("--blend", type=float, default=0.1, help="foot locking eases in and out over this many seconds (default 0.1)")
+    p.add_argument("--blend", type=_finite, default=0.1, help="foot locking eases in and out over this many seconds (default 0.1)")
     p.set_defaults(run=cmd_exaggerate)
 
     p = commands.add_parser("validate", help="the swap test (with random and best same-size sets) and the leave-one-person-out warp")
@@ -625,7 +663,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--causal", action="store_true", help="streaming detector: frame t sees frames <= t only (hold filter, floor 0)")
     p.add_argument("--height-threshold", type=_positive(float), default=0.05, metavar="X", help="contact below X x actor height above the floor (default: 0.05)")
     p.add_argument("--speed-threshold", type=_positive(float), default=0.5, metavar="X", help="contact below X x actor height per second (default: 0.5)")
-    p.add_argument("--floor", type=float, metavar="Y", help="floor height in file units (default: 5th percentile of toe heights; 0 with --causal)")
+    p.add_argument("--floor", type=_finite, metavar="Y", help="floor height in file units (default: 5th percentile of toe heights; 0 with --causal)")
     p.set_defaults(run=cmd_footsteps)
 
     p = commands.add_parser(
@@ -663,17 +701,43 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _check_outputs(args) -> None:
-    """Refuse, before any work, an output whose folder is missing or unwritable: files go where
-    they are asked to (``-o``, ``--plot``), never next to an input, and the folders of ``demo``
-    and ``preprocess`` are created only inside an existing one."""
+# Commands whose one output may be standard output (`-o -` or `-o /dev/stdout`): a BVH or .npz
+# streamed as it is; their report lines then go to stderr. Pictures pick their format from the
+# name, decouple writes three files and demo/preprocess a folder, so they take none.
+_STREAMING = ("convert", "positions", "modulate", "mix", "blend", "exaggerate", "calibrate", "train")
+
+
+def _output_paths(args) -> list[str]:
+    """The files a command will write, as given (``-o``, ``--plot``; decouple's three)."""
     outputs = args.output if isinstance(getattr(args, "output", None), list) else [getattr(args, "output", None)]
-    for output in [*outputs, getattr(args, "plot", None)]:
-        if output is None:
+    outputs = [o for o in [*outputs, getattr(args, "plot", None)] if o is not None]
+    if args.run is cmd_decouple and not is_standard_output(outputs[0]):  # `-o -` is refused, not "-_body.bvh"
+        outputs = [f"{outputs[0]}{suffix}" for suffix in DECOUPLE_SUFFIXES]
+    return [str(o) for o in outputs]
+
+
+def _check_outputs(args) -> None:
+    """Refuse, before any work, an output whose folder is missing or unwritable, or that is
+    anything but a regular file or a new one (a folder, FIFO, socket, device, or a symlink to
+    one: :func:`expressive_mocap.io.output_target`): files go where they are asked to (``-o``,
+    ``--plot``), never next to an input, and the folders of ``demo`` and ``preprocess`` are
+    created only inside an existing one. ``-`` is standard output for the commands that stream."""
+    makes_folder = args.run in (cmd_demo, cmd_preprocess)  # their OUT is a folder, made if new
+    for output in _output_paths(args):
+        if is_standard_output(output):
+            if args.command not in _STREAMING:
+                raise MocapError(f"cannot write {output}: {args.command} does not write to standard output (these do: {', '.join(_STREAMING)})")
             continue
         path = Path(output)
-        makes_folder = args.run in (cmd_demo, cmd_preprocess)  # their OUT is a folder, made if new
-        folder = path if makes_folder and path.is_dir() else path.parent
+        if makes_folder:
+            if path.exists() and not path.is_dir():
+                raise MocapError(f"cannot write {output}: it is {file_kind(path.stat().st_mode)}, not a folder")
+            folder = path if path.is_dir() else path.parent
+            if path.is_dir() and args.run is cmd_demo:
+                for name in DEMO_FILES:
+                    output_target(path / name)
+        else:
+            folder = output_target(path).parent  # a symlink to a regular file is written through
         if not folder.is_dir():
             what = "is not a folder" if folder.exists() else "does not exist"
             raise MocapError(f"cannot write {output}: the folder {folder} {what}")
@@ -698,7 +762,10 @@ def _run(args) -> int:
             backend.set_backend(args.backend)
         backend.kernels()  # a bad $EXPRESSIVE_MOCAP_BACKEND fails here, in one line
         _check_outputs(args)
-        return args.run(args)
+        # Streaming an output (`-o -`): standard output carries the data alone, reports go to stderr.
+        streaming = any(is_standard_output(output) for output in _output_paths(args))
+        with contextlib.redirect_stdout(sys.stderr) if streaming else contextlib.nullcontext():
+            return args.run(args)
     except BrokenPipeError:
         # The reader went away (`| head`): stop quietly, and keep Python from complaining at exit.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

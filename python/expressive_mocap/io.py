@@ -9,6 +9,7 @@ import io
 import json
 import os
 import stat
+import sys
 import tempfile
 import zipfile
 from pathlib import Path
@@ -26,7 +27,7 @@ MAX_INPUT_BYTES = 512 << 20
 
 def file_kind(mode: int) -> str:
     """What a file of this ``st_mode`` is, in words, for errors ("a FIFO", "a folder", ...)."""
-    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+    for test, name in ((stat.S_ISREG, "a regular file"), (stat.S_ISLNK, "a symlink"), (stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
                        (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
         if test(mode):
             return name
@@ -64,41 +65,112 @@ def read_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES) -> bytes:
     return data
 
 
+# Output names that mean the process's standard output: written through as they come, never
+# renamed over (os.replace on /dev/stdout would replace the link in /dev).
+STANDARD_OUTPUT = ("-", "/dev/stdout")
+
+
+def is_standard_output(path) -> bool:
+    """Whether ``path`` names standard output (``-`` or ``/dev/stdout``) rather than a file."""
+    return isinstance(path, (str, os.PathLike)) and os.fspath(path) in STANDARD_OUTPUT
+
+
+def output_target(path: str | os.PathLike) -> Path:
+    """The file that writing to ``path`` replaces, checked before any work: ``path`` itself when it
+    is missing or a regular file; for a symlink to a regular file, that file (written through the
+    link, so the link survives). Anything else (a folder, a FIFO, a socket, a character or block
+    device such as /dev/null, a symlink to one of those, to nothing or to itself) is a one-line
+    :class:`MocapError` naming ``path`` and what it is: an output replaces a regular file or
+    creates one, and never turns some other kind of file into one."""
+    path = Path(path)
+    try:
+        info = os.lstat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return path  # a new file: its folder is checked where it is written
+    except OSError as error:
+        raise MocapError(f"cannot write {path}: {error.strerror or error}") from None
+    target = path
+    if stat.S_ISLNK(info.st_mode):
+        target = Path(os.path.realpath(path))
+        try:
+            info = os.lstat(target)
+        except OSError:
+            raise MocapError(f"cannot write {path}: a symlink to {target}, which does not exist") from None
+        if stat.S_ISLNK(info.st_mode):
+            raise MocapError(f"cannot write {path}: a symlink that leads back to itself")
+    if not stat.S_ISREG(info.st_mode):
+        what = file_kind(info.st_mode) if target == path else f"a symlink to {file_kind(info.st_mode)}, {target}"
+        raise MocapError(f"cannot write {path}: it is {what}, not a regular file (outputs replace regular files only; '-' writes to standard output)")
+    return target
+
+
 def atomic_write(path: str | os.PathLike, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
+    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename; see
+    :func:`atomic_write_all`. ``-`` or ``/dev/stdout`` write ``data`` to standard output as it is."""
     atomic_write_all({path: data})
 
 
 def atomic_write_all(files: dict) -> None:
     """Write files that belong together (``{path: bytes}``): every one to a temporary file in its
-    folder first, then all renamed into place; if any cannot be written, none appears."""
-    temporaries: list[tuple[str, Path]] = []
+    folder first, then all renamed into place; if any cannot be written, none appears and every
+    destination is untouched. Every destination is checked first (:func:`output_target`): a
+    regular file is replaced, a symlink to one has its target replaced, and anything else is
+    refused. ``-`` and ``/dev/stdout`` are standard output, written directly (not atomically: a
+    reader of the stream sees what came before an error). Errors are :class:`MocapError` naming
+    the path, e.g. ``cannot write out.bvh: No space left on device``."""
+    streams = [data for path, data in files.items() if is_standard_output(path)]
+    targets = {Path(path): output_target(path) for path in files if not is_standard_output(path)}
+    temporaries: list[tuple[str, Path, Path]] = []
     try:
         for path, data in files.items():
-            temporaries.append((_temporary(Path(path), data), Path(path)))
-        for temporary, path in temporaries:
-            os.replace(temporary, path)
+            if not is_standard_output(path):
+                temporaries.append((_temporary(Path(path), targets[Path(path)], data), Path(path), targets[Path(path)]))
+        for temporary, path, target in temporaries:
+            output_target(path)  # again: nothing may have been swapped in meanwhile
+            try:
+                os.replace(temporary, target)
+            except OSError as error:
+                raise MocapError(f"cannot write {path}: {error.strerror or error}") from None
     except BaseException:
-        for temporary, _ in temporaries:
+        for temporary, _, _ in temporaries:
             Path(temporary).unlink(missing_ok=True)
         raise
+    for data in streams:
+        write_standard_output(data)
 
 
-def _temporary(path: Path, data: bytes) -> str:
-    """``data`` in a new temporary file beside ``path``, with the permissions a plain open() gives."""
-    folder = path.parent
+def write_standard_output(data: bytes) -> None:
+    """``data`` to file descriptor 1 (what ``-o -`` means), after anything Python has buffered
+    for it. A reader that went away is a BrokenPipeError, left to the caller."""
+    sys.stdout.flush()
+    view = memoryview(data)
+    try:
+        while view:
+            view = view[os.write(1, view):]
+    except BrokenPipeError:
+        raise
+    except OSError as error:
+        raise MocapError(f"cannot write to standard output: {error.strerror or error}") from None
+
+
+def _temporary(path: Path, target: Path, data: bytes) -> str:
+    """``data`` in a new temporary file beside ``target`` (the file ``path`` names), with the
+    permissions a plain open() gives; errors name ``path``."""
+    folder = target.parent
     if not folder.is_dir():
         raise MocapError(f"cannot write {path}: the folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}")
     try:
-        handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+        handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
     except OSError as error:
         raise MocapError(f"cannot write {path}: {error.strerror or error}") from None
     try:
         with os.fdopen(handle, "wb") as out:
             out.write(data)
         os.chmod(temporary, 0o666 & ~_umask())  # mkstemp makes the file private
-    except BaseException:
+    except BaseException as error:
         Path(temporary).unlink(missing_ok=True)
+        if isinstance(error, OSError):
+            raise MocapError(f"cannot write {path}: {error.strerror or error}") from None
         raise
     return temporary
 

@@ -120,6 +120,8 @@ class Skeleton:
             raise MocapError("every joint must come after its parent")
         if not np.isfinite(offsets).all():
             raise MocapError("joint offsets must be finite")
+        if not np.isfinite(np.array([off for _, off in self.end_sites], dtype=np.float64)).all():
+            raise MocapError("End Site offsets must be finite")
         for j, cs in enumerate(channels):
             if len(set(cs)) != len(cs):
                 raise MocapError(f"joint {names[j]!r} lists a channel twice: {' '.join(cs)}")
@@ -216,8 +218,13 @@ class Skeleton:
 
     def scaled(self, factor: float) -> Skeleton:
         """The same skeleton with every length multiplied by ``factor``."""
-        sites = tuple((j, tuple(np.multiply(off, factor))) for j, off in self.end_sites)
-        return Skeleton(self.names, self.parents, self.offsets * factor, self.channels, sites)
+        with np.errstate(over="ignore", invalid="ignore"):
+            offsets = self.offsets * factor
+            sites = tuple((j, tuple(np.multiply(off, factor))) for j, off in self.end_sites)
+        if not (np.isfinite(offsets).all() and np.isfinite([off for _, off in sites]).all()):
+            lengths = np.concatenate([self.offsets.ravel(), np.ravel([off for _, off in self.end_sites])])
+            _not_finite(factor, "an offset", np.abs(lengths).max(initial=0.0))
+        return Skeleton(self.names, self.parents, offsets, self.channels, sites)
 
     def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
         """World positions of the joints ``[J, 3]`` and End Sites ``[E, 3]`` in the rest pose
@@ -246,6 +253,18 @@ class Skeleton:
         for cs in self.channels:
             layouts[cs] = layouts.get(cs, 0) + 1
         return "; ".join(f"{n} joint{'s' if n > 1 else ''} x {len(cs)} ({' '.join(cs) or 'none'})" for cs, n in layouts.items())
+
+
+def _not_finite(factor, what: str, largest: float):
+    raise MocapError(f"scaled: x {factor:g} takes {what} beyond float64 (the largest is {largest:.6g}): lengths must stay finite")
+
+
+# The most frames x joints Motion.resample makes (README, "Limits"): 2^25, 1.9 GB of rotations and
+# translations at 56 bytes a joint-frame. The largest file the reader takes at a realistic density
+# (512 MiB of text, ~13 million joint-frames: half an hour of 60 joints at 120 fps) fits at twice
+# its rate; a 300-byte file claiming a frame time of 10^6 s does not ask for 7 GiB.
+MAX_RESAMPLED_JOINT_FRAMES = 1 << 25
+_RESAMPLE_BLOCK = 1 << 18  # joint-frames interpolated at a time
 
 
 class Motion:
@@ -323,32 +342,58 @@ class Motion:
 
     def resample(self, fps: float | None = None, n_frames: int | None = None) -> Motion:
         """The same movement sampled at ``fps`` frames a second, or with ``n_frames`` frames over the
-        same duration: slerp for rotations, linear for translations."""
+        same duration: slerp for rotations, linear for translations.
+
+        The output may hold at most :data:`MAX_RESAMPLED_JOINT_FRAMES` frames x joints, checked
+        from the frame count computed in floating point before anything is allocated (a 2-frame
+        file claiming a frame time of 10^6 s asks 120 fps for 1.2 x 10^8 frames); it is then filled
+        in blocks, so the peak memory is the output's 56 bytes a joint-frame and a little more."""
         if (fps is None) == (n_frames is None):
             raise MocapError("resample: give exactly one of fps or n_frames")
         if self.n_frames < 2:
             raise MocapError("resample: a motion needs at least 2 frames")
+        joints = self.skeleton.n_joints
         if fps is not None:
-            if not (np.isfinite(fps) and fps > 0):
-                raise MocapError(f"resample: fps must be positive, got {fps}")
-            new_time = 1.0 / fps
+            if isinstance(fps, bool) or not isinstance(fps, (int, float, np.integer, np.floating)) or not (np.isfinite(fps) and fps > 0):
+                raise MocapError(f"resample: fps must be a positive finite number, got {fps!r}")
+            new_time = 1.0 / float(fps)
             # Files round the frame time (0.0333333 for 1/30 s): allow a hundredth of a frame.
-            n_frames = int(np.floor(self.duration / new_time + 0.01)) + 1
+            frames = np.floor(self.duration / new_time + 0.01) + 1  # a float: may be 1e302 or inf
+            what = f"{float(fps):g} fps over {self.duration:g} s"
         else:
-            if n_frames < 2:
-                raise MocapError(f"resample: n_frames must be at least 2, got {n_frames}")
+            if isinstance(n_frames, bool) or not isinstance(n_frames, (int, np.integer)) or n_frames < 2:
+                raise MocapError(f"resample: n_frames must be a whole number of at least 2, got {n_frames!r}")
+            frames, what = n_frames, "n_frames"
             new_time = self.duration / (n_frames - 1)
-        position = np.minimum(np.arange(n_frames) * new_time / self.frame_time, self.n_frames - 1)
-        i0 = np.minimum(np.floor(position).astype(int), self.n_frames - 2)
-        t = (position - i0)[:, None]
-        rotations = quat.slerp(self.rotations[i0], self.rotations[i0 + 1], t)
-        t3 = t[..., None]
-        translations = (1 - t3) * self.translations[i0] + t3 * self.translations[i0 + 1]
+        if not frames * joints <= MAX_RESAMPLED_JOINT_FRAMES:
+            raise MocapError(
+                f"resample: {what} is {frames:.6g} frames x {joints} joints, more than the {MAX_RESAMPLED_JOINT_FRAMES:,} "
+                f"joint-frames (56 bytes each) a resampled motion may have"
+            )
+        if not (np.isfinite(new_time) and new_time > 0):  # 1e-320 fps overflows, n_frames over a tiny duration underflows
+            raise MocapError(f"resample: {what} gives a frame time of {new_time:g} s")
+        n_frames = int(frames)
+        rotations = np.empty((n_frames, joints, 4))
+        translations = np.empty((n_frames, joints, 3))
+        block = max(1, _RESAMPLE_BLOCK // joints)  # slerp's temporaries take ~5x its output
+        for first in range(0, n_frames, block):
+            rows = slice(first, min(first + block, n_frames))
+            position = np.minimum(np.arange(rows.start, rows.stop) * new_time / self.frame_time, self.n_frames - 1)
+            i0 = np.minimum(np.floor(position).astype(int), self.n_frames - 2)
+            t = (position - i0)[:, None]
+            rotations[rows] = quat.slerp(self.rotations[i0], self.rotations[i0 + 1], t)
+            t3 = t[..., None]
+            translations[rows] = (1 - t3) * self.translations[i0] + t3 * self.translations[i0 + 1]
         return Motion(self.skeleton, rotations, translations, new_time)
 
     def scaled(self, factor: float) -> Motion:
         """The same motion with every length (offsets, translations) multiplied by ``factor``."""
-        return Motion(self.skeleton.scaled(factor), self.rotations, self.translations * factor, self.frame_time)
+        skeleton = self.skeleton.scaled(factor)
+        with np.errstate(over="ignore", invalid="ignore"):
+            translations = self.translations * factor
+        if not np.isfinite(translations).all():
+            _not_finite(factor, "a translation", np.abs(self.translations).max(initial=0.0))
+        return Motion(skeleton, self.rotations, translations, self.frame_time)
 
     def with_rotation_order(self, order: str) -> Motion:
         """The same motion, to be written with every joint's rotation channels in ``order``."""
