@@ -87,3 +87,17 @@ def test_cli_model_fifo_is_one_line_error(fifo, mixed_path, tmp_path, capsys):
     assert code == 1
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "a FIFO, not a regular file" in err and str(fifo) in err
+
+
+def test_reading_a_small_file_reserves_its_size_not_the_bound(tmp_path):
+    import tracemalloc
+
+    path = tmp_path / "small.bvh"
+    path.write_bytes(b"x" * 1000)
+    tracemalloc.start()
+    try:
+        assert len(em_io.read_input(path)) == 1000
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 1 << 20  # read(bound + 1) reserved the whole 512 MiB bound

@@ -59,7 +59,12 @@ def read_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES) -> bytes:
     """The bytes of the regular file at ``path`` (see :func:`open_input`), at most ``limit`` of
     them: a file that grows past the bound while it is read is refused too."""
     with open_input(path, limit) as handle:
-        data = handle.read(limit + 1)
+        # read(n) reserves n bytes up front: ask for the size the file has (and one byte to see
+        # it grow), the bound only if it did grow.
+        size = os.fstat(handle.fileno()).st_size
+        data = handle.read(size + 1)
+        if size < len(data) <= limit:  # it grew while read
+            data += handle.read(limit + 1 - len(data))
     if len(data) > limit:
         raise OSError(errno.EFBIG, f"more than the {limit:,} bytes read at most", str(path))
     return data
