@@ -73,6 +73,7 @@ from .bvh import block_error, parse_header, read_error, read_header
 from .errors import BVHError, MocapError
 from .decouple import EXPONENT, GAIN
 from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from . import io as inputs
 from .io import atomic_write
 from .kernels import decouple_rotations
 from .roles import JointRoles, actor_height, hips_rest_height
@@ -738,6 +739,7 @@ def _kernels(batch: list[_Item], prepared: _Prepared, keep: tuple[str, ...], mod
         results = kernels().clip_pipeline_many(
             group.clips, group.parents, group.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE,
             "positions" in keep, "rotations" in keep or use_model, requests, "contacts" in keep, not use_model,
+            max_bytes=inputs.MAX_INPUT_BYTES,
         )
         for k, header, result in zip(group.indices, group.headers, results):
             if isinstance(result, Exception):
