@@ -117,14 +117,11 @@ const EFBIG: i32 = 27;
 /// # Errors
 /// `ReadError::Os` when the file cannot be opened or read, `ReadError::Refused` otherwise.
 pub fn read_input(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, ReadError> {
-    let file = open_nonblocking(path).map_err(ReadError::Os)?;
+    let file = open_nonblocking(path).map_err(|error| open_error(path, error))?;
     let meta = file.metadata().map_err(ReadError::Os)?;
     if !meta.is_file() {
         let errno = if meta.is_dir() { EISDIR } else { EINVAL };
-        let message = format!(
-            "{}, not a regular file: only regular files are read",
-            file_kind(meta.file_type())
-        );
+        let message = not_regular(meta.file_type());
         return Err(ReadError::Refused { errno, message });
     }
     if meta.len() > limit {
@@ -151,6 +148,25 @@ pub fn read_input(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, ReadE
         });
     }
     Ok(data)
+}
+
+/// The error of a failed open; one of what is neither a regular file nor a folder says what it
+/// is (a socket cannot be opened at all: ENXIO).
+fn open_error(path: &Path, error: std::io::Error) -> ReadError {
+    match std::fs::metadata(path) {
+        Ok(meta) if !meta.is_file() && !meta.is_dir() => ReadError::Refused {
+            errno: error.raw_os_error().unwrap_or(EINVAL),
+            message: not_regular(meta.file_type()),
+        },
+        _ => ReadError::Os(error),
+    }
+}
+
+fn not_regular(kind: std::fs::FileType) -> String {
+    format!(
+        "{}, not a regular file: only regular files are read",
+        file_kind(kind)
+    )
 }
 
 #[cfg(unix)]
@@ -423,6 +439,13 @@ mod tests {
             assert_eq!(
                 refused(read_input(Path::new("/dev/zero"), 10)).1,
                 "a character device, not a regular file: only regular files are read"
+            );
+            // A socket cannot even be opened (ENXIO): still named.
+            let socket = folder.join("sock.bvh");
+            let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+            assert_eq!(
+                refused(read_input(&socket, 10)).1,
+                "a socket, not a regular file: only regular files are read"
             );
         }
         std::fs::remove_dir_all(&folder).unwrap();

@@ -7,6 +7,9 @@ from __future__ import annotations
 
 import errno
 import os
+import socket
+import tarfile
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -98,3 +101,169 @@ def test_a_file_swapped_for_a_fifo_after_its_header_was_read_fails_alone(walk, t
         release(fifo)
     assert "error" not in outcomes[0] and outcomes[0]["frames"] == em.read_bvh(tmp_path / "a.bvh").n_frames
     assert outcomes[1]["error"] == f"{fifo}: cannot read the file: a FIFO, {NOT_REGULAR}"
+
+
+# ----------------------------------------------------------------------------- folders and globs
+
+
+@pytest.fixture
+def hostile_folder(tmp_path, walk):
+    """A folder of one good clip among a FIFO, a /dev/zero link, a socket and a dangling link, all named *.bvh."""
+    folder = tmp_path / "clips"
+    folder.mkdir()
+    (folder / "good.bvh").write_bytes(walk)
+    fifo = make_fifo(folder / "pipe.bvh")
+    (folder / "zero.bvh").symlink_to("/dev/zero")
+    (folder / "gone.bvh").symlink_to(folder / "nowhere.bvh")
+    server = socket.socket(socket.AF_UNIX)
+    server.bind(str(folder / "sock.bvh"))
+    yield folder
+    server.close()
+    release(fifo)
+
+
+@pytest.mark.parametrize("pattern", [False, True], ids=["folder", "glob"])
+def test_only_regular_files_are_read_from_a_folder_or_glob(hostile_folder, pattern, tmp_path, walk, backend):
+    src = str(hostile_folder / "*.bvh") if pattern else hostile_folder
+    summary = _returns_within(30, lambda: run(src, tmp_path / "ds"))
+    assert summary.finished and summary.clips_ok == 1 and load_dataset(tmp_path / "ds").names == ["good"]
+    found = failures(tmp_path / "ds")
+    assert sorted(found) == ["gone", "pipe", "sock", "zero"]
+    for name, kind in (("pipe", "a FIFO"), ("zero", "a character device"), ("sock", "a socket")):
+        assert found[name] == f"{hostile_folder / name}.bvh: cannot read the file: {kind}, {NOT_REGULAR}"
+    assert found["gone"] == f"{hostile_folder / 'gone'}.bvh: cannot read the file: {os.strerror(errno.ENOENT)}"
+    assert summary.bytes_read == len(walk)  # the good clip alone was read
+
+
+def test_listing_a_folder_opens_nothing(hostile_folder, monkeypatch):
+    # A stat per file, never an open: a FIFO opened to be listed would block.
+    def no_open(*args, **kwargs):
+        raise AssertionError("a file was opened while listing")
+
+    monkeypatch.setattr(os, "open", no_open)
+    items = {item.name: item.size for item in preprocess_module._folder(hostile_folder)}
+    assert items == {"gone": 0, "good": (hostile_folder / "good.bvh").stat().st_size, "pipe": 0, "sock": 0, "zero": 0}
+
+
+# ----------------------------------------------------------------------------- archives
+
+
+def _central_entry(data: bytes, name: str) -> int:
+    """Where the zip's central directory entry of ``name`` starts."""
+    at = data.index(b"PK\x01\x02")
+    while True:
+        length = int.from_bytes(data[at + 28:at + 30], "little")
+        if data[at + 46:at + 46 + length] == name.encode():
+            return at
+        at = data.index(b"PK\x01\x02", at + 46)
+
+
+def patch_zip(path: Path, name: str, flags: int = 0, method: int | None = None, size: int | None = None, flip: bool = False) -> None:
+    """Damage member ``name`` in place: set flag bits, the compression method or the declared
+    size (in both its local and central headers), or flip its first data byte."""
+    data = bytearray(path.read_bytes())
+    with zipfile.ZipFile(path) as archive:
+        local = archive.getinfo(name).header_offset
+    central = _central_entry(data, name)
+    for at, flag_at, method_at, size_at in ((local, 6, 8, 22), (central, 8, 10, 24)):
+        data[at + flag_at] |= flags
+        if method is not None:
+            data[at + method_at:at + method_at + 2] = method.to_bytes(2, "little")
+        if size is not None:
+            data[at + size_at:at + size_at + 4] = size.to_bytes(4, "little")
+    if flip:
+        start = local + 30 + int.from_bytes(data[local + 26:local + 28], "little") + int.from_bytes(data[local + 28:local + 30], "little")
+        data[start] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+def member_zip(path: Path, walk: bytes, names, compression=zipfile.ZIP_DEFLATED) -> Path:
+    with zipfile.ZipFile(path, "w", compression) as archive:
+        for name in names:
+            archive.writestr(name, walk)
+    return path
+
+
+def test_a_damaged_or_encrypted_zip_member_fails_alone(walk, tmp_path, backend):
+    path = member_zip(tmp_path / "clips.zip", walk, ["good.bvh", "secret.bvh", "method.bvh"])
+    member_zip(tmp_path / "stored.zip", walk, ["crc.bvh"], zipfile.ZIP_STORED)
+    patch_zip(path, "secret.bvh", flags=0x1)
+    patch_zip(path, "method.bvh", method=99)
+    summary = run(path, tmp_path / "ds")
+    assert summary.finished and load_dataset(tmp_path / "ds").names == ["good"]
+    assert failures(tmp_path / "ds") == {
+        "method": f"{path}:method.bvh: cannot read the archive member: That compression method is not supported",
+        "secret": f"{path}:secret.bvh: cannot read the archive member: encrypted: members are read without a password",
+    }
+    stored = tmp_path / "stored.zip"
+    patch_zip(stored, "crc.bvh", flip=True)
+    run(stored, tmp_path / "crc")
+    assert failures(tmp_path / "crc") == {"crc": f"{stored}:crc.bvh: cannot read the archive member: Bad CRC-32 for file 'crc.bvh'"}
+
+
+def test_a_zip_member_declared_over_the_real_bound_is_refused_unread(walk, tmp_path):
+    # The declared size alone decides: this member's real bytes are a good clip.
+    path = member_zip(tmp_path / "clips.zip", walk, ["good.bvh", "claims.bvh"])
+    patch_zip(path, "claims.bvh", size=em_io.MAX_INPUT_BYTES + 1)
+    summary = run(path, tmp_path / "ds")
+    assert summary.finished and load_dataset(tmp_path / "ds").names == ["good"]
+    assert failures(tmp_path / "ds") == {
+        "claims": f"{path}:claims.bvh: cannot read the archive member: 536,870,913 bytes, more than the 536,870,912 bytes read at most"}
+    assert summary.bytes_read == len(walk)  # not the 537 MB claimed: what was read
+
+
+@pytest.fixture
+def small_bound(monkeypatch):
+    """io.MAX_INPUT_BYTES at 1 MiB: members over the bound cost little to make."""
+    monkeypatch.setattr(em_io, "MAX_INPUT_BYTES", 1 << 20)
+    return 1 << 20
+
+
+def test_zip_members_over_the_bound_are_not_decompressed(walk, tmp_path, small_bound):
+    import tracemalloc
+
+    path = tmp_path / "bomb.zip"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("good.bvh", walk)
+        archive.writestr("over.bvh", walk + b" " * (small_bound + 1 - len(walk)))  # one byte over
+        archive.writestr("huge.bvh", bytes(64 << 20))  # 64 MiB of zeros in 64 KB
+        archive.writestr("lies.bvh", bytes(64 << 20))
+    patch_zip(path, "lies.bvh", size=small_bound)  # declares the bound, holds 64 MiB
+    assert path.stat().st_size < 1 << 20
+    tracemalloc.start()
+    try:
+        summary = run(path, tmp_path / "ds")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    found = failures(tmp_path / "ds")
+    assert summary.finished and load_dataset(tmp_path / "ds").names == ["good"] and sorted(found) == ["huge", "lies", "over"]
+    assert found["over"].endswith(f"{small_bound + 1:,} bytes, more than the {small_bound:,} bytes read at most")
+    assert found["huge"].endswith(f"{64 << 20:,} bytes, more than the {small_bound:,} bytes read at most")
+    assert found["lies"] == f"{path}:lies.bvh: cannot read the archive member: Bad CRC-32 for file 'lies.bvh'"
+    # Never more than a member of the bound held (before: the 64 MiB members were read whole).
+    assert peak < 16 << 20, f"peak {peak / 1e6:.1f} MB"
+    assert summary.bytes_read == len(walk)  # not the 129 MB declared
+
+
+def test_tar_members_over_the_bound_or_not_regular_fail_alone(walk, tmp_path, small_bound):
+    folder = tmp_path / "clips"
+    folder.mkdir()
+    (folder / "good.bvh").write_bytes(walk)
+    (folder / "over.bvh").write_bytes(walk + b" " * (small_bound + 1 - len(walk)))
+    (folder / "link.bvh").symlink_to("/dev/zero")
+    fifo = make_fifo(folder / "pipe.bvh")
+    path = tmp_path / "clips.tar.gz"
+    with tarfile.open(path, "w:gz") as archive:
+        for name in ("good.bvh", "over.bvh", "link.bvh", "pipe.bvh"):
+            archive.add(folder / name, name)
+    release(fifo)
+    summary = run(path, tmp_path / "ds")
+    assert summary.finished and load_dataset(tmp_path / "ds").names == ["good"]
+    member = "cannot read the archive member"
+    assert failures(tmp_path / "ds") == {
+        "over": f"{path}:over.bvh: {member}: {small_bound + 1:,} bytes, more than the {small_bound:,} bytes read at most",
+        "link": f"{path}:link.bvh: {member}: a symbolic link, {NOT_REGULAR}",
+        "pipe": f"{path}:pipe.bvh: {member}: a FIFO, {NOT_REGULAR}",
+    }
+    assert summary.bytes_read == len(walk)

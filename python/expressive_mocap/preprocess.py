@@ -49,11 +49,14 @@ from __future__ import annotations
 
 import datetime
 import glob as globlib
+import errno
 import io
 import itertools
 import json
+import lzma
 import os
 import shutil
+import stat
 import struct
 import sys
 import tarfile
@@ -94,9 +97,10 @@ _HEADER_BYTES = 128  # room reserved at the start of each data file for its .npy
 @dataclass(frozen=True)
 class _Item:
     """One clip to read: ``name`` (path inside SRC without .bvh), ``source`` (where it came
-    from, for the manifest and error messages), ``size`` in bytes, and where its bytes are: a
-    file ``path``, a ``member`` of the zip at ``path``, or ``data`` (a tar member already read).
-    Plain values only, so a batch of items can be sent to the workers of a cluster."""
+    from, for the manifest and error messages), ``size`` in bytes (listed: for batching and
+    progress only), and where its bytes are: a file ``path``, a ``member`` of the zip at
+    ``path``, ``data`` (a tar member already read), or ``refused``: why a tar member was not
+    read. Plain values only, so a batch of items can be sent to the workers of a cluster."""
 
     name: str
     source: str
@@ -104,20 +108,45 @@ class _Item:
     path: str | None = None
     member: str | None = None
     data: bytes | None = None
+    refused: str | None = None
 
-    def header(self):
+    def header(self, outcome: dict):
         """The clip's BVH header and its text for the kernel: the file's path when the header
-        came from the file's beginning (the kernel reads the rest), else the bytes."""
+        came from the file's beginning (the kernel reads the rest), else the bytes. Sets
+        ``outcome["bytes"]`` to the bytes read so far, also when the header then fails."""
+        outcome["bytes"] = 0
+        if self.refused is not None:
+            raise BVHError(self.source, None, f"cannot read the archive member: {self.refused}")
         if self.data is None and self.member is None:
             header, data = read_header(self.path)
-            return header, self.path if data is None else data
-        if self.data is not None:
-            return parse_header(self.data, self.source), self.data
-        try:
-            data = _zip(self.path).read(self.member)
-        except (zipfile.BadZipFile, zlib.error, OSError, EOFError, NotImplementedError) as error:  # a damaged member fails alone
-            raise BVHError(self.source, None, f"cannot read the archive member: {error}") from None
+            if data is None:
+                return header, self.path  # counted once the kernel has read the file
+            outcome["bytes"] = len(data)
+            return header, data
+        data = self.data if self.data is not None else _member_bytes(self)
+        outcome["bytes"] = len(data)
         return parse_header(data, self.source), data
+
+
+# What reading one zip member can raise (a damaged, truncated or unsupported member).
+_MEMBER_ERRORS = (zipfile.BadZipFile, zlib.error, lzma.LZMAError, OSError, EOFError, NotImplementedError, RuntimeError, ValueError)
+
+
+def _member_bytes(item: _Item) -> bytes:
+    """A zip member's bytes, checked before decompressing: not encrypted, at most
+    ``io.MAX_INPUT_BYTES`` declared, and no more than that read whatever it declares (a 1 MB zip
+    can hold a 1 GiB member). Any problem is that clip's BVHError."""
+    try:
+        info = _zip(item.path).getinfo(item.member)
+        if info.flag_bits & 0x1:
+            raise OSError(errno.EACCES, "encrypted: members are read without a password")
+        if info.file_size > inputs.MAX_INPUT_BYTES:
+            raise inputs.too_large(inputs.MAX_INPUT_BYTES, item.source, info.file_size)
+        with _zip(item.path).open(info) as member:
+            return inputs.read_at_most(member, inputs.MAX_INPUT_BYTES, item.source)
+    except _MEMBER_ERRORS as error:  # a damaged member fails alone
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else error
+        raise BVHError(item.source, None, f"cannot read the archive member: {reason}") from None
 
 
 _ZIPS: dict[str, zipfile.ZipFile] = {}
@@ -139,6 +168,16 @@ def _clip_name(relative: str) -> str:
     return relative[:-4] if relative.lower().endswith(".bvh") else relative
 
 
+def _listed_size(path: str) -> int:
+    """The size of a regular file (a stat, no open: listing stays fast), 0 for anything else: a
+    FIFO, device or dangling link is not read, its clip fails with the reason when read."""
+    try:
+        info = os.stat(path)
+    except OSError:
+        return 0
+    return info.st_size if stat.S_ISREG(info.st_mode) else 0
+
+
 def _folder(root: Path) -> list[_Item]:
     """The ``*.bvh`` files below ``root`` (any case; symlinked folders are not followed), by name.
     os.walk + plain strings: an archive of thousands of files is listed in milliseconds."""
@@ -147,16 +186,12 @@ def _folder(root: Path) -> list[_Item]:
         for name in names:
             if name.lower().endswith(".bvh"):
                 path = os.path.join(folder, name)
-                try:
-                    size = os.stat(path).st_size
-                except OSError:  # a dangling link, or gone since listed: its clip fails when read, with the reason
-                    size = 0
-                items.append(_Item(_clip_name(path[len(prefix):].replace(os.sep, "/")), path, size, path=path))
+                items.append(_Item(_clip_name(path[len(prefix):].replace(os.sep, "/")), path, _listed_size(path), path=path))
     return sorted(items, key=lambda i: i.name)
 
 
 def _files(paths, root: Path) -> list[_Item]:
-    items = [_Item(_clip_name(p.relative_to(root).as_posix()), str(p), p.stat().st_size, path=str(p)) for p in paths]
+    items = [_Item(_clip_name(p.relative_to(root).as_posix()), str(p), _listed_size(str(p)), path=str(p)) for p in paths]
     return sorted(items, key=lambda i: i.name)
 
 
@@ -192,7 +227,8 @@ def open_source(src: str | os.PathLike) -> _Source:
     if path.is_file() and _is_tar(path):
         return _Source(f"tar {path}", None, _stream=lambda: _tar_stream(path))
     if any(c in text for c in "*?["):
-        matches = [Path(p) for p in globlib.glob(text, recursive=True) if p.lower().endswith(".bvh") and Path(p).is_file()]
+        # Anything but a folder: a FIFO or a device matched is that clip's failure, not skipped.
+        matches = [Path(p) for p in globlib.glob(text, recursive=True) if p.lower().endswith(".bvh") and not os.path.isdir(p)]
         if not matches:
             raise MocapError(f"no .bvh files match {text}")
         # Clip names are paths below the pattern's last folder without wildcards.
@@ -205,15 +241,34 @@ def open_source(src: str | os.PathLike) -> _Source:
 
 
 def _tar_stream(path: Path) -> Iterator[_Item]:
-    """The .bvh members of a tar in archive order, each read as the stream passes it."""
+    """The .bvh members of a tar in archive order, each read as the stream passes it: only
+    regular files of at most ``io.MAX_INPUT_BYTES`` (checked before reading), others are
+    their clip's failure."""
+    limit = inputs.MAX_INPUT_BYTES
     try:
         with tarfile.open(path, mode="r|*") as archive:
             for member in archive:
-                if member.isfile() and member.name.lower().endswith(".bvh"):
-                    data = archive.extractfile(member).read()
-                    yield _Item(_clip_name(member.name), f"{path}:{member.name}", len(data), data=data)
+                if member.isdir() or not member.name.lower().endswith(".bvh"):
+                    continue
+                name, source = _clip_name(member.name), f"{path}:{member.name}"
+                if not member.isfile():
+                    yield _Item(name, source, 0, refused=f"{_tar_kind(member)}, not a regular file: only regular files are read")
+                elif member.size > limit:
+                    yield _Item(name, source, 0, refused=inputs.too_large(limit, source, member.size).strerror)
+                else:
+                    data = inputs.read_at_most(archive.extractfile(member), limit, source)
+                    yield _Item(name, source, len(data), data=data)
     except (tarfile.TarError, EOFError, OSError) as error:
         raise MocapError(f"{path}: cannot read the tar archive ({type(error).__name__}: {error})") from None
+
+
+def _tar_kind(member: tarfile.TarInfo) -> str:
+    """What a tar member that is not a regular file is, in words (as io.file_kind)."""
+    for test, kind in ((member.issym, "a symbolic link"), (member.islnk, "a hard link"), (member.isfifo, "a FIFO"),
+                       (member.ischr, "a character device"), (member.isblk, "a block device")):
+        if test():
+            return kind
+    return "a special file"
 
 
 # ----------------------------------------------------------------------------- .npy files written in pieces
@@ -286,7 +341,9 @@ def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], mode
 @dataclass
 class Summary:
     """What a run did: clips ok / failed (this run and earlier ones it resumed), frames,
-    bytes of BVH text read, seconds in total and split into reading headers, kernels (reading
+    bytes of BVH text read (what was read, not what files or archive members declare: a file
+    read whole, a member's decompressed bytes; a clip refused or failing before its text was
+    held counts 0), seconds in total and split into reading headers, kernels (reading
     and parsing the MOTION blocks, FK, features, contacts, model) and writing (headers and
     kernels summed over the threads or workers that ran them: they overlap)."""
 
@@ -479,6 +536,7 @@ def preprocess(
             results = _on_cluster(batches, max_batches, stopped, client, (keep, model, model_float32, get_backend()))
         for batch, outcomes, headers_s, kernels_s in results:
             record = {"batch": batch_number, "items": [item.source for item in batch], "clips": [], "failures": []}
+            nbytes = sum(outcome.get("bytes", 0) for outcome in outcomes)  # bytes read, not sizes declared
             times = [time.perf_counter()]
             arrays, rows, skeleton = _collect(batch, outcomes, skeleton, keep, record, rows)
             if "skeleton" in record:  # the first clip parsed: now the row shapes are known
@@ -498,7 +556,6 @@ def preprocess(
             clips += record["clips"]
             failures += record["failures"]
             frames = sum(c["frames"] for c in record["clips"])
-            nbytes = sum(item.size for item in batch)
             summary.headers_s += headers_s
             summary.kernels_s += kernels_s
             summary.write_s += times[1] - times[0]
@@ -694,7 +751,7 @@ def _prepare(batch: list[_Item], keep: tuple[str, ...], model) -> _Prepared:
     by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
     for k, item in enumerate(batch):
         try:
-            header, text = item.header()
+            header, text = item.header(outcomes[k])
         except BVHError as error:
             outcomes[k]["error"] = str(error)
             continue
@@ -741,7 +798,9 @@ def _kernels(batch: list[_Item], prepared: _Prepared, keep: tuple[str, ...], mod
             "positions" in keep, "rotations" in keep or use_model, requests, "contacts" in keep, not use_model,
             max_bytes=inputs.MAX_INPUT_BYTES,
         )
-        for k, header, result in zip(group.indices, group.headers, results):
+        for k, header, clip, result in zip(group.indices, group.headers, group.clips, results):
+            if isinstance(clip[0], str) and not isinstance(result, OSError):  # the kernel read the file whole
+                outcomes[k]["bytes"] = batch[k].size
             if isinstance(result, Exception):
                 outcomes[k]["error"] = str(_clip_error(batch[k], header, result))
                 continue
