@@ -7,11 +7,16 @@ from __future__ import annotations
 
 import errno
 import os
+import signal
 import socket
+import subprocess
+import sys
 import tarfile
+import time
 import zipfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import expressive_mocap as em
@@ -267,3 +272,87 @@ def test_tar_members_over_the_bound_or_not_regular_fail_alone(walk, tmp_path, sm
         "pipe": f"{path}:pipe.bvh: {member}: a FIFO, {NOT_REGULAR}",
     }
     assert summary.bytes_read == len(walk)
+
+
+# ----------------------------------------------------------------------------- Ctrl-C
+
+
+def _start(args: list[str], cwd: Path) -> subprocess.Popen:
+    """A child Python taking SIGINT as a terminal's Ctrl-C (default handling restored: a shell's
+    background job would inherit it ignored)."""
+    env = dict(os.environ, PYTHONPATH=str(Path(em.__file__).parent.parent))
+    return subprocess.Popen([sys.executable, *args], cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+
+
+def _wait_for(condition, seconds: float, what: str) -> None:
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, f"no {what} after {seconds} s"
+        time.sleep(0.01)
+
+
+def _interrupt(process: subprocess.Popen, seconds: float = 5.0) -> str:
+    """Send Ctrl-C; the child must exit within ``seconds`` with status 130 and no traceback. Its stderr."""
+    process.send_signal(signal.SIGINT)
+    try:
+        _, err = process.communicate(timeout=seconds)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.communicate()
+        pytest.fail(f"still running {seconds} s after Ctrl-C")
+    err = err.decode()
+    assert process.returncode == 130 and "Traceback" not in err and err.strip().endswith("expressive-mocap: interrupted"), err
+    return err
+
+
+def test_ctrl_c_stops_a_real_run_promptly_and_the_rerun_completes_it(bandai2_dir, tmp_path):
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    for path in sorted(bandai2_dir.glob("*.bvh"))[:900]:  # ~150 MB: about 20 batches of 8 MB
+        (clips / path.name).symlink_to(path)
+    reference = run(clips, tmp_path / "reference", batch_mb=8)
+    out = tmp_path / "ds"
+    command = ["-m", "expressive_mocap.cli", "preprocess", str(clips), "-o", str(out), "--batch-mb", "8", "-q"]
+    journal = out / ".partial" / "journal.jsonl"
+    process = _start(command, tmp_path)
+    _wait_for(lambda: journal.exists() and journal.read_bytes().count(b"\n") >= 2, 60, "second journal line")
+    _interrupt(process)
+    assert not (out / "manifest.json").exists() and 2 <= journal.read_bytes().count(b"\n") < reference.batches
+
+    process = _start(command, tmp_path)
+    _, err = process.communicate(timeout=300)
+    assert process.returncode == 0, err.decode()
+    ds, expected = load_dataset(out), load_dataset(tmp_path / "reference")
+    assert ds.names == expected.names and len(ds) == 900 and not ds.failures
+    np.testing.assert_array_equal(ds.offsets, expected.offsets)
+    assert set(ds.arrays) == set(expected.arrays)
+    for kind in expected.arrays:
+        np.testing.assert_array_equal(ds[kind], expected[kind])
+
+
+def test_a_blocked_thread_does_not_keep_an_interrupted_run_alive(walk, tmp_path):
+    # The second batch's header read never returns (as a FIFO's open did): Ctrl-C must still end
+    # the process (a ThreadPoolExecutor would wait for it, then join its thread at exit).
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    for number in range(12):
+        (clips / f"walk_{number:02d}.bvh").write_bytes(walk)
+    marker = tmp_path / "blocked"
+    script = f"""
+import sys, threading
+import expressive_mocap.preprocess as p
+from expressive_mocap.cli import main
+prepare, calls = p._prepare, []
+def blocking(*args):
+    calls.append(1)
+    if len(calls) == 2:
+        open({str(marker)!r}, "w").close()
+        threading.Event().wait()
+    return prepare(*args)
+p._prepare = blocking
+sys.exit(main(["preprocess", {str(clips)!r}, "-o", {str(tmp_path / "ds")!r}, "--batch-mb", "0.1", "-q"]))
+"""
+    process = _start(["-c", script], tmp_path)
+    _wait_for(marker.exists, 60, "blocked header read")
+    _interrupt(process)

@@ -55,16 +55,18 @@ import itertools
 import json
 import lzma
 import os
+import queue
 import shutil
 import stat
 import struct
 import sys
 import tarfile
+import threading
 import time
 import zipfile
 import zlib
 from collections import deque
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import CancelledError, Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
@@ -632,15 +634,26 @@ def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tupl
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     in_flight = 3  # batches read ahead of the one being written: bounds memory
     running: deque = deque()
+    header_pool, kernel_pool = _Workers(min(2, cores), "headers"), _Workers(1, "kernels")
+    # Held during each kernel call. A stopped run waits for the call under way (it ends: its reads
+    # never block) so that no thread is in Rust when the interpreter exits (one returning from
+    # Rust then aborts the process: "FATAL: exception not rethrown"), but it does not wait for
+    # a header thread (pure Python) or for batches not started.
+    in_kernels, stopping = threading.Lock(), threading.Event()
 
-    with ThreadPoolExecutor(max_workers=min(2, cores)) as header_pool, ThreadPoolExecutor(max_workers=1) as kernel_pool:
+    def compute(batch, prepared: Future):
+        ready = prepared.result()
+        with in_kernels:
+            if stopping.is_set():
+                raise CancelledError
+            return _kernels(batch, ready, keep, model, model_float32)
 
-        def submit_next() -> None:
-            batch = next(batches, None)  # taken here, in order (a tar stream is read here)
-            if batch is not None:
-                prepared = header_pool.submit(_prepare, batch, keep, model)
-                running.append((batch, kernel_pool.submit(lambda: _kernels(batch, prepared.result(), keep, model, model_float32))))
+    def submit_next() -> None:
+        batch = next(batches, None)  # taken here, in order (a tar stream is read here)
+        if batch is not None:
+            running.append((batch, kernel_pool.submit(compute, batch, header_pool.submit(_prepare, batch, keep, model))))
 
+    try:
         for _ in range(in_flight):
             submit_next()
         for count in itertools.count():
@@ -653,6 +666,51 @@ def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tupl
             result = computed.result()
             submit_next()
             yield (batch, *result)
+    finally:  # done, or stopped by Ctrl-C or an error: the batches read ahead are dropped
+        header_pool.close()
+        kernel_pool.close()
+        with in_kernels:
+            stopping.set()
+
+
+class _Workers:
+    """Daemon threads taking tasks in order (``submit`` returns a Future), for the pipeline of
+    :func:`_local`. Not a ThreadPoolExecutor: that one runs all its queued tasks when closed and
+    joins its threads at interpreter exit, so a Ctrl-C waited for the batches read ahead (5.5 s
+    with a model) or for ever for a blocked read. ``close`` cancels the tasks not started; a
+    running one ends on its own and nothing waits for it here."""
+
+    def __init__(self, count: int, name: str):
+        self._count = count
+        self._tasks: queue.SimpleQueue = queue.SimpleQueue()
+        for number in range(count):
+            threading.Thread(target=self._work, name=f"preprocess-{name}-{number}", daemon=True).start()
+
+    def submit(self, call, *args) -> Future:
+        future: Future = Future()
+        self._tasks.put((future, call, args))
+        return future
+
+    def _work(self) -> None:
+        while (task := self._tasks.get()) is not None:
+            future, call, args = task
+            if future.set_running_or_notify_cancel():
+                try:
+                    future.set_result(call(*args))
+                except BaseException as error:  # handed to whoever takes the result
+                    future.set_exception(error)
+            del task, future, call, args  # hold no batch while waiting for the next task
+
+    def close(self) -> None:
+        while True:
+            try:
+                task = self._tasks.get_nowait()
+            except queue.Empty:
+                break
+            if task is not None:
+                task[0].cancel()
+        for _ in range(self._count):
+            self._tasks.put(None)
 
 
 def _client(cluster):
