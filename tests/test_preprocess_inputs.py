@@ -23,6 +23,7 @@ import expressive_mocap as em
 import expressive_mocap.preprocess as preprocess_module
 from expressive_mocap import io as em_io
 from expressive_mocap.backend import kernels
+from expressive_mocap.cli import main
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.preprocess import load_dataset, preprocess
 
@@ -235,6 +236,9 @@ def test_zip_members_over_the_bound_are_not_decompressed(walk, tmp_path, small_b
         archive.writestr("lies.bvh", bytes(64 << 20))
     patch_zip(path, "lies.bvh", size=small_bound)  # declares the bound, holds 64 MiB
     assert path.stat().st_size < 1 << 20
+    # Listed for batching and the progress bar: a member refused unread counts 0, not its claim.
+    listed = {item.name: item.size for item in preprocess_module.open_source(path).items}
+    assert listed == {"good": len(walk), "huge": 0, "lies": small_bound, "over": 0}
     tracemalloc.start()
     try:
         summary = run(path, tmp_path / "ds")
@@ -272,6 +276,21 @@ def test_tar_members_over_the_bound_or_not_regular_fail_alone(walk, tmp_path, sm
         "pipe": f"{path}:pipe.bvh: {member}: a FIFO, {NOT_REGULAR}",
     }
     assert summary.bytes_read == len(walk)
+
+
+def test_an_unreadable_zip_directory_or_a_fifo_source_is_a_one_line_error(walk, tmp_path, capsys):
+    path = member_zip(tmp_path / "clips.zip", walk, ["a.bvh", "b.bvh"])
+    data = bytearray(path.read_bytes())
+    data[_central_entry(data, "b.bvh") + 1] = 0  # the central directory's second entry, damaged
+    path.write_bytes(bytes(data))
+    fifo = make_fifo(tmp_path / "pipe.bvh")
+    try:
+        for src, message in ((path, f"{path}: cannot read the zip archive (BadZipFile: Bad magic number for central directory)"),
+                             (fifo, f"{fifo}: a FIFO, not a folder, .zip or .tar(.gz/.xz) archive of BVH files")):
+            code = _returns_within(20, lambda: main(["preprocess", str(src), "-o", str(tmp_path / f"{src.name}.out"), "-q"]))
+            assert (code, capsys.readouterr().err) == (1, f"expressive-mocap: error: {message}\n")
+    finally:
+        release(fifo)
 
 
 # ----------------------------------------------------------------------------- Ctrl-C

@@ -171,13 +171,14 @@ def _clip_name(relative: str) -> str:
 
 
 def _listed_size(path: str) -> int:
-    """The size of a regular file (a stat, no open: listing stays fast), 0 for anything else: a
-    FIFO, device or dangling link is not read, its clip fails with the reason when read."""
+    """The size of a regular file within the bound (a stat, no open: listing stays fast), 0 for
+    anything else: a FIFO, device, dangling link or larger file is not read, its clip fails
+    with the reason when read."""
     try:
         info = os.stat(path)
     except OSError:
         return 0
-    return info.st_size if stat.S_ISREG(info.st_mode) else 0
+    return info.st_size if stat.S_ISREG(info.st_mode) and info.st_size <= inputs.MAX_INPUT_BYTES else 0
 
 
 def _folder(root: Path) -> list[_Item]:
@@ -222,9 +223,14 @@ def open_source(src: str | os.PathLike) -> _Source:
     if path.is_dir():
         return _Source(f"folder {path}", _folder(path))
     if path.is_file() and zipfile.is_zipfile(path):
-        archive = _zip(str(path))
+        try:
+            archive = _zip(str(path))
+        except (zipfile.BadZipFile, OSError, ValueError) as error:  # found a zip's end, but not a readable directory
+            raise MocapError(f"{path}: cannot read the zip archive ({type(error).__name__}: {error})") from None
         members = [m for m in archive.infolist() if not m.is_dir() and m.filename.lower().endswith(".bvh")]
-        items = [_Item(_clip_name(m.filename), f"{path}:{m.filename}", m.file_size, path=str(path), member=m.filename) for m in members]
+        # A member over the bound is refused unread: it counts 0 towards the progress bar's total.
+        items = [_Item(_clip_name(m.filename), f"{path}:{m.filename}", m.file_size if m.file_size <= inputs.MAX_INPUT_BYTES else 0,
+                       path=str(path), member=m.filename) for m in members]
         return _Source(f"zip {path}", sorted(items, key=lambda i: i.name), _close=lambda: _ZIPS.pop(str(path)).close())
     if path.is_file() and _is_tar(path):
         return _Source(f"tar {path}", None, _stream=lambda: _tar_stream(path))
@@ -239,6 +245,8 @@ def open_source(src: str | os.PathLike) -> _Source:
         return _Source(f"glob {text}", _files(matches, root))
     if path.is_file():
         raise MocapError(f"{path}: not a folder, .zip or .tar(.gz/.xz) archive of BVH files")
+    if path.exists():  # a FIFO, a device: never opened
+        raise MocapError(f"{path}: {inputs.file_kind(path.stat().st_mode)}, not a folder, .zip or .tar(.gz/.xz) archive of BVH files")
     raise MocapError(f"{path}: no such folder or archive")
 
 
