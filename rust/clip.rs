@@ -6,6 +6,10 @@
 //! and kept for a whole batch instead, the intermediates made the two cores fight over fresh
 //! pages and held `preprocess` to 1.6x the speed of one core.)
 
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+
 use crate::decode::{read_motion_block, ChannelLayout};
 use crate::error::Result;
 use crate::fk::forward_kinematics;
@@ -88,6 +92,131 @@ pub fn clip_outputs(clip: &ClipInput<'_>, request: &ClipRequest<'_>) -> Result<C
     out.positions = request.positions.then_some(positions);
     out.rotations = request.rotations.then_some(rotations);
     Ok(out)
+}
+
+/// Why a clip's file was not read: the system's error, or what was found instead of a regular
+/// file of at most the bound. `errno` and `message` are those of Python's `io.open_input`, so
+/// both backends name a refused file the same way.
+#[derive(Debug)]
+pub enum ReadError {
+    Os(std::io::Error),
+    Refused { errno: i32, message: String },
+}
+
+// The classic values, the same on Linux and macOS (as Python's io.open_input raises them).
+const EISDIR: i32 = 21;
+const EINVAL: i32 = 22;
+const EFBIG: i32 = 27;
+
+/// The bytes of the regular file at `path` (symlinks followed), at most `limit` of them, as
+/// Python's `io.read_input` reads them: opened without blocking (opening a FIFO to read waits
+/// for a writer), then the opened file itself checked, so nothing can be swapped in after the
+/// check: a FIFO, device, socket or folder is refused, and so is a file larger than `limit`
+/// (e.g. a link to /dev/zero, which never ends, or a file that grows while it is read).
+///
+/// # Errors
+/// `ReadError::Os` when the file cannot be opened or read, `ReadError::Refused` otherwise.
+pub fn read_input(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, ReadError> {
+    let file = open_nonblocking(path).map_err(|error| open_error(path, error))?;
+    let meta = file.metadata().map_err(ReadError::Os)?;
+    if !meta.is_file() {
+        let errno = if meta.is_dir() { EISDIR } else { EINVAL };
+        let message = not_regular(meta.file_type());
+        return Err(ReadError::Refused { errno, message });
+    }
+    if meta.len() > limit {
+        let message = format!(
+            "{} bytes, more than the {} bytes read at most",
+            grouped(meta.len()),
+            grouped(limit)
+        );
+        return Err(ReadError::Refused {
+            errno: EFBIG,
+            message,
+        });
+    }
+    // O_NONBLOCK is left set: it does not change how a regular file is read.
+    let mut data = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0).saturating_add(1));
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut data)
+        .map_err(ReadError::Os)?;
+    if data.len() as u64 > limit {
+        let message = format!("more than the {} bytes read at most", grouped(limit));
+        return Err(ReadError::Refused {
+            errno: EFBIG,
+            message,
+        });
+    }
+    Ok(data)
+}
+
+/// The error of a failed open; one of what is neither a regular file nor a folder says what it
+/// is (a socket cannot be opened at all: ENXIO).
+fn open_error(path: &Path, error: std::io::Error) -> ReadError {
+    match std::fs::metadata(path) {
+        Ok(meta) if !meta.is_file() && !meta.is_dir() => ReadError::Refused {
+            errno: error.raw_os_error().unwrap_or(EINVAL),
+            message: not_regular(meta.file_type()),
+        },
+        _ => ReadError::Os(error),
+    }
+}
+
+fn not_regular(kind: std::fs::FileType) -> String {
+    format!(
+        "{}, not a regular file: only regular files are read",
+        file_kind(kind)
+    )
+}
+
+#[cfg(unix)]
+fn open_nonblocking(path: &Path) -> std::io::Result<File> {
+    use std::os::unix::fs::OpenOptionsExt;
+    std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_CLOEXEC)
+        .open(path)
+}
+
+#[cfg(not(unix))]
+fn open_nonblocking(path: &Path) -> std::io::Result<File> {
+    File::open(path)
+}
+
+/// What a file of this type is, in words (Python's `io.file_kind`).
+fn file_kind(kind: std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        for (found, name) in [
+            (kind.is_fifo(), "a FIFO"),
+            (kind.is_char_device(), "a character device"),
+            (kind.is_block_device(), "a block device"),
+            (kind.is_socket(), "a socket"),
+        ] {
+            if found {
+                return name;
+            }
+        }
+    }
+    if kind.is_dir() {
+        "a folder"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// `n` with thousands separators, as Python's `f"{n:,}"`.
+fn grouped(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
 }
 
 #[cfg(test)]
@@ -252,5 +381,73 @@ mod tests {
             )
             .is_err());
         });
+    }
+
+    #[test]
+    fn grouped_is_pythons_thousands_separator() {
+        let cases = [
+            (0, "0"),
+            (999, "999"),
+            (1000, "1,000"),
+            (536_870_912, "536,870,912"),
+            (u64::MAX, "18,446,744,073,709,551,615"),
+        ];
+        for (n, text) in cases {
+            assert_eq!(grouped(n), text);
+        }
+    }
+
+    fn refused(result: std::result::Result<Vec<u8>, ReadError>) -> (i32, String) {
+        match result {
+            Err(ReadError::Refused { errno, message }) => (errno, message),
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn only_regular_files_within_the_bound_are_read() {
+        let folder =
+            std::env::temp_dir().join(format!("expressive-mocap-read-{}", std::process::id()));
+        std::fs::create_dir_all(&folder).unwrap();
+        let file = folder.join("clip.bvh");
+        std::fs::write(&file, b"0123456789").unwrap();
+        assert_eq!(read_input(&file, 10).unwrap(), b"0123456789");
+        assert_eq!(
+            refused(read_input(&file, 9)),
+            (EFBIG, "10 bytes, more than the 9 bytes read at most".into())
+        );
+        assert_eq!(refused(read_input(&folder, 10)).0, EISDIR);
+        assert!(
+            matches!(read_input(&folder.join("gone.bvh"), 10), Err(ReadError::Os(e)) if e.kind() == std::io::ErrorKind::NotFound)
+        );
+        #[cfg(unix)]
+        {
+            // A FIFO without a writer: refused at once, never waited on; /dev/zero never ends.
+            let fifo = folder.join("pipe.bvh");
+            let made = std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .unwrap();
+            assert!(made.success());
+            assert_eq!(
+                refused(read_input(&fifo, 10)),
+                (
+                    EINVAL,
+                    "a FIFO, not a regular file: only regular files are read".into()
+                )
+            );
+            assert_eq!(
+                refused(read_input(Path::new("/dev/zero"), 10)).1,
+                "a character device, not a regular file: only regular files are read"
+            );
+            // A socket cannot even be opened (ENXIO): still named.
+            let socket = folder.join("sock.bvh");
+            let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+            assert_eq!(
+                refused(read_input(&socket, 10)).1,
+                "a socket, not a regular file: only regular files are read"
+            );
+        }
+        std::fs::remove_dir_all(&folder).unwrap();
     }
 }

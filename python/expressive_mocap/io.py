@@ -40,14 +40,19 @@ def open_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES):
     or folder is refused without blocking (opening a FIFO to read waits for a writer, and
     /dev/zero never ends), and so is a file larger than ``limit`` bytes. Refusals are OSErrors
     with errno and a ``strerror`` that says what was found, like any other unreadable file."""
-    handle = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        handle = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except OSError as error:  # a socket cannot be opened at all (ENXIO): say what it is
+        mode = _stat_mode(path)
+        if mode is None or stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+            raise
+        raise _not_regular(error.errno, mode, path) from None
     try:
         info = os.fstat(handle)
         if not stat.S_ISREG(info.st_mode):
-            code = errno.EISDIR if stat.S_ISDIR(info.st_mode) else errno.EINVAL
-            raise OSError(code, f"{file_kind(info.st_mode)}, not a regular file: only regular files are read", str(path))
+            raise _not_regular(errno.EISDIR if stat.S_ISDIR(info.st_mode) else errno.EINVAL, info.st_mode, path)
         if info.st_size > limit:
-            raise OSError(errno.EFBIG, f"{info.st_size:,} bytes, more than the {limit:,} bytes read at most", str(path))
+            raise too_large(limit, path, info.st_size)
         os.set_blocking(handle, True)
         return open(handle, "rb")  # the caller closes it
     except BaseException:
@@ -55,18 +60,34 @@ def open_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES):
         raise
 
 
+def _not_regular(code: int, mode: int, path) -> OSError:
+    return OSError(code, f"{file_kind(mode)}, not a regular file: only regular files are read", str(path))
+
+
+def _stat_mode(path) -> int | None:
+    try:
+        return os.stat(path).st_mode
+    except OSError:
+        return None
+
+
 def read_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES) -> bytes:
     """The bytes of the regular file at ``path`` (see :func:`open_input`), at most ``limit`` of
     them: a file that grows past the bound while it is read is refused too."""
     with open_input(path, limit) as handle:
-        # read(n) reserves n bytes up front: ask for the size the file has (and one byte to see
-        # it grow), the bound only if it did grow.
-        size = os.fstat(handle.fileno()).st_size
-        data = handle.read(size + 1)
-        if size < len(data) <= limit:  # it grew while read
-            data += handle.read(limit + 1 - len(data))
+        return read_at_most(handle, limit, path, size=os.fstat(handle.fileno()).st_size)
+
+
+def read_at_most(handle, limit: int, name, size: int | None = None) -> bytes:
+    """The bytes of an open binary ``handle`` (a file, an archive member), at most ``limit``:
+    one byte past the bound is read, no more, to refuse a longer one with :func:`too_large`.
+    ``size``: what it should hold, when known: read(n) of a file reserves n bytes up front, so
+    that plus one byte is asked for (to see it grow), and on towards the bound only if it did."""
+    data = handle.read(limit + 1 if size is None else min(size, limit) + 1)
+    if size is not None and size < len(data) <= limit:  # it grew while read
+        data += handle.read(limit + 1 - len(data))
     if len(data) > limit:
-        raise OSError(errno.EFBIG, f"more than the {limit:,} bytes read at most", str(path))
+        raise too_large(limit, name)
     return data
 
 
@@ -107,6 +128,12 @@ def output_target(path: str | os.PathLike) -> Path:
         what = file_kind(info.st_mode) if target == path else f"a symlink to {file_kind(info.st_mode)}, {target}"
         raise MocapError(f"cannot write {path}: it is {what}, not a regular file (outputs replace regular files only; '-' writes to standard output)")
     return target
+
+
+def too_large(limit: int, name, size: int | None = None) -> OSError:
+    """The OSError (EFBIG) of an input over ``limit`` bytes (of ``size`` bytes, when known)."""
+    found = "more" if size is None else f"{size:,} bytes, more"
+    return OSError(errno.EFBIG, f"{found} than the {limit:,} bytes read at most", str(name))
 
 
 def atomic_write(path: str | os.PathLike, data: bytes) -> None:

@@ -57,18 +57,23 @@ from __future__ import annotations
 
 import datetime
 import glob as globlib
+import errno
 import io
 import itertools
 import json
+import lzma
 import os
+import queue
+import stat
 import struct
 import sys
 import tarfile
+import threading
 import time
 import zipfile
 import zlib
 from collections import Counter, deque
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import CancelledError, Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
@@ -82,6 +87,7 @@ from .dataset import (FORMAT, JOURNAL, KINDS, MANIFEST, OFFSETS, PARTIAL, RUN, V
 from .errors import BVHError, MocapError
 from .decouple import EXPONENT, GAIN
 from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from . import io as inputs
 from .io import atomic_write
 from .kernels import decouple_rotations
 from .roles import JointRoles, actor_height, hips_rest_height
@@ -98,9 +104,10 @@ _HEADER_BYTES = 128  # room reserved at the start of each data file for its .npy
 @dataclass(frozen=True)
 class _Item:
     """One clip to read: ``name`` (path inside SRC without .bvh), ``source`` (where it came
-    from, for the manifest and error messages), ``size`` in bytes, and where its bytes are: a
-    file ``path``, a ``member`` of the zip at ``path``, or ``data`` (a tar member already read).
-    Plain values only, so a batch of items can be sent to the workers of a cluster."""
+    from, for the manifest and error messages), ``size`` in bytes (listed: for batching and
+    progress only), and where its bytes are: a file ``path``, a ``member`` of the zip at
+    ``path``, ``data`` (a tar member already read), or ``refused``: why a tar member was not
+    read. Plain values only, so a batch of items can be sent to the workers of a cluster."""
 
     name: str
     source: str
@@ -108,20 +115,45 @@ class _Item:
     path: str | None = None
     member: str | None = None
     data: bytes | None = None
+    refused: str | None = None
 
-    def header(self):
+    def header(self, outcome: dict):
         """The clip's BVH header and its text for the kernel: the file's path when the header
-        came from the file's beginning (the kernel reads the rest), else the bytes."""
+        came from the file's beginning (the kernel reads the rest), else the bytes. Sets
+        ``outcome["bytes"]`` to the bytes read so far, also when the header then fails."""
+        outcome["bytes"] = 0
+        if self.refused is not None:
+            raise BVHError(self.source, None, f"cannot read the archive member: {self.refused}")
         if self.data is None and self.member is None:
             header, data = read_header(self.path)
-            return header, self.path if data is None else data
-        if self.data is not None:
-            return parse_header(self.data, self.source), self.data
-        try:
-            data = _zip(self.path).read(self.member)
-        except (zipfile.BadZipFile, zlib.error, OSError, EOFError, NotImplementedError) as error:  # a damaged member fails alone
-            raise BVHError(self.source, None, f"cannot read the archive member: {error}") from None
+            if data is None:
+                return header, self.path  # counted once the kernel has read the file
+            outcome["bytes"] = len(data)
+            return header, data
+        data = self.data if self.data is not None else _member_bytes(self)
+        outcome["bytes"] = len(data)
         return parse_header(data, self.source), data
+
+
+# What reading one zip member can raise (a damaged, truncated or unsupported member).
+_MEMBER_ERRORS = (zipfile.BadZipFile, zlib.error, lzma.LZMAError, OSError, EOFError, NotImplementedError, RuntimeError, ValueError)
+
+
+def _member_bytes(item: _Item) -> bytes:
+    """A zip member's bytes, checked before decompressing: not encrypted, at most
+    ``io.MAX_INPUT_BYTES`` declared, and no more than that read whatever it declares (a 1 MB zip
+    can hold a 1 GiB member). Any problem is that clip's BVHError."""
+    try:
+        info = _zip(item.path).getinfo(item.member)
+        if info.flag_bits & 0x1:
+            raise OSError(errno.EACCES, "encrypted: members are read without a password")
+        if info.file_size > inputs.MAX_INPUT_BYTES:
+            raise inputs.too_large(inputs.MAX_INPUT_BYTES, item.source, info.file_size)
+        with _zip(item.path).open(info) as member:
+            return inputs.read_at_most(member, inputs.MAX_INPUT_BYTES, item.source)
+    except _MEMBER_ERRORS as error:  # a damaged member fails alone
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else error
+        raise BVHError(item.source, None, f"cannot read the archive member: {reason}") from None
 
 
 _ZIPS: dict[str, zipfile.ZipFile] = {}
@@ -143,6 +175,17 @@ def _clip_name(relative: str) -> str:
     return relative[:-4] if relative.lower().endswith(".bvh") else relative
 
 
+def _listed_size(path: str) -> int:
+    """The size of a regular file within the bound (a stat, no open: listing stays fast), 0 for
+    anything else: a FIFO, device, dangling link or larger file is not read, its clip fails
+    with the reason when read."""
+    try:
+        info = os.stat(path)
+    except OSError:
+        return 0
+    return info.st_size if stat.S_ISREG(info.st_mode) and info.st_size <= inputs.MAX_INPUT_BYTES else 0
+
+
 def _folder(root: Path) -> list[_Item]:
     """The ``*.bvh`` files below ``root`` (any case; symlinked folders are not followed), by name.
     os.walk + plain strings: an archive of thousands of files is listed in milliseconds."""
@@ -151,16 +194,12 @@ def _folder(root: Path) -> list[_Item]:
         for name in names:
             if name.lower().endswith(".bvh"):
                 path = os.path.join(folder, name)
-                try:
-                    size = os.stat(path).st_size
-                except OSError:  # a dangling link, or gone since listed: its clip fails when read, with the reason
-                    size = 0
-                items.append(_Item(_clip_name(path[len(prefix):].replace(os.sep, "/")), path, size, path=path))
+                items.append(_Item(_clip_name(path[len(prefix):].replace(os.sep, "/")), path, _listed_size(path), path=path))
     return sorted(items, key=lambda i: i.name)
 
 
 def _files(paths, root: Path) -> list[_Item]:
-    items = [_Item(_clip_name(p.relative_to(root).as_posix()), str(p), p.stat().st_size, path=str(p)) for p in paths]
+    items = [_Item(_clip_name(p.relative_to(root).as_posix()), str(p), _listed_size(str(p)), path=str(p)) for p in paths]
     return sorted(items, key=lambda i: i.name)
 
 
@@ -189,14 +228,20 @@ def open_source(src: str | os.PathLike) -> _Source:
     if path.is_dir():
         return _Source(f"folder {path}", _folder(path))
     if path.is_file() and zipfile.is_zipfile(path):
-        archive = _zip(str(path))
+        try:
+            archive = _zip(str(path))
+        except (zipfile.BadZipFile, OSError, ValueError) as error:  # found a zip's end, but not a readable directory
+            raise MocapError(f"{path}: cannot read the zip archive ({type(error).__name__}: {error})") from None
         members = [m for m in archive.infolist() if not m.is_dir() and m.filename.lower().endswith(".bvh")]
-        items = [_Item(_clip_name(m.filename), f"{path}:{m.filename}", m.file_size, path=str(path), member=m.filename) for m in members]
+        # A member over the bound is refused unread: it counts 0 towards the progress bar's total.
+        items = [_Item(_clip_name(m.filename), f"{path}:{m.filename}", m.file_size if m.file_size <= inputs.MAX_INPUT_BYTES else 0,
+                       path=str(path), member=m.filename) for m in members]
         return _Source(f"zip {path}", sorted(items, key=lambda i: i.name), _close=lambda: _ZIPS.pop(str(path)).close())
     if path.is_file() and _is_tar(path):
         return _Source(f"tar {path}", None, _stream=lambda: _tar_stream(path))
     if any(c in text for c in "*?["):
-        matches = [Path(p) for p in globlib.glob(text, recursive=True) if p.lower().endswith(".bvh") and Path(p).is_file()]
+        # Anything but a folder: a FIFO or a device matched is that clip's failure, not skipped.
+        matches = [Path(p) for p in globlib.glob(text, recursive=True) if p.lower().endswith(".bvh") and not os.path.isdir(p)]
         if not matches:
             raise MocapError(f"no .bvh files match {text}")
         # Clip names are paths below the pattern's last folder without wildcards.
@@ -205,19 +250,40 @@ def open_source(src: str | os.PathLike) -> _Source:
         return _Source(f"glob {text}", _files(matches, root))
     if path.is_file():
         raise MocapError(f"{path}: not a folder, .zip or .tar(.gz/.xz) archive of BVH files")
+    if path.exists():  # a FIFO, a device: never opened
+        raise MocapError(f"{path}: {inputs.file_kind(path.stat().st_mode)}, not a folder, .zip or .tar(.gz/.xz) archive of BVH files")
     raise MocapError(f"{path}: no such folder or archive")
 
 
 def _tar_stream(path: Path) -> Iterator[_Item]:
-    """The .bvh members of a tar in archive order, each read as the stream passes it."""
+    """The .bvh members of a tar in archive order, each read as the stream passes it: only
+    regular files of at most ``io.MAX_INPUT_BYTES`` (checked before reading), others are
+    their clip's failure."""
+    limit = inputs.MAX_INPUT_BYTES
     try:
         with tarfile.open(path, mode="r|*") as archive:
             for member in archive:
-                if member.isfile() and member.name.lower().endswith(".bvh"):
-                    data = archive.extractfile(member).read()
-                    yield _Item(_clip_name(member.name), f"{path}:{member.name}", len(data), data=data)
+                if member.isdir() or not member.name.lower().endswith(".bvh"):
+                    continue
+                name, source = _clip_name(member.name), f"{path}:{member.name}"
+                if not member.isfile():
+                    yield _Item(name, source, 0, refused=f"{_tar_kind(member)}, not a regular file: only regular files are read")
+                elif member.size > limit:
+                    yield _Item(name, source, 0, refused=inputs.too_large(limit, source, member.size).strerror)
+                else:
+                    data = inputs.read_at_most(archive.extractfile(member), limit, source)
+                    yield _Item(name, source, len(data), data=data)
     except (tarfile.TarError, EOFError, OSError) as error:
         raise MocapError(f"{path}: cannot read the tar archive ({type(error).__name__}: {error})") from None
+
+
+def _tar_kind(member: tarfile.TarInfo) -> str:
+    """What a tar member that is not a regular file is, in words (as io.file_kind)."""
+    for test, kind in ((member.issym, "a symbolic link"), (member.islnk, "a hard link"), (member.isfifo, "a FIFO"),
+                       (member.ischr, "a character device"), (member.isblk, "a block device")):
+        if test():
+            return kind
+    return "a special file"
 
 
 # ----------------------------------------------------------------------------- .npy files written in pieces
@@ -290,7 +356,9 @@ def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], mode
 @dataclass
 class Summary:
     """What a run did: clips ok / failed (this run and earlier ones it resumed), frames,
-    bytes of BVH text read, seconds in total and split into reading headers, kernels (reading
+    bytes of BVH text read (what was read, not what files or archive members declare: a file
+    read whole, a member's decompressed bytes; a clip refused or failing before its text was
+    held counts 0), seconds in total and split into reading headers, kernels (reading
     and parsing the MOTION blocks, FK, features, contacts, model) and writing (headers and
     kernels summed over the threads or workers that ran them: they overlap)."""
 
@@ -434,15 +502,19 @@ def preprocess(
                "backend": get_backend()}
 
     finished_manifest(out)  # refuse a folder that is not ours before putting a lock file in it
-    out.mkdir(parents=True, exist_ok=True)
-    with FolderLock(out):  # held to the end: a second run on OUT fails at once
-        manifest = finished_manifest(out)  # again: another run may have changed it meanwhile
-        if manifest is not None:
-            if not overwrite:
-                return _already_finished(out, manifest, options, started)
-            remove_partial(out)
-            remove_dataset(out)
-        return _run(src, out, keep, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress, started)
+    source = open_source(src)  # a bad SRC fails before OUT is touched
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with FolderLock(out):  # held to the end: a second run on OUT fails at once
+            manifest = finished_manifest(out)  # again: another run may have changed it meanwhile
+            if manifest is not None:
+                if not overwrite:
+                    return _already_finished(out, manifest, options, started)
+                remove_partial(out)
+                remove_dataset(out)
+            return _run(source, out, keep, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress, started)
+    finally:
+        source.close()
 
 
 def _already_finished(out: Path, manifest: dict, options: dict, started: float) -> Summary:
@@ -466,7 +538,7 @@ def _summary_of(out: Path, manifest: dict, started: float) -> Summary:
                    failures=manifest["failures"], finished=True, seconds=time.perf_counter() - started)
 
 
-def _run(src, out: Path, keep, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress, started) -> Summary:
+def _run(source: _Source, out: Path, keep, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress, started) -> Summary:
     """The run itself, in ``out`` locked and free of other datasets: start or resume the journal
     in ``out/.partial``, process what it has not done, then move the finished files into place."""
     partial = out / PARTIAL
@@ -497,7 +569,6 @@ def _run(src, out: Path, keep, options, body_model, model, model_float32, batch_
     if kinds:
         _cut_data_files(partial, kinds, rows)
 
-    source = open_source(src)
     client, close_client = _client(cluster) if cluster is not None else (None, lambda: None)
     syncer = ThreadPoolExecutor(max_workers=1)  # flushes each batch's rows to disk in the background
     try:
@@ -518,6 +589,7 @@ def _run(src, out: Path, keep, options, body_model, model, model_float32, batch_
             results = _on_cluster(batches, max_batches, stopped, client, (keep, model, model_float32, get_backend()))
         for batch, outcomes, headers_s, kernels_s in results:
             record = {"batch": batch_number, "items": [item.name for item in batch], "clips": [], "failures": []}
+            nbytes = sum(outcome.get("bytes", 0) for outcome in outcomes)  # bytes read, not sizes declared
             times = [time.perf_counter()]
             arrays, rows, skeleton = _collect(batch, outcomes, skeleton, keep, record, rows, taken)
             if "skeleton" in record:  # the first clip parsed: now the row shapes are known
@@ -536,7 +608,6 @@ def _run(src, out: Path, keep, options, body_model, model, model_float32, batch_
             clips += record["clips"]
             failures += record["failures"]
             frames = sum(c["frames"] for c in record["clips"])
-            nbytes = sum(item.size for item in batch)
             summary.headers_s += headers_s
             summary.kernels_s += kernels_s
             summary.write_s += times[1] - times[0]
@@ -558,7 +629,6 @@ def _run(src, out: Path, keep, options, body_model, model, model_float32, batch_
         bar.close()
     finally:
         syncer.shutdown()
-        source.close()
         close_client()
     summary.clips_ok, summary.clips_failed = len(clips), len(failures)
     summary.failures = failures
@@ -614,15 +684,26 @@ def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tupl
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     in_flight = 3  # batches read ahead of the one being written: bounds memory
     running: deque = deque()
+    header_pool, kernel_pool = _Workers(min(2, cores), "headers"), _Workers(1, "kernels")
+    # Held during each kernel call. A stopped run waits for the call under way (it ends: its reads
+    # never block) so that no thread is in Rust when the interpreter exits (one returning from
+    # Rust then aborts the process: "FATAL: exception not rethrown"), but it does not wait for
+    # a header thread (pure Python) or for batches not started.
+    in_kernels, stopping = threading.Lock(), threading.Event()
 
-    with ThreadPoolExecutor(max_workers=min(2, cores)) as header_pool, ThreadPoolExecutor(max_workers=1) as kernel_pool:
+    def compute(batch, prepared: Future):
+        ready = prepared.result()
+        with in_kernels:
+            if stopping.is_set():
+                raise CancelledError
+            return _kernels(batch, ready, keep, model, model_float32)
 
-        def submit_next() -> None:
-            batch = next(batches, None)  # taken here, in order (a tar stream is read here)
-            if batch is not None:
-                prepared = header_pool.submit(_prepare, batch, keep, model)
-                running.append((batch, kernel_pool.submit(lambda: _kernels(batch, prepared.result(), keep, model, model_float32))))
+    def submit_next() -> None:
+        batch = next(batches, None)  # taken here, in order (a tar stream is read here)
+        if batch is not None:
+            running.append((batch, kernel_pool.submit(compute, batch, header_pool.submit(_prepare, batch, keep, model))))
 
+    try:
         for _ in range(in_flight):
             submit_next()
         for count in itertools.count():
@@ -635,6 +716,51 @@ def _local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tupl
             result = computed.result()
             submit_next()
             yield (batch, *result)
+    finally:  # done, or stopped by Ctrl-C or an error: the batches read ahead are dropped
+        header_pool.close()
+        kernel_pool.close()
+        with in_kernels:
+            stopping.set()
+
+
+class _Workers:
+    """Daemon threads taking tasks in order (``submit`` returns a Future), for the pipeline of
+    :func:`_local`. Not a ThreadPoolExecutor: that one runs all its queued tasks when closed and
+    joins its threads at interpreter exit, so a Ctrl-C waited for the batches read ahead (5.5 s
+    with a model) or for ever for a blocked read. ``close`` cancels the tasks not started; a
+    running one ends on its own and nothing waits for it here."""
+
+    def __init__(self, count: int, name: str):
+        self._count = count
+        self._tasks: queue.SimpleQueue = queue.SimpleQueue()
+        for number in range(count):
+            threading.Thread(target=self._work, name=f"preprocess-{name}-{number}", daemon=True).start()
+
+    def submit(self, call, *args) -> Future:
+        future: Future = Future()
+        self._tasks.put((future, call, args))
+        return future
+
+    def _work(self) -> None:
+        while (task := self._tasks.get()) is not None:
+            future, call, args = task
+            if future.set_running_or_notify_cancel():
+                try:
+                    future.set_result(call(*args))
+                except BaseException as error:  # handed to whoever takes the result
+                    future.set_exception(error)
+            del task, future, call, args  # hold no batch while waiting for the next task
+
+    def close(self) -> None:
+        while True:
+            try:
+                task = self._tasks.get_nowait()
+            except queue.Empty:
+                break
+            if task is not None:
+                task[0].cancel()
+        for _ in range(self._count):
+            self._tasks.put(None)
 
 
 def _client(cluster):
@@ -733,7 +859,7 @@ def _prepare(batch: list[_Item], keep: tuple[str, ...], model) -> _Prepared:
     by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
     for k, item in enumerate(batch):
         try:
-            header, text = item.header()
+            header, text = item.header(outcomes[k])
         except BVHError as error:
             outcomes[k]["error"] = str(error)
             continue
@@ -778,8 +904,11 @@ def _kernels(batch: list[_Item], prepared: _Prepared, keep: tuple[str, ...], mod
         results = kernels().clip_pipeline_many(
             group.clips, group.parents, group.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE,
             "positions" in keep, "rotations" in keep or use_model, requests, "contacts" in keep, not use_model,
+            max_bytes=inputs.MAX_INPUT_BYTES,
         )
-        for k, header, result in zip(group.indices, group.headers, results):
+        for k, header, clip, result in zip(group.indices, group.headers, group.clips, results):
+            if isinstance(clip[0], str) and not isinstance(result, OSError):  # the kernel read the file whole
+                outcomes[k]["bytes"] = batch[k].size
             if isinstance(result, Exception):
                 outcomes[k]["error"] = str(_clip_error(batch[k], header, result))
                 continue

@@ -10,7 +10,7 @@ use pyo3::types::{PyBytes, PyList};
 
 use super::features::{array2, gait_joints, thigh_reference_values};
 use super::{contiguous, to_py, OwnedLayout};
-use crate::clip::{clip_outputs, ClipInput, ClipOutputs, ClipRequest};
+use crate::clip::{clip_outputs, read_input, ClipInput, ClipOutputs, ClipRequest, ReadError};
 use crate::error::KernelError;
 use crate::features::N_FEATURES;
 use crate::gait::{BodyScale, FeatureRequest, GaitParams};
@@ -30,7 +30,7 @@ enum Text<'a> {
 
 enum Failure {
     Kernel(KernelError),
-    Read(std::io::Error),
+    Read(ReadError),
 }
 
 /// A float array in the precision asked for, converted inside the parallel work.
@@ -90,15 +90,16 @@ type ClipArgs<'py> = (
 ///
 /// `clips`: per clip `(source, start, frames, channels, rotation_columns, orders,
 /// position_columns, offsets, frame_time, height, hips_rest_height)`: `source` the file's bytes
-/// or its path (read here), `start` where its MOTION block begins, the layout arrays as for
+/// or its path (read here: a regular file of at most `max_bytes`, by default
+/// `expressive_mocap.io.MAX_INPUT_BYTES`), `start` where its MOTION block begins, the layout arrays as for
 /// `read_motion_blocks`, the body scale as for `clip_gait_many`. `parents` [J]; `roles` the 7
 /// gait joints. Kept per clip: world `positions` [F, J, 3], local `rotations` [F, J, 4], one
 /// causal feature array [F, 19] per `features` request `(floor or None, thigh_reference [2, 4]
 /// or None)`, offline `contacts` bool [F, 2]; float arrays in float32 when `float32`. Returns per
 /// clip `(positions or None, rotations or None, [features...], contacts or None)`, or a
-/// `ParseError` (malformed block) or `OSError` (unreadable file) instance in its place.
+/// `ParseError` (malformed block) or `OSError` (unreadable or refused file) instance in its place.
 #[pyfunction]
-#[pyo3(signature = (clips, parents, roles, height_threshold, speed_threshold, min_duration, floor_percentile, positions, rotations, features, contacts, float32))]
+#[pyo3(signature = (clips, parents, roles, height_threshold, speed_threshold, min_duration, floor_percentile, positions, rotations, features, contacts, float32, max_bytes=None))]
 #[allow(
     clippy::too_many_arguments,
     clippy::too_many_lines,
@@ -118,8 +119,17 @@ fn clip_pipeline_many<'py>(
     features: Vec<(Option<f64>, Option<PyReadonlyArray2<'py, f64>>)>,
     contacts: bool,
     float32: bool,
+    max_bytes: Option<u64>,
 ) -> PyResult<Vec<Py<PyAny>>> {
     use rayon::prelude::*;
+    // One bound for every reader of BVH text: the package's, unless the caller gives one.
+    let max_bytes = match max_bytes {
+        Some(bound) => bound,
+        None => py
+            .import("expressive_mocap.io")?
+            .getattr("MAX_INPUT_BYTES")?
+            .extract()?,
+    };
     let mut requests = Vec::with_capacity(features.len());
     for (floor, reference) in &features {
         let thigh_reference =
@@ -191,7 +201,7 @@ fn clip_pipeline_many<'py>(
                 let data = match text {
                     Text::Bytes(bytes) => *bytes,
                     Text::Path(path) => {
-                        read = std::fs::read(path).map_err(Failure::Read)?;
+                        read = read_input(path, max_bytes).map_err(Failure::Read)?;
                         &read[..]
                     }
                 };
@@ -265,9 +275,16 @@ fn clip_pipeline_many<'py>(
         .collect()
 }
 
-/// An `OSError` with `errno` and `strerror` as Python's own `open` gives them (Rust's message
-/// without its " (os error N)" suffix), so both backends name a failed read the same way.
-fn os_error(error: &std::io::Error) -> PyErr {
+/// An `OSError` with `errno` and `strerror` as Python's own `open` (Rust's message without its
+/// " (os error N)" suffix) or `io.open_input` gives them, so both backends name a failed read
+/// the same way.
+fn os_error(error: &ReadError) -> PyErr {
+    let error = match error {
+        ReadError::Refused { errno, message } => {
+            return PyOSError::new_err((*errno, message.clone()))
+        }
+        ReadError::Os(error) => error,
+    };
     match error.raw_os_error() {
         Some(code) => {
             let text = error.to_string();

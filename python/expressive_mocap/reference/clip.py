@@ -7,6 +7,7 @@ import os
 
 import numpy as np
 
+from .. import io
 from .fk import forward_kinematics
 from .gait import GAIT_ROLES, clip_gait_many
 from .motion_block import read_motion_blocks
@@ -25,12 +26,15 @@ def clip_pipeline_many(
     features,
     contacts: bool,
     float32: bool,
+    max_bytes: int | None = None,
 ) -> list:
     """Per clip ``(source, start, frames, channels, rotation_columns, orders, position_columns,
     offsets, frame_time, height, hips_rest_height)`` (``source``: the bytes, or a path read
-    here): ``(positions [F, J, 3] or None, rotations [F, J, 4] or None, [features [F, 19] per
-    (floor, thigh_reference) request], contacts bool [F, 2] or None)``, float32 if asked; a
-    ``ParseError`` or ``OSError`` in the place of a clip whose block or file cannot be read."""
+    here with :func:`~expressive_mocap.io.read_input`: a regular file of at most ``max_bytes``,
+    by default ``io.MAX_INPUT_BYTES``): ``(positions [F, J, 3] or None, rotations [F, J, 4] or
+    None, [features [F, 19] per (floor, thigh_reference) request], contacts bool [F, 2] or
+    None)``, float32 if asked; a ``ParseError`` or ``OSError`` in the place of a clip whose
+    block or file cannot be read (or is refused: not a regular file, or over the bound)."""
     roles = [int(r) for r in roles]
     if len(roles) != 7:
         raise ValueError(f"argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {len(roles)}")
@@ -40,8 +44,7 @@ def clip_pipeline_many(
     for source, start, frames, channels, *layout, frame_time, height, hips_rest_height in clips:
         if isinstance(source, (str, os.PathLike)):
             try:
-                with open(source, "rb") as handle:
-                    source = handle.read()
+                source = io.read_input(source, io.MAX_INPUT_BYTES if max_bytes is None else max_bytes)
             except OSError as error:
                 out.append(OSError(error.errno, error.strerror) if error.errno is not None else error)
                 continue
