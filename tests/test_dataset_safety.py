@@ -319,3 +319,11 @@ def test_a_failed_background_flush_stops_the_run(clips, tmp_path, monkeypatch):
     with pytest.raises(em.MocapError, match=r"cannot write .*\.npy: Input/output error"):
         run(clips, tmp_path / "ds", batch_mb=1e-6)
     assert not (tmp_path / "ds" / "manifest.json").exists()
+
+
+def test_a_bad_source_leaves_the_output_folder_untouched(tmp_path):
+    out = tmp_path / "ds"
+    for _ in range(2):  # twice: a first failed run must not change what the second says
+        with pytest.raises(em.MocapError, match="no such folder or archive"):
+            run(tmp_path / "nothing", out)
+    assert not out.exists()
