@@ -47,7 +47,7 @@ from .ik import two_bone_ik
 from .io import atomic_write, check_keys, finite_array, read_model_file
 from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
 from .motion import Motion, Skeleton
-from .roles import JointRoles, actor_height
+from .roles import JointRoles, actor_height, facing_yaw
 
 FORMAT = "expressive-mocap exaggeration model"
 # 3: every training cycle kept (cycle_trajectories, cycle_performance); 2: lower / upper measured
@@ -173,9 +173,7 @@ def cycle_heading(motion: Motion, roles: JointRoles, cycle: Cycle, positions: np
     travel[1] = 0.0
     if np.linalg.norm(travel) >= 0.05 * actor_height(motion.skeleton, roles):
         return _yaw(travel)
-    left, right = positions[cycle.start : cycle.end + 1, roles.upper_legs[0]], positions[cycle.start : cycle.end + 1, roles.upper_legs[1]]
-    side = (left - right).mean(axis=0)
-    return _yaw(np.array([-side[2], 0.0, side[0]]))  # +X left, +Z forward: forward = up x left
+    return facing_yaw(positions[cycle.start : cycle.end + 1], roles)
 
 
 def _without_heading(rotations: np.ndarray, hips: int, yaw: np.ndarray) -> np.ndarray:
