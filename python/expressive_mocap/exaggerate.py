@@ -803,9 +803,11 @@ def _frame_yaw(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], posit
 
 
 def motion_dofs(model: ExaggerationModel, motion: Motion, roles: JointRoles, yaw: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """DOFs ``[F, D]`` of every frame of ``motion`` (heading ``yaw [F]`` removed, rotations relative to ``reference``)."""
+    """DOFs ``[F, D]`` of every frame of ``motion`` (heading ``yaw [F]`` removed, rotations relative to
+    ``reference``; the hips height in units of the motion's own actor height, as in training, so a
+    model trained in centimetres edits a motion in metres)."""
     rot = rotations_to_dofs(_without_heading(motion.rotations, roles.hips, yaw), reference, model.representation, model.orders)
-    heights = motion.positions()[:, roles.hips, 1] / model.height
+    heights = motion.positions()[:, roles.hips, 1] / actor_height(motion.skeleton, roles)
     return np.concatenate([rot, heights[:, None]], axis=1)
 
 
@@ -897,7 +899,7 @@ def exaggerate(
     parent = motion.skeleton.parents[roles.hips]
     parent_rot = world_rotations[:, parent] if parent >= 0 else np.broadcast_to(IDENTITY, (motion.n_frames, 4))
     lift = np.zeros((motion.n_frames, 3))
-    lift[:, 1] = (new[:, -1] - X[:, -1]) * model.height
+    lift[:, 1] = (new[:, -1] - X[:, -1]) * actor_height(motion.skeleton, roles)  # the motion's units, not the model's
     translations[:, roles.hips] += quat.rotate(quat.conjugate(parent_rot), lift)
     out = Motion(motion.skeleton, rotations, translations, motion.frame_time)
     correction = residual = 0.0
@@ -945,6 +947,7 @@ def lock_stance_feet(original: Motion, edited: Motion, contacts: np.ndarray, rol
     world_in, pos_in = forward_kinematics(original.rotations, original.translations, parents)
     world_out, pos_out = forward_kinematics(edited.rotations, edited.translations, parents)
     weights = _contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
+    height = actor_height(original.skeleton, roles)  # tolerances in the motion's units
     rotations = edited.rotations.copy()
     correction = 0.0
     legs = []
@@ -956,7 +959,7 @@ def lock_stance_feet(original: Motion, edited: Motion, contacts: np.ndarray, rol
             raise MocapError(f"foot locking needs a two-bone leg: {names[foot]} is not the grandchild of {names[hip]}; use lock_feet=False")
         # Frames to lock: weighted, and where the edit moved or turned the foot at all (elsewhere
         # the IK would only add rounding).
-        moved = (np.linalg.norm(pos_out[:, foot] - pos_in[:, foot], axis=1) > 1e-9) | (quat.angle(quat.mul(quat.conjugate(world_in[:, foot]), world_out[:, foot])) > 1e-9)
+        moved = (np.linalg.norm(pos_out[:, foot] - pos_in[:, foot], axis=1) > 1e-11 * height) | (quat.angle(quat.mul(quat.conjugate(world_in[:, foot]), world_out[:, foot])) > 1e-9)
         frames = np.flatnonzero((weights[:, s] > 0) & moved)
         if not len(frames):
             continue
