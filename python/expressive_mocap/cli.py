@@ -540,7 +540,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = commands.add_parser("exaggerate", help="exaggerate or diminish a motion with a model from `rank -o MODEL.npz`")
     p.add_argument("--model", required=True, metavar="MODEL.npz", help="exaggeration model")
     p.add_argument("--input", required=True, metavar="IN.bvh", help="the motion (same skeleton and action)")
-    p.add_argument("--from", dest="current", type=float, metavar="K0", help="its current intensity (default: estimated from the mappings)")
+    p.add_argument("--from", dest="current", type=float, metavar="K0",
+                   help="its current intensity (default: estimated by least squares over the key DOFs' mapped coefficients, each weighted "
+                   "by how well the mapping predicts it; printed with its uncertainty and fit residual, with a warning when outside the trained range)")
     p.add_argument("--to", type=float, required=True, metavar="K1", help="target intensity (beyond the trained range extrapolates)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     p.add_argument("--margin", type=float, default=0.1, help="DOFs stay within the training range widened by this share of its width (default 0.1)")
