@@ -238,3 +238,15 @@ def test_dataset1_walks_are_estimated_near_their_own_intensity(bandai1_dir):
     model = train([clips], [1, 2, 3])
     k = [exaggerate(model, clip, 2.0, lock_feet=False)[1].estimate.k for clip in clips]
     np.testing.assert_allclose(k, [1, 2, 3], atol=0.2)
+
+
+def test_blend_command_says_how_the_second_motion_was_placed(bandai2_dir, tmp_path, capsys):
+    """The README's example on real clips: the hips continue (no step over 5 cm a frame; before:
+    24.6 cm), and the command says which joint carries the path and how the wave was placed."""
+    from expressive_mocap.cli import main
+
+    out = tmp_path / "blend.bvh"
+    args = [str(bandai2_dir / WALK), str(bandai2_dir / WAVE), "--body-window", "30:60", "--expressive-window", "60:75", "-o", str(out)]
+    assert main(["blend", *args]) == 0
+    assert "continues the path of Hips from frame 30: turned" in capsys.readouterr().out
+    assert hips_steps(em.read_bvh(out)).max() < 5.0

@@ -275,15 +275,19 @@ def cmd_mix(args) -> int:
 
 
 def cmd_blend(args) -> int:
-    from .decouple import blend
+    from .decouple import blend, blend_alignment
 
     first, second = read_bvh(args.first), read_bvh(args.second)
+    expressive_window = None if args.naive else args.expressive_window or args.body_window
     if args.naive:
         out = blend(first, second, None, args.body_window)
     else:
-        out = blend(first, second, _model(args), args.body_window, args.expressive_window or args.body_window, args.gain, args.exponent)
+        out = blend(first, second, _model(args), args.body_window, expressive_window, args.gain, args.exponent)
     write_bvh(out, args.output)
+    a = blend_alignment(first, second, args.body_window, expressive_window)
     print(f"wrote {args.output}: {out.n_frames} frames")
+    print(f"  {args.second} continues the path of {first.skeleton.names[a.joint]} from frame {a.anchor}: turned {a.turn:.1f} degrees "
+          f"about the vertical and moved {np.linalg.norm(a.shift):.4g} (file units) on the floor")
     return 0
 
 

@@ -151,6 +151,41 @@ def _turned(motion: Motion, carrier: int, degrees: float, pivot: np.ndarray, to:
     return Motion(motion.skeleton, rotations, translations, motion.frame_time)
 
 
+def _second_start(body_window: tuple[int, int], expressive_window: tuple[int, int] | None) -> int:
+    """The output frame where a blend's second motion starts: the earlier window's start."""
+    return min(body_window[0], expressive_window[0]) if expressive_window is not None else body_window[0]
+
+
+@dataclass(frozen=True)
+class BlendAlignment:
+    """How :func:`blend` places the second motion: ``joint`` carries the path (index), ``anchor``
+    the output frame (the body window's start); the second motion is turned ``turn`` degrees about
+    the vertical through its ``joint``'s position ``pivot [3]`` at the anchor, then moved by
+    ``shift [3]`` on the floor plane (file units)."""
+
+    joint: int
+    anchor: int
+    turn: float
+    pivot: np.ndarray
+    shift: np.ndarray
+
+
+def blend_alignment(first: Motion, second: Motion, body_window: tuple[int, int], expressive_window: tuple[int, int] | None = None,
+                    roles: JointRoles | None = None, first_positions: np.ndarray | None = None) -> BlendAlignment:
+    """The placement of ``second`` that :func:`blend` uses with these windows."""
+    roles = roles or JointRoles.find(first.skeleton)
+    start = _second_start(body_window, expressive_window)
+    frames = start + second.n_frames
+    anchor = min(body_window[0], frames - 1)
+    i, j = _on_timeline(first, 0, frames)[anchor], _on_timeline(second, start, frames)[anchor]
+    joint = min(path_joint(m.translations, m.skeleton, roles) for m in (first, second))  # the higher on the chain
+    a = first.positions() if first_positions is None else first_positions
+    b = second.positions()
+    turn = _facing_at(a, roles, i, first.fps) - _facing_at(b, roles, j, second.fps)
+    turn = (turn + 180.0) % 360.0 - 180.0
+    return BlendAlignment(joint, int(anchor), float(turn), b[j, joint].copy(), (a[i, joint] - b[j, joint]) * [1.0, 0.0, 1.0])
+
+
 def blend(first: Motion, second: Motion, model: BodyMechanicsModel | None, body_window: tuple[int, int],
           expressive_window: tuple[int, int] | None = None, gain: float = GAIN, exponent: float = EXPONENT,
           roles: JointRoles | None = None) -> Motion:
@@ -161,21 +196,20 @@ def blend(first: Motion, second: Motion, model: BodyMechanicsModel | None, body_
     upper legs, averaged over a second around the anchor) and moved on the floor plane to where
     ``first``'s path is; both applied to the joint that carries the path (:func:`path_joint`: the
     hips on Bandai-Namco files, whose root never moves). In the body window the path follows the
-    blend of both motions' steps, so it never moves faster than either. Without a model (or without
-    an expressive window) this is the naive blend: whole poses over ``body_window``."""
+    blend of both motions' steps, so it never moves faster than either (:func:`blend_alignment`
+    tells the turn and the move). Without a model (or without an expressive window) this is the
+    naive blend: whole poses over ``body_window``."""
     _check_same_skeleton(first, second, "blend")
     roles = roles or JointRoles.find(first.skeleton)
-    windows = [body_window] + ([expressive_window] if expressive_window is not None else [])
-    start = min(w[0] for w in windows)
+    start = _second_start(body_window, expressive_window)
     frames = start + second.n_frames
     i, j = _on_timeline(first, 0, frames), _on_timeline(second, start, frames)
     body_weights = _weights(frames, body_window)
 
-    carrier = min(path_joint(m.translations, m.skeleton, roles) for m in (first, second))  # the higher on the chain
-    anchor = min(body_window[0], frames - 1)
-    first_positions, second_positions = first.positions(), second.positions()
-    turn = _facing_at(first_positions, roles, i[anchor], first.fps) - _facing_at(second_positions, roles, j[anchor], second.fps)
-    second = _turned(second, carrier, turn, second_positions[j[anchor], carrier], first_positions[i[anchor], carrier])
+    first_positions = first.positions()
+    alignment = blend_alignment(first, second, body_window, expressive_window, roles, first_positions)
+    carrier = alignment.joint
+    second = _turned(second, carrier, alignment.turn, alignment.pivot, alignment.pivot + alignment.shift)
 
     if model is None or expressive_window is None:
         rotations = quat.slerp(first.rotations[i], second.rotations[j], body_weights[:, None])
