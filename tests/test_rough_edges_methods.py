@@ -250,3 +250,32 @@ def test_blend_command_says_how_the_second_motion_was_placed(bandai2_dir, tmp_pa
     assert main(["blend", *args]) == 0
     assert "continues the path of Hips from frame 30: turned" in capsys.readouterr().out
     assert hips_steps(em.read_bvh(out)).max() < 5.0
+
+
+def test_blend_aligns_a_moving_root(tmp_path):
+    """On a skeleton whose root is the hips (CMU-style), the root carries the path: a second walk
+    heading +X, blended into one heading +Z, walks on along +Z without a jump. Before: it turned
+    90 degrees over the window (its path kept its own heading)."""
+    from conftest import stick_walker
+
+    frames = np.arange(60)
+    hips = np.stack([np.zeros(60), np.full(60, 90.0), 4.0 * frames], axis=1)  # 4 cm a frame along +Z
+    feet = [hips + [side, -85.0, 0.0] for side in (10.0, -10.0)]
+    first = stick_walker(hips, *feet)
+    second = turned_and_moved_root(stick_walker(hips * [1, 1, 0.5], *(f * [1, 1, 0.5] for f in feet)), 90.0)
+    out = blend(first, second, None, (20, 30))
+    path = out.positions()[:, 0]
+    steps = np.diff(path, axis=0)
+    assert np.linalg.norm(steps[:, [0, 2]], axis=1).max() <= 4.0 + 1e-9
+    np.testing.assert_allclose(steps[35:, 0], 0.0, atol=1e-9)  # still along +Z, at the second's 2 cm a frame
+    np.testing.assert_allclose(steps[35:, 2], 2.0, atol=1e-9)
+
+
+def turned_and_moved_root(motion: em.Motion, degrees: float) -> em.Motion:
+    """The whole motion turned about the vertical through the origin (its root turned and its path
+    rotated with it)."""
+    rotations, translations = motion.rotations.copy(), motion.translations.copy()
+    turn = quat.about("Y", degrees)
+    rotations[:, 0] = quat.mul(turn, rotations[:, 0])
+    translations[:, 0] = quat.rotate(np.broadcast_to(turn, (motion.n_frames, 4)), translations[:, 0])
+    return em.Motion(motion.skeleton, rotations, translations, motion.frame_time)
