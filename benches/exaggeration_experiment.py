@@ -290,7 +290,7 @@ def main() -> None:
     report += [
         f"## Exaggerating the held-out `{HELD_OUT}`",
         "",
-        "`k0` estimated by least squares on the mappings; every DOF clamped to the range seen in training (rotation-vector "
+        "`k0` estimated by least squares on the mappings, each key coefficient weighted by how well the mapping predicts it; every DOF clamped to the range seen in training (rotation-vector "
         "components measured from the people's mean rotations, as the edit measures them) widened by 10% of its width "
         "(the default margin); changes cross-faded over 0.15 s at cycle boundaries; foot locking: during the input's "
         "contacts each ankle and foot are pinned to the input's with two-bone leg IK, eased in and out over 0.1 s. "

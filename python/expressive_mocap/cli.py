@@ -359,15 +359,19 @@ def cmd_mix(args) -> int:
 
 
 def cmd_blend(args) -> int:
-    from .decouple import blend
+    from .decouple import blend, blend_alignment
 
     first, second = read_bvh(args.first), read_bvh(args.second)
+    expressive_window = None if args.naive else args.expressive_window or args.body_window
     if args.naive:
         out = blend(first, second, None, args.body_window)
     else:
-        out = blend(first, second, _model(args), args.body_window, args.expressive_window or args.body_window, args.gain, args.exponent)
+        out = blend(first, second, _model(args), args.body_window, expressive_window, args.gain, args.exponent)
     write_bvh(out, args.output)
+    a = blend_alignment(first, second, args.body_window, expressive_window)
     print(f"wrote {args.output}: {out.n_frames} frames")
+    print(f"  {args.second} continues the path of {first.skeleton.names[a.joint]} from frame {a.anchor}: turned {a.turn:.1f} degrees "
+          f"about the vertical and moved {np.linalg.norm(a.shift):.4g} (file units) on the floor")
     return 0
 
 
@@ -635,7 +639,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = commands.add_parser("exaggerate", help="exaggerate or diminish a motion with a model from `rank -o MODEL.npz`")
     p.add_argument("--model", required=True, metavar="MODEL.npz", help="exaggeration model")
     p.add_argument("--input", required=True, metavar="IN.bvh", help="the motion (same skeleton and action)")
-    p.add_argument("--from", dest="current", type=_finite, metavar="K0", help="its current intensity (default: estimated from the mappings)")
+    p.add_argument("--from", dest="current", type=_finite, metavar="K0",
+                   help="its current intensity (default: estimated by least squares over the key DOFs' mapped coefficients, each weighted "
+                   "by how well the mapping predicts it; printed with its uncertainty and fit residual, with a warning when outside the trained range)")
     p.add_argument("--to", type=_finite, required=True, metavar="K1", help="target intensity (beyond the trained range extrapolates)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     p.add_argument("--margin", type=_finite, default=0.1, help="DOFs stay within the training range widened by this share of its width (default 0.1)")

@@ -16,11 +16,13 @@ import numpy as np
 from . import quat
 from .errors import MocapError
 from .features import mean_rotation
-from .kernels import compose_rotations, decouple_rotations
+from .kernels import compose_rotations, decouple_rotations, forward_kinematics
 from .motion import Motion
+from .roles import JointRoles, facing_yaw, path_joint
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
 EXPONENT = 4.0  # b
+IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 class BodyMechanicsModel(Protocol):
@@ -121,19 +123,93 @@ def _on_timeline(motion: Motion, start: int, frames: int) -> np.ndarray:
     return np.clip(np.arange(frames) - start, 0, motion.n_frames - 1)
 
 
+FACING_SECONDS = 1.0  # the facing at the anchor is averaged over about a gait cycle (the pelvis swings)
+
+
+def _facing_at(positions: np.ndarray, roles: JointRoles, frame: int, fps: float) -> float:
+    half = max(1, int(round(FACING_SECONDS * fps / 2)))
+    return facing_yaw(positions[max(0, frame - half) : frame + half + 1], roles)
+
+
+def _turned(motion: Motion, carrier: int, degrees: float, pivot: np.ndarray, to: np.ndarray) -> Motion:
+    """``motion`` turned ``degrees`` about the vertical through its carrier's world position
+    ``pivot`` and moved on the floor plane so that the pivot lands on ``to``: the carrier's world
+    rotation pre-multiplied by the turn, its world path rotated with it (heights kept)."""
+    world_rotations, positions = motion.fk()
+    turn = quat.about("Y", degrees)
+    parent = motion.skeleton.parents[carrier]
+    if parent >= 0:
+        parent_rotation, parent_position = world_rotations[:, parent], positions[:, parent]
+    else:
+        parent_rotation, parent_position = np.broadcast_to(IDENTITY, (motion.n_frames, 4)), np.zeros((motion.n_frames, 3))
+    path = positions[:, carrier] - pivot * [1.0, 0.0, 1.0]
+    path = quat.rotate(np.broadcast_to(turn, (motion.n_frames, 4)), path) + to * [1.0, 0.0, 1.0]
+    rotations, translations = motion.rotations.copy(), motion.translations.copy()
+    inverse = quat.conjugate(parent_rotation)
+    rotations[:, carrier] = quat.mul(inverse, quat.mul(turn[None], world_rotations[:, carrier]))
+    translations[:, carrier] = quat.rotate(inverse, path - parent_position)
+    return Motion(motion.skeleton, rotations, translations, motion.frame_time)
+
+
+def _second_start(body_window: tuple[int, int], expressive_window: tuple[int, int] | None) -> int:
+    """The output frame where a blend's second motion starts: the earlier window's start."""
+    return min(body_window[0], expressive_window[0]) if expressive_window is not None else body_window[0]
+
+
+@dataclass(frozen=True)
+class BlendAlignment:
+    """How :func:`blend` places the second motion: ``joint`` carries the path (index), ``anchor``
+    the output frame (the body window's start); the second motion is turned ``turn`` degrees about
+    the vertical through its ``joint``'s position ``pivot [3]`` at the anchor, then moved by
+    ``shift [3]`` on the floor plane (file units)."""
+
+    joint: int
+    anchor: int
+    turn: float
+    pivot: np.ndarray
+    shift: np.ndarray
+
+
+def blend_alignment(first: Motion, second: Motion, body_window: tuple[int, int], expressive_window: tuple[int, int] | None = None,
+                    roles: JointRoles | None = None, first_positions: np.ndarray | None = None) -> BlendAlignment:
+    """The placement of ``second`` that :func:`blend` uses with these windows."""
+    roles = roles or JointRoles.find(first.skeleton)
+    start = _second_start(body_window, expressive_window)
+    frames = start + second.n_frames
+    anchor = min(body_window[0], frames - 1)
+    i, j = _on_timeline(first, 0, frames)[anchor], _on_timeline(second, start, frames)[anchor]
+    joint = min(path_joint(m.translations, m.skeleton, roles) for m in (first, second))  # the higher on the chain
+    a = first.positions() if first_positions is None else first_positions
+    b = second.positions()
+    turn = _facing_at(a, roles, i, first.fps) - _facing_at(b, roles, j, second.fps)
+    turn = (turn + 180.0) % 360.0 - 180.0
+    return BlendAlignment(joint, int(anchor), float(turn), b[j, joint].copy(), (a[i, joint] - b[j, joint]) * [1.0, 0.0, 1.0])
+
+
 def blend(first: Motion, second: Motion, model: BodyMechanicsModel | None, body_window: tuple[int, int],
-          expressive_window: tuple[int, int] | None = None, gain: float = GAIN, exponent: float = EXPONENT) -> Motion:
+          expressive_window: tuple[int, int] | None = None, gain: float = GAIN, exponent: float = EXPONENT,
+          roles: JointRoles | None = None) -> Motion:
     """Blend from ``first`` to ``second``, body mechanics over ``body_window`` and the expressive
     component over ``expressive_window`` (output frames ``(start, end)``; slerp with smoothstep
-    weights). ``second`` starts at the earlier window's start; its root trajectory is moved so
-    that it continues ``first``'s at the start of the body window. Without a model (or without an
-    expressive window) this is the naive blend: whole poses over ``body_window``."""
+    weights). ``second`` starts at the earlier window's start. At the start of the body window
+    (the anchor) it is turned about the vertical to face where ``first`` faces (the facing from the
+    upper legs, averaged over a second around the anchor) and moved on the floor plane to where
+    ``first``'s path is; both applied to the joint that carries the path (:func:`path_joint`: the
+    hips on Bandai-Namco files, whose root never moves). In the body window the path follows the
+    blend of both motions' steps, so it never moves faster than either (:func:`blend_alignment`
+    tells the turn and the move). Without a model (or without an expressive window) this is the
+    naive blend: whole poses over ``body_window``."""
     _check_same_skeleton(first, second, "blend")
-    windows = [body_window] + ([expressive_window] if expressive_window is not None else [])
-    start = min(w[0] for w in windows)
+    roles = roles or JointRoles.find(first.skeleton)
+    start = _second_start(body_window, expressive_window)
     frames = start + second.n_frames
     i, j = _on_timeline(first, 0, frames), _on_timeline(second, start, frames)
     body_weights = _weights(frames, body_window)
+
+    first_positions = first.positions()
+    alignment = blend_alignment(first, second, body_window, expressive_window, roles, first_positions)
+    carrier = alignment.joint
+    second = _turned(second, carrier, alignment.turn, alignment.pivot, alignment.pivot + alignment.shift)
 
     if model is None or expressive_window is None:
         rotations = quat.slerp(first.rotations[i], second.rotations[j], body_weights[:, None])
@@ -143,15 +219,21 @@ def blend(first: Motion, second: Motion, model: BodyMechanicsModel | None, body_
         expressive = quat.slerp(a.expressive[i], b.expressive[j], _weights(frames, expressive_window)[:, None])
         rotations = compose_rotations(expressive, body)
 
-    # Translations: the second motion's root moved (on the floor plane) to continue the first's.
-    root = int(np.flatnonzero(first.skeleton.parents < 0)[0])
-    anchor = min(body_window[0], frames - 1)
-    shift = first.translations[i[anchor], root] - second.translations[j[anchor], root]
-    shift[1] = 0.0  # keep heights
-    second_translations = second.translations[j].copy()
-    second_translations[:, root] += shift
     w = body_weights[:, None, None]
-    translations = (1 - w) * first.translations[i] + w * second_translations
+    translations = (1 - w) * first.translations[i] + w * second.translations[j]
+    # The carrier's world path: the first's, plus the blend's share of the difference between the
+    # two motions' steps on the floor plane (so the path never jumps: each step is a mix of the
+    # inputs' steps); heights blended directly. Then back into the blended parent's frame.
+    path_a, path_b = first_positions[i, carrier], second.positions()[j, carrier]
+    # A step into frame t takes the weight of frame t - 1: at a cut the anchor frame is still the first's.
+    steps = np.diff(path_b - path_a, axis=0, prepend=(path_b - path_a)[:1]) * np.r_[0.0, body_weights[:-1]][:, None]
+    path = path_a + np.cumsum(steps * [1.0, 0.0, 1.0], axis=0)
+    path[:, 1] = (1 - body_weights) * path_a[:, 1] + body_weights * path_b[:, 1]
+    parent = first.skeleton.parents[carrier]
+    if parent >= 0:
+        world_rotations, positions = forward_kinematics(rotations, translations, first.skeleton.parents)
+        path = quat.rotate(quat.conjugate(world_rotations[:, parent]), path - positions[:, parent])
+    translations[:, carrier] = path
     return Motion(first.skeleton, rotations, translations, first.frame_time)
 
 

@@ -25,7 +25,10 @@ Pipeline and shapes (``T`` samples a cycle, ``D`` DOFs, ``K`` intensities, ``P``
    a DOF that only varies scores almost as predictable as one that follows the intensity; over
    every cycle (about 20 a person on the Bandai walks) ``rho`` also sees the step-to-step spread;
 5. least-squares lines ``c_{d,i}(k)``, averaged over people;
-6. a new motion, per cycle: ``x' = x + U (f(k1) - f(k0))`` on the key DOFs, mapped back onto each
+6. a new motion's current intensity ``k0`` (given, or estimated by least squares over the key
+   DOFs' mapped coefficients weighted by how well the mapping predicts each, with an uncertainty
+   and a fit residual: :meth:`ExaggerationModel.estimate`);
+7. per cycle: ``x' = x + U (f(k1) - f(k0))`` on the key DOFs, mapped back onto each
    cycle's own frames, cross-faded at cycle boundaries, clamped to the training range plus a
    margin, optionally with the stance foot locked.
 """
@@ -35,6 +38,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import warnings
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -47,7 +51,7 @@ from .ik import two_bone_ik
 from .io import atomic_write, check_keys, finite_array, read_model_file
 from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
 from .motion import Motion, Skeleton
-from .roles import JointRoles, actor_height
+from .roles import JointRoles, actor_height, facing_yaw
 
 FORMAT = "expressive-mocap exaggeration model"
 # 3: every training cycle kept (cycle_trajectories, cycle_performance); 2: lower / upper measured
@@ -173,9 +177,7 @@ def cycle_heading(motion: Motion, roles: JointRoles, cycle: Cycle, positions: np
     travel[1] = 0.0
     if np.linalg.norm(travel) >= 0.05 * actor_height(motion.skeleton, roles):
         return _yaw(travel)
-    left, right = positions[cycle.start : cycle.end + 1, roles.upper_legs[0]], positions[cycle.start : cycle.end + 1, roles.upper_legs[1]]
-    side = (left - right).mean(axis=0)
-    return _yaw(np.array([-side[2], 0.0, side[0]]))  # +X left, +Z forward: forward = up x left
+    return facing_yaw(positions[cycle.start : cycle.end + 1], roles)
 
 
 def _without_heading(rotations: np.ndarray, hips: int, yaw: np.ndarray) -> np.ndarray:
@@ -235,6 +237,80 @@ def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple, 
             raise MocapError(f"cycle {cycle}: the clip has {len(cycles)} cycles")
         return [cycles[cycle]]
     raise MocapError(f"cycle must be one of {', '.join(CYCLE_CHOICES)}, an index or a (start, end) range, got {cycle!r}")
+
+
+# --------------------------------------------------------------------------- intensity
+
+BOOTSTRAP_DRAWS = 200
+POOR_FIT = 2.0  # estimate residual above which the motion is reported as unlike the training performances
+
+
+@dataclass(frozen=True)
+class IntensityEstimate:
+    """A motion's estimated current intensity ``k``. ``uncertainty`` (one standard deviation, in
+    intensity units) combines how much the key joints disagree (``jackknife``: leave one joint's
+    DOFs out), how much the motion's own cycles do (``bootstrap``: resampled) and how far the
+    training performances come out from their own intensities (``training``: RMS). ``residual``:
+    the weighted misfit at ``k`` relative to the training performances' own (about 1 for a
+    performance like the training ones; well above 1, the motion is not much like them).
+    ``trained``: the lowest and highest trained intensity."""
+
+    k: float
+    uncertainty: float
+    residual: float
+    jackknife: float
+    bootstrap: float
+    training: float
+    trained: tuple[float, float]
+
+    @property
+    def outside(self) -> bool:
+        """Outside the trained range by more than twice the uncertainty."""
+        low, high = self.trained
+        return self.k + 2 * self.uncertainty < low or self.k - 2 * self.uncertainty > high
+
+    @property
+    def poor_fit(self) -> bool:
+        """The residual is above :data:`POOR_FIT` (a model of dataset-2's walks: its own walks
+        0.55-1.12, each take left out of training 0.59-1.19, a turning walk 1.75, runs 2.4-3.5,
+        a wave 5.8)."""
+        return self.residual > POOR_FIT
+
+    def warning(self) -> str:
+        """What is wrong with the estimate ("" when nothing)."""
+        low, high = self.trained
+        problems = []
+        if self.outside:
+            problems.append(f"the estimated current intensity {self.k:.3g} +- {self.uncertainty:.2g} is outside the trained range "
+                            f"{low:g}-{high:g} (the mappings extrapolate there)")
+        if self.poor_fit:
+            problems.append(f"the motion fits the model poorly (residual {self.residual:.2f}; the training performances' about 1): is it the same action?")
+        return "; ".join(problems) + ("; give the current intensity if known" if problems else "")
+
+
+def _weighted_intensity(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """Weighted least-squares intensities ``[B]`` of coefficients ``c [B, n, r]`` under polynomial
+    ``mappings [n, r, degree + 1]`` with ``weights [n, r]``: closed form for lines; otherwise the
+    best of a grid over the trained range widened by twice its span, refined by Gauss-Newton."""
+    degree = mappings.shape[-1] - 1
+    if degree == 0:
+        return np.full(len(c), float(np.mean(levels)))
+    if degree == 1:
+        slope, intercept = mappings[..., 0], mappings[..., 1]
+        denominator = float(np.sum(weights * slope * slope))
+        if denominator <= 0:
+            return np.full(len(c), float(np.mean(levels)))
+        return np.sum(weights * slope * (c - intercept), axis=(1, 2)) / denominator
+    span = float(levels[-1] - levels[0])
+    grid = np.linspace(levels[0] - 2 * span, levels[-1] + 2 * span, 401)
+    errors = np.einsum("nr,bgnr->bg", weights, (_mapped(mappings, grid)[None] - c[:, None]) ** 2)
+    k = grid[np.argmin(errors, axis=1)]
+    derivative = mappings[..., :-1] * np.arange(degree, 0, -1)
+    for _ in range(8):
+        gap, slope = _mapped(mappings, k) - c, _mapped(derivative, k)  # [B, n, r]
+        denominator = np.einsum("nr,bnr->b", weights, slope * slope)
+        k = k - np.where(denominator > 0, np.einsum("nr,bnr->b", weights, slope * gap) / np.where(denominator > 0, denominator, 1.0), 0.0)
+    return k
 
 
 # --------------------------------------------------------------------------- the model
@@ -335,19 +411,64 @@ class ExaggerationModel:
         """``f(k) [..., D, r]``: the mapped coefficients at intensity ``k`` (scalar or array)."""
         return _mapped(self.mappings, k)
 
-    def estimate_intensity(self, coefficients: np.ndarray) -> float:
-        """Least-squares intensity of coefficients ``[D, r]`` over the key DOFs: the ``k`` whose
-        mapped coefficients are closest (closed form for lines, a search otherwise)."""
+    def coefficient_spread(self) -> np.ndarray:
+        """``[D, r]``: the mean square distance of the training performances' coefficients from the
+        mapping at their own intensity (over people and intensities): what the mappings do not
+        predict, the people's differences and the lines' misfit alike."""
+        coefficients = np.einsum("tr,pktd->pkdr", self.basis, self.trajectories)
+        return ((coefficients - self.predict_coefficients(self.levels)[None]) ** 2).mean(axis=(0, 1))
+
+    def estimate(self, coefficients: np.ndarray, cycle_coefficients: np.ndarray | None = None) -> IntensityEstimate:
+        """The current intensity of a motion from its coefficients ``[D, r]`` (the mean over its
+        cycles): weighted least squares over the mapped coefficients of the key DOFs, each weighted
+        by the inverse of its :meth:`coefficient_spread` (a coefficient the mapping predicts well
+        counts more; unweighted, the dataset-2 walks' own 'normal' takes came out at 1.43 for 2).
+        ``cycle_coefficients [C, D, r]`` (each cycle's) give the uncertainty its bootstrap part;
+        see :class:`IntensityEstimate`."""
         key = self.key
-        c = coefficients[key]
-        if self.mappings.shape[-1] == 2:
-            slope, intercept = self.mappings[key, :, 0], self.mappings[key, :, 1]
-            denominator = float(np.sum(slope * slope))
-            return float(np.sum(slope * (c - intercept)) / denominator) if denominator > 0 else float(np.mean(self.levels))
-        span = float(self.levels[-1] - self.levels[0])
-        grid = np.linspace(self.levels[0] - 2 * span, self.levels[-1] + 2 * span, 2001)
-        errors = ((self.predict_coefficients(grid)[:, key] - c[None]) ** 2).sum(axis=(1, 2))
-        return float(grid[np.argmin(errors)])
+        mappings, c = self.mappings[key], np.asarray(coefficients, dtype=np.float64)[key]
+        # No coefficient counts as predicted better than to a tenth of the typical change over the
+        # trained range: training data exactly on the lines (one noiseless person) would otherwise
+        # weigh in without bound; with that floor alone the weights are equal (plain least squares).
+        change = _mapped(mappings, self.levels[-1]) - _mapped(mappings, self.levels[0])
+        floor = 0.01 * float(np.mean(change**2)) if change.size else 0.0
+        spread = self.coefficient_spread()[key] + (floor if floor > 0 else 1.0)
+        weights = 1.0 / spread
+        k = float(_weighted_intensity(mappings, weights, c[None], self.levels)[0])
+        # Leave one key joint out (its DOFs together: they move together) ...
+        joints = np.flatnonzero(key) // 3
+        groups = [joints == j for j in np.unique(joints)]
+        if len(groups) > 1:
+            left_out = np.array([_weighted_intensity(mappings, weights * ~g[:, None], c[None], self.levels)[0] for g in groups])
+            n = len(groups)
+            jackknife = float(np.sqrt((n - 1) / n * np.sum((left_out - left_out.mean()) ** 2)))
+        else:
+            jackknife = 0.0
+        # ... and resample the motion's cycles.
+        bootstrap = 0.0
+        if cycle_coefficients is not None and len(cycle_coefficients) > 1:
+            cycles = np.asarray(cycle_coefficients, dtype=np.float64)[:, key]
+            draws = np.random.default_rng(0).integers(0, len(cycles), size=(BOOTSTRAP_DRAWS, len(cycles)))
+            bootstrap = float(np.std(_weighted_intensity(mappings, weights, cycles[draws].mean(axis=1), self.levels)))
+        # ... and how far the training performances themselves come out from their intensities.
+        trained = np.einsum("tr,pktd->pkdr", self.basis, self.trajectories)[:, :, key]
+        P, K = trained.shape[:2]
+        trained = trained.reshape(P * K, *trained.shape[2:])
+        trained_k = _weighted_intensity(mappings, weights, trained, self.levels)
+        training = float(np.sqrt(np.mean((trained_k - np.tile(self.levels, P)) ** 2)))
+
+        def misfit(c: np.ndarray, k: np.ndarray) -> np.ndarray:  # weighted RMS distance from the mapping at k
+            return np.sqrt(np.einsum("nr,bnr->b", weights, (_mapped(mappings, k) - c) ** 2) / weights.sum())
+
+        # The residual in units of the training performances' own (at least the floor's tenth of the change).
+        typical = max(float(np.sqrt(np.mean(misfit(trained, trained_k) ** 2))), np.sqrt(floor))
+        residual = float(misfit(c[None], np.array([k]))[0] / typical) if typical > 0 else 0.0
+        return IntensityEstimate(k, float(np.sqrt(jackknife**2 + bootstrap**2 + training**2)), residual, jackknife, bootstrap, training,
+                                 (float(self.levels[0]), float(self.levels[-1])))
+
+    def estimate_intensity(self, coefficients: np.ndarray) -> float:
+        """:meth:`estimate`'s intensity alone."""
+        return self.estimate(coefficients).k
 
     def table(self, top: int | None = None) -> str:
         """The ranking as text: DOFs (most expressive first, key ones marked) then joints."""
@@ -708,7 +829,7 @@ class ExaggerationReport:
     """What :func:`exaggerate` did: intensities (``k0`` estimated or given), cycles edited, DOFs clamped
     (``{dof: (frames, largest excess)}``), the largest rotation change per joint (degrees), foot
     locking's largest ankle correction and the largest distance it could not close (file units),
-    stance-foot speeds before and after."""
+    stance-foot speeds before and after; ``estimate`` how ``k0`` was estimated (None when given)."""
 
     k0: float
     k1: float
@@ -720,12 +841,22 @@ class ExaggerationReport:
     foot_residual: float
     stance_speed_input: float
     stance_speed_output: float
+    estimate: IntensityEstimate | None = None
 
     def text(self) -> str:
+        e = self.estimate
+        k0 = f"{self.k0:.3g} +- {e.uncertainty:.2g} (estimated)" if e is not None else f"{self.k0:.3g}"
         lines = [
-            f"intensity {self.k0:.3g}{' (estimated)' if self.k0_estimated else ''} -> {self.k1:.3g}; {len(self.cycles)} cycle(s) edited"
+            f"intensity {k0} -> {self.k1:.3g}; {len(self.cycles)} cycle(s) edited"
             + (f" (frames {self.cycles[0].start}-{self.cycles[-1].end})" if self.cycles else ""),
         ]
+        if e is not None:
+            lines.append(
+                f"estimate: fit residual {e.residual:.2f} (the training performances' own: about 1); uncertainty from the key joints "
+                f"{e.jackknife:.2g}, the cycles {e.bootstrap:.2g}, the training clips' own error {e.training:.2g}"
+            )
+            if e.warning():
+                lines.append("warning: " + e.warning())
         if self.clamped:
             worst = sorted(self.clamped.items(), key=lambda kv: -kv[1][1])
             lines.append(
@@ -805,9 +936,11 @@ def _frame_yaw(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], posit
 
 
 def motion_dofs(model: ExaggerationModel, motion: Motion, roles: JointRoles, yaw: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """DOFs ``[F, D]`` of every frame of ``motion`` (heading ``yaw [F]`` removed, rotations relative to ``reference``)."""
+    """DOFs ``[F, D]`` of every frame of ``motion`` (heading ``yaw [F]`` removed, rotations relative to
+    ``reference``; the hips height in units of the motion's own actor height, as in training, so a
+    model trained in centimetres edits a motion in metres)."""
     rot = rotations_to_dofs(_without_heading(motion.rotations, roles.hips, yaw), reference, model.representation, model.orders)
-    heights = motion.positions()[:, roles.hips, 1] / model.height
+    heights = motion.positions()[:, roles.hips, 1] / actor_height(motion.skeleton, roles)
     return np.concatenate([rot, heights[:, None]], axis=1)
 
 
@@ -827,8 +960,11 @@ def exaggerate(
 ) -> tuple[Motion, ExaggerationReport]:
     """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
 
-    ``current`` is ``k0``; by default it is estimated by least squares from the mean coefficients
-    of the motion's cycles. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles of
+    ``current`` is ``k0``; by default (None) it is estimated from the mean coefficients of the
+    motion's cycles by least squares over the key DOFs' mapped coefficients, each weighted by how
+    well the mapping predicts it (:meth:`ExaggerationModel.estimate`); the report holds the
+    estimate with its uncertainty and fit residual, and a ``UserWarning`` says when it is outside
+    the trained range. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles of
     the foot the model was trained with; a single whole-clip cycle when none is found) gets ``x' = x + U (f(to) - f(k0))`` on the key DOFs,
     in its own timing; frames outside the cycles keep their values and the changes are cross-faded
     over ``fade`` seconds at every boundary. DOFs are kept within the training range widened by
@@ -870,9 +1006,12 @@ def exaggerate(
     C, _, J, _ = sampled.rotations.shape
     rot = rotations_to_dofs(sampled.rotations.reshape(C * T, J, 4), ref, model.representation, model.orders).reshape(C, T, 3 * J)
     cycle_dofs = np.concatenate([rot, sampled.heights[..., None]], axis=-1)
-    coefficients = np.einsum("tr,ctd->dr", model.basis, cycle_dofs) / C
+    per_cycle = np.einsum("tr,ctd->cdr", model.basis, cycle_dofs)
     estimated = current is None
-    k0 = model.estimate_intensity(coefficients) if estimated else float(current)
+    estimate = model.estimate(per_cycle.mean(axis=0), per_cycle) if estimated else None
+    k0 = estimate.k if estimated else float(current)
+    if estimated and estimate.warning():
+        warnings.warn(estimate.warning(), stacklevel=2)
     change = (model.predict_coefficients(float(to)) - model.predict_coefficients(k0)) * model.key[:, None]  # [D, r]
     delta = model.basis @ change.T  # [T, D]
     per_frame = _per_frame_change(delta, cycles, motion.n_frames, int(round(fade * motion.fps)))
@@ -899,7 +1038,7 @@ def exaggerate(
     parent = motion.skeleton.parents[roles.hips]
     parent_rot = world_rotations[:, parent] if parent >= 0 else np.broadcast_to(IDENTITY, (motion.n_frames, 4))
     lift = np.zeros((motion.n_frames, 3))
-    lift[:, 1] = (new[:, -1] - X[:, -1]) * model.height
+    lift[:, 1] = (new[:, -1] - X[:, -1]) * actor_height(motion.skeleton, roles)  # the motion's units, not the model's
     translations[:, roles.hips] += quat.rotate(quat.conjugate(parent_rot), lift)
     out = Motion(motion.skeleton, rotations, translations, motion.frame_time)
     correction = residual = 0.0
@@ -908,7 +1047,7 @@ def exaggerate(
         rotations = out.rotations
     angles = np.degrees(quat.angle(quat.mul(quat.conjugate(motion.rotations), rotations))).max(axis=0)
     report = ExaggerationReport(
-        k0=k0, k1=float(to), k0_estimated=estimated, cycles=cycles, clamped=clamped,
+        k0=k0, k1=float(to), k0_estimated=estimated, cycles=cycles, clamped=clamped, estimate=estimate,
         largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
         foot_correction=correction,
         foot_residual=residual,
@@ -947,6 +1086,7 @@ def lock_stance_feet(original: Motion, edited: Motion, contacts: np.ndarray, rol
     world_in, pos_in = forward_kinematics(original.rotations, original.translations, parents)
     world_out, pos_out = forward_kinematics(edited.rotations, edited.translations, parents)
     weights = _contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
+    height = actor_height(original.skeleton, roles)  # tolerances in the motion's units
     rotations = edited.rotations.copy()
     correction = 0.0
     legs = []
@@ -958,7 +1098,7 @@ def lock_stance_feet(original: Motion, edited: Motion, contacts: np.ndarray, rol
             raise MocapError(f"foot locking needs a two-bone leg: {names[foot]} is not the grandchild of {names[hip]}; use lock_feet=False")
         # Frames to lock: weighted, and where the edit moved or turned the foot at all (elsewhere
         # the IK would only add rounding).
-        moved = (np.linalg.norm(pos_out[:, foot] - pos_in[:, foot], axis=1) > 1e-9) | (quat.angle(quat.mul(quat.conjugate(world_in[:, foot]), world_out[:, foot])) > 1e-9)
+        moved = (np.linalg.norm(pos_out[:, foot] - pos_in[:, foot], axis=1) > 1e-11 * height) | (quat.angle(quat.mul(quat.conjugate(world_in[:, foot]), world_out[:, foot])) > 1e-9)
         frames = np.flatnonzero((weights[:, s] > 0) & moved)
         if not len(frames):
             continue
@@ -1152,6 +1292,7 @@ __all__ = [
     "Cycle",
     "ExaggerationModel",
     "ExaggerationReport",
+    "IntensityEstimate",
     "RankAgreement",
     "SwapResult",
     "WarpResult",

@@ -159,4 +159,25 @@ def _rest_heights(skeleton: Skeleton, roles: JointRoles) -> tuple[float, float]:
     return hips, hips + float(sum(bone[j] for j in roles.spine[1:]))
 
 
-__all__ = ["ROLE_NAMES", "JointRoles", "actor_height", "hips_rest_height"]
+def facing_yaw(positions: np.ndarray, roles: JointRoles) -> float:
+    """The yaw (degrees about Y, 0 = facing +Z) the body faces over world ``positions [N, J, 3]``:
+    perpendicular to the mean line from the right to the left upper leg (METHODS.md part 2: the
+    best heading on skeletons whose rest pose is not upright)."""
+    side = np.mean(positions[:, roles.upper_legs[0]] - positions[:, roles.upper_legs[1]], axis=0)
+    return float(np.degrees(np.arctan2(-side[2], side[0])))  # forward = left x up = (-z, 0, x)
+
+
+def path_joint(translations: np.ndarray, skeleton: Skeleton, roles: JointRoles | None = None) -> int:
+    """The joint that carries the motion's path: the first joint on the chain from the root down to
+    the hips whose local translation changes over ``translations [F, J, 3]`` (the root itself on
+    most skeletons; the hips on Bandai-Namco's, whose ``joint_Root`` never moves), else the hips."""
+    roles = roles or JointRoles.find(skeleton)
+    root = int(np.flatnonzero(skeleton.parents < 0)[0])
+    chain = _chain(skeleton, root, roles.hips) if roles.hips != root else (root,)
+    for joint in chain:
+        if np.ptp(translations[:, joint], axis=0).max(initial=0.0) > 0:
+            return int(joint)
+    return int(roles.hips)
+
+
+__all__ = ["ROLE_NAMES", "JointRoles", "actor_height", "facing_yaw", "hips_rest_height", "path_joint"]
