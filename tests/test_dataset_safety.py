@@ -327,3 +327,33 @@ def test_a_bad_source_leaves_the_output_folder_untouched(tmp_path):
         with pytest.raises(em.MocapError, match="no such folder or archive"):
             run(tmp_path / "nothing", out)
     assert not out.exists()
+
+
+def test_nothing_read_is_a_failure_of_the_command(tmp_path, capsys):
+    from expressive_mocap.cli import main
+
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["preprocess", str(empty), "-o", str(tmp_path / "a"), "-q"]) == 1
+    assert "holds no .bvh clips" in capsys.readouterr().err
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    for k in range(3):
+        (broken / f"b{k}.bvh").write_bytes(BROKEN)
+    assert main(["preprocess", str(broken), "-o", str(tmp_path / "b"), "-q"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "none of its 3 clips could be read" in err
+
+
+def test_clips_of_the_same_skeleton_in_other_units_are_failures(clips, tmp_path):
+    src = tmp_path / "src"
+    shutil.copytree(clips, src)
+    walk = em.read_bvh(src / "walk_2.bvh")
+    em.write_bvh(walk.scaled(0.01), src / "walk_2_metres.bvh")  # the same walk in metres
+    em.write_bvh(walk.scaled(1 / 2.54), src / "walk_2_inches.bvh")
+    em.write_bvh(walk.scaled(1.3), src / "walk_2_taller.bvh")  # a taller actor: the same units
+    ds = load_dataset(run(src, tmp_path / "ds").out)
+    errors = {f["name"]: f["error"] for f in ds.failures}
+    assert "other units?" in errors["walk_2_metres"] and "0.01x as long" in errors["walk_2_metres"]
+    assert "0.394x as long" in errors["walk_2_inches"]
+    assert "walk_2_taller" in ds.names and "walk_2" in ds.names

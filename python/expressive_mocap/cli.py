@@ -529,6 +529,9 @@ def cmd_preprocess(args) -> int:
                          max_batches=args.max_batches, model_float32=args.model_float32, cluster=args.dask, overwrite=args.overwrite,
                          progress=not args.quiet)
     print("\n".join(summary.lines()))
+    if summary.finished and summary.clips_ok == 0:  # a dataset of nothing is not a success
+        found = f"none of its {summary.clips_failed} clips could be read (see the failures above)" if summary.clips_failed else "it holds no .bvh clips"
+        raise MocapError(f"{args.source}: {found}; {args.output} holds no data")
     return 0
 
 

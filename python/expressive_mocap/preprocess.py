@@ -865,6 +865,7 @@ def _prepare(batch: list[_Item], keep: tuple[str, ...], model) -> _Prepared:
             continue
         shape = (tuple(header.skeleton.names), tuple(header.skeleton.parents.tolist()))
         outcomes[k]["skeleton"] = shape
+        outcomes[k]["bone_length"] = bone_length(header.skeleton)
         by_hierarchy.setdefault(shape, []).append((k, header, text))
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
@@ -949,10 +950,12 @@ def _collect(batch: list[_Item], outcomes: list[dict], skeleton, keep, record: d
         if shape is not None:
             names, parents = list(shape[0]), list(shape[1])
             if skeleton is None:
-                skeleton = record["skeleton"] = {"names": names, "parents": parents}
+                skeleton = record["skeleton"] = {"names": names, "parents": parents, "bone_length": outcome["bone_length"]}
             elif names != skeleton["names"] or parents != skeleton["parents"]:
                 error = (f"{item.source}: another skeleton ({len(names)} joints) than the dataset's "
                          f"({len(skeleton['names'])} joints, {', '.join(skeleton['names'][:3])}, ...): one dataset holds one skeleton")
+            elif error is None:
+                error = _units_error(item, outcome["bone_length"], skeleton)
         if error is not None:
             record["failures"].append({"name": item.name, "source": item.source, "error": error})
             continue
@@ -962,6 +965,30 @@ def _collect(batch: list[_Item], outcomes: list[dict], skeleton, keep, record: d
                                 "fps": outcome["fps"], "frame_time": outcome["frame_time"], "start": rows})
         rows += outcome["frames"]
     return arrays, rows, skeleton
+
+
+def bone_length(skeleton) -> float:
+    """The summed lengths of a skeleton's bones (offsets, End Sites included), in file units:
+    what tells a skeleton in metres from the same one in centimetres, whatever its axes."""
+    sites = sum(float(np.linalg.norm(offset)) for _, offset in skeleton.end_sites)
+    return float(np.linalg.norm(skeleton.offsets, axis=1).sum()) + sites
+
+
+# People differ in size by less than this factor; units (cm/inch 2.54, m/cm 100) by more.
+SAME_UNITS_RATIO = 2.0
+
+
+def _units_error(item: _Item, length: float, skeleton: dict) -> str | None:
+    """Why a clip of the dataset's skeleton is in other units than its first clip, or None:
+    positions in two units in one array would be silently wrong."""
+    reference = skeleton.get("bone_length")
+    if not reference or not length:
+        return None
+    ratio = length / reference
+    if 1 / SAME_UNITS_RATIO <= ratio <= SAME_UNITS_RATIO:
+        return None
+    return (f"{item.source}: its bones are {ratio:.3g}x as long as the dataset's (summed {length:.4g} against {reference:.4g}): "
+            "other units? One dataset holds one unit: rescale it first (expressive-mocap convert --scale)")
 
 
 def _cut_data_files(partial: Path, kinds: list[_Kind], rows: int) -> None:
