@@ -347,7 +347,7 @@ def test_ctrl_c_stops_a_real_run_promptly_and_the_rerun_completes_it(bandai2_dir
     np.testing.assert_array_equal(ds.offsets, expected.offsets)
     assert set(ds.arrays) == set(expected.arrays)
     for kind in expected.arrays:
-        np.testing.assert_array_equal(ds[kind], expected[kind])
+        np.testing.assert_array_equal(ds.arrays[kind], expected[kind])
 
 
 def test_a_blocked_thread_does_not_keep_an_interrupted_run_alive(walk, tmp_path):

@@ -66,7 +66,6 @@ import os
 import queue
 import stat
 import struct
-import sys
 import tarfile
 import threading
 import time
@@ -90,6 +89,7 @@ from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DUR
 from . import io as inputs
 from .io import atomic_write
 from .kernels import decouple_rotations
+from .progress import Progress
 from .roles import JointRoles, actor_height, hips_rest_height
 
 MODEL_KINDS = ("activity", "body", "expressive")
@@ -396,37 +396,6 @@ class Summary:
         return out
 
 
-class _Progress:
-    """tqdm when installed, else a plain line per batch: files, frames, MB/s."""
-
-    def __init__(self, total_bytes: int | None, total_files: int | None, enabled: bool):
-        self.bar, self.enabled, self.total_files = None, enabled, total_files
-        self.start = time.perf_counter()
-        if not enabled:
-            return
-        try:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total_bytes, unit="B", unit_scale=True, desc="preprocess", file=sys.stderr, dynamic_ncols=True)
-        except ImportError:
-            pass
-
-    def update(self, files: int, frames: int, nbytes: int, done_bytes: int) -> None:
-        if not self.enabled:
-            return
-        if self.bar is not None:
-            self.bar.update(nbytes)
-            self.bar.set_postfix(files=files, frames=f"{frames:,}", refresh=False)
-        else:
-            seconds = time.perf_counter() - self.start
-            of = f"/{self.total_files}" if self.total_files else ""
-            print(f"preprocess: {files}{of} files, {frames:,} frames, {done_bytes / MB / max(seconds, 1e-9):.0f} MB/s", file=sys.stderr, flush=True)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 def _journal_entries(path: Path) -> list[dict]:
     """Complete lines of the journal; a torn last line (a crash mid-append) is cut off."""
     if not path.exists():
@@ -578,7 +547,7 @@ def _run(source: _Source, out: Path, keep, options, body_model, model, model_flo
         else:
             todo, total_bytes = _not_done(source, done), None
         total_files = len(source.items) if source.items is not None else None
-        bar = _Progress(total_bytes, total_files, progress)
+        bar = Progress(total_bytes, "preprocess", "B", enabled=progress)
         batch_number = len(entries)
         stopped: list[bool] = []
         flushes: list = []
@@ -618,7 +587,8 @@ def _run(source: _Source, out: Path, keep, options, body_model, model, model_flo
             summary.clips_failed += len(record["failures"])
             summary.failures += record["failures"]
             batch_number += 1
-            bar.update(len(clips) + len(failures), sum(c["frames"] for c in clips), nbytes, summary.bytes_read)
+            files = len(clips) + len(failures)
+            bar.update(nbytes, f"{files}{f'/{total_files}' if total_files else ''} files, {sum(c['frames'] for c in clips):,} frames")
         if not stopped:
             t0 = time.perf_counter()
             syncer.shutdown()
