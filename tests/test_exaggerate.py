@@ -462,3 +462,29 @@ def test_commands_fail_in_one_line(tmp_path, capsys):
     assert main(["exaggerate", "--model", str(tmp_path / "none.npz"), "--input", str(walk), "--to", "2", "-o", str(tmp_path / "o.bvh")]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "cannot read" in err
+
+
+def test_rank_names_the_clip_it_cannot_use_and_the_option_to_use(tmp_path, mixed_path, capsys):
+    from expressive_mocap.cli import main
+
+    files = {}
+    for p in range(2):
+        for i, k in enumerate(LEVELS):
+            files[p, k] = tmp_path / f"p{p}_k{k:g}.bvh"
+            em.write_bvh(loaded_walk(k, wobble=0.3, seed=10 * p + i), files[p, k])
+    short = tmp_path / "short.bvh"
+    em.write_bvh(em.read_bvh(files[1, LEVELS[1]])[:31], short)  # 31 frames: no foot strikes twice
+    levels = [a for k in LEVELS for a in ("--level", f"{k:g}", str(files[0, k]), str(short if k == LEVELS[1] else files[1, k]))]
+    assert main(["rank", *levels]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"expressive-mocap: error: {short}: no gait cycle found in its 31 frames")
+    assert "--cycle whole" in err
+    levels = [a for k in LEVELS for a in ("--level", f"{k:g}", str(files[0, k]), str(mixed_path if k == LEVELS[2] else files[1, k]))]
+    assert main(["rank", *levels]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"expressive-mocap: error: {mixed_path}: another skeleton") and err.count("\n") == 1
+    assert main(["rank", *levels[:-4], "-o", str(tmp_path / "m.npz")]) == 0  # two levels, both people fine
+    capsys.readouterr()
+    assert main(["exaggerate", "--model", str(tmp_path / "m.npz"), "--input", str(mixed_path), "--to", "3", "-o", str(tmp_path / "x.bvh")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"expressive-mocap: error: {mixed_path}: the model was trained on") and "`expressive-mocap rank" in err

@@ -19,7 +19,7 @@ import numpy as np
 
 from . import __version__, backend
 from .bvh import bvh_bytes, read_bvh, write_bvh
-from .errors import MocapError
+from .errors import ClipError, MocapError
 from .io import atomic_write, atomic_write_all, file_kind, is_standard_output, open_input, output_target
 from .motion import Motion
 from .rotations import ORDERS
@@ -285,15 +285,20 @@ def _is_model_file(path: str) -> bool:
         return False  # the reader says why, with the file's name
 
 
-def _read_for_model(path: str, model, what: str = "the body-mechanics model") -> Motion:
+BODY_MODEL_FIX = ("the body-mechanics model applies to its own skeleton only; train one on clips of this skeleton "
+                  "(`expressive-mocap train`), then calibrate it to a session if needed (`calibrate`)")
+EXAGGERATION_MODEL_FIX = ("an exaggeration model applies to its own skeleton only; train one on clips of this skeleton "
+                          "(`expressive-mocap rank --level ... -o MODEL.npz`)")
+
+
+def _read_for_model(path: str, model, fix: str = BODY_MODEL_FIX) -> Motion:
     """A BVH file that the model can take: another skeleton is an error naming the file and
     what to do about it."""
     motion = read_bvh(path)
     try:
         model.check_skeleton(motion)
     except MocapError as error:
-        raise MocapError(f"{path}: {error}: {what} applies to its own skeleton only; train one on clips of this "
-                         "skeleton (`expressive-mocap train`), then calibrate it to a session if needed (`calibrate`)") from None
+        raise MocapError(f"{path}: {error}: {fix}") from None
     return motion
 
 
@@ -451,10 +456,13 @@ def _train_from_args(args):
         return ExaggerationModel.load(args.model), None
     people, levels, paths = _levels(args)
     cycle = int(args.cycle) if args.cycle.lstrip("-").isdigit() else args.cycle  # names are checked by train
-    model = train(
-        people, levels, samples=args.samples, share=args.share, energy=args.energy, rank=args.rank, degree=args.degree,
-        representation="euler" if args.euler else "rotvec", cycle=cycle, foot=("left", "right").index(args.foot),
-    )
+    try:
+        model = train(
+            people, levels, samples=args.samples, share=args.share, energy=args.energy, rank=args.rank, degree=args.degree,
+            representation="euler" if args.euler else "rotvec", cycle=cycle, foot=("left", "right").index(args.foot),
+        )
+    except ClipError as error:
+        raise MocapError(f"{paths[error.person][error.level]}: {error}") from None
     return model, paths
 
 
@@ -480,7 +488,7 @@ def cmd_exaggerate(args) -> int:
     from .exaggerate import ExaggerationModel, exaggerate
 
     model = ExaggerationModel.load(args.model)
-    motion = read_bvh(args.input)
+    motion = _read_for_model(args.input, model, EXAGGERATION_MODEL_FIX)
     out, report = exaggerate(
         model, motion, args.to, current=args.current, margin=args.margin, fade=args.fade, lock_feet=not args.no_foot_lock, blend=args.blend,
         reference=args.reference,

@@ -22,3 +22,14 @@ class BVHError(MocapError):
         self.reason = reason
         where = f"{self.source}, line {line}" if line is not None else self.source
         super().__init__(f"{where}: {reason}")
+
+
+class ClipError(MocapError):
+    """A clip among several given together (the people and intensities of a training set) that
+    cannot be used: ``person`` and ``level`` (indices) say which, so that a caller holding the
+    file names can name its file."""
+
+    def __init__(self, message: str, person: int, level: int):
+        super().__init__(message)
+        self.person = person
+        self.level = level

@@ -45,7 +45,7 @@ from typing import Sequence
 import numpy as np
 
 from . import quat
-from .errors import MocapError
+from .errors import ClipError, MocapError
 from .features import foot_contacts, footstrikes, mean_rotation
 from .ik import two_bone_ik
 from .io import atomic_write, check_keys, finite_array, read_model_file
@@ -222,8 +222,8 @@ def _choose_cycles(motion: Motion, roles: JointRoles, cycle: str | int | tuple, 
     cycles = find_cycles(motion, roles, foot=foot)
     if not cycles:
         raise MocapError(
-            f"no gait cycle found in a {motion.n_frames}-frame clip (no foot strikes twice); "
-            "for other actions use cycle='whole' or a (start, end) frame range"
+            f"no gait cycle found in its {motion.n_frames} frames (no foot strikes twice): for an action other than "
+            "walking take the whole clip (--cycle whole; in Python cycle='whole') or a (start, end) frame range"
         )
     if cycle == "first":
         return cycles[:1]
@@ -625,7 +625,12 @@ class _PersonDofs:
 
 
 def _person_dofs(motions: Sequence[Motion], roles: JointRoles, samples: int, cycle, representation: str, foot: int) -> _PersonDofs:
-    sampled = [_sample_cycles(m, roles, _choose_cycles(m, roles, cycle, foot), samples) for m in motions]
+    sampled = []
+    for k, m in enumerate(motions):
+        try:
+            sampled.append(_sample_cycles(m, roles, _choose_cycles(m, roles, cycle, foot), samples))
+        except MocapError as error:  # which clip: the caller knows the person, and maybe the file
+            raise ClipError(str(error), -1, k) from None
     everything = np.concatenate([s.rotations.reshape(-1, *s.rotations.shape[2:]) for s in sampled])
     reference = mean_rotation(everything)
     orders = motions[0].skeleton.euler_orders
@@ -776,10 +781,19 @@ def train(
         if not isinstance(m, Motion):
             raise MocapError(f"expected Motion objects, got {type(m).__name__}")
     skeleton = people[0][0].skeleton
-    if any(m.skeleton.names != skeleton.names for p in people for m in p):
-        raise MocapError("every clip must have the same skeleton (joint names) as the first")
+    for i, person in enumerate(people):
+        for k, m in enumerate(person):
+            if m.skeleton.names != skeleton.names:
+                raise ClipError(f"another skeleton ({m.skeleton.n_joints} joints, {', '.join(m.skeleton.names[:3])}, ...) than the "
+                                f"first clip's ({skeleton.n_joints} joints, {', '.join(skeleton.names[:3])}, ...): a model is trained "
+                                "on clips of one skeleton", i, k)
     roles = roles or JointRoles.find(skeleton)
-    per_person = [_person_dofs(p, roles, int(samples), cycle, representation, int(foot)) for p in people]
+    per_person = []
+    for i, person in enumerate(people):
+        try:
+            per_person.append(_person_dofs(person, roles, int(samples), cycle, representation, int(foot)))
+        except ClipError as error:
+            raise ClipError(str(error), i, error.level) from None
     X = np.stack([d.performances for d in per_person])
     refs = np.stack([d.reference for d in per_person])
     cycle_trajectories = np.concatenate([d.cycles for d in per_person])
