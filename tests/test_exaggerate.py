@@ -278,8 +278,8 @@ def test_foot_locking_pins_the_stance_foot(walk):
     for j in roles.upper_legs:
         rotations[:, j] = quat.mul(quat.about("X", 12.0), rotations[:, j])
     edited = em.Motion(walk.skeleton, rotations, walk.translations, walk.frame_time)
-    locked, correction, residual = lock_stance_feet(walk, edited, contacts, roles, blend_frames=3)
-    assert correction > 5.0 and residual < 1e-6
+    locked, correction, residual, lowered = lock_stance_feet(walk, edited, contacts, roles, blend_frames=3)
+    assert correction > 5.0 and residual < 1e-6 and lowered == 0.0  # the thighs' swing keeps the feet within reach
     assert stance_foot_speed(edited, contacts, roles) > 2 * stance_foot_speed(walk, contacts, roles)
     assert stance_foot_speed(locked, contacts, roles) == pytest.approx(stance_foot_speed(walk, contacts, roles), abs=1e-6)
     for s in (0, 1):
@@ -488,3 +488,21 @@ def test_rank_names_the_clip_it_cannot_use_and_the_option_to_use(tmp_path, mixed
     assert main(["exaggerate", "--model", str(tmp_path / "m.npz"), "--input", str(mixed_path), "--to", "3", "-o", str(tmp_path / "x.bvh")]) == 1
     err = capsys.readouterr().err
     assert err.startswith(f"expressive-mocap: error: {mixed_path}: the model was trained on") and "`expressive-mocap rank" in err
+
+
+def test_foot_locking_lowers_the_hips_where_a_leg_cannot_reach(walk):
+    """An edit that raises the hips 5% of the actor's height: the stance legs cannot reach the
+    input's ankles, so the hips come down just enough, eased; the feet stay planted."""
+    roles = em.JointRoles.find(walk.skeleton)
+    contacts = em.foot_contacts(walk, roles)
+    height = em.actor_height(walk.skeleton, roles)
+    translations = walk.translations.copy()
+    translations[:, roles.hips, 1] += 0.05 * height  # the hips' parent is the identity in the demo walk
+    edited = em.Motion(walk.skeleton, walk.rotations, translations, walk.frame_time)
+    locked, _, residual, lowered = lock_stance_feet(walk, edited, contacts, roles, blend_frames=3)
+    assert residual < 1e-3 * height and 0.0 < lowered <= 0.05 * height + 1e-9
+    for s in (0, 1):
+        gap = np.abs(locked.positions()[contacts[:, s], roles.feet[s], 1] - walk.positions()[contacts[:, s], roles.feet[s], 1])
+        assert gap.max() < 1e-3 * height  # before: the stance feet hung up to 5% of the height above the floor
+    hips = locked.positions()[:, roles.hips]
+    assert np.abs(np.diff(hips[:, 1])).max() < np.abs(np.diff(walk.positions()[:, roles.hips, 1])).max() + 0.01 * height

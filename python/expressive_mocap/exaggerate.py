@@ -842,7 +842,7 @@ def train(
 class ExaggerationReport:
     """What :func:`exaggerate` did: intensities (``k0`` estimated or given), cycles edited, DOFs clamped
     (``{dof: (frames, largest excess)}``), the largest rotation change per joint (degrees), foot
-    locking's largest ankle correction and the largest distance it could not close (file units),
+    locking's largest ankle correction, the largest distance it could not close and how far it lowered the hips (file units),
     stance-foot speeds before and after; ``estimate`` how ``k0`` was estimated (None when given)."""
 
     k0: float
@@ -853,6 +853,7 @@ class ExaggerationReport:
     largest_change: dict[str, float]
     foot_correction: float
     foot_residual: float
+    hips_lowered: float
     stance_speed_input: float
     stance_speed_output: float
     estimate: IntensityEstimate | None = None
@@ -883,7 +884,8 @@ class ExaggerationReport:
         lines.append("largest change per joint (degrees): " + ", ".join(f"{n} {v:.1f}" for n, v in changes if v >= 0.05)[:600] or "largest change: none")
         lines.append(
             f"stance-foot speed {self.stance_speed_input:.3g} -> {self.stance_speed_output:.3g} (file units/s); foot locking moved "
-            f"the ankles by up to {self.foot_correction:.3g} (out of reach by up to {self.foot_residual:.3g})"
+            f"the ankles by up to {self.foot_correction:.3g} (out of reach by up to {self.foot_residual:.3g}), lowering the hips "
+            f"by up to {self.hips_lowered:.3g} where a leg could not reach"
         )
         return "\n".join(lines)
 
@@ -1055,9 +1057,9 @@ def exaggerate(
     lift[:, 1] = (new[:, -1] - X[:, -1]) * actor_height(motion.skeleton, roles)  # the motion's units, not the model's
     translations[:, roles.hips] += quat.rotate(quat.conjugate(parent_rot), lift)
     out = Motion(motion.skeleton, rotations, translations, motion.frame_time)
-    correction = residual = 0.0
+    correction = residual = lowered = 0.0
     if lock_feet and len(changed):
-        out, correction, residual = lock_stance_feet(motion, out, contacts, roles, int(round(blend * motion.fps)))
+        out, correction, residual, lowered = lock_stance_feet(motion, out, contacts, roles, int(round(blend * motion.fps)))
         rotations = out.rotations
     angles = np.degrees(quat.angle(quat.mul(quat.conjugate(motion.rotations), rotations))).max(axis=0)
     report = ExaggerationReport(
@@ -1065,6 +1067,7 @@ def exaggerate(
         largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
         foot_correction=correction,
         foot_residual=residual,
+        hips_lowered=lowered,
         stance_speed_input=stance_foot_speed(motion, contacts, roles),
         stance_speed_output=stance_foot_speed(out, contacts, roles),
     )
@@ -1091,15 +1094,24 @@ def lock_stance_feet(original: Motion, edited: Motion, contacts: np.ndarray, rol
     target is ``(1 - w) edited + w original`` (world positions) and the foot's world rotation the
     slerp between the two by ``w``; two-bone IK (:func:`~expressive_mocap.ik.two_bone_ik`) turns
     the upper and lower leg to reach the target, and the foot's local rotation is set to give the
-    wanted world rotation. The toe, fixed to the foot, follows. The hips path is not touched.
+    wanted world rotation. The toe, fixed to the foot, follows. Where a target is beyond the leg's
+    reach (the edit raised the hips or spread the legs), the hips are first lowered just enough,
+    eased in and out over ``blend_frames``: a stance foot is never lifted off the floor.
 
-    Returns the new motion, the largest distance an ankle was moved to its target, and the largest
-    distance left where the target was out of the leg's reach (file units).
+    Returns the new motion, the largest distance an ankle was moved to its target, the largest
+    distance left where the target was out of the leg's reach (file units; the hips could not
+    help: the target is beyond the leg's length across the floor), and how far the hips were lowered.
     """
     parents = original.skeleton.parents
+    for s in (0, 1):
+        hip, foot = roles.upper_legs[s], roles.feet[s]
+        if parents[foot] < 0 or parents[parents[foot]] != hip:
+            names = original.skeleton.names
+            raise MocapError(f"foot locking needs a two-bone leg: {names[foot]} is not the grandchild of {names[hip]}; use lock_feet=False")
     world_in, pos_in = forward_kinematics(original.rotations, original.translations, parents)
-    world_out, pos_out = forward_kinematics(edited.rotations, edited.translations, parents)
     weights = _contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
+    edited, lowered = _lowered_to_reach(edited, pos_in, weights, roles, blend_frames)
+    world_out, pos_out = forward_kinematics(edited.rotations, edited.translations, parents)
     height = actor_height(original.skeleton, roles)  # tolerances in the motion's units
     rotations = edited.rotations.copy()
     correction = 0.0
@@ -1107,9 +1119,6 @@ def lock_stance_feet(original: Motion, edited: Motion, contacts: np.ndarray, rol
     for s in (0, 1):
         hip, foot = roles.upper_legs[s], roles.feet[s]
         knee = parents[foot]
-        if knee < 0 or parents[knee] != hip:
-            names = original.skeleton.names
-            raise MocapError(f"foot locking needs a two-bone leg: {names[foot]} is not the grandchild of {names[hip]}; use lock_feet=False")
         # Frames to lock: weighted, and where the edit moved or turned the foot at all (elsewhere
         # the IK would only add rounding).
         moved = (np.linalg.norm(pos_out[:, foot] - pos_in[:, foot], axis=1) > 1e-11 * height) | (quat.angle(quat.mul(quat.conjugate(world_in[:, foot]), world_out[:, foot])) > 1e-9)
@@ -1131,7 +1140,49 @@ def lock_stance_feet(original: Motion, edited: Motion, contacts: np.ndarray, rol
     out = Motion(edited.skeleton, rotations, edited.translations, edited.frame_time)
     positions = out.positions()
     residual = max((float(np.linalg.norm(positions[f, foot] - target, axis=1).max()) for f, foot, target in legs), default=0.0)
-    return out, correction, residual
+    return out, correction, residual, lowered
+
+
+# A leg reaches this share of its length at most: a knee straightened to the last 0.01% would flip.
+REACH = 0.9999
+
+
+def _lowered_to_reach(edited: Motion, pos_in: np.ndarray, weights: np.ndarray, roles: JointRoles, blend_frames: int) -> tuple[Motion, float]:
+    """``edited`` with its hips lowered (along the vertical, in file units) in the frames where a
+    locked foot's target, the input's ankle, is beyond its leg's reach from where the edit put
+    the hip: just enough for the leg to reach it, eased over ``blend_frames`` frames either side
+    (a soft dilation of the drop, so the hips never jump). Returns it and the largest drop."""
+    parents = edited.skeleton.parents
+    world, pos = forward_kinematics(edited.rotations, edited.translations, parents)
+    drop = np.zeros(edited.n_frames)
+    for s in (0, 1):
+        hip, foot = roles.upper_legs[s], roles.feet[s]
+        knee = parents[foot]
+        frames = np.flatnonzero(weights[:, s] > 0)
+        length = REACH * (np.linalg.norm(edited.translations[frames, knee], axis=1) + np.linalg.norm(edited.translations[frames, foot], axis=1))
+        target = (1 - weights[frames, s, None]) * pos[frames, foot] + weights[frames, s, None] * pos_in[frames, foot]
+        above = pos[frames, hip] - target
+        across = np.hypot(above[:, 0], above[:, 2])
+        # The hip must come within reach, |above - d up| = length; lowering the hips by `drop` lowers
+        # the edited foot too, so the target (a blend of it and the input's ankle) by (1 - w) drop:
+        # d = w drop.
+        needed = above[:, 1] - np.sqrt(np.clip(length**2 - across**2, 0.0, None))
+        drop[frames] = np.maximum(drop[frames], np.clip(needed, 0.0, None) / weights[frames, s])
+    if not drop.any():
+        return edited, 0.0
+    eased = drop.copy()
+    for i in range(1, blend_frames + 1):
+        x = 1.0 - i / (blend_frames + 1)
+        ramp = x * x * (3 - 2 * x)
+        eased[i:] = np.maximum(eased[i:], ramp * drop[:-i])
+        eased[:-i] = np.maximum(eased[:-i], ramp * drop[i:])
+    hips, parent = roles.hips, parents[roles.hips]
+    parent_rot = world[:, parent] if parent >= 0 else np.broadcast_to(IDENTITY, (edited.n_frames, 4))
+    down = np.zeros((edited.n_frames, 3))
+    down[:, 1] = -eased
+    translations = edited.translations.copy()
+    translations[:, hips] += quat.rotate(quat.conjugate(parent_rot), down)
+    return Motion(edited.skeleton, edited.rotations, translations, edited.frame_time), float(eased.max())
 
 
 # --------------------------------------------------------------------------- validation
