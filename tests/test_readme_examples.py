@@ -1,0 +1,108 @@
+"""The README's command examples, run as written on the real clips they name (placeholders such as
+walk.bvh and wave.bvh stand for the dataset-2 clips below), in order, in one folder; then every BVH
+they write is checked for plausibility: no hips step longer than 5 cm a frame at 30 fps or than
+the inputs' own longest (in the file's units, relative to its actor's height), and an exaggerated
+walk's stance feet no higher than the input's (foot locking). Data: Bandai-Namco-Research-
+Motiondataset, CC BY-NC 4.0."""
+
+from __future__ import annotations
+
+import re
+import shlex
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap.cli import main
+from expressive_mocap.features import foot_contacts
+from expressive_mocap.roles import JointRoles, actor_height
+
+REPO = Path(__file__).resolve().parent.parent
+BANDAI_ACTOR_CM = 140.9  # the Bandai skeleton's actor height: 5 cm a frame is relative to it
+PLACEHOLDERS = {
+    "walk.bvh": "dataset-2_walk_normal_001.bvh",
+    "clip.bvh": "dataset-2_walk_normal_001.bvh",
+    "wave.bvh": "dataset-2_wave-right-hand_normal_001.bvh",
+    "other_session_walk.bvh": "dataset-1_walk_normal_001.bvh",
+}
+NOT_RUN = {"info broken.bvh": "shows an error message for a file the README does not give"}
+
+
+def readme_commands() -> list[str]:
+    """Every `expressive-mocap ...` line of the README's code blocks (after `$ ` in transcripts),
+    without trailing comments, in order; `validate ...` is given the model written before it."""
+    text = (REPO / "README.md").read_text()
+    commands = []
+    for block in re.findall(r"```(?:sh|text)\n(.*?)```", text, re.S):
+        for line in block.splitlines():
+            line = line.removeprefix("$ ")
+            if re.match(r"(EXPRESSIVE_MOCAP_BACKEND=\w+ )?expressive-mocap [a-z]", line):
+                command = line.split(" #")[0].strip().replace("validate ...", "validate --model walks.npz")
+                if not any(skip in command for skip in NOT_RUN):
+                    commands.append(command)
+    return commands
+
+
+def real_arguments(command: str, dataset1: Path, dataset2: Path) -> tuple[list[str], str | None]:
+    """The command's arguments with the README's clip names made paths, and the backend it sets."""
+    backend = None
+    if command.startswith("EXPRESSIVE_MOCAP_BACKEND="):
+        setting, command = command.split(" ", 1)
+        backend = setting.split("=", 1)[1]
+    args = []
+    for token in shlex.split(command)[1:]:
+        token = PLACEHOLDERS.get(token, token)
+        ranged = re.fullmatch(r"\.\.\.(\w+)_00\{(\d)\.\.(\d)\}\.bvh", token)  # ...exhausted_00{1..8}.bvh
+        if ranged:
+            args += [str(dataset2 / f"dataset-2_walk_{ranged[1]}_00{k}.bvh") for k in range(int(ranged[2]), int(ranged[3]) + 1)]
+        elif token.startswith("dataset-2_"):
+            args.append(str(dataset2 / token))
+        elif token.startswith("dataset-1_"):
+            args.append(str(dataset1 / token))
+        elif token == "Bandai-Namco-Research-Motiondataset-2/data":
+            args.append(str(dataset2))
+        else:
+            args.append(token)
+    return args, backend
+
+
+def longest_hips_step(motion: em.Motion) -> float:
+    """The longest hips step between frames, per frame at 30 fps, in cm of a Bandai-sized actor."""
+    roles = JointRoles.find(motion.skeleton)
+    hips = motion.positions()[:, roles.hips]
+    steps = np.linalg.norm(np.diff(hips, axis=0), axis=1) * motion.fps / 30
+    return float(steps.max()) * BANDAI_ACTOR_CM / actor_height(motion.skeleton, roles)
+
+
+def test_the_readme_examples_run_and_their_outputs_are_plausible(bandai1_dir, bandai2_dir, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    commands = readme_commands()
+    assert any(c.startswith("expressive-mocap blend ") for c in commands) and len(commands) >= 15
+    longest_input_step = {}
+    for command in commands:
+        args, backend = real_arguments(command, bandai1_dir, bandai2_dir)
+        with em.use_backend(backend or "auto"):
+            status = main(args)
+        err = capsys.readouterr().err
+        assert status == 0, f"{command}: {err}"
+        inputs = [Path(a) for a in args if a.endswith(".bvh") and Path(a).is_absolute()]
+        outputs = [Path(a) for a in args if a.endswith(".bvh") and not Path(a).is_absolute() and Path(a).exists()]
+        if args[0] == "decouple":
+            outputs = sorted(tmp_path.glob(f"{args[args.index('-o') + 1]}_*.bvh"))
+        for path in inputs:
+            longest_input_step.setdefault(path, longest_hips_step(em.read_bvh(path)))
+        for path in outputs:
+            step = longest_hips_step(em.read_bvh(path))
+            allowed = max([5.0] + [1.05 * longest_input_step[p] for p in inputs])
+            assert step <= allowed, f"{command}: {path.name} moves its hips {step:.1f} cm in a frame (allowed {allowed:.1f})"
+    # The exaggerated walk keeps its stance feet down (foot locking): never above the input's.
+    walk = em.read_bvh(bandai2_dir / PLACEHOLDERS["walk.bvh"])
+    heavier = em.read_bvh(tmp_path / "heavier.bvh")
+    roles = JointRoles.find(walk.skeleton)
+    contacts = foot_contacts(walk, roles)
+    for side, foot in enumerate(roles.feet):
+        stance = contacts[:, side]
+        rise = heavier.positions()[stance, foot, 1] - walk.positions()[stance, foot, 1]
+        assert rise.max() <= 1.0, f"a stance foot rises {rise.max():.2f} cm above the input's"
