@@ -249,7 +249,7 @@ def reader_breakdown(paths) -> tuple[list, str]:
 
 
 def peer_read(name: str, path: str):
-    """Load one file with a peer, as its users would (see ../shared/PEERS.md)."""
+    """Load one file with a peer, through the reader its users would call."""
     if name == "pymotion":
         from pymotion.io.bvh import BVH
 
@@ -682,7 +682,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     if "rust" in runs:
         peak = max(x["peak_rss"] for x in runs["rust"])
         targets.append(["(info) peak memory of read + FK, FK outputs kept too", f"{peak / MB:.0f} MB = {peak / decoded:.2f}x", ""])
-    out.append("## Targets (from the issue)\n")
+    out.append("## Targets we set\n")
     out.append(md_table(["target", "measured", "result"], targets) + "\n")
     return "\n".join(out)
 
