@@ -15,7 +15,8 @@ Measures, in one run (machines here drift by +-30 %, so only ratios taken in the
 5. a table on stdout and ``benches/RESULTS.md`` with the targets marked pass / fail.
 
 Data: Bandai-Namco-Research-Motiondataset (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
-The repository never contains it: ``--data DIR`` or ``../shared/data/unpack``.
+The repository never contains it (see the README, Data): ``--data DIR``, else the ``unpack``
+script of ``../shared/data`` next to the checkout.
 """
 
 from __future__ import annotations
