@@ -15,7 +15,8 @@ Measures, in one run (machines here drift by +-30 %, so only ratios taken in the
 5. a table on stdout and ``benches/RESULTS.md`` with the targets marked pass / fail.
 
 Data: Bandai-Namco-Research-Motiondataset (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
-The repository never contains it: ``--data DIR`` or ``../shared/data/unpack``.
+The repository never contains it (see the README, Data): ``--data DIR``, else the ``unpack``
+script of ``../shared/data`` next to the checkout.
 """
 
 from __future__ import annotations
@@ -249,7 +250,7 @@ def reader_breakdown(paths) -> tuple[list, str]:
 
 
 def peer_read(name: str, path: str):
-    """Load one file with a peer, as its users would (see ../shared/PEERS.md)."""
+    """Load one file with a peer, through the reader its users would call."""
     if name == "pymotion":
         from pymotion.io.bvh import BVH
 
@@ -682,7 +683,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     if "rust" in runs:
         peak = max(x["peak_rss"] for x in runs["rust"])
         targets.append(["(info) peak memory of read + FK, FK outputs kept too", f"{peak / MB:.0f} MB = {peak / decoded:.2f}x", ""])
-    out.append("## Targets (from the issue)\n")
+    out.append("## Targets we set\n")
     out.append(md_table(["target", "measured", "result"], targets) + "\n")
     return "\n".join(out)
 

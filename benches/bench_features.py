@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Dynamic features (METHODS.md part 2) on every dataset-2 walk clip, Rust vs the NumPy twin.
+"""Dynamic features (Boehs et al.'s decoupling inputs) on every dataset-2 walk clip, Rust vs the NumPy twin.
 
     python benches/bench_features.py [--data DIR] [--pattern 'dataset-2_walk*.bvh'] [--rounds 3]
 

@@ -217,7 +217,7 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
     med = lambda name, key: statistics.median(r[key] for r in runs[name])  # noqa: E731
     frames = next(r["frames"] for rs in runs.values() for r in rs)
     lines = [
-        "# Preprocessing the archive (issue 5): `expressive-mocap preprocess`",
+        "# Preprocessing the archive: `expressive-mocap preprocess`",
         "",
         f"- date: {started:%Y-%m-%d %H:%M} (the run took {seconds / 60:.1f} min)",
         f"- machine: {info}",

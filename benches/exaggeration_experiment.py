@@ -1,4 +1,4 @@
-"""Exaggeration on real walks (METHODS.md part 1): Bandai-Namco-Research-Motiondataset-2
+"""Exaggeration on real walks (Davis & Kannappan's method): Bandai-Namco-Research-Motiondataset-2
 (CC BY-NC 4.0), walks 'exhausted' < 'normal' < 'active' as intensities 1 < 2 < 3.
 
 The dataset has no actor label, so takes stand in for people: "person" p (p = 1..8) is take p of
@@ -38,10 +38,10 @@ LEVELS = (1.0, 2.0, 3.0)
 PEOPLE = 8
 HELD_OUT = "walk_normal_012"
 PROTOTYPE_UNION = 35  # DOFs in the throwaway prototype's union of 8 people (52% of 67)
-CYCLES = ("all", "middle")  # the default (every cycle of a clip) and METHODS' single cycle
+CYCLES = ("all", "middle")  # the default (every cycle of a clip) and the paper's single cycle
 CYCLE_MEANING = {
     "all": "every cycle of a clip: their mean is the performance, predictability is measured over every one (the default)",
-    "middle": "one cycle per clip, the one nearest the clip's middle (METHODS step 1 as written)",
+    "middle": "one cycle per clip, the one nearest the clip's middle (the paper's single cycle)",
 }
 
 
@@ -84,17 +84,17 @@ def elbow_flexion(motion: em.Motion) -> np.ndarray:
 
 
 def readings_checked(people, default) -> list[str]:
-    """The subsection on the readings of METHODS.md / the paper measured as alternatives
+    """The subsection on the readings of the paper measured as alternatives
     (benches/exaggeration_variants.py), the cycles taken, and the union's pivotal DOFs."""
     import exaggeration_variants as variants
 
     lines = [
-        "### Readings checked against METHODS.md part 1 and the paper",
+        "### Readings checked against the paper",
         "",
         "Each row reads one step differently (`benches/exaggeration_variants.py` patches that one piece; the package "
         "is unchanged) and reruns the whole validation. Per person: share of DOFs swapped and ratio (random / best "
         "same-size in brackets); union: DOFs swapped, ratio over DOFs and over joint positions; warp: leave-one-person-out "
-        "mean over DOFs (positions). Each is measured with every cycle of each clip (`all`, the default) and with METHODS' "
+        "mean over DOFs (positions). Each is measured with every cycle of each clip (`all`, the default) and with the paper's "
         "single cycle (`middle`). Not listed because they cannot change the ranking: normalising predictability by "
         "the sum of all singular values instead of the kept ones (a constant factor per person, removed when E is "
         "normalised) and the column order of `A` (the SVD's `U` and `s` do not depend on it).",
@@ -118,12 +118,12 @@ def readings_checked(people, default) -> list[str]:
     lines += [
         "",
         "Rows that meet both union targets: " + (", ".join(both) if both else "none") + ". "
-        "Two rows are the paper's wording taken literally where METHODS.md fixes another reading: 'eigenvalue-weighted' "
-        "(METHODS: `s_i / sum(s)`) and 'the sum of bone lengths of the joint's children' (METHODS: the whole subtree, "
-        "'a shoulder moves the whole arm'). METHODS does not say on which side the mean is taken out; `m^-1 q` (`q = m d`, "
+        "Two rows are the paper's wording taken literally where our reading fixes another: 'eigenvalue-weighted' "
+        "(ours: `s_i / sum(s)`) and 'the sum of bone lengths of the joint's children' (ours: the whole subtree, "
+        "'a shoulder moves the whole arm'). Neither says on which side the mean is taken out; `m^-1 q` (`q = m d`, "
         "the deviation in the joint's own mean frame) is the usual reading and the one the edit uses, and the DOF that "
         "reaches the share is part of the set ('accumulate until ... reached'). None of these readings was adopted. "
-        "The one change from METHODS that was adopted is the first row against `P-over-performances` (every cycle "
+        "The one change from our reading that was adopted is the first row against `P-over-performances` (every cycle "
         f"averaged, predictability over the performances: the former `cycle=\"mean\"` option; union {former.ratio:.3f} / {former.ratio_positions:.3f}): with one sample per "
         "intensity the correlation behind predictability rests on three points, and for three points the correlation of "
         "pure noise follows the arcsine law (median |rho| 0.71); measured over every cycle it also sees how much a DOF "
@@ -148,7 +148,7 @@ def readings_checked(people, default) -> list[str]:
         f"With one cycle per clip the union ratios over DOFs range over {min(u.ratio for u in single.values()):.3f}-{max(u.ratio for u in single.values()):.3f}, "
         f"over positions {min(u.ratio_positions for u in single.values()):.3f}-{max(u.ratio_positions for u in single.values()):.3f}"
         + (f" ({', '.join(hits)} meet both targets)" if hits else "")
-        + ": METHODS says 'take one cycle' without saying which, and which one moves the result as much as the targets' "
+        + ": the paper takes 'a single walk cycle' without saying which, and which one moves the result as much as the targets' "
         "margins. Choosing one because it meets them would be tuning; the default takes every cycle instead, which "
         "leaves no such choice and uses all the data.",
     ]
@@ -193,10 +193,10 @@ def main() -> None:
         "Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0), walks `exhausted` < `normal` < `active` as "
         f"intensities 1 < 2 < 3. No actor label: \"person\" p (p = 1..{PEOPLE}) is take p of every style "
         f"(`walk_exhausted_00p`, `walk_normal_00p`, `walk_active_00p`); the held-out walk is `{HELD_OUT}` (in no person).",
-        "Defaults of METHODS.md part 1 (T = 50, rotation vectors relative to each person's mean, heading removed, "
+        "Defaults of our reading of the paper (T = 50, rotation vectors relative to each person's mean, heading removed, "
         "hips height / actor height, 99% energy, share 0.9, lines), except where a row says otherwise, and except one "
         "choice: every cycle of a clip is used (its mean is the performance, predictability is measured over every "
-        "cycle; `cycle = all`), where METHODS takes one (`cycle = middle`, measured beside it throughout).",
+        "cycle; `cycle = all`), where the paper takes one (`cycle = middle`, measured beside it throughout).",
         "Produced by `PYTHONPATH=python python benches/exaggeration_experiment.py`.",
         "",
     ]
@@ -335,7 +335,7 @@ def main() -> None:
         "(with OpenBLAS's default threads on this busy 2-core machine the SVD alone took ~300 ms)",
         "",
     ]
-    # Targets of the issue.
+    # The targets we set.
     ex = results[4.0, True][1]
 
     def reached(cycle: str) -> list[str]:
@@ -360,7 +360,7 @@ def main() -> None:
         "rank agreement between people, Spearman (prototype: about 0.93)",
     ]
     report += [
-        "## Against the issue's targets",
+        "## Against the targets we set",
         "",
         "| target | cycle = `all` (default) | cycle = `middle` |",
         "|---|---|---|",

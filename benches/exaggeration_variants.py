@@ -1,8 +1,8 @@
-"""Readings of METHODS.md part 1 / the paper that the defaults could have taken differently, each
+"""Readings of the paper (Davis & Kannappan) that the defaults could have taken differently, each
 measured with the full validation table on the Bandai-Namco dataset-2 walks (CC BY-NC 4.0;
 the same people and intensities as benches/exaggeration_experiment.py). Prints one line per
 variant and cycle choice; benches/exaggeration_experiment.py writes the same measurements into
-benches/EXAGGERATION.md ("Readings checked against METHODS.md part 1 and the paper").
+benches/EXAGGERATION.md ("Readings checked against the paper").
 
     PYTHONPATH=python python benches/exaggeration_variants.py [DATA_DIR] [VARIANT ...]
     PYTHONPATH=python python benches/exaggeration_variants.py [DATA_DIR] --cycles all middle 0 -2
@@ -101,19 +101,19 @@ def key_before_crossing(values, share):
 
 # name: (what is read differently, module patches, train options)
 VARIANTS = {
-    "default": ("METHODS.md part 1 as implemented", {}, {}),
+    "default": ("our reading of the paper, as implemented", {}, {}),
     "P-over-performances": ("predictability over the performances (each the mean of its cycles) instead of over every cycle",
                             {"fit": make_fit(samples="performances")}, {}),
     "mean-right": ("rotation vector of `q m^-1` (deviation in the parent's frame) instead of `m^-1 q`",
                    {"rotations_to_dofs": right_to_dofs, "dofs_to_rotations": right_to_rotations}, {}),
-    "euler": ("Euler channels relative to the mean (METHODS' option) instead of rotation vectors", {}, {"representation": "euler"}),
+    "euler": ("Euler channels relative to the mean (the package's option) instead of rotation vectors", {}, {"representation": "euler"}),
     "P-eigenvalues": ("predictability weighted by `s_i^2` (the paper's 'eigenvalue-weighted', eigenvalues of `A A^T`) instead of `s_i`",
                       {"fit": make_fit("s2")}, {}),
     "P-all-vectors": ("predictability summed over all 50 basis vectors instead of the kept `r`", {"fit": make_fit("s", over="all")}, {}),
     "P-all-eigenvalues": ("both of the above", {"fit": make_fit("s2", over="all")}, {}),
     "O-all-vectors": ("observability over all 50 basis vectors (the whole trajectory difference) instead of the kept `r`",
                       {"fit": make_fit(observe="all")}, {}),
-    "height-weight-0": ("hips height DOF weight 0 instead of the hips' subtree (METHODS gives no weight for it)",
+    "height-weight-0": ("hips height DOF weight 0 instead of the hips' subtree (no weight is defined for it)",
                         {"fit": make_fit(height_weight=0.0)}, {}),
     "children-weights": ("`w_j` = the joint's own bones only (the paper's literal 'bone lengths of the joint's children') instead of the whole subtree",
                          {"subtree_weights": children_weights}, {}),

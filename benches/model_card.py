@@ -59,9 +59,10 @@ def main() -> None:
 
 ## What it does
 From 19 causal dynamic features of a frame (hips velocity and its 1/3 s mean in the heading frame,
-foot contacts, air time, relative hips height, thigh rotations; METHODS.md part 2) it predicts the
-local rotations of the 20 joints other than `joint_Root` and `Hips` that a neutral performer
-would have: the body-mechanics component. It works on the 22-joint Bandai-Namco skeleton only
+foot contacts, air time, relative hips height, thigh rotations: the inputs of Boehs, Vieira &
+Pereira, "Decoupling Expressiveness and Body-Mechanics in Human Motion") it predicts the local
+rotations of the 20 joints other than `joint_Root` and `Hips` that a neutral performer would
+have: the body-mechanics component. It works on the 22-joint Bandai-Namco skeleton only
 (joint names checked); other sessions of that skeleton need `calibrate` (see the README).
 
 ## Data

@@ -1,4 +1,4 @@
-//! Per-joint algebra of decoupling (METHODS.md part 2): the expressive component
+//! Per-joint algebra of decoupling (Boehs et al.): the expressive component
 //! `E = O * B^-1`, its activity index `A = clip((tanh(a) g)^b, 0, 1)` with `a` the angle of `E`,
 //! the filtered component `E* = E^A` and the recovered body mechanics `B' = E*^-1 * O`, so that
 //! `E* * B' = O` exactly; and recomposition `E*^s * B'` (modulation).

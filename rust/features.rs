@@ -1,4 +1,4 @@
-//! Per-frame dynamic features of a motion (METHODS.md part 2): hips velocity and its 1/3 s
+//! Per-frame dynamic features of a motion (the decoupling method of Boehs et al.): hips velocity and its 1/3 s
 //! mean in the heading frame, foot contacts, air time, relative hips height, thigh rotations.
 //!
 //! Y is up. The heading frame of a frame turns the world about Y so that the character's

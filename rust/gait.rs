@@ -24,7 +24,8 @@ pub struct BodyScale {
     pub hips_rest_height: f64,
 }
 
-/// Contact thresholds (fractions of the actor's height, as in METHODS.md) and the floor rule.
+/// Contact thresholds (after Lee et al. 2002, as fractions of the actor's height, so one setting
+/// fits any skeleton's units) and the floor rule.
 #[derive(Debug, Clone, Copy)]
 pub struct GaitParams {
     /// Contact height threshold x height.

@@ -525,7 +525,7 @@ def _add_training_options(p, model: bool = False) -> None:
     p.add_argument("--degree", type=int, default=1, help="degree of the intensity-to-coefficient mappings (default 1: lines)")
     p.add_argument("--samples", type=_positive(int), default=50, help="samples per time-normalised cycle T (default 50)")
     p.add_argument("--cycle", default="all", help="cycles of each clip: all (default: their mean is the performance, predictability is measured over "
-                   "every one), middle (METHODS' single cycle), first, whole (not a walk), or an index")
+                   "every one), middle (the paper's single cycle), first, whole (not a walk), or an index")
     p.add_argument("--foot", choices=["left", "right"], default="left", help="walking cycles run from one footstrike of this foot to the next (default left)")
     p.add_argument("--euler", action="store_true", help="DOFs are the Euler channels (relative to the mean) instead of rotation vectors")
 

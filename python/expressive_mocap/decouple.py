@@ -1,5 +1,6 @@
-"""Decoupling expressiveness from body mechanics (Boehs et al.; METHODS.md part 2) and its
-applications: modulation, source mixing, asynchronous blending.
+"""Decoupling expressiveness from body mechanics (Boehs, Vieira & Pereira, "Decoupling
+Expressiveness and Body-Mechanics in Human Motion") and its applications: modulation, source
+mixing, asynchronous blending.
 
 A body-mechanics model is anything with ``predict(motion) -> rotations [F, J, 4]``: the local
 rotations a neutral performer would have at each frame given the motion's dynamics (root and

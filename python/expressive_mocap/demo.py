@@ -308,7 +308,8 @@ LOADED_JOINTS = ("Spine", "Chest", "UpperArm_L", "UpperArm_R", "LowerArm_L", "Lo
 
 
 def loaded_walk(intensity: float, seconds: float = 3.0, *, lean: float = 4.0, stiffness: float = 0.2, wobble: float = 0.0, seed: int = 0) -> Motion:
-    """The procedural walk as if carrying a load of ``intensity`` (METHODS.md section 3): the
+    """The procedural walk as if carrying a load of ``intensity`` (a synthetic intensity series
+    whose changing joints are known, so a ranking can be checked against them): the
     spine and chest each lean ``lean`` x intensity degrees further forward, and the upper arms
     and forearms swing less (their deviation from their mean rotation scaled by
     ``1 - stiffness (intensity - 1)``). Only :data:`LOADED_JOINTS` change with the intensity.

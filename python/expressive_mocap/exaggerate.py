@@ -1,4 +1,5 @@
-"""Expressive features for movement exaggeration (Davis & Kannappan; METHODS.md part 1).
+"""Expressive features for movement exaggeration (Davis & Kannappan, "Expressive Features for
+Movement Exaggeration", SIGGRAPH 2002 sketch).
 
 From performances of one action at known intensities (e.g. walks 'exhausted' < 'normal' <
 'active' as 1 < 2 < 3), find the joint-angle trajectories (DOFs) that change most and most
@@ -20,7 +21,7 @@ Pipeline and shapes (``T`` samples a cycle, ``D`` DOFs, ``K`` intensities, ``P``
    ``E_d = O_d P_d^2``, normalised and accumulated to ``share`` (0.9): key features.
    By default (``cycle="all"``) a performance is the mean of every cycle of its clip (in DOF
    space) and ``rho`` is taken over every cycle, each at its clip's intensity. With one sample
-   per intensity (METHODS' "one cycle"; ``cycle="middle"``) three points decide ``rho``, and for
+   per intensity (the paper's single cycle; ``cycle="middle"``) three points decide ``rho``, and for
    three points the correlation of pure noise follows the arcsine law (median ``|rho|`` 0.71), so
    a DOF that only varies scores almost as predictable as one that follows the intensity; over
    every cycle (about 20 a person on the Bandai walks) ``rho`` also sees the step-to-step spread;
@@ -753,7 +754,7 @@ def train(
     ``people[p][k]`` is person ``p``'s performance at intensity ``levels[k]`` (one list per person;
     one person is ``[[light, medium, heavy]]``). ``cycle`` picks each clip's cycles (see
     :func:`_choose_cycles`): "all" by default (the performance is their mean; predictability is
-    measured over every one), "middle" for METHODS' single cycle, "whole" or ``(start, end)`` for
+    measured over every one), "middle" for the paper's single cycle, "whole" or ``(start, end)`` for
     actions that are not walks. ``samples`` is ``T``; ``energy`` the basis' share of ``sum(s^2)`` unless
     ``rank`` is given; ``share`` the expressiveness accumulated into the key set; ``degree`` the
     mappings' polynomial degree (< number of intensities); ``foot`` (0 = left, 1 = right) the foot
@@ -1233,7 +1234,7 @@ def _ratios(model: ExaggerationModel, light: np.ndarray, heavy: np.ndarray, refe
 
 def swap_test(model: ExaggerationModel, person: int | None = None, *, draws: int = 200, seed: int = 0, union_key: np.ndarray | None = None) -> list[SwapResult]:
     """Swap the key DOF trajectories of each person's lightest performance for the heaviest's
-    and compare with the real heaviest (METHODS part 1, step 10). ``person``: one index, or every
+    and compare with the real heaviest (the paper's own validation). ``person``: one index, or every
     person (their own key sets) followed by ``"union"`` (every person with the union key set
     ``union_key``, by default :attr:`ExaggerationModel.key`; the people's ratios averaged)."""
     P, K, T, D = model.trajectories.shape

@@ -1,4 +1,4 @@
-"""Foot contacts and the dynamic features per frame of METHODS.md part 2.
+"""Foot contacts and the dynamic features per frame of the decoupling method (Boehs et al.).
 
 Python does forward kinematics, joint roles and defaults; the per-frame loops (speeds, contact
 filter, heading frame, running mean) run in the kernels (Rust, or the NumPy twins in

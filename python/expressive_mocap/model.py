@@ -1,5 +1,5 @@
 """The body-mechanics model: from a frame's dynamic features to the pose a neutral performer
-would have (METHODS.md part 2), and its file format.
+would have (the decoupling method of Boehs et al.), and its file format.
 
 A model predicts the local rotations of every joint except the root and the hips (those come
 from the motion itself), each on the hemisphere of its mean training rotation. It knows the

@@ -142,7 +142,7 @@ def hips_rest_height(skeleton: Skeleton, roles: JointRoles) -> float:
 
 def actor_height(skeleton: Skeleton, roles: JointRoles | None = None) -> float:
     """The actor's height in file units: :func:`hips_rest_height` plus the bone lengths of the
-    spine-to-head chain (METHODS.md part 2: the Bandai rest pose is not upright, so its vertical
+    spine-to-head chain (the Bandai rest pose is not upright, so its vertical
     extent is no measure; this gives about 141 cm there)."""
     return _rest_heights(skeleton, roles or JointRoles.find(skeleton))[1]
 
@@ -161,7 +161,7 @@ def _rest_heights(skeleton: Skeleton, roles: JointRoles) -> tuple[float, float]:
 
 def facing_yaw(positions: np.ndarray, roles: JointRoles) -> float:
     """The yaw (degrees about Y, 0 = facing +Z) the body faces over world ``positions [N, J, 3]``:
-    perpendicular to the mean line from the right to the left upper leg (METHODS.md part 2: the
+    perpendicular to the mean line from the right to the left upper leg (the
     best heading on skeletons whose rest pose is not upright)."""
     side = np.mean(positions[:, roles.upper_legs[0]] - positions[:, roles.upper_legs[1]], axis=0)
     return float(np.degrees(np.arctan2(-side[2], side[0])))  # forward = left x up = (-z, 0, x)

@@ -1,4 +1,4 @@
-"""Training the body-mechanics network on plain arrays (METHODS.md part 2; Boehs et al. III.B, IV).
+"""Training the body-mechanics network on plain arrays (Boehs et al. III.B, IV).
 
 Inputs ``X [N, 19]`` (the dynamic features of each frame), poses ``P [N, D]`` and ``groups [N]``
 (a clip id per frame). Stages, each reported with train and test MSE on a 70/30 split by group

@@ -1,4 +1,5 @@
-"""Twin of ``rust/features.rs``: the 19 dynamic features per frame of METHODS.md part 2.
+"""Twin of ``rust/features.rs``: the 19 dynamic features per frame of the decoupling method
+(Boehs et al.).
 
 Y is up. The heading frame of a frame turns the world about Y so that the character's forward
 direction (``(left upper leg - right upper leg) x up``, flattened) becomes +Z and its left +X.
