@@ -1,0 +1,147 @@
+"""Hostile inputs to the reader and the kernels: arrays written by another thread during a call,
+odd bytes in bool arrays, one number grammar for the whole file, byte-order marks and old Mac
+line endings, and huge tokens echoed in error messages."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+
+from conftest import REPO
+
+needs_rust = pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+
+# Run in a subprocess, so that the panic messages a kernel might print on stderr can be checked.
+# One thread flips one entry of `parents` (or of a layout) between valid and invalid values while
+# the main thread calls a kernel in a loop; every call must give a clean ValueError or exactly
+# the result of one of the valid values.
+HAMMER = textwrap.dedent(
+    """
+    import json, sys, threading, time
+    import numpy as np
+    from expressive_mocap import _core, bvh, demo, roles as R
+    from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+
+    GAIT = (HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
+
+    def fk_kernels():
+        rng = np.random.default_rng(0)
+        q = rng.normal(size=(4000, 8, 4))
+        q /= np.linalg.norm(q, axis=-1, keepdims=True)
+        t = rng.normal(size=(4000, 8, 3))
+        parents = np.arange(-1, 7, dtype=np.int64)
+        yield "forward_kinematics", parents, 5, [0, 2, 4], lambda: _core.forward_kinematics(q, t, parents)
+        yield "forward_kinematics_many", parents, 5, [0, 2, 4], lambda: _core.forward_kinematics_many([(q, t, parents)] * 3)
+
+    def pipeline():
+        data = bvh.bvh_bytes(demo.procedural_walk(seconds=4.0))
+        header = bvh.parse_header(data, "walk")
+        skeleton = header.skeleton
+        roles = R.JointRoles.find(skeleton)
+        clip = (data, header.block_start, header.frames, skeleton.n_channels, *skeleton.layout(), skeleton.offsets,
+                header.frame_time, R.actor_height(skeleton, roles), R.hips_rest_height(skeleton, roles))
+        parents = np.array(skeleton.parents, dtype=np.int64)  # the skeleton's own is read-only
+        joint = skeleton.n_joints - 1
+        valid = sorted({int(parents[joint]), 0, joint - 1})
+        call = lambda: _core.clip_pipeline_many([clip] * 2, parents, roles.gait_joints, *GAIT, True, False, [(0.0, None)], True, False)
+        yield "clip_pipeline_many", parents, joint, valid, call
+
+    def flat(result):
+        out = []
+        for item in result if isinstance(result, (list, tuple)) else [result]:
+            if isinstance(item, np.ndarray):
+                out.append(item)
+            elif isinstance(item, (list, tuple)):
+                out += flat(item)
+            elif item is not None:
+                raise AssertionError(f"unexpected result item {item!r}")
+        return out
+
+    def same(a, b):
+        return len(a) == len(b) and all(x.shape == y.shape and np.array_equal(x, y) for x, y in zip(a, b))
+
+    report = {}
+    sys.setswitchinterval(1e-4)
+    for name, parents, joint, valid, call in [*fk_kernels(), *pipeline()]:
+        expected = []
+        for value in valid:
+            parents[joint] = value
+            expected.append(flat(call()))
+        stop, writes = threading.Event(), [0]
+
+        def hammer():
+            # Valid, then the joint itself, a later joint, out of range, negative.
+            values = valid + [joint, joint + 1, len(parents), 1 << 40, 1 << 62, -2, -(1 << 40)]
+            while not stop.is_set():
+                parents[joint] = values[writes[0] % len(values)]
+                writes[0] += 1
+
+        counts = {"calls": 0, "refused": 0, "valid": 0, "wrong": 0, "other": []}
+        thread = threading.Thread(target=hammer)
+        thread.start()
+        start = time.perf_counter()
+        try:
+            while counts["calls"] < 20 or time.perf_counter() - start < 1.5:
+                counts["calls"] += 1
+                try:
+                    got = flat(call())
+                except ValueError as error:
+                    counts["refused"] += 1
+                    if "parents" not in str(error):
+                        counts["other"].append(str(error)[:200])
+                    continue
+                except BaseException as error:  # PanicException is a BaseException
+                    counts["other"].append(f"{type(error).__name__}: {str(error)[:200]}")
+                    continue
+                counts["valid" if any(same(got, e) for e in expected) else "wrong"] += 1
+        finally:
+            stop.set()
+            thread.join()
+        counts["writes"] = writes[0]
+        report[name] = counts
+    print(json.dumps(report))
+    """
+)
+
+
+@needs_rust
+def test_index_arrays_written_by_another_thread_never_reach_a_kernel():
+    # Found by review: the bindings read `parents` from NumPy's memory after releasing the GIL,
+    # so a parent checked in range could be out of range when used: a PanicException (a
+    # BaseException) and tens of MB of panic messages on stderr.
+    env = dict(os.environ, PYTHONPATH=str(REPO / "python"), EXPRESSIVE_MOCAP_BACKEND="rust", RUST_BACKTRACE="0")
+    done = subprocess.run([sys.executable, "-c", HAMMER], capture_output=True, text=True, env=env, timeout=600)
+    assert "panicked" not in done.stderr, done.stderr[:2000]
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads(done.stdout)
+    assert set(report) == {"forward_kinematics", "forward_kinematics_many", "clip_pipeline_many"}
+    for name, counts in report.items():
+        assert counts["other"] == [] and counts["wrong"] == 0, (name, counts)
+        assert counts["calls"] >= 20 and counts["refused"] + counts["valid"] == counts["calls"] and counts["writes"] > 0, (name, counts)
+
+
+@needs_rust
+@pytest.mark.parametrize("kernel", ["air_time", "dynamic_features"])
+def test_a_bool_array_holding_other_bytes_reads_them_as_numpy_does(kernel):
+    # NumPy lets a bool array hold any byte (a view of uint8 data); NumPy reads non-zero as
+    # True, and Rust must not read such a byte as a `bool` (undefined behaviour).
+    from expressive_mocap import _core, reference
+
+    flags = np.array([[0, 0], [2, 1], [0, 255], [0, 0], [128, 0]], dtype=np.uint8)
+    odd, plain = flags.view(bool), flags != 0
+    if kernel == "air_time":
+        args = lambda contacts: (contacts, 0.1)  # noqa: E731
+    else:
+        rng = np.random.default_rng(1)
+        points, thighs = rng.normal(size=(5, 3, 3)), rng.normal(size=(5, 2, 4))
+        reference_quats = np.tile([0.0, 0.0, 0.0, 1.0], (2, 1))
+        args = lambda contacts: (points, thighs, contacts, reference_quats, 0.1, 170.0, 90.0, 0.0, 3)  # noqa: E731
+    expected = getattr(_core, kernel)(*args(plain))
+    np.testing.assert_allclose(expected, getattr(reference, kernel)(*args(plain)), atol=1e-12)
+    np.testing.assert_array_equal(getattr(_core, kernel)(*args(odd)), expected)
