@@ -8,7 +8,6 @@ file's bytes, by the kernel ``read_motion_blocks`` (Rust, or its NumPy twin). Ev
 from __future__ import annotations
 
 import errno
-import math
 import os
 import re
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -21,10 +20,11 @@ from .backend import PARSE_ERRORS, kernels
 from .errors import BVHError, MocapError
 from .io import MAX_INPUT_BYTES, atomic_write, open_input, read_input
 from .motion import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton, canonical_channels
+from .tokens import NUMBER_PATTERN, finite_number
 
 Source = Union[str, os.PathLike, bytes, bytearray, memoryview, BinaryIO]
 
-_TOKEN = re.compile(r"[{}]|[^\s{}]+")
+_TOKEN = re.compile(r"[{}]|[^ \t\r\n\x0c{}]+")  # ASCII blanks, as in the MOTION block (tokens.py)
 _KEYWORDS = frozenset(["}", "OFFSET", "CHANNELS", "JOINT", "ROOT"])  # already in upper case
 _CHANNEL_NAMES = frozenset(c.lower() for c in POSITION_CHANNELS + ROTATION_CHANNELS)
 _MOTION = re.compile(rb"^[ \t]*MOTION[ \t]*\r?$", re.MULTILINE | re.IGNORECASE)
@@ -111,21 +111,11 @@ class _Tokens:
             self.pos = len(self.words)
             self.next(what)  # raises the end-of-header error
         self.pos = start + count
-        try:
-            values = [float(w) for w in self.words[start : start + count]]
-            if all(math.isfinite(v) for v in values):
-                return values
-        except ValueError:
-            pass
-        for k in range(start, start + count):  # error path: name the bad token
-            token, line = self.words[k], self.lines[k]
-            try:
-                bad = not math.isfinite(float(token))
-            except ValueError:
-                bad = True
-            if bad:
-                raise self.error(line, f"expected {what} (a finite number), found {token!r}")
-        raise AssertionError("unreachable")
+        values = [finite_number(w) for w in self.words[start : start + count]]
+        for k, value in enumerate(values, start):
+            if value is None:
+                raise self.error(self.lines[k], f"expected {what} (a finite number), found {self.words[k]!r}")
+        return values
 
     def name_on_line(self, keyword_line: int, what: str) -> str:
         """The rest of the keyword's line up to '{' (names may contain spaces or ':')."""
@@ -250,7 +240,8 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
 # unusual takes the full parse, whose errors name the line.
 # A number is cut out only whole: "0}" stays in the shape (found by fuzz_bvh.py: "OFFSET 0 0 0}"
 # cached a shape that a later "OFFSET 0 0 0" without its brace matched, and was read).
-_OFFSET_NUMBERS = re.compile(r"(?<=OFFSET)[ \t]+([^\s{}]+)[ \t]+([^\s{}]+)[ \t]+([^\s{}]+)(?=[ \t]*\r?$)", re.MULTILINE)
+# Only tokens of the number grammar are cut out: anything else takes the full parse and its error.
+_OFFSET_NUMBERS = re.compile(rf"(?<=OFFSET)[ \t]+({NUMBER_PATTERN})[ \t]+({NUMBER_PATTERN})[ \t]+({NUMBER_PATTERN})(?=[ \t]*\r?$)", re.MULTILINE)
 _SHAPES: dict[tuple[str, ...], tuple[Skeleton, np.ndarray, np.ndarray]] = {}
 _HIERARCHIES: dict[str, Skeleton] = {}
 _MAX_SHAPES = 64
@@ -389,11 +380,8 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
             f"Frames: {frames} x {skeleton.n_joints} joints is more than the {block_bytes}-byte MOTION block can hold (the reader's "
             f"limit: one joint-frame per {BLOCK_BYTES_PER_JOINT_FRAME} bytes of the block, or {MIN_JOINT_FRAMES}; see Limits in the README)",
         )
-    try:
-        frame_time = float(time_text)
-    except ValueError:
-        frame_time = math.nan
-    if not (math.isfinite(frame_time) and frame_time > 0):
+    frame_time = finite_number(time_text)
+    if frame_time is None or frame_time <= 0:
         raise BVHError(name, time_line, f"expected a positive number of seconds after 'Frame Time:', found {time_text!r}")
     return _Header(skeleton, frames, frame_time, block_start, time_line + 1)
 
