@@ -201,7 +201,7 @@ def test_the_header_and_the_motion_block_accept_the_same_numbers(token):
         assert all(isinstance(o, tuple) for o in outcomes), (token, outcomes)
     else:
         assert outcomes == [header] * len(outcomes), (token, header, outcomes)
-    assert len({o if isinstance(o, float) else o[1] for o in outcomes}) == 1, (token, outcomes)
+    assert len(set(map(repr, outcomes))) == 1, (token, outcomes)  # the same value, or message and line
     # Frame Time: the same numbers, positive.
     try:
         frame_time = bvh.parse_header(one_joint_file("0", frame_time=token), "t").frame_time
@@ -217,3 +217,42 @@ def test_numbers_python_alone_would_read_are_refused_in_the_header(token):
         em.read_bvh(one_joint_file(token))
     with pytest.raises(em.BVHError, match="Frame Time"):
         em.read_bvh(one_joint_file("0", frame_time=token))
+
+
+# --- Tokens echoed in error messages ---------------------------------------------------------
+
+HUGE = "7" * (1 << 20)
+GOOD = one_joint_file("0")
+ECHOES = {
+    # where a 1 MB token goes: the file
+    "OFFSET value": one_joint_file(HUGE + "x"),
+    "joint name": GOOD.replace(b"ROOT Hips\n{\n\tOFFSET 0 0 0\n", b"ROOT " + HUGE.encode() + b"\n{\n"),
+    "keyword": GOOD.replace(b"\tCHANNELS", HUGE.encode() + b" CHANNELS"),
+    "channel count": GOOD.replace(b"CHANNELS 1", b"CHANNELS " + HUGE.encode()),
+    "channel name": GOOD.replace(b"Xrotation", b"X" + HUGE.encode()),
+    "after the hierarchy": GOOD.replace(b"}\nMOTION", b"}\n" + HUGE.encode() + b"\nMOTION"),
+    "Frames line": GOOD.replace(b"Frames: 1", HUGE.encode()),
+    "Frames value": GOOD.replace(b"Frames: 1", b"Frames: " + HUGE.encode()),
+    "Frame Time value": GOOD.replace(b"Frame Time: 0.04", b"Frame Time: " + HUGE.encode() + b"x"),
+    "first line": HUGE.encode() + b"\n" + GOOD,
+    "MOTION block": one_joint_file("0", frame=HUGE + "x"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(ECHOES))
+def test_a_huge_token_is_echoed_cut_with_its_length(case, backend):
+    # Found by review: a 1 MB OFFSET token made a 1 MB error line.
+    with pytest.raises(em.BVHError) as caught:
+        em.read_bvh(ECHOES[case])
+    message = str(caught.value)
+    assert len(message) < 300 and "\n" not in message, message[:500]
+    assert "'7777777777777777777777777777777777777777'... (10485" in message or "'X777777777777777777777777777777777777777'... (10485" in message, message
+
+
+def test_control_characters_in_an_echoed_token_are_escaped_the_same_in_both_backends():
+    token = "a\x0bb\x1b\x85\u2028\u00e9\u0661"
+    outcomes = block_outcomes(token)
+    assert outcomes[0] == ("'a\\x0bb\\x1b\\x85\\u2028\u00e9\u0661' is not a number", 0)
+    assert len(set(outcomes)) == 1, outcomes
+    with pytest.raises(em.BVHError, match=r"found 'a\\x0bb\\x1b\\x85\\u2028\u00e9\u0661'$"):
+        em.read_bvh(one_joint_file(token))

@@ -20,7 +20,7 @@ from .backend import PARSE_ERRORS, kernels
 from .errors import BVHError, MocapError
 from .io import MAX_INPUT_BYTES, atomic_write, open_input, read_input
 from .motion import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton, canonical_channels
-from .tokens import NUMBER_PATTERN, finite_number
+from .tokens import NUMBER_PATTERN, finite_number, shown
 
 Source = Union[str, os.PathLike, bytes, bytearray, memoryview, BinaryIO]
 
@@ -43,6 +43,7 @@ MAX_CHANNELS = 6  # per joint: 3 positions and 3 rotations
 BLOCK_BYTES_PER_JOINT_FRAME = 3
 MIN_JOINT_FRAMES = 1 << 16
 _COUNT = re.compile(r"[0-9]{1,18}")  # ASCII digits only: str.isdigit() also takes '²'
+_COUNT_BYTES = re.compile(_COUNT.pattern.encode("ascii"))
 
 
 @dataclass
@@ -102,7 +103,7 @@ class _Tokens:
     def expect(self, word: str) -> int:
         token, line = self.next(repr(word))
         if token != word and token.lower() != word.lower():
-            raise self.error(line, f"expected {word!r}, found {token!r}")
+            raise self.error(line, f"expected {word!r}, found {shown(token)}")
         return line
 
     def numbers(self, count: int, what: str) -> list[float]:
@@ -114,7 +115,7 @@ class _Tokens:
         values = [finite_number(w) for w in self.words[start : start + count]]
         for k, value in enumerate(values, start):
             if value is None:
-                raise self.error(self.lines[k], f"expected {what} (a finite number), found {self.words[k]!r}")
+                raise self.error(self.lines[k], f"expected {what} (a finite number), found {shown(self.words[k])}")
         return values
 
     def name_on_line(self, keyword_line: int, what: str) -> str:
@@ -151,7 +152,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
             raise tokens.error(keyword_line, f"more than {MAX_JOINTS} joints: the reader's limit (see Limits in the README)")
         name = tokens.name_on_line(keyword_line, "joint")
         if name in first_line:
-            raise tokens.error(keyword_line, f"joint name {name!r} appears more than once (first at line {first_line[name]})")
+            raise tokens.error(keyword_line, f"joint name {shown(name)} appears more than once (first at line {first_line[name]})")
         first_line[name] = keyword_line
         names.append(name)
         parents.append(parent)
@@ -164,32 +165,32 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
     while stack:
         if tokens.done():
             joint = next(j for j in reversed(stack) if j >= 0)
-            raise tokens.error(tokens.last_line, f"unbalanced braces: the '{{' of joint {names[joint]!r} at line {opened_at[joint]} is never closed")
+            raise tokens.error(tokens.last_line, f"unbalanced braces: the '{{' of joint {shown(names[joint])} at line {opened_at[joint]} is never closed")
         token, line = tokens.next("'}'")
         top = stack[-1]
         word = token if token in _KEYWORDS else token.upper()
         if word == "}":
             if top >= 0 and offsets[top] is None:
-                raise tokens.error(line, f"joint {names[top]!r} has no OFFSET")
+                raise tokens.error(line, f"joint {shown(names[top])} has no OFFSET")
             if top < 0 and end_sites[-1 - top][1] is None:
                 raise tokens.error(line, "End Site has no OFFSET")
             stack.pop()
         elif top < 0:
             if word != "OFFSET" or end_sites[-1 - top][1] is not None:
-                raise tokens.error(line, f"expected OFFSET or '}}' in an End Site, found {token!r}")
+                raise tokens.error(line, f"expected OFFSET or '}}' in an End Site, found {shown(token)}")
             end_sites[-1 - top] = (end_sites[-1 - top][0], tokens.numbers(3, "an OFFSET value"))
             offset_owners.append(top)
         elif word == "OFFSET":
             if offsets[top] is not None:
-                raise tokens.error(line, f"joint {names[top]!r} has a second OFFSET")
+                raise tokens.error(line, f"joint {shown(names[top])} has a second OFFSET")
             offsets[top] = tokens.numbers(3, "an OFFSET value")
             offset_owners.append(top)
         elif word == "CHANNELS":
             if channels[top] is not None:
-                raise tokens.error(line, f"joint {names[top]!r} has a second CHANNELS line")
+                raise tokens.error(line, f"joint {shown(names[top])} has a second CHANNELS line")
             count_token, count_line = tokens.next("the number of channels")
             if not _COUNT.fullmatch(count_token) or int(count_token) > MAX_CHANNELS:
-                raise tokens.error(count_line, f"expected a channel count from 0 to {MAX_CHANNELS}, found {count_token!r}")
+                raise tokens.error(count_line, f"expected a channel count from 0 to {MAX_CHANNELS}, found {shown(count_token)}")
             listed = tuple(tokens.words[tokens.pos : tokens.pos + int(count_token)])
             if len(listed) < int(count_token):
                 tokens.pos = len(tokens.words)
@@ -201,7 +202,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
                 bad = next(k for k, n in enumerate(listed) if n.lower() not in _CHANNEL_NAMES)
                 raise tokens.error(tokens.lines[tokens.pos - len(listed) + bad], str(error)) from None
             if len(set(channels[top])) != len(listed):  # canonical names: "Xrotation" and "XROTATION" are one
-                raise tokens.error(line, f"joint {names[top]!r} lists a channel twice: {' '.join(listed)}")
+                raise tokens.error(line, f"joint {shown(names[top])} lists a channel twice: {' '.join(listed)}")
         elif word == "JOINT":
             open_joint(line, top)
         elif word == "END":
@@ -212,7 +213,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
         elif word == "ROOT":
             raise tokens.error(line, "several ROOT hierarchies in one file are not supported (a ROOT inside a joint)")
         else:
-            raise tokens.error(line, f"expected OFFSET, CHANNELS, JOINT, End Site or '}}', found {token!r}")
+            raise tokens.error(line, f"expected OFFSET, CHANNELS, JOINT, End Site or '}}', found {shown(token)}")
 
     if not tokens.done():
         token, line = tokens.next("MOTION")
@@ -220,7 +221,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
             raise tokens.error(line, "several ROOT hierarchies in one file are not supported: only the first ROOT can be read")
         if token == "}":
             raise tokens.error(line, "unbalanced braces: this '}' closes nothing")
-        raise tokens.error(line, f"expected MOTION after the hierarchy, found {token!r}")
+        raise tokens.error(line, f"expected MOTION after the hierarchy, found {shown(token)}")
     try:
         skeleton = Skeleton(
             names=tuple(names),
@@ -289,8 +290,9 @@ def _check_text(data: bytes, name: str) -> None:
     if b"\0" in head:
         raise BVHError(name, None, f"binary data (a NUL byte at offset {head.index(0)}): not a BVH text file")
     if not head[start : start + 9].upper().startswith(b"HIERARCHY"):
-        first = head[start:].split(b"\n", 1)[0][:40].decode("utf-8", "replace")
-        raise BVHError(name, head.count(b"\n", 0, start) + 1, f"expected 'HIERARCHY' at the start of a BVH file, found {first!r}")
+        end = data.find(b"\n", start)
+        first = memoryview(data)[start : len(data) if end < 0 else end]
+        raise BVHError(name, head.count(b"\n", 0, start) + 1, f"expected 'HIERARCHY' at the start of a BVH file, found {shown(first)}")
 
 
 def _line_at(data: bytes, offset: int) -> int:
@@ -363,14 +365,14 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
         match = pattern.match(data, start, end)
         line = _line_at(data, start)
         if match is None:
-            found = data[start:end].strip()[:40].decode("utf-8", "replace")
-            raise BVHError(name, line, f"expected {what} after MOTION, found {found!r}" if found else f"missing {what} after MOTION")
-        values.append((match.group(1).decode("utf-8", "replace"), line))
+            found = data[start:end].strip()
+            raise BVHError(name, line, f"expected {what} after MOTION, found {shown(found)}" if found else f"missing {what} after MOTION")
+        values.append((match.group(1), line))
         position = end + 1
 
     (frames_text, frames_line), (time_text, time_line) = values
-    if not _COUNT.fullmatch(frames_text):
-        raise BVHError(name, frames_line, f"expected a whole number of frames (at most 18 digits) after 'Frames:', found {frames_text!r}")
+    if not _COUNT_BYTES.fullmatch(frames_text):
+        raise BVHError(name, frames_line, f"expected a whole number of frames (at most 18 digits) after 'Frames:', found {shown(frames_text)}")
     frames, block_start = int(frames_text), min(position, len(data))
     block_bytes = (len(data) if size is None else size) - block_start
     if frames * skeleton.n_joints > max(block_bytes // BLOCK_BYTES_PER_JOINT_FRAME, MIN_JOINT_FRAMES):
@@ -380,9 +382,9 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
             f"Frames: {frames} x {skeleton.n_joints} joints is more than the {block_bytes}-byte MOTION block can hold (the reader's "
             f"limit: one joint-frame per {BLOCK_BYTES_PER_JOINT_FRAME} bytes of the block, or {MIN_JOINT_FRAMES}; see Limits in the README)",
         )
-    frame_time = finite_number(time_text)
+    frame_time = finite_number(time_text.decode("utf-8", "replace"))
     if frame_time is None or frame_time <= 0:
-        raise BVHError(name, time_line, f"expected a positive number of seconds after 'Frame Time:', found {time_text!r}")
+        raise BVHError(name, time_line, f"expected a positive number of seconds after 'Frame Time:', found {shown(time_text)}")
     return _Header(skeleton, frames, frame_time, block_start, time_line + 1)
 
 

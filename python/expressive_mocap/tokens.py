@@ -14,7 +14,9 @@ from __future__ import annotations
 import math
 import re
 
-NUMBER_PATTERN = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+# Each digit belongs to one part only: "[0-9]+\.?[0-9]*" made a long token of digits take
+# quadratic time to refuse (a 1 MB token, minutes), backtracking over every split.
+NUMBER_PATTERN = r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
 NUMBER = re.compile(NUMBER_PATTERN)
 NUMBER_BYTES = re.compile(NUMBER_PATTERN.encode("ascii"))
 # What fast-float2 reads as NaN or infinity: refused as "not a finite number", not "not a number".

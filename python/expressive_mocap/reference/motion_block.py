@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 
-from ..tokens import BLANKS, NOT_FINITE_BYTES, NUMBER_BYTES
+from ..tokens import BLANKS, NOT_FINITE_BYTES, NUMBER_BYTES, shown
 from .rotations import euler_to_quat
 
 
@@ -101,15 +101,14 @@ def _raise_first_problem(block: bytes, frames: int, channels: int) -> None:
         if not tokens:
             continue
         for token in tokens:
-            shown = token[:40].decode("utf-8", "replace") + ("…" if len(token) > 40 else "")
             if NUMBER_BYTES.fullmatch(token):
                 finite = math.isfinite(float(token))
             elif NOT_FINITE_BYTES.fullmatch(token):
                 finite = False
             else:
-                raise ParseError(f'"{shown}" is not a number', index)
+                raise ParseError(f"{shown(token)} is not a number", index)
             if not finite:
-                raise ParseError(f'"{shown}" is not a finite number (NaN and infinity are not allowed)', index)
+                raise ParseError(f"{shown(token)} is not a finite number (NaN and infinity are not allowed)", index)
         if len(tokens) != channels:
             raise ParseError(f"expected {channels} values (the CHANNELS of the hierarchy), found {len(tokens)}", index)
         if found == frames:
