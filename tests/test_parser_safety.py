@@ -256,3 +256,42 @@ def test_control_characters_in_an_echoed_token_are_escaped_the_same_in_both_back
     assert len(set(outcomes)) == 1, outcomes
     with pytest.raises(em.BVHError, match=r"found 'a\\x0bb\\x1b\\x85\\u2028\u00e9\u0661'$"):
         em.read_bvh(one_joint_file(token))
+
+
+# --- Byte-order marks and line endings -----------------------------------------------------
+
+MIXED = (REPO / "tests" / "data" / "mixed_orders.bvh").read_bytes()
+BOM = b"\xef\xbb\xbf"
+
+
+def test_a_utf8_byte_order_mark_is_read_with_the_same_lines_and_offsets(backend, tmp_path):
+    # Found by review: "expected 'HIERARCHY' ..., found '\ufeffHIERARCHY'" (exporters write it).
+    plain, marked = em.read_bvh(MIXED), em.read_bvh(BOM + MIXED)
+    np.testing.assert_array_equal(marked.rotations, plain.rotations)
+    np.testing.assert_array_equal(marked.translations, plain.translations)
+    assert marked.skeleton.names == plain.skeleton.names
+    # Lines named in errors, header and MOTION block, are those of the file without the mark.
+    lines = MIXED.split(b"\n")
+    for number, broken in ((12, b"\t\tOFFSET 0.0 twelve 0.0"), (len(lines) - 2, lines[-2].replace(b" ", b" x ", 1))):
+        assert lines[number - 1].strip() and broken != lines[number - 1]
+        bad = b"\n".join(lines[: number - 1] + [broken] + lines[number:])
+        for data in (bad, BOM + bad):
+            with pytest.raises(em.BVHError) as caught:
+                em.read_bvh(data)
+            assert caught.value.line == number, caught.value
+    # The header read from a file's beginning gives the Rust kernel byte offsets into the file.
+    path = tmp_path / "marked.bvh"
+    path.write_bytes(BOM + MIXED)
+    header, _ = bvh.read_header(path)
+    assert header.block_start == bvh.parse_header(MIXED, "plain").block_start + len(BOM)
+
+
+def test_cr_only_line_endings_are_refused_with_how_to_convert(backend):
+    # Found by review: "expected MOTION after the hierarchy, found 'MOTION'".
+    for data in (MIXED.replace(b"\n", b"\r"), BOM + MIXED.replace(b"\n", b"\r")):
+        with pytest.raises(em.BVHError, match=r"line 1: CR-only line endings .* tr '\\r' '\\n'") as caught:
+            em.read_bvh(data)
+        assert "\n" not in str(caught.value) and "\r" not in str(caught.value)
+    # CRLF, and CRCRLF (CRLF converted twice), are still read.
+    for ending in (b"\r\n", b"\r\r\n"):
+        np.testing.assert_array_equal(em.read_bvh(MIXED.replace(b"\n", ending)).rotations, em.read_bvh(MIXED).rotations)

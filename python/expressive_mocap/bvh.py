@@ -27,9 +27,9 @@ Source = Union[str, os.PathLike, bytes, bytearray, memoryview, BinaryIO]
 _TOKEN = re.compile(r"[{}]|[^ \t\r\n\x0c{}]+")  # ASCII blanks, as in the MOTION block (tokens.py)
 _KEYWORDS = frozenset(["}", "OFFSET", "CHANNELS", "JOINT", "ROOT"])  # already in upper case
 _CHANNEL_NAMES = frozenset(c.lower() for c in POSITION_CHANNELS + ROTATION_CHANNELS)
-_MOTION = re.compile(rb"^[ \t]*MOTION[ \t]*\r?$", re.MULTILINE | re.IGNORECASE)
-_FRAMES = re.compile(rb"[ \t]*Frames[ \t]*:[ \t]*(\S*)[ \t]*\r?$", re.IGNORECASE)
-_FRAME_TIME = re.compile(rb"[ \t]*Frame[ \t]+Time[ \t]*:[ \t]*(\S*)[ \t]*\r?$", re.IGNORECASE)
+_MOTION = re.compile(rb"^[ \t]*MOTION[ \t]*\r*$", re.MULTILINE | re.IGNORECASE)
+_FRAMES = re.compile(rb"[ \t]*Frames[ \t]*:[ \t]*(\S*)[ \t]*\r*$", re.IGNORECASE)
+_FRAME_TIME = re.compile(rb"[ \t]*Frame[ \t]+Time[ \t]*:[ \t]*(\S*)[ \t]*\r*$", re.IGNORECASE)
 
 
 # Limits of the reader (README, "Limits"): within them, memory stays proportional to the file's
@@ -242,7 +242,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
 # A number is cut out only whole: "0}" stays in the shape (found by fuzz_bvh.py: "OFFSET 0 0 0}"
 # cached a shape that a later "OFFSET 0 0 0" without its brace matched, and was read).
 # Only tokens of the number grammar are cut out: anything else takes the full parse and its error.
-_OFFSET_NUMBERS = re.compile(rf"(?<=OFFSET)[ \t]+({NUMBER_PATTERN})[ \t]+({NUMBER_PATTERN})[ \t]+({NUMBER_PATTERN})(?=[ \t]*\r?$)", re.MULTILINE)
+_OFFSET_NUMBERS = re.compile(rf"(?<=OFFSET)[ \t]+({NUMBER_PATTERN})[ \t]+({NUMBER_PATTERN})[ \t]+({NUMBER_PATTERN})(?=[ \t]*\r*$)", re.MULTILINE)
 _SHAPES: dict[tuple[str, ...], tuple[Skeleton, np.ndarray, np.ndarray]] = {}
 _HIERARCHIES: dict[str, Skeleton] = {}
 _MAX_SHAPES = 64
@@ -281,18 +281,38 @@ def _remember(text: str, skeleton: Skeleton) -> Skeleton:
     return skeleton
 
 
-def _check_text(data: bytes, name: str) -> None:
-    """Refuse empty and binary files early, looking at the first few kilobytes only."""
-    head = data[:4096]
+_BOM = b"\xef\xbb\xbf"  # UTF-8 byte-order mark: some exporters start files with it
+
+
+def _check_text(data: bytes, name: str) -> int:
+    """Refuse empty and binary files and CR-only line endings early, looking at the first few
+    kilobytes only. Returns where the text starts: 3 after a UTF-8 byte-order mark, else 0."""
+    bom = len(_BOM) if data.startswith(_BOM) else 0
+    head = data[bom:4096]
     start = len(head) - len(head.lstrip())
-    if start == len(head) and not data[len(head) :].strip():
+    if start == len(head) and not data[bom + len(head) :].strip():
         raise BVHError(name, None, "the file is empty: expected a BVH file starting with HIERARCHY")
     if b"\0" in head:
         raise BVHError(name, None, f"binary data (a NUL byte at offset {head.index(0)}): not a BVH text file")
+    if _cr_only(head, bom + len(head) == len(data)):
+        # Lines are LF or CRLF in both MOTION parsers and in preprocess, which hands a file's
+        # path and byte offsets to the Rust kernel: reading CR-only text would take a copy.
+        raise BVHError(name, 1, "CR-only line endings (classic Mac OS): expected LF or CRLF; convert the file first, e.g. tr '\\r' '\\n' < old.bvh > new.bvh")
     if not head[start : start + 9].upper().startswith(b"HIERARCHY"):
-        end = data.find(b"\n", start)
-        first = memoryview(data)[start : len(data) if end < 0 else end]
+        end = data.find(b"\n", bom + start)
+        first = memoryview(data)[bom + start : len(data) if end < 0 else end]
         raise BVHError(name, head.count(b"\n", 0, start) + 1, f"expected 'HIERARCHY' at the start of a BVH file, found {shown(first)}")
+    return bom
+
+
+def _cr_only(head: bytes, whole: bool) -> bool:
+    """Whether the first line break of ``head`` (the file's beginning, or ``whole`` file) is
+    CR alone: CRs not followed by LF ("\r\r\n", from converting twice, is a CRLF)."""
+    breaks = re.search(rb"[\r\n]", head)
+    if breaks is None or breaks[0] == b"\n":
+        return False
+    after = head[breaks.start() :].lstrip(b"\r")[:1]
+    return after != b"\n" and (after != b"" or whole)  # CRs up to the end of a part: maybe LF next
 
 
 def _line_at(data: bytes, offset: int) -> int:
@@ -343,16 +363,16 @@ def _find_motion_line(data: bytes) -> re.Match | None:
 def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
     """The header of the BVH text ``data``; ``size``: the whole file's length when ``data`` is
     only its beginning (see :func:`read_header`)."""
-    _check_text(data, name)
+    text_start = _check_text(data, name)
     motion = _find_motion_line(data)
     hierarchy_end = motion.start() if motion else len(data)
     if hierarchy_end > MAX_HEADER_BYTES:
         where = "the hierarchy" if motion else "the hierarchy (no MOTION line found)"
         raise BVHError(name, None, f"{where} is longer than {MAX_HEADER_BYTES} bytes: the reader's limit (see Limits in the README)")
     try:
-        text = data[:hierarchy_end].decode("utf-8")
+        text = data[text_start:hierarchy_end].decode("utf-8")  # without the byte-order mark: lines are the same
     except UnicodeDecodeError as error:
-        raise BVHError(name, _line_at(data, error.start), "bytes that are not UTF-8 text: not a BVH text file") from None
+        raise BVHError(name, _line_at(data, text_start + error.start), "bytes that are not UTF-8 text: not a BVH text file") from None
     skeleton = _skeleton(text, name)
     if motion is None:
         raise BVHError(name, text.count("\n") + 1, "missing MOTION section after the hierarchy")
