@@ -35,6 +35,8 @@ impl FrameSink for Values {
 /// Parse `frames` lines of `channels` finite numbers each from `block`.
 ///
 /// Blank lines (whitespace only) are skipped, so trailing newlines and CRLF endings are fine.
+/// Lines end at LF only: a lone CR is a blank (the header refuses CR-only files). Numbers are
+/// fast-float2's whole tokens, the grammar of `expressive_mocap/tokens.py`.
 /// Returns the values frame-major, `frames * channels` long.
 ///
 /// # Errors

@@ -3,6 +3,11 @@
 The header (hierarchy, Frames, Frame Time) is parsed here; the MOTION number block, most of a
 file's bytes, by the kernel ``read_motion_blocks`` (Rust, or its NumPy twin). Every problem is a
 :class:`~expressive_mocap.errors.BVHError` naming the file, the line and what was expected.
+
+Text is UTF-8, with or without a byte-order mark; lines end in LF or CRLF (CR-only files, from
+classic Mac OS, are refused with how to convert them). Numbers follow one grammar, header and
+MOTION block alike (:mod:`expressive_mocap.tokens`), and tokens echoed in errors are cut to 40
+bytes (:func:`~expressive_mocap.tokens.shown`).
 """
 
 from __future__ import annotations
