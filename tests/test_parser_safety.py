@@ -2,6 +2,7 @@
 odd bytes in bool arrays, one number grammar for the whole file, byte-order marks and old Mac
 line endings, and huge tokens echoed in error messages."""
 
+import importlib
 import json
 import os
 import subprocess
@@ -10,8 +11,11 @@ import textwrap
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import expressive_mocap as em
+from expressive_mocap import bvh, reference
 
 from conftest import REPO
 
@@ -131,7 +135,7 @@ def test_index_arrays_written_by_another_thread_never_reach_a_kernel():
 def test_a_bool_array_holding_other_bytes_reads_them_as_numpy_does(kernel):
     # NumPy lets a bool array hold any byte (a view of uint8 data); NumPy reads non-zero as
     # True, and Rust must not read such a byte as a `bool` (undefined behaviour).
-    from expressive_mocap import _core, reference
+    from expressive_mocap import _core
 
     flags = np.array([[0, 0], [2, 1], [0, 255], [0, 0], [128, 0]], dtype=np.uint8)
     odd, plain = flags.view(bool), flags != 0
@@ -148,11 +152,6 @@ def test_a_bool_array_holding_other_bytes_reads_them_as_numpy_does(kernel):
 
 
 # --- One number grammar for the whole file -------------------------------------------------
-
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-
-from expressive_mocap import bvh, reference  # noqa: E402
 
 
 def one_joint_file(offset: str, frame_time: str = "0.04", frame: str = "0") -> bytes:
@@ -175,7 +174,7 @@ def block_outcomes(token: str) -> list:
     """Per backend, the value the MOTION block parser reads for ``token`` or its message."""
     data = token.encode("utf-8") + b"\n"
     outcomes = []
-    for module in [reference] + ([__import__("expressive_mocap._core", fromlist=["_"])] if em.rust_available() else []):
+    for module in [reference] + ([importlib.import_module("expressive_mocap._core")] if em.rust_available() else []):
         try:
             outcomes.append(float(module.parse_motion_block(data, 0, 1, 1)[0, 0]))
         except em.backend.PARSE_ERRORS as error:
