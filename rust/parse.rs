@@ -35,6 +35,8 @@ impl FrameSink for Values {
 /// Parse `frames` lines of `channels` finite numbers each from `block`.
 ///
 /// Blank lines (whitespace only) are skipped, so trailing newlines and CRLF endings are fine.
+/// Lines end at LF only: a lone CR is a blank (the header refuses CR-only files). Numbers are
+/// fast-float2's whole tokens, the grammar of `expressive_mocap/tokens.py`.
 /// Returns the values frame-major, `frames * channels` long.
 ///
 /// # Errors
@@ -223,12 +225,12 @@ fn parse_chunk<S: FrameSink>(
             match fast_float2::parse_partial::<f64, _>(rest) {
                 Ok((v, used)) if rest.get(used).is_none_or(u8::is_ascii_whitespace) => {
                     if !v.is_finite() {
-                        return Err((line, format!("{:?} is not a finite number (NaN and infinity are not allowed)", show(token_at(rest)))));
+                        return Err((line, format!("{} is not a finite number (NaN and infinity are not allowed)", show(token_at(rest)))));
                     }
                     values.push(v);
                     i += used;
                 }
-                _ => return Err((line, format!("{:?} is not a number", show(token_at(rest))))),
+                _ => return Err((line, format!("{} is not a number", show(token_at(rest))))),
             }
         }
         if !values.is_empty() {
@@ -247,13 +249,29 @@ fn token_at(rest: &[u8]) -> &[u8] {
     &rest[..rest.iter().position(u8::is_ascii_whitespace).unwrap_or(rest.len())]
 }
 
+/// Bytes of a token shown in an error message: a 1 MB token must not make a 1 MB message.
+const SHOWN_BYTES: usize = 40;
+
+/// `token` quoted for an error message, exactly as the twin's `expressive_mocap.tokens.shown`
+/// (the two backends' messages are compared): its first 40 bytes (undecodable bytes as U+FFFD),
+/// control characters and line separators escaped so the message stays one line, then
+/// `... (N bytes)` when it was cut.
 fn show(token: &[u8]) -> String {
-    let text = String::from_utf8_lossy(&token[..token.len().min(40)]).into_owned();
-    if token.len() > 40 {
-        text + "…"
-    } else {
-        text
+    use std::fmt::Write;
+    let mut text = String::from("'");
+    for c in String::from_utf8_lossy(&token[..token.len().min(SHOWN_BYTES)]).chars() {
+        // Writing into a String cannot fail.
+        let _ = match u32::from(c) {
+            code @ (0..=0x1f | 0x7f..=0x9f) => write!(text, "\\x{code:02x}"),
+            code @ (0x2028 | 0x2029) => write!(text, "\\u{code:04x}"),
+            _ => write!(text, "{c}"),
+        };
     }
+    text.push('\'');
+    if token.len() > SHOWN_BYTES {
+        let _ = write!(text, "... ({} bytes)", token.len());
+    }
+    text
 }
 
 #[cfg(test)]
@@ -307,9 +325,20 @@ mod tests {
         let lines = text.lines().count();
         text.push_str("1 2 oops\n");
         let e = parse_motion_block(text.as_bytes(), 60_001, 3).unwrap_err();
-        assert_eq!(e, KernelError::Parse { line: lines, message: "\"oops\" is not a number".into() });
+        assert_eq!(e, KernelError::Parse { line: lines, message: "'oops' is not a number".into() });
         let e = parse_motion_block(text.as_bytes(), 59_000, 3).unwrap_err();
         assert!(matches!(e, KernelError::Parse { line, .. } if line == 59_000 + 59), "{e:?}");
+    }
+
+    #[test]
+    fn a_long_or_odd_token_is_shown_cut_and_on_one_line() {
+        let mut block = b"1 ".to_vec();
+        block.resize(2 + (1 << 20), b'7');
+        block.extend_from_slice(b"x\n");
+        let e = parse_motion_block(&block, 1, 2).unwrap_err();
+        let expected = format!("'{}'... (1048577 bytes) is not a number", "7".repeat(40));
+        assert_eq!(e, KernelError::Parse { line: 0, message: expected });
+        assert_eq!(show(b"a\x0bb\x1b\xc2\x85\xe2\x80\xa8\xff"), "'a\\x0bb\\x1b\\x85\\u2028\u{fffd}'");
     }
 
     #[test]

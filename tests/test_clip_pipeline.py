@@ -97,7 +97,7 @@ def test_a_bad_block_and_a_missing_file_are_that_clips_result(walks, tmp_path, b
     missing = (str(tmp_path / "gone.bvh"), *clip[1:])
     good, bad, gone = kernels().clip_pipeline_many([clip, broken, missing], parents, joints, *GAIT, True, False, [], True, True)
     assert isinstance(good, tuple) and good[1] is None and good[2] == []
-    assert isinstance(bad, em.backend.PARSE_ERRORS) and bad.args == ('"x" is not a number', 2)
+    assert isinstance(bad, em.backend.PARSE_ERRORS) and bad.args == ("'x' is not a number", 2)
     assert isinstance(gone, OSError) and (gone.errno, gone.strerror) == (errno.ENOENT, os.strerror(errno.ENOENT))
 
 

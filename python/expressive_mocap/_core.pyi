@@ -1,5 +1,9 @@
 """Type stubs of the Rust extension. Every function has a NumPy twin of the same name and
-signature in ``expressive_mocap.reference``; call them through ``expressive_mocap.kernels``."""
+signature in ``expressive_mocap.reference``; call them through ``expressive_mocap.kernels``.
+
+Every function releases the GIL. Index and bool arrays are copied first (a write to them by
+another thread during a call has no effect on it); float arrays are read in place, so a write to
+one during a call gives results from a mix of old and new values (see ``expressive_mocap.kernels``)."""
 
 import numpy as np
 import numpy.typing as npt

@@ -3,12 +3,16 @@
 The header (hierarchy, Frames, Frame Time) is parsed here; the MOTION number block, most of a
 file's bytes, by the kernel ``read_motion_blocks`` (Rust, or its NumPy twin). Every problem is a
 :class:`~expressive_mocap.errors.BVHError` naming the file, the line and what was expected.
+
+Text is UTF-8, with or without a byte-order mark; lines end in LF or CRLF (CR-only files, from
+classic Mac OS, are refused with how to convert them). Numbers follow one grammar, header and
+MOTION block alike (:mod:`expressive_mocap.tokens`), and tokens echoed in errors are cut to 40
+bytes (:func:`~expressive_mocap.tokens.shown`).
 """
 
 from __future__ import annotations
 
 import errno
-import math
 import os
 import re
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -21,15 +25,16 @@ from .backend import PARSE_ERRORS, kernels
 from .errors import BVHError, MocapError
 from .io import MAX_INPUT_BYTES, atomic_write, open_input, read_input
 from .motion import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton, canonical_channels
+from .tokens import NUMBER_PATTERN, finite_number, shown
 
 Source = Union[str, os.PathLike, bytes, bytearray, memoryview, BinaryIO]
 
-_TOKEN = re.compile(r"[{}]|[^\s{}]+")
+_TOKEN = re.compile(r"[{}]|[^ \t\r\n\x0c{}]+")  # ASCII blanks, as in the MOTION block (tokens.py)
 _KEYWORDS = frozenset(["}", "OFFSET", "CHANNELS", "JOINT", "ROOT"])  # already in upper case
 _CHANNEL_NAMES = frozenset(c.lower() for c in POSITION_CHANNELS + ROTATION_CHANNELS)
-_MOTION = re.compile(rb"^[ \t]*MOTION[ \t]*\r?$", re.MULTILINE | re.IGNORECASE)
-_FRAMES = re.compile(rb"[ \t]*Frames[ \t]*:[ \t]*(\S*)[ \t]*\r?$", re.IGNORECASE)
-_FRAME_TIME = re.compile(rb"[ \t]*Frame[ \t]+Time[ \t]*:[ \t]*(\S*)[ \t]*\r?$", re.IGNORECASE)
+_MOTION = re.compile(rb"^[ \t]*MOTION[ \t]*\r*$", re.MULTILINE | re.IGNORECASE)
+_FRAMES = re.compile(rb"[ \t]*Frames[ \t]*:[ \t]*(\S*)[ \t]*\r*$", re.IGNORECASE)
+_FRAME_TIME = re.compile(rb"[ \t]*Frame[ \t]+Time[ \t]*:[ \t]*(\S*)[ \t]*\r*$", re.IGNORECASE)
 
 
 # Limits of the reader (README, "Limits"): within them, memory stays proportional to the file's
@@ -43,6 +48,7 @@ MAX_CHANNELS = 6  # per joint: 3 positions and 3 rotations
 BLOCK_BYTES_PER_JOINT_FRAME = 3
 MIN_JOINT_FRAMES = 1 << 16
 _COUNT = re.compile(r"[0-9]{1,18}")  # ASCII digits only: str.isdigit() also takes '²'
+_COUNT_BYTES = re.compile(_COUNT.pattern.encode("ascii"))
 
 
 @dataclass
@@ -102,7 +108,7 @@ class _Tokens:
     def expect(self, word: str) -> int:
         token, line = self.next(repr(word))
         if token != word and token.lower() != word.lower():
-            raise self.error(line, f"expected {word!r}, found {token!r}")
+            raise self.error(line, f"expected {word!r}, found {shown(token)}")
         return line
 
     def numbers(self, count: int, what: str) -> list[float]:
@@ -111,21 +117,11 @@ class _Tokens:
             self.pos = len(self.words)
             self.next(what)  # raises the end-of-header error
         self.pos = start + count
-        try:
-            values = [float(w) for w in self.words[start : start + count]]
-            if all(math.isfinite(v) for v in values):
-                return values
-        except ValueError:
-            pass
-        for k in range(start, start + count):  # error path: name the bad token
-            token, line = self.words[k], self.lines[k]
-            try:
-                bad = not math.isfinite(float(token))
-            except ValueError:
-                bad = True
-            if bad:
-                raise self.error(line, f"expected {what} (a finite number), found {token!r}")
-        raise AssertionError("unreachable")
+        values = [finite_number(w) for w in self.words[start : start + count]]
+        for k, value in enumerate(values, start):
+            if value is None:
+                raise self.error(self.lines[k], f"expected {what} (a finite number), found {shown(self.words[k])}")
+        return values
 
     def name_on_line(self, keyword_line: int, what: str) -> str:
         """The rest of the keyword's line up to '{' (names may contain spaces or ':')."""
@@ -161,7 +157,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
             raise tokens.error(keyword_line, f"more than {MAX_JOINTS} joints: the reader's limit (see Limits in the README)")
         name = tokens.name_on_line(keyword_line, "joint")
         if name in first_line:
-            raise tokens.error(keyword_line, f"joint name {name!r} appears more than once (first at line {first_line[name]})")
+            raise tokens.error(keyword_line, f"joint name {shown(name)} appears more than once (first at line {first_line[name]})")
         first_line[name] = keyword_line
         names.append(name)
         parents.append(parent)
@@ -174,32 +170,32 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
     while stack:
         if tokens.done():
             joint = next(j for j in reversed(stack) if j >= 0)
-            raise tokens.error(tokens.last_line, f"unbalanced braces: the '{{' of joint {names[joint]!r} at line {opened_at[joint]} is never closed")
+            raise tokens.error(tokens.last_line, f"unbalanced braces: the '{{' of joint {shown(names[joint])} at line {opened_at[joint]} is never closed")
         token, line = tokens.next("'}'")
         top = stack[-1]
         word = token if token in _KEYWORDS else token.upper()
         if word == "}":
             if top >= 0 and offsets[top] is None:
-                raise tokens.error(line, f"joint {names[top]!r} has no OFFSET")
+                raise tokens.error(line, f"joint {shown(names[top])} has no OFFSET")
             if top < 0 and end_sites[-1 - top][1] is None:
                 raise tokens.error(line, "End Site has no OFFSET")
             stack.pop()
         elif top < 0:
             if word != "OFFSET" or end_sites[-1 - top][1] is not None:
-                raise tokens.error(line, f"expected OFFSET or '}}' in an End Site, found {token!r}")
+                raise tokens.error(line, f"expected OFFSET or '}}' in an End Site, found {shown(token)}")
             end_sites[-1 - top] = (end_sites[-1 - top][0], tokens.numbers(3, "an OFFSET value"))
             offset_owners.append(top)
         elif word == "OFFSET":
             if offsets[top] is not None:
-                raise tokens.error(line, f"joint {names[top]!r} has a second OFFSET")
+                raise tokens.error(line, f"joint {shown(names[top])} has a second OFFSET")
             offsets[top] = tokens.numbers(3, "an OFFSET value")
             offset_owners.append(top)
         elif word == "CHANNELS":
             if channels[top] is not None:
-                raise tokens.error(line, f"joint {names[top]!r} has a second CHANNELS line")
+                raise tokens.error(line, f"joint {shown(names[top])} has a second CHANNELS line")
             count_token, count_line = tokens.next("the number of channels")
             if not _COUNT.fullmatch(count_token) or int(count_token) > MAX_CHANNELS:
-                raise tokens.error(count_line, f"expected a channel count from 0 to {MAX_CHANNELS}, found {count_token!r}")
+                raise tokens.error(count_line, f"expected a channel count from 0 to {MAX_CHANNELS}, found {shown(count_token)}")
             listed = tuple(tokens.words[tokens.pos : tokens.pos + int(count_token)])
             if len(listed) < int(count_token):
                 tokens.pos = len(tokens.words)
@@ -211,7 +207,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
                 bad = next(k for k, n in enumerate(listed) if n.lower() not in _CHANNEL_NAMES)
                 raise tokens.error(tokens.lines[tokens.pos - len(listed) + bad], str(error)) from None
             if len(set(channels[top])) != len(listed):  # canonical names: "Xrotation" and "XROTATION" are one
-                raise tokens.error(line, f"joint {names[top]!r} lists a channel twice: {' '.join(listed)}")
+                raise tokens.error(line, f"joint {shown(names[top])} lists a channel twice: {' '.join(listed)}")
         elif word == "JOINT":
             open_joint(line, top)
         elif word == "END":
@@ -222,7 +218,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
         elif word == "ROOT":
             raise tokens.error(line, "several ROOT hierarchies in one file are not supported (a ROOT inside a joint)")
         else:
-            raise tokens.error(line, f"expected OFFSET, CHANNELS, JOINT, End Site or '}}', found {token!r}")
+            raise tokens.error(line, f"expected OFFSET, CHANNELS, JOINT, End Site or '}}', found {shown(token)}")
 
     if not tokens.done():
         token, line = tokens.next("MOTION")
@@ -230,7 +226,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
             raise tokens.error(line, "several ROOT hierarchies in one file are not supported: only the first ROOT can be read")
         if token == "}":
             raise tokens.error(line, "unbalanced braces: this '}' closes nothing")
-        raise tokens.error(line, f"expected MOTION after the hierarchy, found {token!r}")
+        raise tokens.error(line, f"expected MOTION after the hierarchy, found {shown(token)}")
     try:
         skeleton = Skeleton(
             names=tuple(names),
@@ -250,7 +246,8 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
 # unusual takes the full parse, whose errors name the line.
 # A number is cut out only whole: "0}" stays in the shape (found by fuzz_bvh.py: "OFFSET 0 0 0}"
 # cached a shape that a later "OFFSET 0 0 0" without its brace matched, and was read).
-_OFFSET_NUMBERS = re.compile(r"(?<=OFFSET)[ \t]+([^\s{}]+)[ \t]+([^\s{}]+)[ \t]+([^\s{}]+)(?=[ \t]*\r?$)", re.MULTILINE)
+# Only tokens of the number grammar are cut out: anything else takes the full parse and its error.
+_OFFSET_NUMBERS = re.compile(rf"(?<=OFFSET)[ \t]+({NUMBER_PATTERN})[ \t]+({NUMBER_PATTERN})[ \t]+({NUMBER_PATTERN})(?=[ \t]*\r*$)", re.MULTILINE)
 _SHAPES: dict[tuple[str, ...], tuple[Skeleton, np.ndarray, np.ndarray]] = {}
 _HIERARCHIES: dict[str, Skeleton] = {}
 _MAX_SHAPES = 64
@@ -289,17 +286,38 @@ def _remember(text: str, skeleton: Skeleton) -> Skeleton:
     return skeleton
 
 
-def _check_text(data: bytes, name: str) -> None:
-    """Refuse empty and binary files early, looking at the first few kilobytes only."""
-    head = data[:4096]
+_BOM = b"\xef\xbb\xbf"  # UTF-8 byte-order mark: some exporters start files with it
+
+
+def _check_text(data: bytes, name: str) -> int:
+    """Refuse empty and binary files and CR-only line endings early, looking at the first few
+    kilobytes only. Returns where the text starts: 3 after a UTF-8 byte-order mark, else 0."""
+    bom = len(_BOM) if data.startswith(_BOM) else 0
+    head = data[bom:4096]
     start = len(head) - len(head.lstrip())
-    if start == len(head) and not data[len(head) :].strip():
+    if start == len(head) and not data[bom + len(head) :].strip():
         raise BVHError(name, None, "the file is empty: expected a BVH file starting with HIERARCHY")
     if b"\0" in head:
         raise BVHError(name, None, f"binary data (a NUL byte at offset {head.index(0)}): not a BVH text file")
+    if _cr_only(head, bom + len(head) == len(data)):
+        # Lines are LF or CRLF in both MOTION parsers and in preprocess, which hands a file's
+        # path and byte offsets to the Rust kernel: reading CR-only text would take a copy.
+        raise BVHError(name, 1, "CR-only line endings (classic Mac OS): expected LF or CRLF; convert the file first, e.g. tr '\\r' '\\n' < old.bvh > new.bvh")
     if not head[start : start + 9].upper().startswith(b"HIERARCHY"):
-        first = head[start:].split(b"\n", 1)[0][:40].decode("utf-8", "replace")
-        raise BVHError(name, head.count(b"\n", 0, start) + 1, f"expected 'HIERARCHY' at the start of a BVH file, found {first!r}")
+        end = data.find(b"\n", bom + start)
+        first = memoryview(data)[bom + start : len(data) if end < 0 else end]
+        raise BVHError(name, head.count(b"\n", 0, start) + 1, f"expected 'HIERARCHY' at the start of a BVH file, found {shown(first)}")
+    return bom
+
+
+def _cr_only(head: bytes, whole: bool) -> bool:
+    """Whether the first line break of ``head`` (the file's beginning, or ``whole`` file) is
+    CR alone: CRs not followed by LF ("\r\r\n", from converting twice, is a CRLF)."""
+    breaks = re.search(rb"[\r\n]", head)
+    if breaks is None or breaks[0] == b"\n":
+        return False
+    after = head[breaks.start() :].lstrip(b"\r")[:1]
+    return after != b"\n" and (after != b"" or whole)  # CRs up to the end of a part: maybe LF next
 
 
 def _line_at(data: bytes, offset: int) -> int:
@@ -350,16 +368,16 @@ def _find_motion_line(data: bytes) -> re.Match | None:
 def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
     """The header of the BVH text ``data``; ``size``: the whole file's length when ``data`` is
     only its beginning (see :func:`read_header`)."""
-    _check_text(data, name)
+    text_start = _check_text(data, name)
     motion = _find_motion_line(data)
     hierarchy_end = motion.start() if motion else len(data)
     if hierarchy_end > MAX_HEADER_BYTES:
         where = "the hierarchy" if motion else "the hierarchy (no MOTION line found)"
         raise BVHError(name, None, f"{where} is longer than {MAX_HEADER_BYTES} bytes: the reader's limit (see Limits in the README)")
     try:
-        text = data[:hierarchy_end].decode("utf-8")
+        text = data[text_start:hierarchy_end].decode("utf-8")  # without the byte-order mark: lines are the same
     except UnicodeDecodeError as error:
-        raise BVHError(name, _line_at(data, error.start), "bytes that are not UTF-8 text: not a BVH text file") from None
+        raise BVHError(name, _line_at(data, text_start + error.start), "bytes that are not UTF-8 text: not a BVH text file") from None
     skeleton = _skeleton(text, name)
     if motion is None:
         raise BVHError(name, text.count("\n") + 1, "missing MOTION section after the hierarchy")
@@ -372,14 +390,14 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
         match = pattern.match(data, start, end)
         line = _line_at(data, start)
         if match is None:
-            found = data[start:end].strip()[:40].decode("utf-8", "replace")
-            raise BVHError(name, line, f"expected {what} after MOTION, found {found!r}" if found else f"missing {what} after MOTION")
-        values.append((match.group(1).decode("utf-8", "replace"), line))
+            found = data[start:end].strip()
+            raise BVHError(name, line, f"expected {what} after MOTION, found {shown(found)}" if found else f"missing {what} after MOTION")
+        values.append((match.group(1), line))
         position = end + 1
 
     (frames_text, frames_line), (time_text, time_line) = values
-    if not _COUNT.fullmatch(frames_text):
-        raise BVHError(name, frames_line, f"expected a whole number of frames (at most 18 digits) after 'Frames:', found {frames_text!r}")
+    if not _COUNT_BYTES.fullmatch(frames_text):
+        raise BVHError(name, frames_line, f"expected a whole number of frames (at most 18 digits) after 'Frames:', found {shown(frames_text)}")
     frames, block_start = int(frames_text), min(position, len(data))
     block_bytes = (len(data) if size is None else size) - block_start
     if frames * skeleton.n_joints > max(block_bytes // BLOCK_BYTES_PER_JOINT_FRAME, MIN_JOINT_FRAMES):
@@ -389,12 +407,9 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> _Header:
             f"Frames: {frames} x {skeleton.n_joints} joints is more than the {block_bytes}-byte MOTION block can hold (the reader's "
             f"limit: one joint-frame per {BLOCK_BYTES_PER_JOINT_FRAME} bytes of the block, or {MIN_JOINT_FRAMES}; see Limits in the README)",
         )
-    try:
-        frame_time = float(time_text)
-    except ValueError:
-        frame_time = math.nan
-    if not (math.isfinite(frame_time) and frame_time > 0):
-        raise BVHError(name, time_line, f"expected a positive number of seconds after 'Frame Time:', found {time_text!r}")
+    frame_time = finite_number(time_text.decode("utf-8", "replace"))
+    if frame_time is None or frame_time <= 0:
+        raise BVHError(name, time_line, f"expected a positive number of seconds after 'Frame Time:', found {shown(time_text)}")
     return _Header(skeleton, frames, frame_time, block_start, time_line + 1)
 
 

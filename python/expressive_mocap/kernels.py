@@ -2,6 +2,14 @@
 
 Each function runs the Rust kernel or its NumPy twin (see :mod:`expressive_mocap.backend`);
 both take and return float64 arrays. Leading batch dimensions are folded into frames.
+
+Arrays written by another thread during a call: the Rust kernels run without the GIL, so
+other Python threads run meanwhile. Index arrays (``parents``, channel columns, gait joints)
+and bool flags are copied before the GIL is released, so a write to them during a call has no
+effect on it: it is computed from the values at the call, or refused with a ValueError. Float
+arrays are read in place (copying them would cost as much as some kernels): a write to one
+during a call gives results computed from a mix of its old and new values, and nothing worse
+(no crash, no error). Don't write to a kernel's inputs while it runs if you need its result.
 """
 
 from __future__ import annotations

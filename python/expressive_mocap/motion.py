@@ -18,6 +18,7 @@ import numpy as np
 from . import kernels, quat
 from .errors import MocapError
 from .rotations import AXES, ORDERS, axes_of, order_name
+from .tokens import shown
 
 POSITION_CHANNELS = tuple(f"{a}position" for a in AXES)
 ROTATION_CHANNELS = tuple(f"{a}rotation" for a in AXES)
@@ -29,7 +30,7 @@ def canonical_channel(name: str) -> str:
     try:
         return _CANONICAL[name.lower()]
     except KeyError:
-        raise MocapError(f"unknown channel {name!r}: expected one of {', '.join(_CANONICAL.values())}") from None
+        raise MocapError(f"unknown channel {shown(name)}: expected one of {', '.join(_CANONICAL.values())}") from None
 
 
 @lru_cache(maxsize=1024)
@@ -113,7 +114,7 @@ class Skeleton:
             )
         if len(set(names)) != joints:
             duplicate = next(n for n in names if names.count(n) > 1)
-            raise MocapError(f"joint name {duplicate!r} appears more than once")
+            raise MocapError(f"joint name {shown(duplicate)} appears more than once")
         if parents[0] != -1 or (parents[1:] < 0).any():
             raise MocapError("a skeleton has exactly one root, the first joint (parent -1)")
         if (parents[1:] >= np.arange(1, joints)).any():

@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList};
 
 use super::features::{array2, gait_joints, thigh_reference_values};
-use super::{contiguous, to_py, OwnedLayout};
+use super::{owned_indices, to_py, OwnedLayout};
 use crate::clip::{clip_outputs, read_input, ClipInput, ClipOutputs, ClipRequest, ReadError};
 use crate::error::KernelError;
 use crate::features::N_FEATURES;
@@ -139,9 +139,9 @@ fn clip_pipeline_many<'py>(
             thigh_reference,
         });
     }
-    let parents = contiguous("parents", &parents)?;
+    let parents = owned_indices("parents", &parents)?;
     let request = ClipRequest {
-        parents,
+        parents: &parents,
         roles: gait_joints(&roles)?,
         params: GaitParams {
             height_threshold,

@@ -5,7 +5,7 @@ use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3, PyReadonl
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use super::{contiguous, shape_error, to_py};
+use super::{contiguous, owned_flags, shape_error, to_py};
 use crate::features::{FeatureParams, N_FEATURES};
 use crate::footsteps::ContactParams;
 
@@ -44,8 +44,8 @@ fn air_time<'py>(py: Python<'py>, contacts: PyReadonlyArray2<'py, bool>, frame_t
     if shape[1] == 0 {
         return Err(shape_error("contacts", "[F, S]", &shape));
     }
-    let flags = contiguous("contacts", &contacts)?;
-    let times = py.detach(|| crate::footsteps::air_time(flags, shape[1], frame_time)).map_err(to_py)?;
+    let flags = owned_flags("contacts", &contacts)?;
+    let times = py.detach(|| crate::footsteps::air_time(&flags, shape[1], frame_time)).map_err(to_py)?;
     Ok(array2(times, (shape[0], shape[1]))?.into_pyarray(py))
 }
 
@@ -79,8 +79,8 @@ fn dynamic_features<'py>(
         return Err(shape_error("reference", "[2, 4]", reference.shape()));
     }
     let params = FeatureParams { frame_time, height, hips_rest_height, floor, window };
-    let (p, t, c, r) = (contiguous("points", &points)?, contiguous("thighs", &thighs)?, contiguous("contacts", &contacts)?, contiguous("reference", &reference)?);
-    let features = py.detach(|| crate::features::dynamic_features(p, t, c, r, &params)).map_err(to_py)?;
+    let (p, t, c, r) = (contiguous("points", &points)?, contiguous("thighs", &thighs)?, owned_flags("contacts", &contacts)?, contiguous("reference", &reference)?);
+    let features = py.detach(|| crate::features::dynamic_features(p, t, &c, r, &params)).map_err(to_py)?;
     Ok(array2(features, (frames, N_FEATURES))?.into_pyarray(py))
 }
 

@@ -63,7 +63,7 @@ fn forward_typed<'py, T: Scalar + Element>(
 ///     activations: per layer "tanh" or "linear".
 ///
 /// Returns:
-///     [N, out] in the dtype of `x`. The GIL is released; don't mutate the inputs meanwhile.
+///     [N, out] in the dtype of `x`. The GIL is released: inputs written meanwhile give a mix of old and new values.
 #[pyfunction]
 fn mlp_forward<'py>(
     py: Python<'py>,

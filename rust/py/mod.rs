@@ -1,7 +1,7 @@
 //! PyO3 bindings: argument checks, GIL release, arrays in and out. No algorithm lives here.
 
 use numpy::ndarray::{Array2, Array3, Dimension};
-use numpy::{Element, IntoPyArray, PyReadonlyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::{Element, IntoPyArray, PyArrayMethods, PyReadonlyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -29,15 +29,47 @@ fn shape_error(name: &str, expected: &str, got: &[usize]) -> PyErr {
     PyValueError::new_err(format!("argument `{name}`: expected shape {expected}, got {got:?}"))
 }
 
+fn not_contiguous(name: &str) -> PyErr {
+    PyTypeError::new_err(format!("argument `{name}`: expected a C-contiguous array (see numpy.ascontiguousarray)"))
+}
+
+/// A copy of an index array (parents, columns...), taken while the GIL is held.
+///
+/// Kernels run without the GIL, so another Python thread may write to the caller's arrays
+/// meanwhile. An index checked in the array and read again later could then be out of range
+/// (a panic), and reading memory another thread writes is a data race in Rust's terms. Index
+/// arrays are small: the kernels check and use this copy only, so no write can reach them.
+/// Float arrays are read in place (copying them would cost as much as some kernels): a write
+/// during a call only mixes old and new values into the results (see `kernels.py`).
+fn owned_indices<D: Dimension>(name: &str, array: &PyReadonlyArray<'_, i64, D>) -> PyResult<Vec<i64>> {
+    Ok(contiguous(name, array)?.to_vec())
+}
+
+/// A copy of a bool array, read as bytes: NumPy lets a bool array hold any byte (e.g.
+/// `np.frombuffer(b"\\x02", bool)`), which is undefined behaviour as a Rust `bool`; any non-zero
+/// byte is true, as NumPy reads it. Copied under the GIL like `owned_indices`.
+fn owned_flags<D: Dimension>(name: &str, array: &PyReadonlyArray<'_, bool, D>) -> PyResult<Vec<bool>> {
+    if !array.is_c_contiguous() {
+        return Err(not_contiguous(name));
+    }
+    let len = array.len();
+    if len == 0 {
+        return Ok(Vec::new());
+    }
+    // SAFETY: the array is C-contiguous (checked above) with `len` one-byte elements at its
+    // non-null data pointer, alive while borrowed; read as u8, every byte is a valid value.
+    let bytes = unsafe { std::slice::from_raw_parts(array.data().cast::<u8>().cast_const(), len) };
+    Ok(bytes.iter().map(|&b| b != 0).collect())
+}
+
 /// The elements of a C-contiguous array, or a TypeError naming the argument (the numpy crate's
 /// own error does not say which argument).
 fn contiguous<'a, T: Element, D: Dimension>(name: &str, array: &'a PyReadonlyArray<'_, T, D>) -> PyResult<&'a [T]> {
     // as_slice alone also takes Fortran-ordered arrays, whose elements it would hand over transposed.
-    let refused = || PyTypeError::new_err(format!("argument `{name}`: expected a C-contiguous array (see numpy.ascontiguousarray)"));
     if !array.is_c_contiguous() {
-        return Err(refused());
+        return Err(not_contiguous(name));
     }
-    array.as_slice().map_err(|_| refused())
+    array.as_slice().map_err(|_| not_contiguous(name))
 }
 
 fn orders_from(orders: &PyReadonlyArray2<'_, u8>) -> PyResult<Vec<Order>> {
@@ -83,9 +115,9 @@ impl OwnedLayout {
         let (rotation_columns, orders, position_columns, offsets) = arrays;
         Ok(Self {
             channels,
-            rotation_columns: contiguous("rotation_columns", rotation_columns)?.to_vec(),
+            rotation_columns: owned_indices("rotation_columns", rotation_columns)?,
             orders: orders_from(orders)?,
-            position_columns: contiguous("position_columns", position_columns)?.to_vec(),
+            position_columns: owned_indices("position_columns", position_columns)?,
             offsets: contiguous("offsets", offsets)?.to_vec(),
         })
     }
@@ -205,8 +237,8 @@ fn forward_kinematics<'py>(
     if ts != [rs[0], joints, 3] {
         return Err(shape_error("translations", &format!("[{}, {joints}, 3]", rs[0]), &ts));
     }
-    let (r, t, p) = (contiguous("rotations", &rotations)?, contiguous("translations", &translations)?, contiguous("parents", &parents)?);
-    let (world_rot, world_pos) = py.detach(|| crate::fk::forward_kinematics(r, t, p)).map_err(to_py)?;
+    let (r, t, p) = (contiguous("rotations", &rotations)?, contiguous("translations", &translations)?, owned_indices("parents", &parents)?);
+    let (world_rot, world_pos) = py.detach(|| crate::fk::forward_kinematics(r, t, &p)).map_err(to_py)?;
     Ok((array3(world_rot, (rs[0], joints, 4))?.into_pyarray(py), array3(world_pos, (rs[0], joints, 3))?.into_pyarray(py)))
 }
 
@@ -229,7 +261,7 @@ fn forward_kinematics_many<'py>(
                 "argument `clips`: clip {index} has rotations {rs:?} and translations {ts:?} for {joints} parents, expected [F, {joints}, 4] and [F, {joints}, 3]"
             )));
         }
-        jobs.push((contiguous("clips", rotations)?, contiguous("clips", translations)?, contiguous("clips", parents)?, rs[0]));
+        jobs.push((contiguous("clips", rotations)?, contiguous("clips", translations)?, owned_indices("clips", parents)?, rs[0]));
     }
     let results: Vec<Result<(Vec<f64>, Vec<f64>), KernelError>> =
         py.detach(|| jobs.par_iter().map(|(r, t, p, _)| crate::fk::forward_kinematics(r, t, p)).collect());

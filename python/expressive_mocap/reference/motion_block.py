@@ -13,15 +13,15 @@ import warnings
 
 import numpy as np
 
+from ..tokens import BLANKS, NOT_FINITE_BYTES, NUMBER_BYTES, shown
 from .rotations import euler_to_quat
 
 
-# The Rust parser's grammar: numbers separated by ASCII blanks (space, tab, CR, form feed), one
+# The Rust parser's grammar (expressive_mocap.tokens): numbers separated by ASCII blanks, one
 # frame a line. Python's own split() also splits at other control characters, so the twin
 # tokenises with these explicitly to accept and refuse exactly the same files.
-_PLAIN = b"0123456789+-.eE \t\r\n\x0c"
-_BLANKS = re.compile(rb"[ \t\r\x0c]+")
-_NUMBER = re.compile(rb"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf(?:inity)?)", re.IGNORECASE)
+_PLAIN = b"0123456789+-.eE\n" + BLANKS.encode("ascii")
+_BLANKS = re.compile(b"[" + re.escape(BLANKS.encode("ascii")) + b"]+")
 
 
 def _tokens(line: bytes) -> list[bytes]:
@@ -101,12 +101,14 @@ def _raise_first_problem(block: bytes, frames: int, channels: int) -> None:
         if not tokens:
             continue
         for token in tokens:
-            shown = token[:40].decode("utf-8", "replace") + ("…" if len(token) > 40 else "")
-            if not _NUMBER.fullmatch(token):
-                raise ParseError(f'"{shown}" is not a number', index)
-            value = float(token)
-            if not math.isfinite(value):
-                raise ParseError(f'"{shown}" is not a finite number (NaN and infinity are not allowed)', index)
+            if NUMBER_BYTES.fullmatch(token):
+                finite = math.isfinite(float(token))
+            elif NOT_FINITE_BYTES.fullmatch(token):
+                finite = False
+            else:
+                raise ParseError(f"{shown(token)} is not a number", index)
+            if not finite:
+                raise ParseError(f"{shown(token)} is not a finite number (NaN and infinity are not allowed)", index)
         if len(tokens) != channels:
             raise ParseError(f"expected {channels} values (the CHANNELS of the hierarchy), found {len(tokens)}", index)
         if found == frames:
