@@ -43,3 +43,16 @@ def test_line_log_redraws_running_lines_only_on_a_terminal():
         log("fit: 3 iterations")
     assert terminal.getvalue().count("\n") == 1 and "iteration 2/3" in terminal.getvalue()
     assert plain.getvalue().splitlines() == ["fit: iteration 1/3", "fit: 3 iterations"]  # running lines every 10 s
+
+
+def test_commands_reading_many_clips_show_a_bar_on_a_terminal_and_nothing_quick_in_logs(mixed_path, monkeypatch):
+    from expressive_mocap import cli
+
+    terminal = Terminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    assert len(cli._read_all([str(mixed_path)] * 3, "clips")) == 3
+    assert terminal.getvalue().startswith("\rreading clips [") and "3 files/3 files (100%)" in terminal.getvalue()
+    log = io.StringIO()
+    monkeypatch.setattr("sys.stderr", log)
+    cli._read_all([str(mixed_path)] * 3, "clips")
+    assert log.getvalue() == ""  # under 10 s: no line in a log

@@ -394,21 +394,25 @@ def cmd_calibrate(args) -> int:
     return 0
 
 
+def _read_all(paths: list[str], what: str, quiet: bool = False) -> list[Motion]:
+    """BVH files read one after the other, with a progress bar on stderr (see progress.Progress)."""
+    from .progress import Progress
+
+    with Progress(len(paths), f"reading {what}", "files", enabled=bool(paths) and not quiet) as bar:
+        motions = []
+        for path in paths:
+            motions.append(read_bvh(path))
+            bar.update()
+    return motions
+
+
 def cmd_train(args) -> int:
     from .model import poor_fit, train_model
-    from .progress import Progress, line_log
+    from .progress import line_log
     from .train import format_report
 
-    def read_all(paths, what):
-        with Progress(len(paths), f"reading {what} clips", "files", enabled=bool(paths) and not args.quiet) as bar:
-            motions = []
-            for path in paths:
-                motions.append(read_bvh(path))
-                bar.update()
-        return motions
-
-    neutral = read_all(args.neutral, "neutral")
-    unlabelled = read_all(args.unlabelled or [], "unlabelled")
+    neutral = _read_all(args.neutral, "neutral clips", args.quiet)
+    unlabelled = _read_all(args.unlabelled or [], "unlabelled clips", args.quiet)
     model = train_model(
         neutral, unlabelled, hidden=args.hidden, regression_hidden=args.regression_hidden, unlabelled_frames=args.unlabelled_frames,
         seed=args.seed, max_iter=args.max_iter, log=line_log(not args.quiet),
@@ -445,8 +449,8 @@ def _levels(args) -> tuple[list[list[Motion]], list[float], list[list[str]]]:
         raise MocapError(f"every --level needs the same number of files (one per person); got {[len(f) for _, f in levels]}")
     n = counts.pop()
     paths = [[files[i] for _, files in levels] for i in range(n)]
-    people = [[read_bvh(path) for path in person] for person in paths]
-    return people, [k for k, _ in levels], paths
+    people = _read_all([path for person in paths for path in person], "clips")
+    return [people[i * len(levels) : (i + 1) * len(levels)] for i in range(n)], [k for k, _ in levels], paths
 
 
 def _train_from_args(args):

@@ -81,10 +81,13 @@ class Progress:
         self.stream.flush()
 
     def close(self) -> None:
-        """Show the final state (on a terminal, end the redrawn line)."""
+        """Show the final state (on a terminal, end the redrawn line; elsewhere only after work
+        long enough to have shown progress: a quick step stays silent in logs)."""
         if not self.enabled:
             return
-        self._show(time.perf_counter())
+        now = time.perf_counter()
+        if self.terminal or now - self.start >= self.every:
+            self._show(now)
         if self.terminal:
             self.stream.write("\n")
             self.stream.flush()
