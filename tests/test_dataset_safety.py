@@ -21,7 +21,8 @@ import expressive_mocap.preprocess as preprocess_module
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.preprocess import load_dataset, preprocess
 
-REPO = Path(__file__).resolve().parent.parent
+# Child processes import the package the tests import: the installed one in CI, not the sources.
+PACKAGE_ROOT = str(Path(em.__file__).resolve().parent.parent)
 BROKEN = b"HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 2 Xposition\n}\n"
 
 
@@ -63,7 +64,7 @@ def snapshot(folder: Path) -> dict:
 
 
 def cli(*args: str, **kw) -> subprocess.Popen:
-    env = {**os.environ, "PYTHONPATH": str(REPO / "python")}
+    env = {**os.environ, "PYTHONPATH": PACKAGE_ROOT}
     return subprocess.Popen([sys.executable, "-m", "expressive_mocap.cli", "preprocess", *args, "-q"], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
 
@@ -77,7 +78,7 @@ def test_a_second_run_on_a_locked_folder_fails_naming_the_holder(clips, referenc
     holder = subprocess.Popen(
         [sys.executable, "-c", "import sys, time; from pathlib import Path; from expressive_mocap.dataset import FolderLock\n"
          "with FolderLock(Path(sys.argv[1])):\n    print('locked', flush=True); time.sleep(60)", str(out)],
-        env={**os.environ, "PYTHONPATH": str(REPO / "python")}, stdout=subprocess.PIPE, text=True)
+        env={**os.environ, "PYTHONPATH": PACKAGE_ROOT}, stdout=subprocess.PIPE, text=True)
     try:
         assert holder.stdout.readline().strip() == "locked"
         second = cli(str(clips), "-o", str(out))

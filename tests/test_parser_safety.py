@@ -6,6 +6,7 @@ import importlib
 import json
 import os
 import subprocess
+from pathlib import Path
 import sys
 import textwrap
 
@@ -119,7 +120,7 @@ def test_index_arrays_written_by_another_thread_never_reach_a_kernel():
     # Found by review: the bindings read `parents` from NumPy's memory after releasing the GIL,
     # so a parent checked in range could be out of range when used: a PanicException (a
     # BaseException) and tens of MB of panic messages on stderr.
-    env = dict(os.environ, PYTHONPATH=str(REPO / "python"), EXPRESSIVE_MOCAP_BACKEND="rust", RUST_BACKTRACE="0")
+    env = dict(os.environ, PYTHONPATH=str(Path(em.__file__).resolve().parent.parent), EXPRESSIVE_MOCAP_BACKEND="rust", RUST_BACKTRACE="0")
     done = subprocess.run([sys.executable, "-c", HAMMER], capture_output=True, text=True, env=env, timeout=600)
     assert "panicked" not in done.stderr, done.stderr[:2000]
     assert done.returncode == 0, done.stderr[-2000:]

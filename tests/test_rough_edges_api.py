@@ -18,7 +18,7 @@ from expressive_mocap.decouple import decompose
 from expressive_mocap.model import BodyModel
 from expressive_mocap.preprocess import preprocess
 
-PYTHON = Path(__file__).resolve().parent.parent / "python"
+PYTHON = Path(em.__file__).resolve().parent.parent  # the package the tests import (installed in CI)
 
 
 # ----------------------------------------------------------------------------- the package's names
