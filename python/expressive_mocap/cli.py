@@ -626,7 +626,13 @@ def build_parser() -> argparse.ArgumentParser:
     _add_model_options(p)
     p.set_defaults(run=cmd_blend)
 
-    p = commands.add_parser("train", help="train a body-mechanics model on neutral clips of one skeleton")
+    p = commands.add_parser(
+        "train", help="train a body-mechanics model on neutral clips of one skeleton",
+        description="Train a body-mechanics model on neutral clips of one skeleton. How much data: on Bandai-Namco locomotion "
+        "(benches/NEUTRAL_DATA.md) 2 clips (~7 s) gave a model worse than the mean pose, which train refuses; 4 clips (~16 s) "
+        "predicted held-out poses with 0.15x the mean pose's error, 16 clips (~70 s) 0.07x, 99 clips (~8 min) 0.05x. Give at "
+        "least a minute of neutral walking and running, in several clips (the test split is by clip).",
+    )
     p.add_argument("neutral", nargs="+", metavar="NEUTRAL", help="neutral clips (no gestures, head forward, limbs moving with the body); 70/30 split by clip")
     p.add_argument("--unlabelled", nargs="+", metavar="CLIP", help="any clips of the same skeleton: frames for the denoising autoencoder")
     p.add_argument("-o", "--output", required=True, metavar="MODEL.npz", help="the model file")
