@@ -1,4 +1,14 @@
-"""The package's exceptions: one base, and one for malformed BVH files."""
+"""The package's exceptions: every error caused by bad input or bad arguments is a
+:class:`MocapError` (a ``ValueError``), raised from Python and from the Rust kernels alike, and the
+command line turns exactly these into its one-line messages. The subclasses say what was wrong:
+
+- :class:`ArgumentError`: an argument of a function or command (a shape, a dtype, a value);
+- :class:`BVHError`: a BVH file, naming the file and the line; :class:`ParseError`: a MOTION
+  number block, before the file is known (turned into a BVHError by the reader);
+- :class:`ModelError`: a model file or a model that cannot be used as asked;
+- :class:`DatasetError`: a preprocessed dataset folder;
+- :class:`ClipError`: one clip among several given together.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +17,23 @@ import os
 
 class MocapError(ValueError):
     """Base class of every error expressive-mocap raises on bad input."""
+
+
+class ArgumentError(MocapError):
+    """A bad argument: its name, what was expected and what was given."""
+
+
+class ModelError(MocapError):
+    """A model file that cannot be read, or a model that does not fit what it is asked to do."""
+
+
+class DatasetError(MocapError):
+    """A dataset folder that is not ours to write, or whose files its manifest does not vouch for."""
+
+
+class ParseError(MocapError):
+    """A MOTION number block that cannot be read: ``args == (message, line_in_block)``, the line
+    counted from the block's first (0-based); the reader adds the file and the header's lines."""
 
 
 class BVHError(MocapError):
@@ -33,3 +60,6 @@ class ClipError(MocapError):
         super().__init__(message)
         self.person = person
         self.level = level
+
+
+__all__ = ["ArgumentError", "BVHError", "ClipError", "DatasetError", "MocapError", "ModelError", "ParseError"]
