@@ -28,7 +28,7 @@ import numpy as np
 import expressive_mocap as em
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.exaggerate import dof_positions, exaggerate, fit, leave_one_out, rank_agreement, swap_test, train, validation_table
-from expressive_mocap.io import atomic_write
+from expressive_mocap.files import atomic_write
 from expressive_mocap.render import render
 
 HERE = Path(__file__).resolve().parent

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from expressive_mocap import exaggerate, io as em_io, model as em_model
+from expressive_mocap import exaggerate, files as em_io, model as em_model
 
 
 def small_models() -> dict[str, tuple[dict, dict]]:

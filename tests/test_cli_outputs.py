@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import io as em_io
+from expressive_mocap import files as em_io
 from expressive_mocap.cli import build_parser, main
 from expressive_mocap.demo import loaded_walk, procedural_walk, walk_and_wave
 
@@ -124,7 +124,7 @@ class _FailingFile:
 @pytest.mark.parametrize("name", WRITERS)
 def test_an_interrupted_write_leaves_no_partial_file(name, inputs, tmp_path, capsys, monkeypatch):
     real_fdopen = em_io.os.fdopen
-    # Inputs are opened with os.fdopen too (io.open_input): only files opened to write fail.
+    # Inputs are opened with os.fdopen too (files.open_input): only files opened to write fail.
     monkeypatch.setattr(em_io.os, "fdopen", lambda fd, mode: _FailingFile(real_fdopen(fd, mode)) if "w" in mode else real_fdopen(fd, mode))
     status, err, _ = run(name, inputs, tmp_path, capsys)
     # Progress lines (train) may come first; the error is the last line, and one line.
@@ -142,7 +142,7 @@ def test_decouple_writes_its_three_files_together_or_not_at_all(inputs, tmp_path
     def third_write_fails(fd, mode):
         handle = real_fdopen(fd, mode)
         if "w" not in mode:
-            return handle  # an input (io.open_input)
+            return handle  # an input (files.open_input)
         opened.append(fd)
         return _FailingFile(handle) if len(opened) == 3 else handle
 

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import io as em_io
+from expressive_mocap import files as em_io
 from expressive_mocap.cli import main
 from expressive_mocap.demo import walk_and_wave
 from expressive_mocap.errors import MocapError

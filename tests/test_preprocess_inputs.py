@@ -21,7 +21,7 @@ import pytest
 
 import expressive_mocap as em
 import expressive_mocap.preprocess as preprocess_module
-from expressive_mocap import io as em_io
+from expressive_mocap import files as em_io
 from expressive_mocap.backend import kernels
 from expressive_mocap.cli import main
 from expressive_mocap.demo import procedural_walk

@@ -23,7 +23,7 @@ import numpy as np
 
 from .backend import PARSE_ERRORS, kernels
 from .errors import BVHError, MocapError
-from .io import MAX_INPUT_BYTES, atomic_write, open_input, read_input
+from .files import MAX_INPUT_BYTES, atomic_write, open_input, read_input
 from .motion import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton, canonical_channels
 from .tokens import NUMBER_PATTERN, finite_number, shown
 
@@ -593,7 +593,7 @@ def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
 
 def write_bvh(motion: Motion, path: str | os.PathLike, decimals: int | None = None) -> None:
     """Write ``motion`` as a BVH file at ``path``, atomically (a complete file or none; see
-    :func:`expressive_mocap.io.atomic_write_all` for what ``path`` may be). A non-finite value
+    :func:`expressive_mocap.files.atomic_write_all` for what ``path`` may be). A non-finite value
     is refused, naming ``path``, the frame and the channel, before anything is written.
 
     See :func:`bvh_bytes` for ``decimals``.

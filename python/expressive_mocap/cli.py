@@ -20,7 +20,7 @@ import numpy as np
 from . import __version__, backend
 from .bvh import bvh_bytes, read_bvh, write_bvh
 from .errors import ClipError, MocapError
-from .io import atomic_write, atomic_write_all, file_kind, is_standard_output, open_input, output_target
+from .files import atomic_write, atomic_write_all, file_kind, is_standard_output, open_input, output_target
 from .motion import Motion
 from .rotations import ORDERS
 
@@ -746,7 +746,7 @@ def _output_paths(args) -> list[str]:
 def _check_outputs(args) -> None:
     """Refuse, before any work, an output whose folder is missing or unwritable, or that is
     anything but a regular file or a new one (a folder, FIFO, socket, device, or a symlink to
-    one: :func:`expressive_mocap.io.output_target`): files go where they are asked to (``-o``,
+    one: :func:`expressive_mocap.files.output_target`): files go where they are asked to (``-o``,
     ``--plot``), never next to an input, and the folders of ``demo`` and ``preprocess`` are
     created only inside an existing one. ``-`` is standard output for the commands that stream."""
     makes_folder = args.run in (cmd_demo, cmd_preprocess)  # their OUT is a folder, made if new

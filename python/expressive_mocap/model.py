@@ -26,7 +26,7 @@ import numpy as np
 from . import quat
 from .errors import MocapError
 from .features import FEATURE_NAMES, default_floor, dynamic_features, mean_rotation
-from .io import atomic_write, check_keys, finite_array, read_model_file
+from .files import atomic_write, check_keys, finite_array, read_model_file
 from .mlp import Mlp
 from .motion import Motion, Skeleton
 from .roles import JointRoles

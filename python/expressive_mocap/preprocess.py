@@ -86,8 +86,8 @@ from .dataset import (FORMAT, JOURNAL, KINDS, MANIFEST, OFFSETS, PARTIAL, RUN, V
 from .errors import BVHError, MocapError
 from .decouple import EXPONENT, GAIN
 from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
-from . import io as inputs
-from .io import atomic_write
+from . import files as inputs
+from .files import atomic_write
 from .kernels import decouple_rotations
 from .progress import Progress
 from .roles import JointRoles, actor_height, hips_rest_height
@@ -141,7 +141,7 @@ _MEMBER_ERRORS = (zipfile.BadZipFile, zlib.error, lzma.LZMAError, OSError, EOFEr
 
 def _member_bytes(item: _Item) -> bytes:
     """A zip member's bytes, checked before decompressing: not encrypted, at most
-    ``io.MAX_INPUT_BYTES`` declared, and no more than that read whatever it declares (a 1 MB zip
+    ``files.MAX_INPUT_BYTES`` declared, and no more than that read whatever it declares (a 1 MB zip
     can hold a 1 GiB member). Any problem is that clip's BVHError."""
     try:
         info = _zip(item.path).getinfo(item.member)
@@ -257,7 +257,7 @@ def open_source(src: str | os.PathLike) -> _Source:
 
 def _tar_stream(path: Path) -> Iterator[_Item]:
     """The .bvh members of a tar in archive order, each read as the stream passes it: only
-    regular files of at most ``io.MAX_INPUT_BYTES`` (checked before reading), others are
+    regular files of at most ``files.MAX_INPUT_BYTES`` (checked before reading), others are
     their clip's failure."""
     limit = inputs.MAX_INPUT_BYTES
     try:
@@ -278,7 +278,7 @@ def _tar_stream(path: Path) -> Iterator[_Item]:
 
 
 def _tar_kind(member: tarfile.TarInfo) -> str:
-    """What a tar member that is not a regular file is, in words (as io.file_kind)."""
+    """What a tar member that is not a regular file is, in words (as files.file_kind)."""
     for test, kind in ((member.issym, "a symbolic link"), (member.islnk, "a hard link"), (member.isfifo, "a FIFO"),
                        (member.ischr, "a character device"), (member.isblk, "a block device")):
         if test():

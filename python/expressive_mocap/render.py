@@ -18,7 +18,7 @@ from typing import Sequence
 import numpy as np
 
 from .errors import MocapError
-from .io import atomic_write, output_target
+from .files import atomic_write, output_target
 from .motion import Motion
 
 VIEWS = ("side", "front")
@@ -248,7 +248,7 @@ def render_animation(
 
 def render(motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", **options) -> str | None:
     """Render to ``path``: a GIF animation if it ends in ``.gif`` (returns how it plays), otherwise
-    a PNG of poses. ``path`` is checked before drawing (:func:`expressive_mocap.io.output_target`)."""
+    a PNG of poses. ``path`` is checked before drawing (:func:`expressive_mocap.files.output_target`)."""
     output_target(path)
     if str(path).lower().endswith(".gif"):
         return render_animation(motions, path, titles, view, **options)

@@ -91,7 +91,7 @@ type ClipArgs<'py> = (
 /// `clips`: per clip `(source, start, frames, channels, rotation_columns, orders,
 /// position_columns, offsets, frame_time, height, hips_rest_height)`: `source` the file's bytes
 /// or its path (read here: a regular file of at most `max_bytes`, by default
-/// `expressive_mocap.io.MAX_INPUT_BYTES`), `start` where its MOTION block begins, the layout arrays as for
+/// `expressive_mocap.files.MAX_INPUT_BYTES`), `start` where its MOTION block begins, the layout arrays as for
 /// `read_motion_blocks`, the body scale as for `clip_gait_many`. `parents` [J]; `roles` the 7
 /// gait joints. Kept per clip: world `positions` [F, J, 3], local `rotations` [F, J, 4], one
 /// causal feature array [F, 19] per `features` request `(floor or None, thigh_reference [2, 4]
@@ -126,7 +126,7 @@ fn clip_pipeline_many<'py>(
     let max_bytes = match max_bytes {
         Some(bound) => bound,
         None => py
-            .import("expressive_mocap.io")?
+            .import("expressive_mocap.files")?
             .getattr("MAX_INPUT_BYTES")?
             .extract()?,
     };

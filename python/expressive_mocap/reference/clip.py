@@ -7,7 +7,7 @@ import os
 
 import numpy as np
 
-from .. import io
+from .. import files
 from .fk import forward_kinematics
 from .gait import GAIT_ROLES, clip_gait_many
 from .motion_block import read_motion_blocks
@@ -30,8 +30,8 @@ def clip_pipeline_many(
 ) -> list:
     """Per clip ``(source, start, frames, channels, rotation_columns, orders, position_columns,
     offsets, frame_time, height, hips_rest_height)`` (``source``: the bytes, or a path read
-    here with :func:`~expressive_mocap.io.read_input`: a regular file of at most ``max_bytes``,
-    by default ``io.MAX_INPUT_BYTES``): ``(positions [F, J, 3] or None, rotations [F, J, 4] or
+    here with :func:`~expressive_mocap.files.read_input`: a regular file of at most ``max_bytes``,
+    by default ``files.MAX_INPUT_BYTES``): ``(positions [F, J, 3] or None, rotations [F, J, 4] or
     None, [features [F, 19] per (floor, thigh_reference) request], contacts bool [F, 2] or
     None)``, float32 if asked; a ``ParseError`` or ``OSError`` in the place of a clip whose
     block or file cannot be read (or is refused: not a regular file, or over the bound)."""
@@ -44,7 +44,7 @@ def clip_pipeline_many(
     for source, start, frames, channels, *layout, frame_time, height, hips_rest_height in clips:
         if isinstance(source, (str, os.PathLike)):
             try:
-                source = io.read_input(source, io.MAX_INPUT_BYTES if max_bytes is None else max_bytes)
+                source = files.read_input(source, files.MAX_INPUT_BYTES if max_bytes is None else max_bytes)
             except OSError as error:
                 out.append(OSError(error.errno, error.strerror) if error.errno is not None else error)
                 continue
