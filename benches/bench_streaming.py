@@ -11,9 +11,9 @@ import time
 import numpy as np
 
 import expressive_mocap as em
-from expressive_mocap.decouple import StreamingDecoupler
+from expressive_mocap.decoupling.streaming import StreamingDecoupler
 from expressive_mocap.demo import walk_and_wave
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.body_model import BodyModel
 
 
 def latencies(motion: em.Motion, model: BodyModel) -> np.ndarray:

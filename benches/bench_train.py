@@ -13,7 +13,7 @@ import argparse
 import os
 import time
 
-from expressive_mocap.train import synthetic_data, train_body_mechanics
+from expressive_mocap.decoupling.training import synthetic_data, train_stacked_network
 
 
 def main() -> None:
@@ -26,7 +26,7 @@ def main() -> None:
     X, P, groups = synthetic_data(args.clips, args.frames)
     print(f"{len(X)} rows, {X.shape[1]} features, D = {P.shape[1]}, H = {args.hidden}, max_iter {args.max_iter} a stage, {os.cpu_count()} cpus")
     start = time.perf_counter()
-    train_body_mechanics(X, P, groups, hidden=args.hidden, regression_hidden=args.hidden, max_iter=args.max_iter, log=lambda line: print(line, flush=True))
+    train_stacked_network(X, P, groups, hidden=args.hidden, regression_hidden=args.hidden, max_iter=args.max_iter, log=lambda line: print(line, flush=True))
     print(f"total {time.perf_counter() - start:.0f} s")  # the report above comes from the training log
 
 

@@ -22,10 +22,10 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
-from expressive_mocap.decouple import decompose
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.algebra import decompose
+from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.render import render
-from expressive_mocap.train import split_by_group
+from expressive_mocap.decoupling.training import split_by_group
 
 HERE = Path(__file__).resolve().parent
 NEUTRAL_CONTENTS = ("walk", "walk-turn-left", "walk-turn-right", "run")  # the shipped model's training set, in its order

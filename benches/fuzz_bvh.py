@@ -27,7 +27,8 @@ import numpy as np
 
 with atheris.instrument_imports():
     import expressive_mocap as em
-    from expressive_mocap import exaggerate, model as em_model
+    from expressive_mocap import exaggerate
+    from expressive_mocap.decoupling import body_model as em_model
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / "tests"))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.body_model import BodyModel
 
 HERE = Path(__file__).resolve().parent
 CARD = HERE.parent / "python" / "expressive_mocap" / "data" / "MODEL_CARD.md"

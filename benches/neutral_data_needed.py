@@ -3,7 +3,7 @@ training clips. python benches/neutral_data_needed.py [--max-iter N] [--sizes 2,
 
 Dataset-2's 145 neutral locomotion clips (walk, walk-turn-left/right, run; style normal) are split
 once by clip (seed 0, 30% of the frames held out); models are trained with
-`train_model` (its own 70/30 split inside the clips given, no unlabelled clips) on the first n of
+`train_body_model` (its own 70/30 split inside the clips given, no unlabelled clips) on the first n of
 the remaining clips, shuffled with a fixed seed, and every model is scored on the same held-out
 clips: pose MSE of the network and of the mean training pose (the baseline a model must beat).
 Writes benches/NEUTRAL_DATA.md. Data: Bandai-Namco-Research-Motiondataset-2, CC BY-NC 4.0.
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
-from expressive_mocap.model import pose_vectors, train_model
-from expressive_mocap.train import split_by_group
+from expressive_mocap.decoupling.body_model import pose_vectors
+from expressive_mocap.decoupling.training import split_by_group, train_body_model
 
 HERE = Path(__file__).resolve().parent
 SHARED = HERE.parent.parent / "shared" / "data"
@@ -58,7 +58,7 @@ def main() -> None:
     for n in [int(s) for s in args.sizes.split(",")]:
         chosen = [motions[k] for k in order[:n]]
         start = time.perf_counter()
-        model = train_model(chosen, max_iter=args.max_iter, log=None)
+        model = train_body_model(chosen, max_iter=args.max_iter, log=None)
         seconds = time.perf_counter() - start
         network, baseline = held_out_mse(model, chosen, test)
         rows.append((n, sum(m.n_frames for m in chosen), network, baseline, seconds))

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
-from expressive_mocap.model import BodyModel, pose_vectors
-from expressive_mocap.train import sweep_autoencoder
+from expressive_mocap.decoupling.body_model import BodyModel, pose_vectors
+from expressive_mocap.decoupling.training import sweep_autoencoder
 
 from eval_decoupling import NEUTRAL_CONTENTS, dataset_root
 

@@ -6,7 +6,8 @@ import json
 
 import numpy as np
 
-from expressive_mocap import exaggerate, files as em_io, model as em_model
+from expressive_mocap import exaggerate, files as em_io
+from expressive_mocap.decoupling import body_model as em_model
 
 
 def small_models() -> dict[str, tuple[dict, dict]]:

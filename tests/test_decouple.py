@@ -6,7 +6,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from expressive_mocap import decouple as dc
+from expressive_mocap import decoupling as dc
+from expressive_mocap.decoupling import edits
+from expressive_mocap.errors import ArgumentError
 from expressive_mocap import quat, reference
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.kernels import compose_rotations, decouple_rotations
@@ -86,7 +88,7 @@ def test_asynchronous_blend_moves_each_component_in_its_own_window(walk):
     a, b = dc.decompose(walk, MODEL), dc.decompose(other, MODEL)
     frames = np.arange(out.n_frames)
     i, j = np.minimum(frames, walk.n_frames - 1), np.clip(frames - 10, 0, other.n_frames - 1)
-    body = quat.slerp(a.body[i], b.body[j], dc._weights(out.n_frames, (10, 30))[:, None])
+    body = quat.slerp(a.body[i], b.body[j], edits._weights(out.n_frames, (10, 30))[:, None])
     expressive = quat.mul(out.rotations, quat.conjugate(body))[:, 2:]  # the hips, turned by the blend, have none
     # The expressive part is the first motion's until its window opens, the second's after it closes.
     np.testing.assert_allclose(same_rotation(expressive[:40], a.expressive[i[:40], 2:]), 1.0, atol=1e-9)
@@ -94,7 +96,7 @@ def test_asynchronous_blend_moves_each_component_in_its_own_window(walk):
 
 
 def test_mix_refuses_other_skeletons(walk, mixed_path):
-    with pytest.raises(em.MocapError, match="different skeletons"):
+    with pytest.raises(ArgumentError, match="different skeletons"):
         dc.mix(walk, em.read_bvh(mixed_path), MODEL)
 
 

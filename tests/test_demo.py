@@ -8,7 +8,8 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap import quat
 from expressive_mocap.demo import BANDAI_CHANNELS, WAVE_RAISE, bandai_like_skeleton, procedural_walk, strides_per_second, walk_and_wave
-from expressive_mocap.features import cadence, contact_intervals, foot_contacts, footstrikes, mean_rotation
+from expressive_mocap.features import cadence, contact_intervals, foot_contacts, footstrikes
+from expressive_mocap.quat import mean_rotation
 from expressive_mocap.roles import JointRoles
 
 BANDAI_NAMES = (

@@ -9,7 +9,8 @@ import expressive_mocap as em
 from expressive_mocap import quat, reference
 from expressive_mocap.backend import kernels
 from expressive_mocap.demo import bandai_like_skeleton, procedural_walk
-from expressive_mocap.features import FEATURE_NAMES, default_floor, dynamic_features, mean_rotation
+from expressive_mocap.features import FEATURE_NAMES, default_floor, dynamic_features
+from expressive_mocap.quat import mean_rotation
 from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
 
 from conftest import stick_walker

@@ -15,7 +15,7 @@ from expressive_mocap import files as em_io
 from expressive_mocap.bvh import read_header
 from expressive_mocap.cli import main
 from expressive_mocap.errors import MocapError
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.body_model import BodyModel
 
 
 def _returns_within(seconds: float, call):

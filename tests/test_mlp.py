@@ -6,7 +6,8 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap import reference
-from expressive_mocap.mlp import Layer, Mlp
+from expressive_mocap.decoupling.network import Layer, Mlp
+from expressive_mocap.errors import ArgumentError, ModelError
 
 RTOL = {np.float32: 1e-5, np.float64: 1e-12}  # relative to the largest output
 
@@ -89,7 +90,7 @@ def test_errors_name_the_argument(backend):
         em.mlp_forward(x, [np.zeros(4)], [b1], ["tanh"])
     with pytest.raises(ValueError, match="`weights`.*at least one layer"):
         em.mlp_forward(x, [], [], [])
-    with pytest.raises(ValueError, match="layer 1 takes 5 inputs but layer 0 has 6 outputs"):
+    with pytest.raises(ArgumentError, match="layer 1 takes 5 inputs but layer 0 has 6 outputs"):
         Mlp([(w1, b1, "tanh"), (w2, b2, "linear")])
 
 
@@ -116,7 +117,7 @@ def test_save_and_load_without_pickle(tmp_path, backend):
     assert [layer.activation for layer in loaded.layers] == ["tanh", "tanh", "linear"]
     x = np.random.default_rng(6).normal(size=(4, 19))
     np.testing.assert_array_equal(loaded(x), net(x))
-    with pytest.raises(KeyError, match="prefix 'nope'"):
+    with pytest.raises(ModelError, match="prefix 'nope'"):
         Mlp.from_arrays(np.load(path), "nope")
 
 

@@ -9,9 +9,12 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap import quat
-from expressive_mocap.decouple import StreamingDecoupler, decompose
+from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.demo import procedural_walk
-from expressive_mocap.model import BodyModel, train_model
+from expressive_mocap.decoupling.body_model import BodyModel
+from expressive_mocap.decoupling.streaming import StreamingDecoupler
+from expressive_mocap.decoupling.training import train_body_model
+from expressive_mocap.errors import ModelError
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +24,7 @@ def walks():
 
 @pytest.fixture(scope="module")
 def model(walks):
-    return train_model(walks, walks[:2], hidden=12, regression_hidden=12, max_iter=25, log=None)
+    return train_body_model(walks, walks[:2], hidden=12, regression_hidden=12, max_iter=25, log=None)
 
 
 def test_training_reports_every_stage_and_beats_the_mean_pose(model):
@@ -49,7 +52,7 @@ def test_file_round_trip(tmp_path, model, walks):
 
 
 def test_other_skeleton_is_a_clear_error(model, mixed_path):
-    with pytest.raises(em.MocapError, match="22-joint skeleton.*9 joints"):
+    with pytest.raises(ModelError, match="22-joint skeleton.*9 joints"):
         model.predict(em.read_bvh(mixed_path))
 
 

@@ -11,7 +11,7 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap.exaggerate import ExaggerationModel
 from expressive_mocap.files import MAX_MODEL_BYTES
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.body_model import BodyModel
 
 from model_files import npz, small_models
 

@@ -123,7 +123,7 @@ def test_positions_stream_an_npz(walk, tmp_path, capfdbinary, monkeypatch):
 
 
 def test_calibrate_streams_the_model_and_reports_on_stderr(walk, tmp_path, capfdbinary, monkeypatch):
-    from expressive_mocap.model import BodyModel
+    from expressive_mocap.decoupling.body_model import BodyModel
 
     monkeypatch.chdir(tmp_path)
     assert main(["calibrate", str(walk), "-o", "-"]) == 0

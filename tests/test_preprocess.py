@@ -18,9 +18,9 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap.cli import main
-from expressive_mocap.decouple import decompose
+from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.demo import procedural_walk
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.body_model import BodyModel
 import expressive_mocap.preprocess as preprocess_module
 from expressive_mocap.preprocess import load_dataset, preprocess
 

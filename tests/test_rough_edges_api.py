@@ -14,8 +14,8 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.dataset import load_dataset
-from expressive_mocap.decouple import decompose
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.algebra import decompose
+from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.preprocess import preprocess
 
 PYTHON = Path(em.__file__).resolve().parent.parent  # the package the tests import (installed in CI)
@@ -41,7 +41,7 @@ def test_importing_the_package_does_not_load_the_models_or_the_dataset_reader():
     code = "import sys, expressive_mocap; print(' '.join(sorted(sys.modules)))"
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                             env={"PYTHONPATH": str(PYTHON)}).stdout.split()
-    for heavy in ("expressive_mocap.exaggerate", "expressive_mocap.model", "expressive_mocap.decouple", "expressive_mocap.dataset"):
+    for heavy in ("expressive_mocap.exaggerate", "expressive_mocap.decoupling.body_model", "expressive_mocap.decoupling.algebra", "expressive_mocap.dataset"):
         assert heavy not in loaded
 
 

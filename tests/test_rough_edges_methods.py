@@ -9,8 +9,8 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap import quat
-from expressive_mocap.decouple import blend
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.body_model import BodyModel
+from expressive_mocap.decoupling.edits import blend
 from expressive_mocap.roles import JointRoles, facing_yaw
 
 WALK, WAVE = "dataset-2_walk_normal_001.bvh", "dataset-2_wave-right-hand_normal_001.bvh"
@@ -142,7 +142,7 @@ def test_exaggeration_is_unit_free(bandai2_dir, clips_cm_and_m):
 
 def test_decoupling_and_features_are_unit_free(clips_cm_and_m, body_model):
     """Each method of the decoupling part, on the same clips in centimetres and in metres."""
-    from expressive_mocap import decouple as dc
+    from expressive_mocap import decoupling as dc
     from expressive_mocap.features import dynamic_features, foot_contacts
 
     (walk, wave), (walk_m, wave_m) = clips_cm_and_m

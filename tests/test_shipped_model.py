@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from expressive_mocap import quat
-from expressive_mocap.decouple import decompose
+from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.demo import walk_and_wave
-from expressive_mocap.model import BodyModel
+from expressive_mocap.decoupling.body_model import BodyModel
 
 ARM = ["UpperArm_R", "LowerArm_R", "Hand_R"]
 

@@ -4,8 +4,9 @@ data whose poses are a smooth known function of the features, every stage beatin
 import numpy as np
 import pytest
 
-from expressive_mocap import train
-from expressive_mocap.mlp import Mlp
+from expressive_mocap.decoupling import training as train
+from expressive_mocap.errors import ArgumentError
+from expressive_mocap.decoupling.network import Mlp
 
 pytest.importorskip("scipy")
 
@@ -18,7 +19,7 @@ def synthetic(n_groups=30, frames=50, d=24, seed=0):
 @pytest.fixture(scope="module")
 def trained():
     X, P, groups = synthetic()
-    net, report = train.train_body_mechanics(X, P, groups, hidden=20, regression_hidden=20, max_iter=100, log=None)
+    net, report = train.train_stacked_network(X, P, groups, hidden=20, regression_hidden=20, max_iter=100, log=None)
     return X, P, groups, net, report
 
 
@@ -49,7 +50,7 @@ def test_split_by_group_keeps_groups_whole():
     assert 0.3 <= len(test_rows) / len(groups) < 0.3 + 100 / len(groups)  # stops at the first group past 30%
     again = train.split_by_group(groups, 0.3, seed=3)
     assert np.array_equal(again[0], train_rows) and np.array_equal(again[1], test_rows)
-    with pytest.raises(ValueError, match="at least 2 groups"):
+    with pytest.raises(ArgumentError, match="at least 2 groups"):
         train.split_by_group(np.zeros(5), 0.3)
 
 
@@ -80,12 +81,12 @@ def test_stack_beats_the_mean_pose_on_held_out_clips(trained):
 def test_training_is_deterministic_under_a_seed():
     X, P, groups = synthetic(n_groups=8, frames=20, d=6)
     kwargs = {"hidden": 6, "regression_hidden": 5, "max_iter": 15, "compare_plain": False, "log": None}
-    net_a, report_a = train.train_body_mechanics(X, P, groups, seed=4, **kwargs)
-    net_b, report_b = train.train_body_mechanics(X, P, groups, seed=4, **kwargs)
+    net_a, report_a = train.train_stacked_network(X, P, groups, seed=4, **kwargs)
+    net_b, report_b = train.train_stacked_network(X, P, groups, seed=4, **kwargs)
     for la, lb in zip(net_a.layers, net_b.layers):
         np.testing.assert_array_equal(la.weights, lb.weights)
     assert report_a["fine_tuned"]["test_mse"] == report_b["fine_tuned"]["test_mse"]
-    _, report_c = train.train_body_mechanics(X, P, groups, seed=5, **kwargs)
+    _, report_c = train.train_stacked_network(X, P, groups, seed=5, **kwargs)
     assert report_c["fine_tuned"]["test_mse"] != report_a["fine_tuned"]["test_mse"]
 
 
@@ -99,7 +100,7 @@ def test_sweep_and_progress_lines():
 
 
 def test_bad_shapes_name_the_argument():
-    with pytest.raises(ValueError, match="`groups`"):
-        train.train_body_mechanics(np.zeros((10, 3)), np.zeros((10, 2)), np.zeros(9), log=None)
-    with pytest.raises(ValueError, match="`X`, `P`"):
-        train.train_body_mechanics(np.zeros((10, 3)), np.zeros((11, 2)), np.zeros(10), log=None)
+    with pytest.raises(ArgumentError, match="`groups`"):
+        train.train_stacked_network(np.zeros((10, 3)), np.zeros((10, 2)), np.zeros(9), log=None)
+    with pytest.raises(ArgumentError, match="`X`, `P`"):
+        train.train_stacked_network(np.zeros((10, 3)), np.zeros((11, 2)), np.zeros(10), log=None)

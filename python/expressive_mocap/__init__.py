@@ -9,7 +9,7 @@ from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .errors import BVHError, MocapError
 from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts, gait_many
 from .kernels import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
-from .mlp import Mlp
+from .decoupling.network import Mlp
 from .motion import Motion, Skeleton
 from .roles import JointRoles, actor_height
 
@@ -17,11 +17,11 @@ __version__ = "0.1.0"
 
 # Heavier parts load on first use, so ``import expressive_mocap`` stays as cheap as reading BVH.
 _LAZY = {
-    "BodyModel": "model",
+    "BodyModel": "decoupling",
     "Dataset": "dataset",
-    "Decomposition": "decouple",
+    "Decomposition": "decoupling",
     "ExaggerationModel": "exaggerate",
-    "decompose": "decouple",
+    "decompose": "decoupling",
     "load_dataset": "dataset",
 }
 

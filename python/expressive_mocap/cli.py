@@ -141,7 +141,7 @@ def cmd_render(args) -> int:
     motions = [read_bvh(path) for path in args.files]
     titles = [Path(p).stem for p in args.files]
     if args.decoupled or args.modulated:
-        from .decouple import decompose
+        from .decoupling.algebra import decompose
 
         if len(motions) != 1:
             raise MocapError("--decoupled and --modulated draw one file: give exactly one")
@@ -240,8 +240,8 @@ def cmd_demo(args) -> int:
 
 def _demo_decoupling(waving: Motion, arm: list[str], out: Path) -> None:
     """Decouple the waving walk with the shipped model, modulate it, draw both."""
-    from .decouple import decompose
-    from .model import BodyModel
+    from .decoupling.algebra import decompose
+    from .decoupling.body_model import BodyModel
     from .render import render
 
     parts = decompose(waving, BodyModel.load())
@@ -265,7 +265,7 @@ def _demo_decoupling(waving: Motion, arm: list[str], out: Path) -> None:
 def _model(args):
     """The body-mechanics model of --model (default: the shipped one), calibrated with
     --calibrate NEUTRAL... when given."""
-    from .model import BodyModel
+    from .decoupling.body_model import BodyModel
 
     model = BodyModel.load(args.model)
     if getattr(args, "calibrate", None):
@@ -317,7 +317,7 @@ DECOUPLE_SUFFIXES = ("_body.bvh", "_expressive.bvh", "_activity.csv")
 
 
 def cmd_decouple(args) -> int:
-    from .decouple import decompose
+    from .decoupling.algebra import decompose
 
     model = _model(args)
     motion = _read_for_model(args.input, model)
@@ -344,7 +344,7 @@ def cmd_decouple(args) -> int:
 
 
 def cmd_modulate(args) -> int:
-    from .decouple import modulate
+    from .decoupling.edits import modulate
 
     model = _model(args)
     out = modulate(_read_for_model(args.input, model), args.scale, model, args.gain, args.exponent)
@@ -354,7 +354,7 @@ def cmd_modulate(args) -> int:
 
 
 def cmd_mix(args) -> int:
-    from .decouple import mix
+    from .decoupling.edits import mix
 
     model = _model(args)
     out = mix(_read_for_model(args.body, model), _read_for_model(args.expressive, model), model, args.align, args.offset, args.gain, args.exponent)
@@ -364,7 +364,7 @@ def cmd_mix(args) -> int:
 
 
 def cmd_blend(args) -> int:
-    from .decouple import blend, blend_alignment
+    from .decoupling.edits import blend, blend_alignment
 
     first, second = read_bvh(args.first), read_bvh(args.second)
     expressive_window = None if args.naive else args.expressive_window or args.body_window
@@ -381,7 +381,7 @@ def cmd_blend(args) -> int:
 
 
 def cmd_calibrate(args) -> int:
-    from .model import BodyModel
+    from .decoupling.body_model import BodyModel
 
     model = BodyModel.load(args.model)
     model = model.calibrated([_read_for_model(path, model) for path in args.neutral])
@@ -407,9 +407,10 @@ def _read_all(paths: list[str], what: str, quiet: bool = False) -> list[Motion]:
 
 
 def cmd_train(args) -> int:
-    from .model import poor_fit, train_model
+    from .decoupling.body_model import poor_fit
+    from .decoupling.training import train_body_model as train_model
     from .progress import line_log
-    from .train import format_report
+    from .decoupling.training import format_report
 
     neutral = _read_all(args.neutral, "neutral clips", args.quiet)
     unlabelled = _read_all(args.unlabelled or [], "unlabelled clips", args.quiet)

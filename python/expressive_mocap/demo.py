@@ -315,7 +315,7 @@ def loaded_walk(intensity: float, seconds: float = 3.0, *, lean: float = 4.0, st
     ``1 - stiffness (intensity - 1)``). Only :data:`LOADED_JOINTS` change with the intensity.
     ``wobble`` > 0 adds a slow random rotation (up to ``wobble`` degrees; ``seed`` picks it) to
     every joint but the root, like a performer who never repeats a walk exactly."""
-    from .features import mean_rotation
+    from .quat import mean_rotation
 
     motion = procedural_walk(seconds)
     rotations = motion.rotations.copy()

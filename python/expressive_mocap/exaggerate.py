@@ -47,7 +47,8 @@ import numpy as np
 
 from . import quat
 from .errors import ClipError, MocapError
-from .features import foot_contacts, footstrikes, mean_rotation
+from .features import foot_contacts, footstrikes
+from .quat import mean_rotation
 from .ik import two_bone_ik
 from .files import atomic_write, check_keys, finite_array, read_model_file
 from .kernels import euler_to_quat, forward_kinematics, quat_to_euler

@@ -15,6 +15,7 @@ import numpy as np
 from .backend import kernels
 from .errors import MocapError
 from .motion import Motion
+from .quat import mean_rotation
 from .roles import JointRoles, actor_height, hips_rest_height
 
 FEATURE_NAMES = (
@@ -188,17 +189,6 @@ def cadence(contacts, frame_time: float) -> float:
     return (len(strikes) - 1) / ((strikes[-1] - strikes[0]) * frame_time)
 
 
-def mean_rotation(quats: np.ndarray) -> np.ndarray:
-    """Means of unit quaternions over the first axis, ``[F, ..., 4] -> [..., 4]`` (e.g. one
-    rotation per joint from ``[F, J, 4]``): each put on the first one's hemisphere, summed and
-    normalised (good for rotations that stay well within 90 degrees of each other)."""
-    quats = np.asarray(quats, dtype=np.float64)
-    aligned = np.where(np.sum(quats * quats[:1], axis=-1, keepdims=True) < 0, -quats, quats)
-    total = aligned.sum(axis=0)
-    norm = np.linalg.norm(total, axis=-1, keepdims=True)
-    return np.where(norm > 1e-12, total / np.where(norm > 1e-12, norm, 1.0), quats[0])
-
-
 def _thigh_reference(thigh_reference, thighs: np.ndarray, causal: bool) -> np.ndarray:
     if thigh_reference is None:
         # Causal: the first frame (the only one every frame may look at); offline: the clip's mean.
@@ -304,5 +294,4 @@ __all__ = [
     "foot_contacts",
     "footstrikes",
     "gait_many",
-    "mean_rotation",
 ]

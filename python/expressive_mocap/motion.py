@@ -380,11 +380,8 @@ class Motion:
         for first in range(0, n_frames, block):
             rows = slice(first, min(first + block, n_frames))
             position = np.minimum(np.arange(rows.start, rows.stop) * new_time / self.frame_time, self.n_frames - 1)
-            i0 = np.minimum(np.floor(position).astype(int), self.n_frames - 2)
-            t = (position - i0)[:, None]
-            rotations[rows] = quat.slerp(self.rotations[i0], self.rotations[i0 + 1], t)
-            t3 = t[..., None]
-            translations[rows] = (1 - t3) * self.translations[i0] + t3 * self.translations[i0 + 1]
+            rotations[rows] = quat.resample(self.rotations, position)
+            translations[rows] = quat.resample(self.translations, position, rotations=False)
         return Motion(self.skeleton, rotations, translations, new_time)
 
     def scaled(self, factor: float) -> Motion:

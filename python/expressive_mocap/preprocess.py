@@ -84,7 +84,7 @@ from .bvh import block_error, parse_header, read_error, read_header
 from .dataset import (FORMAT, JOURNAL, KINDS, MANIFEST, OFFSETS, PARTIAL, RUN, VERSION, Dataset, FolderLock, data_file,
                       file_record, finished_manifest, load_dataset, read_manifest, remove_dataset, remove_partial, verify)
 from .errors import BVHError, MocapError
-from .decouple import EXPONENT, GAIN
+from .decoupling.algebra import EXPONENT, GAIN
 from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from . import files as inputs
 from .files import atomic_write
@@ -618,7 +618,7 @@ def _keep(keep, model) -> tuple[str, ...]:
 
 
 def _load_model(model):
-    from .model import BodyModel
+    from .decoupling.body_model import BodyModel
 
     return BodyModel.load(None if model == "" else model)
 

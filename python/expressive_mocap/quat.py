@@ -106,3 +106,57 @@ def exp(v: np.ndarray) -> np.ndarray:
     angle = np.linalg.norm(v, axis=-1, keepdims=True)
     scale = np.where(angle < 1e-12, 0.5, np.sin(angle / 2) / np.where(angle < 1e-12, 1.0, angle))
     return np.concatenate([v * scale, np.cos(angle / 2)], axis=-1)
+
+
+# --------------------------------------------------------------------------- means and resampling
+
+
+def mean_rotation(quats: np.ndarray) -> np.ndarray:
+    """Means of unit quaternions over the first axis, ``[F, ..., 4] -> [..., 4]`` (e.g. one
+    rotation per joint from ``[F, J, 4]``): each put on the first one's hemisphere, summed and
+    normalised (good for rotations that stay well within 90 degrees of each other)."""
+    quats = np.asarray(quats, dtype=np.float64)
+    aligned = np.where(np.sum(quats * quats[:1], axis=-1, keepdims=True) < 0, -quats, quats)
+    total = aligned.sum(axis=0)
+    norm = np.linalg.norm(total, axis=-1, keepdims=True)
+    return np.where(norm > 1e-12, total / np.where(norm > 1e-12, norm, 1.0), quats[0])
+
+
+def spanning_positions(n_from: int, n_to: int) -> np.ndarray:
+    """``n_to`` fractional frame positions spread evenly over frames ``0 .. n_from - 1`` (the
+    first on the first frame, the last on the last): the positions that stretch or squeeze a
+    sequence of ``n_from`` frames to ``n_to`` for :func:`resample`."""
+    return np.linspace(0.0, n_from - 1, n_to)
+
+
+def resample(values: np.ndarray, positions: np.ndarray, *, rotations: bool = True) -> np.ndarray:
+    """``values [F, ...]`` (``F >= 2`` frames) at fractional frame ``positions [N]`` in
+    ``[0, F - 1]``: ``[N, ...]``, each between its two neighbouring frames by slerp
+    (``rotations=True``: unit quaternions ``[F, ..., 4]``) or linearly (``rotations=False``: any
+    values, e.g. translations or DOF trajectories). The one time resampler of the package."""
+    values = np.asarray(values)
+    positions = np.asarray(positions, dtype=np.float64)
+    i0 = np.minimum(np.floor(positions).astype(int), len(values) - 2)
+    t = positions - i0
+    if rotations:
+        return slerp(values[i0], values[i0 + 1], t.reshape((-1,) + (1,) * (values.ndim - 2)))
+    t = t.reshape((-1,) + (1,) * (values.ndim - 1))
+    return (1 - t) * values[i0] + t * values[i0 + 1]
+
+
+__all__ = [
+    "about",
+    "angle",
+    "conjugate",
+    "exp",
+    "log",
+    "mean_rotation",
+    "mul",
+    "normalize",
+    "power",
+    "resample",
+    "rotate",
+    "slerp",
+    "spanning_positions",
+    "to_matrix",
+]

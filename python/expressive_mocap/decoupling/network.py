@@ -1,7 +1,7 @@
 """A small dense network (multilayer perceptron) whose inference runs in the Rust kernel.
 
 An :class:`Mlp` is a list of :class:`Layer` s ``h = act(h @ weights + bias)``. It is what
-:mod:`expressive_mocap.train` produces, and saves to an ``.npz`` without pickle::
+:mod:`expressive_mocap.decoupling.training` produces, and saves to an ``.npz`` without pickle::
 
     np.savez(path, **net.to_arrays("body"))
     net = Mlp.from_arrays(np.load(path), "body")
@@ -14,8 +14,9 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
-from .kernels import mlp_forward
-from .reference.mlp import ACTIVATIONS
+from ..errors import ArgumentError, ModelError
+from ..kernels import mlp_forward
+from ..reference.mlp import ACTIVATIONS
 
 
 @dataclass(frozen=True)
@@ -31,9 +32,9 @@ class Layer:
         weights = np.array(self.weights, dtype=np.float64)  # a copy: the layer owns its values
         bias = np.array(self.bias, dtype=np.float64)
         if weights.ndim != 2 or bias.shape != weights.shape[1:]:
-            raise ValueError(f"a layer needs weights [in, out] and bias [out], got {list(weights.shape)} and {list(bias.shape)}")
+            raise ArgumentError(f"a layer needs weights [in, out] and bias [out], got {list(weights.shape)} and {list(bias.shape)}")
         if self.activation not in ACTIVATIONS:
-            raise ValueError(f"activation must be one of {ACTIVATIONS}, got {self.activation!r}")
+            raise ArgumentError(f"activation must be one of {ACTIVATIONS}, got {self.activation!r}")
         object.__setattr__(self, "weights", weights)
         object.__setattr__(self, "bias", bias)
 
@@ -49,11 +50,11 @@ class Mlp:
     def __init__(self, layers: Iterable[Layer | tuple]):
         self.layers = tuple(layer if isinstance(layer, Layer) else Layer(*layer) for layer in layers)
         if not self.layers:
-            raise ValueError("an Mlp needs at least one layer")
+            raise ArgumentError("an Mlp needs at least one layer")
         for i in range(1, len(self.layers)):
             given, taken = self.layers[i - 1].weights.shape[1], self.layers[i].weights.shape[0]
             if given != taken:
-                raise ValueError(f"layer {i} takes {taken} inputs but layer {i - 1} has {given} outputs")
+                raise ArgumentError(f"layer {i} takes {taken} inputs but layer {i - 1} has {given} outputs")
         self._cast: dict[np.dtype, tuple[list, list]] = {}
 
     @property
@@ -100,9 +101,19 @@ class Mlp:
 
     @classmethod
     def from_arrays(cls, arrays: Mapping[str, np.ndarray], prefix: str = "mlp") -> "Mlp":
-        """The network :meth:`to_arrays` described (``arrays`` may be an ``np.load`` result)."""
+        """The network :meth:`to_arrays` described (``arrays`` may be an ``np.load`` result);
+        :class:`~expressive_mocap.errors.ModelError` if arrays are missing or do not make a network."""
         key = f"{prefix}.activations"
         if key not in arrays:
-            raise KeyError(f"no network under prefix {prefix!r}: {key!r} is missing")
+            raise ModelError(f"no network under prefix {prefix!r}: {key!r} is missing")
         activations = [str(a) for a in np.asarray(arrays[key]).tolist()]
-        return cls(Layer(arrays[f"{prefix}.{i}.weights"], arrays[f"{prefix}.{i}.bias"], act) for i, act in enumerate(activations))
+        missing = [k for i in range(len(activations)) for k in (f"{prefix}.{i}.weights", f"{prefix}.{i}.bias") if k not in arrays]
+        if missing:
+            raise ModelError(f"the network under prefix {prefix!r} lacks {', '.join(map(repr, missing))}")
+        try:
+            return cls(Layer(arrays[f"{prefix}.{i}.weights"], arrays[f"{prefix}.{i}.bias"], act) for i, act in enumerate(activations))
+        except ArgumentError as error:
+            raise ModelError(f"the network under prefix {prefix!r} is invalid: {error}") from None
+
+
+__all__ = ["Layer", "Mlp"]

@@ -1,73 +1,22 @@
-"""Decoupling expressiveness from body mechanics (Boehs, Vieira & Pereira, "Decoupling
-Expressiveness and Body-Mechanics in Human Motion") and its applications: modulation, source
-mixing, asynchronous blending.
-
-A body-mechanics model is anything with ``predict(motion) -> rotations [F, J, 4]``: the local
-rotations a neutral performer would have at each frame given the motion's dynamics (root and
-hips copied from the motion). The shipped one is :class:`expressive_mocap.model.BodyModel`.
+"""Applications of the decoupling method (Boehs et al.): modulation (scaling the expressive
+component), source mixing (one motion's body mechanics with another's expressiveness) and
+asynchronous blending (body mechanics and expressiveness over different windows).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 
-from . import quat
-from .errors import MocapError
-from .features import mean_rotation
-from .kernels import compose_rotations, decouple_rotations, forward_kinematics
-from .motion import Motion
-from .roles import JointRoles, facing_yaw, path_joint
+from .. import quat
+from ..errors import ArgumentError
+from ..kernels import compose_rotations, forward_kinematics
+from ..motion import Motion
+from ..roles import JointRoles, facing_yaw, path_joint
+from .algebra import EXPONENT, GAIN, BodyMechanicsModel, decompose
 
-GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
-EXPONENT = 4.0  # b
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
-
-
-class BodyMechanicsModel(Protocol):
-    def predict(self, motion: Motion) -> np.ndarray:
-        """Body-mechanics local rotations ``[F, J, 4]`` for ``motion``."""
-
-
-@dataclass(frozen=True)
-class Decomposition:
-    """``original`` split into filtered expressive rotations ``expressive`` (E*, ``[F, J, 4]``,
-    identity where nothing expressive happens) and body-mechanics rotations ``body`` (B'), with
-    the per-joint ``activity`` ``[F, J]`` in [0, 1]; ``E* * B' = O`` exactly."""
-
-    original: Motion
-    expressive: np.ndarray
-    body: np.ndarray
-    activity: np.ndarray
-
-    def body_motion(self) -> Motion:
-        """The body-mechanics component as a motion (translations and root trajectory of the original)."""
-        return self._with_rotations(self.body)
-
-    def expressive_motion(self) -> Motion:
-        """The expressive component made visible: E* laid on the clip's mean body-mechanics
-        pose (a neutral stance), root and hips following the original."""
-        mean_body = mean_rotation(self.body)
-        return self._with_rotations(quat.mul(self.expressive, mean_body[None]))
-
-    def recompose(self, scale: float = 1.0) -> Motion:
-        """``E*^scale * B'``: 1 gives back the original, 0 the body mechanics, 1.5 150% expressiveness."""
-        return self._with_rotations(compose_rotations(self.expressive, self.body, scale))
-
-    def _with_rotations(self, rotations: np.ndarray) -> Motion:
-        o = self.original
-        return Motion(o.skeleton, rotations, o.translations, o.frame_time)
-
-
-def decompose(motion: Motion, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT) -> Decomposition:
-    """Split ``motion`` into expressive and body-mechanics components with ``model``."""
-    predicted = np.asarray(model.predict(motion), dtype=np.float64)
-    if predicted.shape != motion.rotations.shape:
-        raise MocapError(f"the model predicted rotations {list(predicted.shape)} for a motion of {list(motion.rotations.shape)}")
-    expressive, body, activity = decouple_rotations(motion.rotations, predicted, gain, exponent)
-    return Decomposition(motion, expressive, body, activity)
 
 
 def modulate(motion: Motion, scale: float, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT) -> Motion:
@@ -77,7 +26,7 @@ def modulate(motion: Motion, scale: float, model: BodyMechanicsModel, gain: floa
 
 def _check_same_skeleton(a: Motion, b: Motion, what: str) -> None:
     if a.skeleton.names != b.skeleton.names:
-        raise MocapError(f"{what}: the two motions have different skeletons ({a.skeleton.n_joints} and {b.skeleton.n_joints} joints, or other names)")
+        raise ArgumentError(f"{what}: the two motions have different skeletons ({a.skeleton.n_joints} and {b.skeleton.n_joints} joints, or other names)")
 
 
 def _aligned(rotations: np.ndarray, frames: int, align: str, offset: int) -> np.ndarray:
@@ -89,10 +38,8 @@ def _aligned(rotations: np.ndarray, frames: int, align: str, offset: int) -> np.
     if align == "resample":
         if len(rotations) < 2 or frames < 2:
             return rotations[np.zeros(frames, dtype=int)]
-        position = np.linspace(0, len(rotations) - 1, frames)
-        i0 = np.minimum(position.astype(int), len(rotations) - 2)
-        return quat.slerp(rotations[i0], rotations[i0 + 1], (position - i0)[:, None])
-    raise MocapError(f"align must be 'index' or 'resample', got {align!r}")
+        return quat.resample(rotations, quat.spanning_positions(len(rotations), frames))
+    raise ArgumentError(f"align must be 'index' or 'resample', got {align!r}")
 
 
 def mix(body_source: Motion, expressive_source: Motion, model: BodyMechanicsModel, align: str = "index", offset: int = 0,
@@ -111,7 +58,7 @@ def _weights(frames: int, window: tuple[int, int]) -> np.ndarray:
     """Smoothstep from 0 before ``window[0]`` to 1 from ``window[1]`` on; an empty window is a step."""
     start, end = window
     if end < start:
-        raise MocapError(f"a window must not end before it starts, got {start}:{end}")
+        raise ArgumentError(f"a window must not end before it starts, got {start}:{end}")
     t = np.arange(frames, dtype=np.float64)
     if end == start:
         return (t >= start).astype(np.float64)
@@ -238,31 +185,4 @@ def blend(first: Motion, second: Motion, model: BodyMechanicsModel | None, body_
     return Motion(first.skeleton, rotations, translations, first.frame_time)
 
 
-class StreamingDecoupler:
-    """Decouples a motion one frame at a time, as it arrives (e.g. from a live capture).
-
-    The features are causal, so frame ``t`` needs only the frames before it: the decoupler keeps
-    the last ``history`` seconds (enough for the velocity mean, the contact filter and the air
-    time of any step) and returns, for each new frame, its body-mechanics rotations, filtered
-    expressive rotations and activity per joint. The floor is given (default 0), not estimated.
-    """
-
-    def __init__(self, model, skeleton, frame_time: float, floor: float = 0.0, history: float = 2.0,
-                 gain: float = GAIN, exponent: float = EXPONENT):
-        self.model, self.skeleton, self.frame_time = model, skeleton, float(frame_time)
-        self.floor, self.gain, self.exponent = float(floor), gain, exponent
-        self.capacity = max(2, int(round(history / self.frame_time)))
-        self._rotations: list[np.ndarray] = []
-        self._translations: list[np.ndarray] = []
-
-    def push(self, rotations, translations) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """One frame in (local ``rotations [J, 4]``, ``translations [J, 3]``); its body mechanics
-        ``[J, 4]``, expressive component ``[J, 4]`` and activity ``[J]`` out."""
-        self._rotations.append(np.asarray(rotations, dtype=np.float64))
-        self._translations.append(np.asarray(translations, dtype=np.float64))
-        del self._rotations[: -self.capacity], self._translations[: -self.capacity]
-        window = Motion(self.skeleton, np.stack(self._rotations), np.stack(self._translations), self.frame_time)
-        features = self.model.features(window, floor=self.floor)[-1:]
-        body = self.model.predict_from_features(window.rotations[-1:], features)
-        expressive, recovered, activity = decouple_rotations(window.rotations[-1:], body, self.gain, self.exponent)
-        return recovered[0], expressive[0], activity[0]
+__all__ = ["BlendAlignment", "blend", "blend_alignment", "mix", "modulate"]

@@ -23,13 +23,13 @@ from typing import Sequence
 
 import numpy as np
 
-from . import quat
-from .errors import MocapError
-from .features import FEATURE_NAMES, default_floor, dynamic_features, mean_rotation
-from .files import atomic_write, check_keys, finite_array, read_model_file
-from .mlp import Mlp
-from .motion import Motion, Skeleton
-from .roles import JointRoles
+from .. import quat
+from ..errors import ArgumentError, ModelError
+from ..features import FEATURE_NAMES, default_floor, dynamic_features
+from ..files import atomic_write, check_keys, finite_array, read_model_file
+from ..motion import Motion, Skeleton
+from ..roles import JointRoles
+from .network import Mlp
 
 FORMAT = "expressive-mocap body model"
 VERSION = 1
@@ -74,7 +74,7 @@ class BodyModel:
             extra = [n for n in names if n not in self.joint_names]
             detail = f"missing {', '.join(missing[:5])}" if missing else ""
             detail += ("; " if detail and extra else "") + (f"unknown {', '.join(extra[:5])}" if extra else "")
-            raise MocapError(
+            raise ModelError(
                 f"this body model was trained on a {len(self.joint_names)}-joint skeleton ({', '.join(self.joint_names[:4])}, ...); "
                 f"the motion has {len(names)} joints{': ' + detail if detail else ' in another order'}"
             )
@@ -105,11 +105,11 @@ class BodyModel:
         """This model calibrated to the actor or session of ``neutral`` clips (neutral movement
         of that session): per joint ``Q_j`` = mean over all frames of ``O_j * B_j^-1``."""
         if not neutral:
-            raise MocapError("calibration needs at least one neutral clip")
+            raise ArgumentError("calibration needs at least one neutral clip")
         uncalibrated = replace(self, calibration=None)
         offsets = [quat.mul(m.rotations, quat.conjugate(uncalibrated.predict(m))) for m in neutral]
         stacked = np.concatenate(offsets, axis=0)
-        q = mean_rotation(stacked)
+        q = quat.mean_rotation(stacked)
         q[[j for j in range(len(self.joint_names)) if j not in set(self.predicted.tolist())]] = [0.0, 0.0, 0.0, 1.0]
         return replace(self, calibration=q)
 
@@ -164,30 +164,30 @@ class BodyModel:
     @classmethod
     def _from_arrays(cls, arrays: dict, meta: dict, name: str) -> BodyModel:
         if meta.get("format") != FORMAT or meta.get("version") != VERSION:
-            raise MocapError(f"{name}: not an expressive-mocap body model of version {VERSION} (format {meta.get('format')!r}, version {meta.get('version')!r})")
+            raise ModelError(f"{name}: not an expressive-mocap body model of version {VERSION} (format {meta.get('format')!r}, version {meta.get('version')!r})")
         if meta.get("feature_names") != list(FEATURE_NAMES):
-            raise MocapError(f"{name}: the model's features {meta.get('feature_names')} are not this version's {list(FEATURE_NAMES)}")
+            raise ModelError(f"{name}: the model's features {meta.get('feature_names')} are not this version's {list(FEATURE_NAMES)}")
         joint_names = meta.get("joint_names")
         if not isinstance(joint_names, list) or not joint_names or not all(isinstance(n, str) for n in joint_names) or len(set(joint_names)) != len(joint_names):
-            raise MocapError(f"{name}: the metadata's joint_names must be a list of distinct joint names")
+            raise ModelError(f"{name}: the metadata's joint_names must be a list of distinct joint names")
         for key in ("settings", "report"):
             if not isinstance(meta.get(key, {}), dict):
-                raise MocapError(f"{name}: the metadata's {key} must be a JSON object")
+                raise ModelError(f"{name}: the metadata's {key} must be a JSON object")
         predicted = finite_array(arrays, "predicted", name, kinds="iu")
         if predicted.ndim != 1 or len(predicted) == 0 or predicted.min() < 0 or predicted.max() >= len(joint_names) or len(set(predicted.tolist())) != len(predicted):
-            raise MocapError(f"{name}: predicted joint indices must be distinct indices of the {len(joint_names)} joints")
+            raise ModelError(f"{name}: predicted joint indices must be distinct indices of the {len(joint_names)} joints")
         for key in arrays:
             if key.startswith("network.") and not key.endswith(".activations"):
                 finite_array(arrays, key, name, kinds="f")  # weights and biases: finite floats
         try:
             network = Mlp.from_arrays(arrays, "network")
         except (KeyError, ValueError) as error:
-            raise MocapError(f"{name}: the network's arrays are invalid ({error})") from None
+            raise ModelError(f"{name}: the network's arrays are invalid ({error})") from None
         layers = [f"network.{i}.{part}" for i in range(len(network.layers)) for part in ("weights", "bias")]
         check_keys(arrays, ["predicted", "hemispheres", "thigh_reference", "calibration", "network.activations", *layers], name)
         n_features = len(FEATURE_NAMES)
         if network.n_inputs != n_features or network.n_outputs != 4 * len(predicted):
-            raise MocapError(f"{name}: the network maps {network.n_inputs} -> {network.n_outputs}, expected {n_features} -> {4 * len(predicted)}")
+            raise ModelError(f"{name}: the network maps {network.n_inputs} -> {network.n_outputs}, expected {n_features} -> {4 * len(predicted)}")
         return cls(
             joint_names=tuple(joint_names),
             predicted=predicted.astype(np.int64),
@@ -215,7 +215,7 @@ def shipped_model_bytes() -> bytes:
     """The bytes of the model shipped inside the package."""
     path = resources.files("expressive_mocap") / "data" / DEFAULT_MODEL
     if not path.is_file():
-        raise MocapError(f"the package has no shipped model ({DEFAULT_MODEL}); train one with `expressive-mocap train`")
+        raise ModelError(f"the package has no shipped model ({DEFAULT_MODEL}); train one with `expressive-mocap train`")
     return path.read_bytes()
 
 
@@ -234,62 +234,4 @@ def model_features(motion: Motion, thigh_reference: np.ndarray, floor: float | N
     return dynamic_features(motion, roles, floor=floor, thigh_reference=thigh_reference, causal=True)
 
 
-def train_model(
-    neutral: Sequence[Motion],
-    unlabelled: Sequence[Motion] = (),
-    *,
-    hidden: int = 300,
-    regression_hidden: int = 300,
-    unlabelled_frames: int = 40_000,
-    seed: int = 0,
-    max_iter: int = 400,
-    log=None,
-) -> BodyModel:
-    """Train a body-mechanics model on ``neutral`` clips (one skeleton; 70/30 split by clip),
-    its autoencoder also on up to ``unlabelled_frames`` frames drawn from ``unlabelled`` clips
-    (any clip, expressive ones included; the neutral test clips are left out of it, so the test
-    scores stay held out). Progress goes to ``log`` (a callable taking a line)."""
-    from .train import split_by_group, train_body_mechanics
-
-    if not neutral:
-        raise MocapError("training needs at least two neutral clips")
-    skeleton = neutral[0].skeleton
-    for motion in list(neutral) + list(unlabelled):
-        if motion.skeleton.names != skeleton.names:
-            raise MocapError("every training clip must have the same skeleton (joint names) as the first")
-    roles = JointRoles.find(skeleton)
-    predicted = np.array([j for j in range(skeleton.n_joints) if skeleton.parents[j] >= 0 and j != roles.hips])
-    rotations = np.concatenate([m.rotations for m in neutral])
-    hemispheres = mean_rotation(rotations[:, predicted])
-    thigh_reference = mean_rotation(rotations[:, list(roles.upper_legs)])
-
-    X = np.concatenate([model_features(m, thigh_reference) for m in neutral])
-    P = np.concatenate([pose_vectors(m.rotations, predicted, hemispheres) for m in neutral])
-    groups = np.concatenate([np.full(m.n_frames, k) for k, m in enumerate(neutral)])
-    extra = None
-    if unlabelled:
-        # The same split train_body_mechanics makes: keep its test clips out of the autoencoder.
-        train_rows, test_rows = split_by_group(groups, 0.3, seed)
-        test_clips = {_fingerprint(neutral[k]) for k in np.unique(groups[test_rows])}
-        kept = [pose_vectors(m.rotations, predicted, hemispheres) for m in unlabelled if _fingerprint(m) not in test_clips]
-        pool = np.concatenate(kept) if kept else np.zeros((0, P.shape[1]))
-        drawn = np.random.default_rng(seed).choice(len(pool), size=min(unlabelled_frames, len(pool)), replace=False)
-        extra = np.concatenate([pool[drawn], P[train_rows]])
-    network, report = train_body_mechanics(X, P, groups, extra, hidden, regression_hidden, seed=seed, max_iter=max_iter, log=log)
-    settings = {
-        "hidden": hidden,
-        "regression_hidden": regression_hidden,
-        "seed": seed,
-        "max_iter": max_iter,
-        "neutral_clips": len(neutral),
-        "neutral_frames": int(len(X)),
-        "unlabelled_clips": len(unlabelled),
-        "unlabelled_frames": 0 if extra is None else int(len(extra)),
-        "features": "causal; floor = 5th percentile of toe heights; thigh hemisphere = training mean",
-    }
-    return BodyModel(tuple(skeleton.names), predicted, hemispheres, thigh_reference, network, settings, report)
-
-
-def _fingerprint(motion: Motion) -> tuple:
-    """Identifies a clip read twice (from the neutral and the unlabelled lists)."""
-    return motion.n_frames, motion.rotations[0].tobytes(), motion.rotations[-1].tobytes()
+__all__ = ["DEFAULT_MODEL", "FORMAT", "VERSION", "BodyModel", "model_features", "poor_fit", "pose_vectors", "shipped_model_bytes"]

@@ -1,4 +1,6 @@
-"""Training the body-mechanics network on plain arrays (Boehs et al. III.B, IV).
+"""Training the body-mechanics model (Boehs et al. III.B, IV): :func:`train_body_model` from
+neutral clips to a :class:`~expressive_mocap.decoupling.body_model.BodyModel`, and under it
+:func:`train_stacked_network`, the network on plain arrays.
 
 Inputs ``X [N, 19]`` (the dynamic features of each frame), poses ``P [N, D]`` and ``groups [N]``
 (a clip id per frame). Stages, each reported with train and test MSE on a 70/30 split by group
@@ -11,7 +13,7 @@ c. the stack ``X -> R -> code -> decoder -> P``;
 d. the stack fine-tuned end to end on ``(X, P)``;
 
 plus the mean-pose baseline and a plain ``X -> H tanh -> P`` network for comparison. The result
-is an :class:`~expressive_mocap.mlp.Mlp` taking raw features and giving poses: the z-scoring of
+is an :class:`~expressive_mocap.decoupling.network.Mlp` taking raw features and giving poses: the z-scoring of
 ``X`` and the pose scaling are folded into its first and last layers, so inference (in Rust)
 needs nothing else.
 
@@ -29,8 +31,13 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .mlp import Layer, Mlp
-from .progress import line_log
+from .. import quat
+from ..errors import ArgumentError
+from ..motion import Motion
+from ..progress import line_log
+from ..roles import JointRoles
+from .body_model import BodyModel, model_features, pose_vectors
+from .network import Layer, Mlp
 
 Log = Callable[[str], None]
 Params = list[tuple[np.ndarray, np.ndarray]]  # per layer (weights [in, out], bias [out])
@@ -48,7 +55,7 @@ def split_by_group(groups, test_fraction: float = 0.3, seed: int = 0) -> tuple[n
     groups = np.asarray(groups)
     ids, inverse, counts = np.unique(groups, return_inverse=True, return_counts=True)
     if len(ids) < 2:
-        raise ValueError(f"argument `groups`: a split by group needs at least 2 groups, got {len(ids)}")
+        raise ArgumentError(f"argument `groups`: a split by group needs at least 2 groups, got {len(ids)}")
     order = np.random.default_rng(seed).permutation(len(ids))
     cumulative = np.cumsum(counts[order])
     # Smallest number of groups reaching the fraction, leaving at least one group for training.
@@ -109,7 +116,7 @@ def _unpack(flat: np.ndarray, like: Params) -> Params:
     return out
 
 
-def fit(
+def fit_lbfgs(
     params: Params,
     activations: Sequence[str],
     x: np.ndarray,
@@ -221,11 +228,11 @@ def train_autoencoder(
     acts = ("tanh", "linear")
     for r in range(rounds):
         iters = max_iter // rounds + (r < max_iter % rounds)
-        params, _ = fit(params, acts, corrupt(rng, z, mask, noise), target, max_iter=iters, weight_decay=weight_decay, name=f"autoencoder H={hidden} round {r + 1}/{rounds}", log=log)
+        params, _ = fit_lbfgs(params, acts, corrupt(rng, z, mask, noise), target, max_iter=iters, weight_decay=weight_decay, name=f"autoencoder H={hidden} round {r + 1}/{rounds}", log=log)
     return _mlp([_fold_input(params[0], mean, std), _fold_output(params[1], mean, scale)], acts)
 
 
-def train_body_mechanics(
+def train_stacked_network(
     X,
     P,
     groups,
@@ -264,9 +271,9 @@ def train_body_mechanics(
     """
     X, P, groups = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64), np.asarray(groups)
     if X.ndim != 2 or P.ndim != 2 or len(X) != len(P):
-        raise ValueError(f"arguments `X`, `P`: expected [N, F] and [N, D] with the same N, got {list(X.shape)} and {list(P.shape)}")
+        raise ArgumentError(f"arguments `X`, `P`: expected [N, F] and [N, D] with the same N, got {list(X.shape)} and {list(P.shape)}")
     if groups.shape != (len(X),):
-        raise ValueError(f"argument `groups`: expected shape [{len(X)}], got {list(groups.shape)}")
+        raise ArgumentError(f"argument `groups`: expected shape [{len(X)}], got {list(groups.shape)}")
     train, test = split_by_group(groups, test_fraction, seed)
     variance = float(np.mean(P[test].var(axis=0)))
     report: dict = {
@@ -295,7 +302,7 @@ def train_body_mechanics(
     code = Mlp([encoder])(P)
     rng = np.random.default_rng(seed + 1)
     reg_acts = ("tanh", "tanh")
-    reg, _ = fit(init_params(rng, (X.shape[1], regression_hidden, hidden)), reg_acts, xz[train], code[train], max_iter=max_iter, name="regression", **common)
+    reg, _ = fit_lbfgs(init_params(rng, (X.shape[1], regression_hidden, hidden)), reg_acts, xz[train], code[train], max_iter=max_iter, name="regression", **common)
     report["regression"] = _stage(_mlp(reg, reg_acts), xz, code, train, test, float(np.mean(code[test].var(axis=0))), seconds=time.perf_counter() - start)
 
     # (c) stack: regression layers then the decoder, on raw features
@@ -309,7 +316,7 @@ def train_body_mechanics(
     p_mean, p_scale = P[train].mean(axis=0), float(np.sqrt(np.mean(P[train].var(axis=0)))) or 1.0
     scaled = (P - p_mean) / p_scale
     unfold = _fold_output((decoder.weights, decoder.bias), -p_mean / p_scale, 1.0 / p_scale)
-    tuned, iters = fit([reg[0], reg[1], unfold], stack_acts, xz[train], scaled[train], max_iter=max_iter, name="fine-tuning", **common)
+    tuned, iters = fit_lbfgs([reg[0], reg[1], unfold], stack_acts, xz[train], scaled[train], max_iter=max_iter, name="fine-tuning", **common)
     tuned[2] = _fold_output(tuned[2], p_mean, p_scale)
     net = to_raw(tuned)
     report["fine_tuned"] = _stage(net, X, P, train, test, variance, seconds=time.perf_counter() - start, iterations=iters)
@@ -329,7 +336,7 @@ def train_plain(X, P, hidden: int = 300, *, seed: int = 0, max_iter: int = 400, 
     p_mean, p_scale = P.mean(axis=0), float(np.sqrt(np.mean(P.var(axis=0)))) or 1.0
     acts = ("tanh", "linear")
     params = init_params(np.random.default_rng(seed + 2), (X.shape[1], hidden, P.shape[1]))
-    params, _ = fit(params, acts, (X - x_mean) / x_std, (P - p_mean) / p_scale, max_iter=max_iter, weight_decay=weight_decay, name=f"plain H={hidden}", log=log)
+    params, _ = fit_lbfgs(params, acts, (X - x_mean) / x_std, (P - p_mean) / p_scale, max_iter=max_iter, weight_decay=weight_decay, name=f"plain H={hidden}", log=log)
     return _mlp([_fold_input(params[0], x_mean, x_std), _fold_output(params[1], p_mean, p_scale)], acts)
 
 
@@ -370,3 +377,81 @@ def synthetic_data(n_groups: int = 30, frames: int = 50, n_in: int = 19, d: int 
     z = np.concatenate([rng.normal(size=n_in) + np.cumsum(rng.normal(scale=0.15, size=(frames, n_in)), axis=0) for _ in range(n_groups)])
     poses = np.tanh(z @ a) @ b + rng.normal(scale=1e-3, size=(len(z), d))
     return z * 2.0 + 5.0, poses, np.repeat(np.arange(n_groups), frames)
+
+
+# --- from clips to a body model ----------------------------------------------------------------
+
+
+def train_body_model(
+    neutral: Sequence[Motion],
+    unlabelled: Sequence[Motion] = (),
+    *,
+    hidden: int = 300,
+    regression_hidden: int = 300,
+    unlabelled_frames: int = 40_000,
+    seed: int = 0,
+    max_iter: int = 400,
+    log=None,
+) -> BodyModel:
+    """Train a body-mechanics model on ``neutral`` clips (one skeleton; 70/30 split by clip),
+    its autoencoder also on up to ``unlabelled_frames`` frames drawn from ``unlabelled`` clips
+    (any clip, expressive ones included; the neutral test clips are left out of it, so the test
+    scores stay held out). Progress goes to ``log`` (a callable taking a line)."""
+    if not neutral:
+        raise ArgumentError("training needs at least two neutral clips")
+    skeleton = neutral[0].skeleton
+    for motion in list(neutral) + list(unlabelled):
+        if motion.skeleton.names != skeleton.names:
+            raise ArgumentError("every training clip must have the same skeleton (joint names) as the first")
+    roles = JointRoles.find(skeleton)
+    predicted = np.array([j for j in range(skeleton.n_joints) if skeleton.parents[j] >= 0 and j != roles.hips])
+    rotations = np.concatenate([m.rotations for m in neutral])
+    hemispheres = quat.mean_rotation(rotations[:, predicted])
+    thigh_reference = quat.mean_rotation(rotations[:, list(roles.upper_legs)])
+
+    X = np.concatenate([model_features(m, thigh_reference) for m in neutral])
+    P = np.concatenate([pose_vectors(m.rotations, predicted, hemispheres) for m in neutral])
+    groups = np.concatenate([np.full(m.n_frames, k) for k, m in enumerate(neutral)])
+    extra = None
+    if unlabelled:
+        # The same split train_stacked_network makes: keep its test clips out of the autoencoder.
+        train_rows, test_rows = split_by_group(groups, 0.3, seed)
+        test_clips = {_fingerprint(neutral[k]) for k in np.unique(groups[test_rows])}
+        kept = [pose_vectors(m.rotations, predicted, hemispheres) for m in unlabelled if _fingerprint(m) not in test_clips]
+        pool = np.concatenate(kept) if kept else np.zeros((0, P.shape[1]))
+        drawn = np.random.default_rng(seed).choice(len(pool), size=min(unlabelled_frames, len(pool)), replace=False)
+        extra = np.concatenate([pool[drawn], P[train_rows]])
+    network, report = train_stacked_network(X, P, groups, extra, hidden, regression_hidden, seed=seed, max_iter=max_iter, log=log)
+    settings = {
+        "hidden": hidden,
+        "regression_hidden": regression_hidden,
+        "seed": seed,
+        "max_iter": max_iter,
+        "neutral_clips": len(neutral),
+        "neutral_frames": int(len(X)),
+        "unlabelled_clips": len(unlabelled),
+        "unlabelled_frames": 0 if extra is None else int(len(extra)),
+        "features": "causal; floor = 5th percentile of toe heights; thigh hemisphere = training mean",
+    }
+    return BodyModel(tuple(skeleton.names), predicted, hemispheres, thigh_reference, network, settings, report)
+
+
+def _fingerprint(motion: Motion) -> tuple:
+    """Identifies a clip read twice (from the neutral and the unlabelled lists)."""
+    return motion.n_frames, motion.rotations[0].tobytes(), motion.rotations[-1].tobytes()
+
+
+__all__ = [
+    "corrupt",
+    "fit_lbfgs",
+    "format_report",
+    "init_params",
+    "loss_and_grad",
+    "split_by_group",
+    "sweep_autoencoder",
+    "synthetic_data",
+    "train_autoencoder",
+    "train_body_model",
+    "train_plain",
+    "train_stacked_network",
+]

@@ -1,0 +1,124 @@
+"""The decomposition of the decoupling method (Boehs, Vieira & Pereira, "Decoupling
+Expressiveness and Body-Mechanics in Human Motion"): original rotations ``O`` and the
+body-mechanics model's prediction ``B`` give filtered expressive rotations ``E*``,
+body-mechanics rotations ``B'`` and a per-joint activity ``A``, with ``E* B' = O`` exactly.
+
+:func:`split` is that step given the predicted rotations; :func:`split_from_features` runs
+"features -> body model -> split" for any number of frames, and is what :func:`decompose`
+(one motion), :func:`decompose_many` (many clips, one network call) and the streaming
+decoupler (one frame at a time) share.
+
+A body-mechanics model is anything with ``predict(motion) -> rotations [F, J, 4]``: the local
+rotations a neutral performer would have at each frame given the motion's dynamics (root and
+hips copied from the motion). The shipped one is
+:class:`expressive_mocap.decoupling.body_model.BodyModel`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from .. import quat
+from ..errors import ModelError
+from ..kernels import compose_rotations, decouple_rotations
+from ..motion import Motion
+
+GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
+EXPONENT = 4.0  # b
+
+
+class BodyMechanicsModel(Protocol):
+    def predict(self, motion: Motion) -> np.ndarray:
+        """Body-mechanics local rotations ``[F, J, 4]`` for ``motion``."""
+
+
+class FeatureModel(Protocol):
+    def predict_from_features(self, rotations: np.ndarray, features: np.ndarray) -> np.ndarray:
+        """Body-mechanics local rotations ``[F, J, 4]`` from ``features [F, 19]`` and the motion's ``rotations``."""
+
+
+def split(original: np.ndarray, predicted: np.ndarray, gain: float = GAIN, exponent: float = EXPONENT) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(expressive E*, body B', activity A)`` of ``original [F, J, 4]`` given the model's
+    ``predicted [F, J, 4]`` (:class:`~expressive_mocap.errors.ModelError` if their shapes differ)."""
+    predicted = np.asarray(predicted, dtype=np.float64)
+    if predicted.shape != np.shape(original):
+        raise ModelError(f"the model predicted rotations {list(predicted.shape)} for a motion of {list(np.shape(original))}")
+    return decouple_rotations(original, predicted, gain, exponent)
+
+
+def split_from_features(rotations: np.ndarray, features: np.ndarray, model: FeatureModel, gain: float = GAIN,
+                        exponent: float = EXPONENT) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`split` of ``rotations [F, J, 4]`` with the model's prediction from ``features [F, 19]``."""
+    return split(rotations, model.predict_from_features(rotations, features), gain, exponent)
+
+
+@dataclass(frozen=True)
+class Decomposition:
+    """``original`` split into filtered expressive rotations ``expressive`` (E*, ``[F, J, 4]``,
+    identity where nothing expressive happens) and body-mechanics rotations ``body`` (B'), with
+    the per-joint ``activity`` ``[F, J]`` in [0, 1]; ``E* * B' = O`` exactly."""
+
+    original: Motion
+    expressive: np.ndarray
+    body: np.ndarray
+    activity: np.ndarray
+
+    def body_motion(self) -> Motion:
+        """The body-mechanics component as a motion (translations and root trajectory of the original)."""
+        return self._with_rotations(self.body)
+
+    def expressive_motion(self) -> Motion:
+        """The expressive component made visible: E* laid on the clip's mean body-mechanics
+        pose (a neutral stance), root and hips following the original."""
+        mean_body = quat.mean_rotation(self.body)
+        return self._with_rotations(quat.mul(self.expressive, mean_body[None]))
+
+    def recompose(self, scale: float = 1.0) -> Motion:
+        """``E*^scale * B'``: 1 gives back the original, 0 the body mechanics, 1.5 150% expressiveness."""
+        return self._with_rotations(compose_rotations(self.expressive, self.body, scale))
+
+    def _with_rotations(self, rotations: np.ndarray) -> Motion:
+        o = self.original
+        return Motion(o.skeleton, rotations, o.translations, o.frame_time)
+
+
+def decompose(motion: Motion, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT) -> Decomposition:
+    """Split ``motion`` into expressive and body-mechanics components with ``model``."""
+    expressive, body, activity = split(motion.rotations, model.predict(motion), gain, exponent)
+    return Decomposition(motion, expressive, body, activity)
+
+
+def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], model: FeatureModel, float32: bool = False) -> list[dict[str, np.ndarray]]:
+    """``decompose`` of many clips at once, from each clip's local ``rotations [F, J, 4]`` and
+    model ``features [F, 19]``: one network call for all their frames (the network and the
+    decoupling work frame by frame, so this is the per-clip result, with one kernel call that
+    the Rust MLP spreads over its threads instead of a small call per clip). Returns per clip
+    ``activity [F, J]``, ``body`` and ``expressive [F, J, 4]`` (float64). ``float32``: run the
+    network in float32, about 2x faster (on 12,689 Bandai frames: activity within 2e-5, body
+    rotations within 3e-6 of the float64 result)."""
+    if not rotations:
+        return []
+    original = np.concatenate(rotations)
+    inputs = np.concatenate(features)
+    expressive, recovered, activity = split_from_features(original, inputs.astype(np.float32) if float32 else inputs, model)
+    cuts = np.cumsum([len(r) for r in rotations])[:-1]
+    return [
+        {"activity": a, "body": b, "expressive": e}
+        for a, b, e in zip(np.split(activity, cuts), np.split(recovered, cuts), np.split(expressive, cuts))
+    ]
+
+
+__all__ = [
+    "EXPONENT",
+    "GAIN",
+    "BodyMechanicsModel",
+    "Decomposition",
+    "FeatureModel",
+    "decompose",
+    "decompose_many",
+    "split",
+    "split_from_features",
+]
