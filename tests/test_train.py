@@ -4,6 +4,7 @@ data whose poses are a smooth known function of the features, every stage beatin
 import numpy as np
 import pytest
 
+from expressive_mocap.decoupling import lbfgs
 from expressive_mocap.decoupling import training as train
 from expressive_mocap.errors import ArgumentError
 from expressive_mocap.decoupling.network import Mlp
@@ -25,19 +26,19 @@ def trained():
 
 def test_gradient_matches_finite_differences():
     rng = np.random.default_rng(0)
-    params = train.init_params(rng, (3, 5, 4, 2))
+    params = lbfgs.init_params(rng, (3, 5, 4, 2))
     params = [(w, rng.normal(scale=0.3, size=b.shape)) for w, b in params]
     acts = ("tanh", "tanh", "linear")
     x, y = rng.normal(size=(7, 3)), rng.normal(size=(7, 2))
-    loss, grads = train.loss_and_grad(params, acts, x, y, weight_decay=0.01)
-    flat, analytic = train._pack(params), train._pack(grads)
+    loss, grads = lbfgs.loss_and_grad(params, acts, x, y, weight_decay=0.01)
+    flat, analytic = lbfgs._pack(params), lbfgs._pack(grads)
     numeric = np.empty_like(flat)
     h = 1e-6
     for i in range(len(flat)):
         up, down = flat.copy(), flat.copy()
         up[i] += h
         down[i] -= h
-        numeric[i] = (train.loss_and_grad(train._unpack(up, params), acts, x, y, 0.01)[0] - train.loss_and_grad(train._unpack(down, params), acts, x, y, 0.01)[0]) / (2 * h)
+        numeric[i] = (lbfgs.loss_and_grad(lbfgs._unpack(up, params), acts, x, y, 0.01)[0] - lbfgs.loss_and_grad(lbfgs._unpack(down, params), acts, x, y, 0.01)[0]) / (2 * h)
     np.testing.assert_allclose(analytic, numeric, rtol=1e-6, atol=1e-9)
     assert loss == pytest.approx(np.mean((Mlp(zip(*zip(*params), acts))(x) - y) ** 2) + 0.01 * sum(np.sum(w**2) for w, _ in params))
 

@@ -40,17 +40,22 @@ class FeatureModel(Protocol):
         """Body-mechanics local rotations ``[F, J, 4]`` from ``features [F, 19]`` and the motion's ``rotations``."""
 
 
-def split(original: np.ndarray, predicted: np.ndarray, gain: float = GAIN, exponent: float = EXPONENT) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def split(
+    original: np.ndarray, predicted: np.ndarray, gain: float = GAIN, exponent: float = EXPONENT
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(expressive E*, body B', activity A)`` of ``original [F, J, 4]`` given the model's
     ``predicted [F, J, 4]`` (:class:`~expressive_mocap.errors.ModelError` if their shapes differ)."""
     predicted = np.asarray(predicted, dtype=np.float64)
     if predicted.shape != np.shape(original):
-        raise ModelError(f"the model predicted rotations {list(predicted.shape)} for a motion of {list(np.shape(original))}")
+        raise ModelError(
+            f"the model predicted rotations {list(predicted.shape)} for a motion of {list(np.shape(original))}"
+        )
     return decouple_rotations(original, predicted, gain, exponent)
 
 
-def split_from_features(rotations: np.ndarray, features: np.ndarray, model: FeatureModel, gain: float = GAIN,
-                        exponent: float = EXPONENT) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def split_from_features(
+    rotations: np.ndarray, features: np.ndarray, model: FeatureModel, gain: float = GAIN, exponent: float = EXPONENT
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`split` of ``rotations [F, J, 4]`` with the model's prediction from ``features [F, 19]``."""
     return split(rotations, model.predict_from_features(rotations, features), gain, exponent)
 
@@ -85,13 +90,17 @@ class Decomposition:
         return Motion(o.skeleton, rotations, o.translations, o.frame_time)
 
 
-def decompose(motion: Motion, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT) -> Decomposition:
+def decompose(
+    motion: Motion, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT
+) -> Decomposition:
     """Split ``motion`` into expressive and body-mechanics components with ``model``."""
     expressive, body, activity = split(motion.rotations, model.predict(motion), gain, exponent)
     return Decomposition(motion, expressive, body, activity)
 
 
-def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], model: FeatureModel, float32: bool = False) -> list[dict[str, np.ndarray]]:
+def decompose_many(
+    rotations: list[np.ndarray], features: list[np.ndarray], model: FeatureModel, float32: bool = False
+) -> list[dict[str, np.ndarray]]:
     """``decompose`` of many clips at once, from each clip's local ``rotations [F, J, 4]`` and
     model ``features [F, 19]``: one network call for all their frames (the network and the
     decoupling work frame by frame, so this is the per-clip result, with one kernel call that
@@ -103,7 +112,9 @@ def decompose_many(rotations: list[np.ndarray], features: list[np.ndarray], mode
         return []
     original = np.concatenate(rotations)
     inputs = np.concatenate(features)
-    expressive, recovered, activity = split_from_features(original, inputs.astype(np.float32) if float32 else inputs, model)
+    expressive, recovered, activity = split_from_features(
+        original, inputs.astype(np.float32) if float32 else inputs, model
+    )
     cuts = np.cumsum([len(r) for r in rotations])[:-1]
     return [
         {"activity": a, "body": b, "expressive": e}

@@ -17,9 +17,9 @@ import io
 import json
 import os
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from importlib import resources
-from typing import Sequence
 
 import numpy as np
 
@@ -60,9 +60,12 @@ class BodyModel:
         # One line: the dataclass default prints every weight.
         sizes = [self.network.layers[0].weights.shape[0]] + [layer.weights.shape[1] for layer in self.network.layers]
         mse = self.report.get("fine_tuned", {}).get("test_mse")
-        return (f"BodyModel({len(self.joint_names)}-joint skeleton (root {self.joint_names[0]!r}), {len(self.predicted)} joints predicted, "
-                f"network {'-'.join(map(str, sizes))}, test MSE {'?' if mse is None else f'{mse:.3g}'}"
-                f"{', calibrated' if self.calibration is not None else ''})")
+        return (
+            f"BodyModel({len(self.joint_names)}-joint skeleton (root {self.joint_names[0]!r}), "
+            f"{len(self.predicted)} joints predicted, "
+            f"network {'-'.join(map(str, sizes))}, test MSE {'?' if mse is None else f'{mse:.3g}'}"
+            f"{', calibrated' if self.calibration is not None else ''})"
+        )
 
     # ---------------------------------------------------------------- prediction
 
@@ -75,7 +78,8 @@ class BodyModel:
             detail = f"missing {', '.join(missing[:5])}" if missing else ""
             detail += ("; " if detail and extra else "") + (f"unknown {', '.join(extra[:5])}" if extra else "")
             raise ModelError(
-                f"this body model was trained on a {len(self.joint_names)}-joint skeleton ({', '.join(self.joint_names[:4])}, ...); "
+                f"this body model was trained on a {len(self.joint_names)}-joint skeleton "
+                f"({', '.join(self.joint_names[:4])}, ...); "
                 f"the motion has {len(names)} joints{': ' + detail if detail else ' in another order'}"
             )
 
@@ -163,19 +167,39 @@ class BodyModel:
 
     @classmethod
     def _from_arrays(cls, arrays: dict, meta: dict, name: str) -> BodyModel:
+        # One check after another, each naming what is wrong in the file: longer than 60 lines,
+        # kept in one piece so the whole format is read in one place.
         if meta.get("format") != FORMAT or meta.get("version") != VERSION:
-            raise ModelError(f"{name}: not an expressive-mocap body model of version {VERSION} (format {meta.get('format')!r}, version {meta.get('version')!r})")
+            raise ModelError(
+                f"{name}: not an expressive-mocap body model of version {VERSION} "
+                f"(format {meta.get('format')!r}, version {meta.get('version')!r})"
+            )
         if meta.get("feature_names") != list(FEATURE_NAMES):
-            raise ModelError(f"{name}: the model's features {meta.get('feature_names')} are not this version's {list(FEATURE_NAMES)}")
+            raise ModelError(
+                f"{name}: the model's features {meta.get('feature_names')} are not this version's {list(FEATURE_NAMES)}"
+            )
         joint_names = meta.get("joint_names")
-        if not isinstance(joint_names, list) or not joint_names or not all(isinstance(n, str) for n in joint_names) or len(set(joint_names)) != len(joint_names):
+        if (
+            not isinstance(joint_names, list)
+            or not joint_names
+            or not all(isinstance(n, str) for n in joint_names)
+            or len(set(joint_names)) != len(joint_names)
+        ):
             raise ModelError(f"{name}: the metadata's joint_names must be a list of distinct joint names")
         for key in ("settings", "report"):
             if not isinstance(meta.get(key, {}), dict):
                 raise ModelError(f"{name}: the metadata's {key} must be a JSON object")
         predicted = finite_array(arrays, "predicted", name, kinds="iu")
-        if predicted.ndim != 1 or len(predicted) == 0 or predicted.min() < 0 or predicted.max() >= len(joint_names) or len(set(predicted.tolist())) != len(predicted):
-            raise ModelError(f"{name}: predicted joint indices must be distinct indices of the {len(joint_names)} joints")
+        if (
+            predicted.ndim != 1
+            or len(predicted) == 0
+            or predicted.min() < 0
+            or predicted.max() >= len(joint_names)
+            or len(set(predicted.tolist())) != len(predicted)
+        ):
+            raise ModelError(
+                f"{name}: predicted joint indices must be distinct indices of the {len(joint_names)} joints"
+            )
         for key in arrays:
             if key.startswith("network.") and not key.endswith(".activations"):
                 finite_array(arrays, key, name, kinds="f")  # weights and biases: finite floats
@@ -184,10 +208,15 @@ class BodyModel:
         except (KeyError, ValueError) as error:
             raise ModelError(f"{name}: the network's arrays are invalid ({error})") from None
         layers = [f"network.{i}.{part}" for i in range(len(network.layers)) for part in ("weights", "bias")]
-        check_keys(arrays, ["predicted", "hemispheres", "thigh_reference", "calibration", "network.activations", *layers], name)
+        check_keys(
+            arrays, ["predicted", "hemispheres", "thigh_reference", "calibration", "network.activations", *layers], name
+        )
         n_features = len(FEATURE_NAMES)
         if network.n_inputs != n_features or network.n_outputs != 4 * len(predicted):
-            raise ModelError(f"{name}: the network maps {network.n_inputs} -> {network.n_outputs}, expected {n_features} -> {4 * len(predicted)}")
+            raise ModelError(
+                f"{name}: the network maps {network.n_inputs} -> {network.n_outputs}, "
+                f"expected {n_features} -> {4 * len(predicted)}"
+            )
         return cls(
             joint_names=tuple(joint_names),
             predicted=predicted.astype(np.int64),
@@ -196,7 +225,9 @@ class BodyModel:
             network=network,
             settings=meta.get("settings", {}),
             report=meta.get("report", {}),
-            calibration=finite_array(arrays, "calibration", name, (len(joint_names), 4), kinds="f") if "calibration" in arrays else None,
+            calibration=finite_array(arrays, "calibration", name, (len(joint_names), 4), kinds="f")
+            if "calibration" in arrays
+            else None,
         )
 
 
@@ -207,8 +238,10 @@ def poor_fit(report: dict) -> str | None:
     final, baseline = report.get("fine_tuned"), report.get("mean_pose")
     if not final or not baseline or final["test_mse"] < baseline["test_mse"]:
         return None
-    return (f"its held-out pose error {final['test_mse']:.3g} is no better than the mean training pose's "
-            f"{baseline['test_mse']:.3g} (test variance explained {final['test_variance_explained']:.2f})")
+    return (
+        f"its held-out pose error {final['test_mse']:.3g} is no better than the mean training pose's "
+        f"{baseline['test_mse']:.3g} (test variance explained {final['test_variance_explained']:.2f})"
+    )
 
 
 def shipped_model_bytes() -> bytes:
@@ -234,4 +267,13 @@ def model_features(motion: Motion, thigh_reference: np.ndarray, floor: float | N
     return dynamic_features(motion, roles, floor=floor, thigh_reference=thigh_reference, causal=True)
 
 
-__all__ = ["DEFAULT_MODEL", "FORMAT", "VERSION", "BodyModel", "model_features", "poor_fit", "pose_vectors", "shipped_model_bytes"]
+__all__ = [
+    "DEFAULT_MODEL",
+    "FORMAT",
+    "VERSION",
+    "BodyModel",
+    "model_features",
+    "poor_fit",
+    "pose_vectors",
+    "shipped_model_bytes",
+]

@@ -19,14 +19,19 @@ from .algebra import EXPONENT, GAIN, BodyMechanicsModel, decompose
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
-def modulate(motion: Motion, scale: float, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT) -> Motion:
+def modulate(
+    motion: Motion, scale: float, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT
+) -> Motion:
     """The motion with its expressiveness scaled: ``O_s = E*^s B'`` (1 = unchanged, 0 = body mechanics only)."""
     return decompose(motion, model, gain, exponent).recompose(scale)
 
 
 def _check_same_skeleton(a: Motion, b: Motion, what: str) -> None:
     if a.skeleton.names != b.skeleton.names:
-        raise ArgumentError(f"{what}: the two motions have different skeletons ({a.skeleton.n_joints} and {b.skeleton.n_joints} joints, or other names)")
+        raise ArgumentError(
+            f"{what}: the two motions have different skeletons "
+            f"({a.skeleton.n_joints} and {b.skeleton.n_joints} joints, or other names)"
+        )
 
 
 def _aligned(rotations: np.ndarray, frames: int, align: str, offset: int) -> np.ndarray:
@@ -42,8 +47,15 @@ def _aligned(rotations: np.ndarray, frames: int, align: str, offset: int) -> np.
     raise ArgumentError(f"align must be 'index' or 'resample', got {align!r}")
 
 
-def mix(body_source: Motion, expressive_source: Motion, model: BodyMechanicsModel, align: str = "index", offset: int = 0,
-        gain: float = GAIN, exponent: float = EXPONENT) -> Motion:
+def mix(
+    body_source: Motion,
+    expressive_source: Motion,
+    model: BodyMechanicsModel,
+    align: str = "index",
+    offset: int = 0,
+    gain: float = GAIN,
+    exponent: float = EXPONENT,
+) -> Motion:
     """The body mechanics (and root trajectory) of ``body_source`` with the expressive component
     of ``expressive_source``: ``E*_Y B'_X``. The expressive source is aligned to the body source
     frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``)."""
@@ -89,7 +101,10 @@ def _turned(motion: Motion, carrier: int, degrees: float, pivot: np.ndarray, to:
     if parent >= 0:
         parent_rotation, parent_position = world_rotations[:, parent], positions[:, parent]
     else:
-        parent_rotation, parent_position = np.broadcast_to(IDENTITY, (motion.n_frames, 4)), np.zeros((motion.n_frames, 3))
+        parent_rotation, parent_position = (
+            np.broadcast_to(IDENTITY, (motion.n_frames, 4)),
+            np.zeros((motion.n_frames, 3)),
+        )
     path = positions[:, carrier] - pivot * [1.0, 0.0, 1.0]
     path = quat.rotate(np.broadcast_to(turn, (motion.n_frames, 4)), path) + to * [1.0, 0.0, 1.0]
     rotations, translations = motion.rotations.copy(), motion.translations.copy()
@@ -118,8 +133,14 @@ class BlendAlignment:
     shift: np.ndarray
 
 
-def blend_alignment(first: Motion, second: Motion, body_window: tuple[int, int], expressive_window: tuple[int, int] | None = None,
-                    roles: JointRoles | None = None, first_positions: np.ndarray | None = None) -> BlendAlignment:
+def blend_alignment(
+    first: Motion,
+    second: Motion,
+    body_window: tuple[int, int],
+    expressive_window: tuple[int, int] | None = None,
+    roles: JointRoles | None = None,
+    first_positions: np.ndarray | None = None,
+) -> BlendAlignment:
     """The placement of ``second`` that :func:`blend` uses with these windows."""
     roles = roles or JointRoles.find(first.skeleton)
     start = _second_start(body_window, expressive_window)
@@ -131,12 +152,21 @@ def blend_alignment(first: Motion, second: Motion, body_window: tuple[int, int],
     b = second.positions()
     turn = _facing_at(a, roles, i, first.fps) - _facing_at(b, roles, j, second.fps)
     turn = (turn + 180.0) % 360.0 - 180.0
-    return BlendAlignment(joint, int(anchor), float(turn), b[j, joint].copy(), (a[i, joint] - b[j, joint]) * [1.0, 0.0, 1.0])
+    return BlendAlignment(
+        joint, int(anchor), float(turn), b[j, joint].copy(), (a[i, joint] - b[j, joint]) * [1.0, 0.0, 1.0]
+    )
 
 
-def blend(first: Motion, second: Motion, model: BodyMechanicsModel | None, body_window: tuple[int, int],
-          expressive_window: tuple[int, int] | None = None, gain: float = GAIN, exponent: float = EXPONENT,
-          roles: JointRoles | None = None) -> Motion:
+def blend(
+    first: Motion,
+    second: Motion,
+    model: BodyMechanicsModel | None,
+    body_window: tuple[int, int],
+    expressive_window: tuple[int, int] | None = None,
+    gain: float = GAIN,
+    exponent: float = EXPONENT,
+    roles: JointRoles | None = None,
+) -> Motion:
     """Blend from ``first`` to ``second``, body mechanics over ``body_window`` and the expressive
     component over ``expressive_window`` (output frames ``(start, end)``; slerp with smoothstep
     weights). ``second`` starts at the earlier window's start. At the start of the body window

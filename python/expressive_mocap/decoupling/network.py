@@ -9,8 +9,8 @@ An :class:`Mlp` is a list of :class:`Layer` s ``h = act(h @ weights + bias)``. I
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Iterable, Mapping
 
 import numpy as np
 
@@ -32,7 +32,9 @@ class Layer:
         weights = np.array(self.weights, dtype=np.float64)  # a copy: the layer owns its values
         bias = np.array(self.bias, dtype=np.float64)
         if weights.ndim != 2 or bias.shape != weights.shape[1:]:
-            raise ArgumentError(f"a layer needs weights [in, out] and bias [out], got {list(weights.shape)} and {list(bias.shape)}")
+            raise ArgumentError(
+                f"a layer needs weights [in, out] and bias [out], got {list(weights.shape)} and {list(bias.shape)}"
+            )
         if self.activation not in ACTIVATIONS:
             raise ArgumentError(f"activation must be one of {ACTIVATIONS}, got {self.activation!r}")
         object.__setattr__(self, "weights", weights)
@@ -77,7 +79,10 @@ class Mlp:
     def _arrays(self, dtype) -> tuple[list, list]:
         dtype = np.dtype(dtype)
         if dtype not in self._cast:
-            self._cast[dtype] = ([layer.weights.astype(dtype) for layer in self.layers], [layer.bias.astype(dtype) for layer in self.layers])
+            self._cast[dtype] = (
+                [layer.weights.astype(dtype) for layer in self.layers],
+                [layer.bias.astype(dtype) for layer in self.layers],
+            )
         return self._cast[dtype]
 
     def forward(self, x) -> np.ndarray:
@@ -100,18 +105,26 @@ class Mlp:
         return arrays
 
     @classmethod
-    def from_arrays(cls, arrays: Mapping[str, np.ndarray], prefix: str = "mlp") -> "Mlp":
+    def from_arrays(cls, arrays: Mapping[str, np.ndarray], prefix: str = "mlp") -> Mlp:
         """The network :meth:`to_arrays` described (``arrays`` may be an ``np.load`` result);
         :class:`~expressive_mocap.errors.ModelError` if arrays are missing or do not make a network."""
         key = f"{prefix}.activations"
         if key not in arrays:
             raise ModelError(f"no network under prefix {prefix!r}: {key!r} is missing")
         activations = [str(a) for a in np.asarray(arrays[key]).tolist()]
-        missing = [k for i in range(len(activations)) for k in (f"{prefix}.{i}.weights", f"{prefix}.{i}.bias") if k not in arrays]
+        missing = [
+            k
+            for i in range(len(activations))
+            for k in (f"{prefix}.{i}.weights", f"{prefix}.{i}.bias")
+            if k not in arrays
+        ]
         if missing:
             raise ModelError(f"the network under prefix {prefix!r} lacks {', '.join(map(repr, missing))}")
         try:
-            return cls(Layer(arrays[f"{prefix}.{i}.weights"], arrays[f"{prefix}.{i}.bias"], act) for i, act in enumerate(activations))
+            return cls(
+                Layer(arrays[f"{prefix}.{i}.weights"], arrays[f"{prefix}.{i}.bias"], act)
+                for i, act in enumerate(activations)
+            )
         except ArgumentError as error:
             raise ModelError(f"the network under prefix {prefix!r} is invalid: {error}") from None
 

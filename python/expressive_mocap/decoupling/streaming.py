@@ -17,8 +17,16 @@ class StreamingDecoupler:
     expressive rotations and activity per joint. The floor is given (default 0), not estimated.
     """
 
-    def __init__(self, model, skeleton, frame_time: float, floor: float = 0.0, history: float = 2.0,
-                 gain: float = GAIN, exponent: float = EXPONENT):
+    def __init__(
+        self,
+        model,
+        skeleton,
+        frame_time: float,
+        floor: float = 0.0,
+        history: float = 2.0,
+        gain: float = GAIN,
+        exponent: float = EXPONENT,
+    ):
         self.model, self.skeleton, self.frame_time = model, skeleton, float(frame_time)
         self.floor, self.gain, self.exponent = float(floor), gain, exponent
         self.capacity = max(2, int(round(history / self.frame_time)))
@@ -33,7 +41,9 @@ class StreamingDecoupler:
         del self._rotations[: -self.capacity], self._translations[: -self.capacity]
         window = Motion(self.skeleton, np.stack(self._rotations), np.stack(self._translations), self.frame_time)
         features = self.model.features(window, floor=self.floor)[-1:]
-        expressive, recovered, activity = split_from_features(window.rotations[-1:], features, self.model, self.gain, self.exponent)
+        expressive, recovered, activity = split_from_features(
+            window.rotations[-1:], features, self.model, self.gain, self.exponent
+        )
         return recovered[0], expressive[0], activity[0]
 
 

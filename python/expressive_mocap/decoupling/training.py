@@ -13,12 +13,13 @@ c. the stack ``X -> R -> code -> decoder -> P``;
 d. the stack fine-tuned end to end on ``(X, P)``;
 
 plus the mean-pose baseline and a plain ``X -> H tanh -> P`` network for comparison. The result
-is an :class:`~expressive_mocap.decoupling.network.Mlp` taking raw features and giving poses: the z-scoring of
-``X`` and the pose scaling are folded into its first and last layers, so inference (in Rust)
+is an :class:`~expressive_mocap.decoupling.network.Mlp` taking raw features and giving poses:
+the z-scoring of ``X`` and the pose scaling are folded into its first and last layers, so inference (in Rust)
 needs nothing else.
 
-Optimiser: full-batch L-BFGS (``scipy.optimize.minimize(method="L-BFGS-B", jac=True)``) on
-NumPy forward/backward passes in float64. Full batch fits: 50k frames x 300 units is ~0.1 GB of
+Optimiser: :func:`~expressive_mocap.decoupling.lbfgs.fit_lbfgs`, full-batch L-BFGS
+(``scipy.optimize.minimize(method="L-BFGS-B", jac=True)``) on NumPy forward/backward passes in
+float64. Full batch fits: 50k frames x 300 units is ~0.1 GB of
 activations, and L-BFGS needs no learning rate or schedule to tune, which is what keeps a
 training run reproducible and free of knobs. The denoising autoencoder's corruption is drawn
 afresh for each of a few rounds (L-BFGS needs a fixed objective within a round).
@@ -27,24 +28,18 @@ afresh for each of a few rounds (L-BFGS needs a fixed objective within a round).
 from __future__ import annotations
 
 import time
-from typing import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
 from .. import quat
 from ..errors import ArgumentError
 from ..motion import Motion
-from ..progress import line_log
 from ..roles import JointRoles
 from .body_model import BodyModel, model_features, pose_vectors
+from .lbfgs import Log, Params, fit_lbfgs, init_params
+from .lbfgs import stderr_log as _stderr
 from .network import Layer, Mlp
-
-Log = Callable[[str], None]
-Params = list[tuple[np.ndarray, np.ndarray]]  # per layer (weights [in, out], bias [out])
-
-
-_stderr = line_log()  # progress lines on stderr, the running ones redrawn on a terminal
-
 
 # --- splitting ---------------------------------------------------------------------------------
 
@@ -66,95 +61,6 @@ def split_by_group(groups, test_fraction: float = 0.3, seed: int = 0) -> tuple[n
     return np.flatnonzero(~test_rows), np.flatnonzero(test_rows)
 
 
-# --- networks as plain arrays: init, forward, backward, L-BFGS ---------------------------------
-
-
-def init_params(rng: np.random.Generator, widths: Sequence[int]) -> Params:
-    """Glorot-uniform weights and zero biases for layers ``widths[i] -> widths[i + 1]``."""
-    params = []
-    for a, b in zip(widths[:-1], widths[1:]):
-        limit = np.sqrt(6.0 / (a + b))
-        params.append((rng.uniform(-limit, limit, size=(a, b)), np.zeros(b)))
-    return params
-
-
-def forward_all(params: Params, activations: Sequence[str], x: np.ndarray) -> list[np.ndarray]:
-    """Every layer's output ``[N, out_i]`` (input first), kept for the backward pass."""
-    hs = [x]
-    for (w, b), act in zip(params, activations):
-        h = hs[-1] @ w + b
-        hs.append(np.tanh(h, out=h) if act == "tanh" else h)
-    return hs
-
-
-def loss_and_grad(params: Params, activations: Sequence[str], x: np.ndarray, y: np.ndarray, weight_decay: float = 0.0) -> tuple[float, Params]:
-    """``mean((net(x) - y)^2) + weight_decay * sum(W^2)`` (biases not decayed) and its gradient,
-    one ``(dW, db)`` per layer. ``x [N, in]``, ``y [N, out]``."""
-    hs = forward_all(params, activations, x)
-    error = hs[-1] - y
-    loss = float(np.mean(error**2)) + weight_decay * sum(float(np.sum(w * w)) for w, _ in params)
-    grad_h = error * (2.0 / error.size)
-    grads: Params = []
-    for i in range(len(params) - 1, -1, -1):
-        w, _ = params[i]
-        grad_a = grad_h * (1.0 - hs[i + 1] ** 2) if activations[i] == "tanh" else grad_h
-        grads.append((hs[i].T @ grad_a + 2.0 * weight_decay * w, grad_a.sum(axis=0)))
-        if i > 0:
-            grad_h = grad_a @ w.T
-    return loss, grads[::-1]
-
-
-def _pack(params: Params) -> np.ndarray:
-    return np.concatenate([a.ravel() for layer in params for a in layer])
-
-
-def _unpack(flat: np.ndarray, like: Params) -> Params:
-    out, start = [], 0
-    for w, b in like:
-        out.append((flat[start : start + w.size].reshape(w.shape), flat[start + w.size : start + w.size + b.size]))
-        start += w.size + b.size
-    return out
-
-
-def fit_lbfgs(
-    params: Params,
-    activations: Sequence[str],
-    x: np.ndarray,
-    y: np.ndarray,
-    *,
-    max_iter: int,
-    weight_decay: float,
-    name: str,
-    log: Log | None = _stderr,
-) -> tuple[Params, int]:
-    """Minimise :func:`loss_and_grad` with L-BFGS from ``params``; returns the fitted
-    parameters and the number of iterations run. Progress goes to ``log``: a running line
-    (ending in ``\\r``) at each iteration with the time left, then the stage's last line."""
-    from scipy.optimize import minimize
-
-    state = {"loss": np.nan, "iter": 0, "start": time.perf_counter()}
-
-    def objective(flat):
-        loss, grads = loss_and_grad(_unpack(flat, params), activations, x, y, weight_decay)
-        state["loss"] = loss
-        return loss, _pack(grads)
-
-    def progress(_flat):
-        state["iter"] += 1
-        if log:
-            seconds = time.perf_counter() - state["start"]
-            left = seconds / state["iter"] * (max_iter - state["iter"])
-            log(f"{name}: iteration {state['iter']}/{max_iter}, loss {state['loss']:.4g}, {seconds:.1f} s, at most {left:.0f} s left\r")
-
-    result = minimize(
-        objective, _pack(params), jac=True, method="L-BFGS-B", callback=progress,
-        options={"maxiter": max_iter, "maxcor": 20, "ftol": 1e-12, "gtol": 1e-9},
-    )  # fmt: skip
-    if log:
-        log(f"{name}: {int(result.nit)} iterations, loss {state['loss']:.4g}, {time.perf_counter() - state['start']:.1f} s")
-    return [(w.copy(), b.copy()) for w, b in _unpack(result.x, params)], int(result.nit)
-
-
 # --- normalisation folded into the network -----------------------------------------------------
 
 
@@ -164,7 +70,9 @@ def _zscore_stats(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mean, np.where(std > 1e-8 * max(float(std.max(initial=0.0)), 1e-300), std, 1.0)
 
 
-def _fold_input(layer: tuple[np.ndarray, np.ndarray], mean: np.ndarray, std: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _fold_input(
+    layer: tuple[np.ndarray, np.ndarray], mean: np.ndarray, std: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """The layer acting on raw inputs that equals ``layer`` on ``(x - mean) / std``."""
     w, b = layer
     return w / std[:, None], b - (mean / std) @ w
@@ -180,7 +88,9 @@ def _mlp(params: Params, activations: Sequence[str]) -> Mlp:
     return Mlp(Layer(w, b, act) for (w, b), act in zip(params, activations))
 
 
-def corrupt(rng: np.random.Generator, z: np.ndarray, mask: tuple[float, float] = (0.1, 0.3), noise: float = 0.1) -> np.ndarray:
+def corrupt(
+    rng: np.random.Generator, z: np.ndarray, mask: tuple[float, float] = (0.1, 0.3), noise: float = 0.1
+) -> np.ndarray:
     """Denoising input: per row a fraction drawn from ``mask`` of the values set to 0 (the mean,
     on z-scored poses), and Gaussian noise of std ``noise`` (in units of each column's std)."""
     fraction = rng.uniform(*mask, size=(len(z), 1))
@@ -193,7 +103,9 @@ def _scores(predicted: np.ndarray, target: np.ndarray, variance: float) -> dict:
     return {"mse": mse, "variance_explained": 1.0 - mse / variance if variance > 0 else float("nan")}
 
 
-def _stage(net: Mlp, x: np.ndarray, y: np.ndarray, train: np.ndarray, test: np.ndarray, variance: float, **extra) -> dict:
+def _stage(
+    net: Mlp, x: np.ndarray, y: np.ndarray, train: np.ndarray, test: np.ndarray, variance: float, **extra
+) -> dict:
     """Train and test MSE of ``net`` (run through the kernel backend, as at inference)."""
     tr, te = _scores(net(x[train]), y[train], variance), _scores(net(x[test]), y[test], variance)
     return {"train_mse": tr["mse"], "test_mse": te["mse"], "test_variance_explained": te["variance_explained"], **extra}
@@ -228,10 +140,21 @@ def train_autoencoder(
     acts = ("tanh", "linear")
     for r in range(rounds):
         iters = max_iter // rounds + (r < max_iter % rounds)
-        params, _ = fit_lbfgs(params, acts, corrupt(rng, z, mask, noise), target, max_iter=iters, weight_decay=weight_decay, name=f"autoencoder H={hidden} round {r + 1}/{rounds}", log=log)
+        params, _ = fit_lbfgs(
+            params,
+            acts,
+            corrupt(rng, z, mask, noise),
+            target,
+            max_iter=iters,
+            weight_decay=weight_decay,
+            name=f"autoencoder H={hidden} round {r + 1}/{rounds}",
+            log=log,
+        )
     return _mlp([_fold_input(params[0], mean, std), _fold_output(params[1], mean, scale)], acts)
 
 
+# Long (about 130 lines, half of them its docstring): the four stages share the split, the
+# scalings and the report, and read best in the order of the paper's section.
 def train_stacked_network(
     X,
     P,
@@ -271,13 +194,20 @@ def train_stacked_network(
     """
     X, P, groups = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64), np.asarray(groups)
     if X.ndim != 2 or P.ndim != 2 or len(X) != len(P):
-        raise ArgumentError(f"arguments `X`, `P`: expected [N, F] and [N, D] with the same N, got {list(X.shape)} and {list(P.shape)}")
+        raise ArgumentError(
+            f"arguments `X`, `P`: expected [N, F] and [N, D] with the same N, got {list(X.shape)} and {list(P.shape)}"
+        )
     if groups.shape != (len(X),):
         raise ArgumentError(f"argument `groups`: expected shape [{len(X)}], got {list(groups.shape)}")
     train, test = split_by_group(groups, test_fraction, seed)
     variance = float(np.mean(P[test].var(axis=0)))
     report: dict = {
-        "split": {"train_rows": len(train), "test_rows": len(test), "train_groups": len(np.unique(groups[train])), "test_groups": len(np.unique(groups[test]))},
+        "split": {
+            "train_rows": len(train),
+            "test_rows": len(test),
+            "train_groups": len(np.unique(groups[train])),
+            "test_groups": len(np.unique(groups[test])),
+        },
         "test_variance": variance,
     }
     mean_pose = P[train].mean(axis=0)
@@ -286,12 +216,13 @@ def train_stacked_network(
         "test_mse": float(np.mean((P[test] - mean_pose) ** 2)),
     }
     report["mean_pose"]["test_variance_explained"] = 1.0 - report["mean_pose"]["test_mse"] / variance
-    common = {"weight_decay": weight_decay, "log": log}
 
     # (a) autoencoder
     start = time.perf_counter()
     ae_poses = P[train] if unlabelled_poses is None else np.asarray(unlabelled_poses, dtype=np.float64)
-    ae = train_autoencoder(ae_poses, hidden, seed=seed, max_iter=max_iter, mask=mask, noise=noise, **common)
+    ae = train_autoencoder(
+        ae_poses, hidden, seed=seed, max_iter=max_iter, mask=mask, noise=noise, weight_decay=weight_decay, log=log
+    )
     report["autoencoder"] = _stage(ae, P, P, train, test, variance, seconds=time.perf_counter() - start, hidden=hidden)
 
     # (b) regression from z-scored features to the code (the encoder's tanh units on clean poses)
@@ -302,8 +233,25 @@ def train_stacked_network(
     code = Mlp([encoder])(P)
     rng = np.random.default_rng(seed + 1)
     reg_acts = ("tanh", "tanh")
-    reg, _ = fit_lbfgs(init_params(rng, (X.shape[1], regression_hidden, hidden)), reg_acts, xz[train], code[train], max_iter=max_iter, name="regression", **common)
-    report["regression"] = _stage(_mlp(reg, reg_acts), xz, code, train, test, float(np.mean(code[test].var(axis=0))), seconds=time.perf_counter() - start)
+    reg, _ = fit_lbfgs(
+        init_params(rng, (X.shape[1], regression_hidden, hidden)),
+        reg_acts,
+        xz[train],
+        code[train],
+        max_iter=max_iter,
+        name="regression",
+        weight_decay=weight_decay,
+        log=log,
+    )
+    report["regression"] = _stage(
+        _mlp(reg, reg_acts),
+        xz,
+        code,
+        train,
+        test,
+        float(np.mean(code[test].var(axis=0))),
+        seconds=time.perf_counter() - start,
+    )
 
     # (c) stack: regression layers then the decoder, on raw features
     stack_acts = ("tanh", "tanh", "linear")
@@ -316,19 +264,41 @@ def train_stacked_network(
     p_mean, p_scale = P[train].mean(axis=0), float(np.sqrt(np.mean(P[train].var(axis=0)))) or 1.0
     scaled = (P - p_mean) / p_scale
     unfold = _fold_output((decoder.weights, decoder.bias), -p_mean / p_scale, 1.0 / p_scale)
-    tuned, iters = fit_lbfgs([reg[0], reg[1], unfold], stack_acts, xz[train], scaled[train], max_iter=max_iter, name="fine-tuning", **common)
+    tuned, iters = fit_lbfgs(
+        [reg[0], reg[1], unfold],
+        stack_acts,
+        xz[train],
+        scaled[train],
+        max_iter=max_iter,
+        name="fine-tuning",
+        weight_decay=weight_decay,
+        log=log,
+    )
     tuned[2] = _fold_output(tuned[2], p_mean, p_scale)
     net = to_raw(tuned)
-    report["fine_tuned"] = _stage(net, X, P, train, test, variance, seconds=time.perf_counter() - start, iterations=iters)
+    report["fine_tuned"] = _stage(
+        net, X, P, train, test, variance, seconds=time.perf_counter() - start, iterations=iters
+    )
 
     if compare_plain:
         start = time.perf_counter()
-        plain = train_plain(X[train], P[train], hidden, seed=seed, max_iter=max_iter, **common)
+        plain = train_plain(
+            X[train], P[train], hidden, seed=seed, max_iter=max_iter, weight_decay=weight_decay, log=log
+        )
         report["plain"] = _stage(plain, X, P, train, test, variance, seconds=time.perf_counter() - start, hidden=hidden)
     return net, report
 
 
-def train_plain(X, P, hidden: int = 300, *, seed: int = 0, max_iter: int = 400, weight_decay: float = 1e-6, log: Log | None = _stderr) -> Mlp:
+def train_plain(
+    X,
+    P,
+    hidden: int = 300,
+    *,
+    seed: int = 0,
+    max_iter: int = 400,
+    weight_decay: float = 1e-6,
+    log: Log | None = _stderr,
+) -> Mlp:
     """A plain ``X [N, F] -> H tanh -> P [N, D]`` network (the comparison for the stack), as an
     :class:`Mlp` on raw features."""
     X, P = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64)
@@ -336,11 +306,29 @@ def train_plain(X, P, hidden: int = 300, *, seed: int = 0, max_iter: int = 400, 
     p_mean, p_scale = P.mean(axis=0), float(np.sqrt(np.mean(P.var(axis=0)))) or 1.0
     acts = ("tanh", "linear")
     params = init_params(np.random.default_rng(seed + 2), (X.shape[1], hidden, P.shape[1]))
-    params, _ = fit_lbfgs(params, acts, (X - x_mean) / x_std, (P - p_mean) / p_scale, max_iter=max_iter, weight_decay=weight_decay, name=f"plain H={hidden}", log=log)
+    params, _ = fit_lbfgs(
+        params,
+        acts,
+        (X - x_mean) / x_std,
+        (P - p_mean) / p_scale,
+        max_iter=max_iter,
+        weight_decay=weight_decay,
+        name=f"plain H={hidden}",
+        log=log,
+    )
     return _mlp([_fold_input(params[0], x_mean, x_std), _fold_output(params[1], p_mean, p_scale)], acts)
 
 
-def sweep_autoencoder(P, groups, hiddens: Sequence[int] = (300, 150, 50, 15), *, seed: int = 0, test_fraction: float = 0.3, log: Log | None = _stderr, **kwargs) -> dict[int, dict]:
+def sweep_autoencoder(
+    P,
+    groups,
+    hiddens: Sequence[int] = (300, 150, 50, 15),
+    *,
+    seed: int = 0,
+    test_fraction: float = 0.3,
+    log: Log | None = _stderr,
+    **kwargs,
+) -> dict[int, dict]:
     """Train and test MSE of the autoencoder for each hidden size (the paper's 300/150/50/15),
     trained on the training split of ``P`` by group. ``kwargs`` go to :func:`train_autoencoder`."""
     P = np.asarray(P, dtype=np.float64)
@@ -352,17 +340,26 @@ def sweep_autoencoder(P, groups, hiddens: Sequence[int] = (300, 150, 50, 15), *,
         ae = train_autoencoder(P[train], hidden, seed=seed, log=log, **kwargs)
         results[hidden] = _stage(ae, P, P, train, test, variance, seconds=time.perf_counter() - start)
         if log:
-            log(f"autoencoder H={hidden}: train MSE {results[hidden]['train_mse']:.3g}, test MSE {results[hidden]['test_mse']:.3g}")
+            log(
+                f"autoencoder H={hidden}: train MSE {results[hidden]['train_mse']:.3g}, "
+                f"test MSE {results[hidden]['test_mse']:.3g}"
+            )
     return results
 
 
 def format_report(report: dict) -> str:
     """The report as a small table: one line per stage."""
-    lines = [f"split: {report['split']}, test variance {report['test_variance']:.4g}", f"{'stage':12s} {'train MSE':>10s} {'test MSE':>10s} {'test var. expl.':>15s} {'seconds':>8s}"]
+    lines = [
+        f"split: {report['split']}, test variance {report['test_variance']:.4g}",
+        f"{'stage':12s} {'train MSE':>10s} {'test MSE':>10s} {'test var. expl.':>15s} {'seconds':>8s}",
+    ]
     for stage in ("mean_pose", "autoencoder", "regression", "stack", "fine_tuned", "plain"):
         if stage in report:
             r = report[stage]
-            lines.append(f"{stage:12s} {r['train_mse']:10.4g} {r['test_mse']:10.4g} {r['test_variance_explained']:15.4f} {r.get('seconds', 0.0):8.1f}")
+            lines.append(
+                f"{stage:12s} {r['train_mse']:10.4g} {r['test_mse']:10.4g} "
+                f"{r['test_variance_explained']:15.4f} {r.get('seconds', 0.0):8.1f}"
+            )
     lines.append("(regression in code units; every other stage in pose units)")
     return "\n".join(lines)
 
@@ -374,7 +371,12 @@ def synthetic_data(n_groups: int = 30, frames: int = 50, n_in: int = 19, d: int 
     rng = np.random.default_rng(seed)
     a = rng.normal(size=(n_in, latent)) * 1.5 / np.sqrt(n_in)
     b = rng.normal(size=(latent, d)) * 0.1
-    z = np.concatenate([rng.normal(size=n_in) + np.cumsum(rng.normal(scale=0.15, size=(frames, n_in)), axis=0) for _ in range(n_groups)])
+    z = np.concatenate(
+        [
+            rng.normal(size=n_in) + np.cumsum(rng.normal(scale=0.15, size=(frames, n_in)), axis=0)
+            for _ in range(n_groups)
+        ]
+    )
     poses = np.tanh(z @ a) @ b + rng.normal(scale=1e-3, size=(len(z), d))
     return z * 2.0 + 5.0, poses, np.repeat(np.arange(n_groups), frames)
 
@@ -417,11 +419,15 @@ def train_body_model(
         # The same split train_stacked_network makes: keep its test clips out of the autoencoder.
         train_rows, test_rows = split_by_group(groups, 0.3, seed)
         test_clips = {_fingerprint(neutral[k]) for k in np.unique(groups[test_rows])}
-        kept = [pose_vectors(m.rotations, predicted, hemispheres) for m in unlabelled if _fingerprint(m) not in test_clips]
+        kept = [
+            pose_vectors(m.rotations, predicted, hemispheres) for m in unlabelled if _fingerprint(m) not in test_clips
+        ]
         pool = np.concatenate(kept) if kept else np.zeros((0, P.shape[1]))
         drawn = np.random.default_rng(seed).choice(len(pool), size=min(unlabelled_frames, len(pool)), replace=False)
         extra = np.concatenate([pool[drawn], P[train_rows]])
-    network, report = train_stacked_network(X, P, groups, extra, hidden, regression_hidden, seed=seed, max_iter=max_iter, log=log)
+    network, report = train_stacked_network(
+        X, P, groups, extra, hidden, regression_hidden, seed=seed, max_iter=max_iter, log=log
+    )
     settings = {
         "hidden": hidden,
         "regression_hidden": regression_hidden,
@@ -443,10 +449,7 @@ def _fingerprint(motion: Motion) -> tuple:
 
 __all__ = [
     "corrupt",
-    "fit_lbfgs",
     "format_report",
-    "init_params",
-    "loss_and_grad",
     "split_by_group",
     "sweep_autoencoder",
     "synthetic_data",
