@@ -17,7 +17,7 @@ import numpy as np
 from . import quat
 from .errors import MocapError
 from .features import mean_rotation
-from .kernels import compose_rotations, decouple_rotations, forward_kinematics
+from .ops import compose_rotations, decouple_rotations, forward_kinematics
 from .motion import Motion
 from .roles import JointRoles, facing_yaw, path_joint
 

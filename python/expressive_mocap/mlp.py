@@ -14,8 +14,7 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
-from .kernels import mlp_forward
-from .reference.mlp import ACTIVATIONS
+from .ops import ACTIVATIONS, mlp_forward
 
 
 @dataclass(frozen=True)
