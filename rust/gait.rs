@@ -100,6 +100,7 @@ fn check_index(name: &'static str, index: usize, joints: usize) -> Result<()> {
 /// `KernelError::Argument` when the lengths disagree with `joints`, a joint index is out of
 /// range, or a parameter is out of range (see the two kernels).
 #[allow(clippy::too_many_arguments)]
+#[allow(clippy::too_many_lines)] // one sequence: checks, floor, contacts, features of one clip
 pub fn clip_gait(
     positions: &[f64],
     rotations: &[f64],

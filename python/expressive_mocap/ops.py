@@ -17,8 +17,9 @@ during a call gives results computed from a mix of its old and new values, and n
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, NamedTuple, Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -113,9 +114,16 @@ def decode_channels(values, rotation_columns, orders, position_columns, offsets)
     position_columns = _array("position_columns", position_columns, np.int64, "iu")
     offsets = _array("offsets", offsets, np.float64)
     joints = len(orders)
-    for name, array in (("rotation_columns", rotation_columns), ("orders", orders), ("position_columns", position_columns), ("offsets", offsets)):
+    for name, array in (
+        ("rotation_columns", rotation_columns),
+        ("orders", orders),
+        ("position_columns", position_columns),
+        ("offsets", offsets),
+    ):
         if array.shape != (joints, 3):
-            raise ArgumentError(f"argument `{name}`: expected shape [{joints}, 3] (one row per joint), got {list(array.shape)}")
+            raise ArgumentError(
+                f"argument `{name}`: expected shape [{joints}, 3] (one row per joint), got {list(array.shape)}"
+            )
     return kernels().decode_channels(values, rotation_columns, orders, position_columns, offsets)
 
 
@@ -161,10 +169,14 @@ def mlp_forward(x, weights, biases, activations) -> np.ndarray:
     weights, biases, activations = list(weights), list(biases), [str(a) for a in activations]
     for i, activation in enumerate(activations):
         if activation not in ACTIVATIONS:
-            raise ArgumentError(f"argument `activations`: layer {i}: unknown activation {activation!r} (expected one of {ACTIVATIONS})")
+            raise ArgumentError(
+                f"argument `activations`: layer {i}: unknown activation {activation!r} (expected one of {ACTIVATIONS})"
+            )
     for name, items in (("biases", biases), ("activations", activations)):
         if len(items) != len(weights):
-            raise ArgumentError(f"argument `{name}`: expected one for each of the {len(weights)} layers, got {len(items)}")
+            raise ArgumentError(
+                f"argument `{name}`: expected one for each of the {len(weights)} layers, got {len(items)}"
+            )
     for i, (w, b) in enumerate(zip(weights, biases)):
         if np.ndim(w) != 2:
             raise ArgumentError(f"argument `weights`: layer {i} must be 2-D [in, out], got shape {list(np.shape(w))}")
@@ -215,7 +227,9 @@ def read_motion_blocks(blocks: Sequence[tuple[bytes, Any]]) -> list:
     per ``(data, header)`` (a :class:`~expressive_mocap.bvh.Header`: where its block starts,
     how many frames, its skeleton) a ``(rotations [F, J, 4], translations [F, J, 3])`` pair, or
     the :class:`~expressive_mocap.errors.ParseError` of a malformed block in its place."""
-    return kernels().read_motion_blocks([MotionBlock(data, h.block_start, h.frames, channel_layout(h.skeleton)) for data, h in blocks])
+    return kernels().read_motion_blocks(
+        [MotionBlock(data, h.block_start, h.frames, channel_layout(h.skeleton)) for data, h in blocks]
+    )
 
 
 def format_motion_block(values, decimals: int | None = None) -> bytes:
@@ -230,12 +244,28 @@ def format_motion_block(values, decimals: int | None = None) -> bytes:
 # -- foot contacts and gait features ---------------------------------------------------------
 
 
-def foot_contacts(feet, frame_time: float, floor: float, height_threshold: float, speed_threshold: float, min_frames: int, causal: bool) -> np.ndarray:
+def foot_contacts(
+    feet,
+    frame_time: float,
+    floor: float,
+    height_threshold: float,
+    speed_threshold: float,
+    min_frames: int,
+    causal: bool,
+) -> np.ndarray:
     """Contact flags ``bool [F, S]`` from world positions ``feet [F, S, P, 3]`` (P points a
     foot: ankle, toe); thresholds in the positions' units (speed per second); runs shorter than
     ``min_frames`` are filtered (offline, or a causal hold when ``causal``)."""
     feet = _array("feet", feet, np.float64)
-    return kernels().foot_contacts(feet, float(frame_time), float(floor), float(height_threshold), float(speed_threshold), int(min_frames), bool(causal))
+    return kernels().foot_contacts(
+        feet,
+        float(frame_time),
+        float(floor),
+        float(height_threshold),
+        float(speed_threshold),
+        int(min_frames),
+        bool(causal),
+    )
 
 
 def air_time(contacts, frame_time: float) -> np.ndarray:
@@ -243,13 +273,30 @@ def air_time(contacts, frame_time: float) -> np.ndarray:
     return kernels().air_time(np.ascontiguousarray(contacts, dtype=bool), float(frame_time))
 
 
-def dynamic_features(points, thighs, contacts, reference, frame_time: float, height: float, hips_rest_height: float, floor: float, window: int) -> np.ndarray:
+def dynamic_features(
+    points,
+    thighs,
+    contacts,
+    reference,
+    frame_time: float,
+    height: float,
+    hips_rest_height: float,
+    floor: float,
+    window: int,
+) -> np.ndarray:
     """The 19 dynamic features ``[F, 19]`` from ``points [F, 3, 3]`` (hips, left and right upper
     leg, world), ``thighs [F, 2, 4]`` (local), ``contacts bool [F, 2]`` and the thighs'
     hemisphere ``reference [2, 4]``."""
     return kernels().dynamic_features(
-        _array("points", points, np.float64), _array("thighs", thighs, np.float64), np.ascontiguousarray(contacts, dtype=bool),
-        _array("reference", reference, np.float64), float(frame_time), float(height), float(hips_rest_height), float(floor), int(window),
+        _array("points", points, np.float64),
+        _array("thighs", thighs, np.float64),
+        np.ascontiguousarray(contacts, dtype=bool),
+        _array("reference", reference, np.float64),
+        float(frame_time),
+        float(height),
+        float(hips_rest_height),
+        float(floor),
+        int(window),
     )
 
 
@@ -263,12 +310,22 @@ class GaitSettings(NamedTuple):
     floor_percentile: float
 
 
-def clip_gait_many(clips, roles, gait: GaitSettings, *, features: bool, contacts: bool, feature_floor: float | None = None,
-                   thigh_reference=None) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
+def clip_gait_many(
+    clips,
+    roles,
+    gait: GaitSettings,
+    *,
+    features: bool,
+    contacts: bool,
+    feature_floor: float | None = None,
+    thigh_reference=None,
+) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
     """Gait arrays of many clips (in parallel with the Rust kernels): per clip ``(positions
     [F, J, 3] world, rotations [F, J, 4] local, frame_time, height, hips_rest_height)``, ``roles``
     the 7 gait joints; per clip ``(features [F, 19] or None, contacts bool [F, 2] or None)``."""
-    return kernels().clip_gait_many(clips, [int(r) for r in roles], *gait, bool(features), bool(contacts), feature_floor, thigh_reference)
+    return kernels().clip_gait_many(
+        clips, [int(r) for r in roles], *gait, bool(features), bool(contacts), feature_floor, thigh_reference
+    )
 
 
 # -- the whole per-clip work of preprocessing -----------------------------------------------------
@@ -292,7 +349,15 @@ class ClipInput:
     def of(cls, source: bytes | str | os.PathLike, header, height: float, hips_rest_height: float) -> ClipInput:
         """The clip of a :class:`~expressive_mocap.bvh.Header` whose text is ``source``."""
         text = source if isinstance(source, bytes) else os.fspath(source)
-        return cls(text, header.block_start, header.frames, channel_layout(header.skeleton), header.frame_time, height, hips_rest_height)
+        return cls(
+            text,
+            header.block_start,
+            header.frames,
+            channel_layout(header.skeleton),
+            header.frame_time,
+            height,
+            hips_rest_height,
+        )
 
 
 @dataclass(frozen=True)
@@ -315,18 +380,35 @@ class PipelineOutputs:
     float32: bool = False
 
 
-def clip_pipeline_many(clips: Sequence[ClipInput], parents, roles, gait: GaitSettings, outputs: PipelineOutputs,
-                       max_bytes: int | None = None) -> list:
+def clip_pipeline_many(
+    clips: Sequence[ClipInput],
+    parents,
+    roles,
+    gait: GaitSettings,
+    outputs: PipelineOutputs,
+    max_bytes: int | None = None,
+) -> list:
     """The whole per-clip work of many clips of one skeleton (``parents [J]``, ``roles`` its 7
     gait joints), clips in parallel with the Rust kernels: reading the file (a path, at most
     ``max_bytes``, default ``files.MAX_INPUT_BYTES``), MOTION block, FK, features, contacts.
     Per clip ``(positions or None, rotations or None, [features per request], contacts or
     None)``, or the ``ParseError`` / ``OSError`` of a clip whose block / file cannot be read."""
     parents = _array("parents", parents, np.int64, "iu")
-    outputs = PipelineOutputs(outputs.positions, outputs.rotations,
-                              tuple(FeatureRequest(f.floor, None if f.thigh_reference is None else _array("thigh_reference", f.thigh_reference, np.float64))
-                                    for f in outputs.features), outputs.contacts, outputs.float32)
-    return kernels().clip_pipeline_many(list(clips), parents, [int(r) for r in roles], gait=GaitSettings(*gait), outputs=outputs, max_bytes=max_bytes)
+    outputs = PipelineOutputs(
+        outputs.positions,
+        outputs.rotations,
+        tuple(
+            FeatureRequest(
+                f.floor, None if f.thigh_reference is None else _array("thigh_reference", f.thigh_reference, np.float64)
+            )
+            for f in outputs.features
+        ),
+        outputs.contacts,
+        outputs.float32,
+    )
+    return kernels().clip_pipeline_many(
+        list(clips), parents, [int(r) for r in roles], gait=GaitSettings(*gait), outputs=outputs, max_bytes=max_bytes
+    )
 
 
 __all__ = [

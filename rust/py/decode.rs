@@ -89,6 +89,9 @@ fn decode_channels<'py>(
     motion_arrays(py, frames, layout.joints(), decoded)
 }
 
+/// Local rotations and translations of one block.
+type Decoded = (Vec<f64>, Vec<f64>);
+
 /// Parse and decode many MOTION blocks (`BlockArgs`), in parallel across blocks; returns per
 /// block a (rotations, translations) pair or a `ParseError` instance.
 #[pyfunction]
@@ -106,7 +109,7 @@ fn read_motion_blocks<'py>(
             OwnedLayout::new(&block.layout)?,
         ));
     }
-    let results: Vec<Result<(Vec<f64>, Vec<f64>), KernelError>> = py.detach(|| {
+    let results: Vec<crate::error::Result<Decoded>> = py.detach(|| {
         jobs.par_iter()
             .map(|(bytes, start, frames, layout)| {
                 let block = bytes
