@@ -90,6 +90,7 @@ def kernels_child(folder: str) -> None:
     the same work split into the kernels it fuses (reading the files, parsing and decoding the
     MOTION blocks, FK, features and contacts), each timed on its own. Best of 3; one JSON line."""
     from expressive_mocap import preprocess as pre
+    from expressive_mocap import ops
     from expressive_mocap.backend import kernels
     from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 
@@ -107,10 +108,11 @@ def kernels_child(folder: str) -> None:
 
     for _ in range(3):
         timed("kernels", lambda: pre._kernels(items, prepared, pre.DEFAULT_KEEP, None, False))
-        texts = timed("read", lambda: [Path(clip[0]).read_bytes() for clip in group.clips])
-        decoded = timed("parse", lambda: core.read_motion_blocks([(text, *clip[1:8]) for text, clip in zip(texts, group.clips)]))
+        texts = timed("read", lambda: [Path(clip.source).read_bytes() for clip in group.clips])
+        blocks = [ops.MotionBlock(text, clip.start, clip.frames, clip.layout) for text, clip in zip(texts, group.clips)]
+        decoded = timed("parse", lambda: core.read_motion_blocks(blocks))
         posed = timed("fk", lambda: core.forward_kinematics_many([(r, t, group.parents) for r, t in decoded]))
-        gait = [(world, local, *clip[8:]) for (_, world), (local, _), clip in zip(posed, decoded, group.clips)]
+        gait = [(world, local, clip.frame_time, clip.height, clip.hips_rest_height) for (_, world), (local, _), clip in zip(posed, decoded, group.clips)]
         timed("gait", lambda: core.clip_gait_many(gait, group.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE, True, True, 0.0))
     print(json.dumps(best))
 

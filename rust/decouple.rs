@@ -6,7 +6,7 @@
 use glam::DQuat;
 use rayon::prelude::*;
 
-use crate::error::{KernelError, Result};
+use crate::error::{positive, KernelError, Result};
 use crate::rotations::PARALLEL_MIN_ITEMS;
 
 /// The angle of a unit quaternion's rotation, in `[0, pi]`.
@@ -41,7 +41,14 @@ pub fn activity(a: f64, gain: f64, exponent: f64) -> f64 {
 
 fn check_pair(name: &'static str, first: &[f64], second: &[f64]) -> Result<()> {
     if first.len() % 4 != 0 || first.len() != second.len() {
-        return Err(KernelError::argument(name, format!("expected two [F, J, 4] arrays of the same shape, got {} and {} values", first.len(), second.len())));
+        return Err(KernelError::argument(
+            name,
+            format!(
+                "expected two [F, J, 4] arrays of the same shape, got {} and {} values",
+                first.len(),
+                second.len()
+            ),
+        ));
     }
     Ok(())
 }
@@ -55,13 +62,15 @@ type Outputs<'a> = (usize, ((&'a mut [f64], &'a mut [f64]), &'a mut f64));
 /// # Errors
 /// `KernelError::Argument` when the arrays differ in shape, are not quaternions, or `gain` or
 /// `exponent` is not a finite positive number.
-pub fn decouple(original: &[f64], body: &[f64], gain: f64, exponent: f64) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+pub fn decouple(
+    original: &[f64],
+    body: &[f64],
+    gain: f64,
+    exponent: f64,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
     check_pair("body", original, body)?;
-    for (name, value) in [("gain", gain), ("exponent", exponent)] {
-        if !(value.is_finite() && value > 0.0) {
-            return Err(KernelError::argument(name, format!("must be a positive number, got {value}")));
-        }
-    }
+    positive("gain", gain)?;
+    positive("exponent", exponent)?;
     let count = original.len() / 4;
     let mut expressive = vec![0.0; original.len()];
     let mut recovered = vec![0.0; original.len()];
@@ -77,9 +86,20 @@ pub fn decouple(original: &[f64], body: &[f64], gain: f64, exponent: f64) -> Res
         *a_out = a;
     };
     if count >= PARALLEL_MIN_ITEMS {
-        expressive.par_chunks_mut(4).zip(recovered.par_chunks_mut(4)).zip(activities.par_iter_mut()).enumerate().with_min_len(1024).for_each(per_rotation);
+        expressive
+            .par_chunks_mut(4)
+            .zip(recovered.par_chunks_mut(4))
+            .zip(activities.par_iter_mut())
+            .enumerate()
+            .with_min_len(1024)
+            .for_each(per_rotation);
     } else {
-        expressive.chunks_mut(4).zip(recovered.chunks_mut(4)).zip(activities.iter_mut()).enumerate().for_each(per_rotation);
+        expressive
+            .chunks_mut(4)
+            .zip(recovered.chunks_mut(4))
+            .zip(activities.iter_mut())
+            .enumerate()
+            .for_each(per_rotation);
     }
     Ok((expressive, recovered, activities))
 }
@@ -92,7 +112,10 @@ pub fn decouple(original: &[f64], body: &[f64], gain: f64, exponent: f64) -> Res
 pub fn compose(expressive: &[f64], body: &[f64], scale: f64) -> Result<Vec<f64>> {
     check_pair("body", expressive, body)?;
     if !scale.is_finite() {
-        return Err(KernelError::argument("scale", format!("must be a finite number, got {scale}")));
+        return Err(KernelError::argument(
+            "scale",
+            format!("must be a finite number, got {scale}"),
+        ));
     }
     let mut out = vec![0.0; body.len()];
     let per_rotation = |(i, dst): (usize, &mut [f64])| {
@@ -104,7 +127,10 @@ pub fn compose(expressive: &[f64], body: &[f64], scale: f64) -> Result<Vec<f64>>
         (e * b).write_to_slice(dst);
     };
     if body.len() / 4 >= PARALLEL_MIN_ITEMS {
-        out.par_chunks_mut(4).enumerate().with_min_len(1024).for_each(per_rotation);
+        out.par_chunks_mut(4)
+            .enumerate()
+            .with_min_len(1024)
+            .for_each(per_rotation);
     } else {
         out.chunks_mut(4).enumerate().for_each(per_rotation);
     }

@@ -14,14 +14,19 @@ pub enum KernelError {
 
 impl KernelError {
     pub(crate) fn argument(name: &'static str, message: impl Into<String>) -> Self {
-        Self::Argument { name, message: message.into() }
+        Self::Argument {
+            name,
+            message: message.into(),
+        }
     }
 }
 
 impl fmt::Display for KernelError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Parse { line, message } => write!(f, "line {} of the MOTION block: {message}", line + 1),
+            Self::Parse { line, message } => {
+                write!(f, "line {} of the MOTION block: {message}", line + 1)
+            }
             Self::Argument { name, message } => write!(f, "argument `{name}`: {message}"),
         }
     }
@@ -31,11 +36,7 @@ impl std::error::Error for KernelError {}
 
 pub type Result<T> = std::result::Result<T, KernelError>;
 
-/// Element types whose all-zero bit pattern is the value zero (or `false`).
-pub trait Zeroable: Copy {}
-impl Zeroable for f64 {}
-impl Zeroable for f32 {}
-impl Zeroable for bool {}
+pub use crate::zeroable::Zeroable;
 
 /// `len` zeros for an output array, or an error naming `name` when that many do not fit in
 /// memory: a caller's shapes (e.g. a huge frame count with no channels, or a layer of a
@@ -47,7 +48,12 @@ impl Zeroable for bool {}
 /// `KernelError::Argument` when `len` elements overflow or cannot be allocated.
 #[allow(clippy::same_length_and_capacity)] // the allocation holds exactly `len` zeroed elements
 pub fn zeros<T: Zeroable>(name: &'static str, len: usize) -> Result<Vec<T>> {
-    let too_big = || KernelError::argument(name, format!("the output of {len} values does not fit in memory"));
+    let too_big = || {
+        KernelError::argument(
+            name,
+            format!("the output of {len} values does not fit in memory"),
+        )
+    };
     if len == 0 || std::mem::size_of::<T>() == 0 {
         return Ok(Vec::new());
     }
@@ -64,10 +70,27 @@ pub fn zeros<T: Zeroable>(name: &'static str, len: usize) -> Result<Vec<T>> {
     }
 }
 
+/// `Ok` when `value` is finite and above 0, else an error naming `name`: the one check of
+/// every positive parameter (frame times, body scale, decoupling gain and exponent).
+///
+/// # Errors
+/// `KernelError::Argument` when `value` is NaN, infinite, zero or negative.
+pub fn positive(name: &'static str, value: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(KernelError::argument(
+            name,
+            format!("must be a positive number, got {value}"),
+        ))
+    }
+}
+
 /// `a * b`, or an error naming `name` when the product overflows.
 ///
 /// # Errors
 /// `KernelError::Argument` on overflow.
 pub fn product(name: &'static str, a: usize, b: usize) -> Result<usize> {
-    a.checked_mul(b).ok_or_else(|| KernelError::argument(name, format!("{a} x {b} elements overflow")))
+    a.checked_mul(b)
+        .ok_or_else(|| KernelError::argument(name, format!("{a} x {b} elements overflow")))
 }

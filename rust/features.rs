@@ -7,7 +7,7 @@
 
 use glam::{DQuat, DVec3};
 
-use crate::error::{KernelError, Result};
+use crate::error::{positive, KernelError, Result};
 use crate::footsteps::air_time;
 
 /// Features per frame.
@@ -38,14 +38,6 @@ pub fn heading_yaw(left: DVec3, right: DVec3) -> Option<f64> {
     (fx.hypot(fz) > 1e-9 * across.length()).then(|| fx.atan2(fz))
 }
 
-fn positive(name: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(KernelError::argument(name, format!("must be positive, got {value}")))
-    }
-}
-
 /// Features `[F, 19]` per frame, each from frames `<= t` only.
 ///
 /// `points` `[F, 3, 3]`: world positions of the hips, left and right upper leg; `thighs`
@@ -59,19 +51,37 @@ fn positive(name: &'static str, value: f64) -> Result<()> {
 /// # Errors
 /// `KernelError::Argument` naming the argument whose length disagrees with `points` or whose
 /// value is out of range.
-pub fn dynamic_features(points: &[f64], thighs: &[f64], contacts: &[bool], reference: &[f64], params: &FeatureParams) -> Result<Vec<f64>> {
+pub fn dynamic_features(
+    points: &[f64],
+    thighs: &[f64],
+    contacts: &[bool],
+    reference: &[f64],
+    params: &FeatureParams,
+) -> Result<Vec<f64>> {
     if points.len() % 9 != 0 {
-        return Err(KernelError::argument("points", format!("length {} is not frames x 3 joints x 3", points.len())));
+        return Err(KernelError::argument(
+            "points",
+            format!("length {} is not frames x 3 joints x 3", points.len()),
+        ));
     }
     let frames = points.len() / 9;
     if thighs.len() != frames * 8 {
-        return Err(KernelError::argument("thighs", format!("expected {frames} x 2 x 4 values, got {}", thighs.len())));
+        return Err(KernelError::argument(
+            "thighs",
+            format!("expected {frames} x 2 x 4 values, got {}", thighs.len()),
+        ));
     }
     if contacts.len() != frames * 2 {
-        return Err(KernelError::argument("contacts", format!("expected {frames} x 2 values, got {}", contacts.len())));
+        return Err(KernelError::argument(
+            "contacts",
+            format!("expected {frames} x 2 values, got {}", contacts.len()),
+        ));
     }
     if reference.len() != 8 {
-        return Err(KernelError::argument("reference", format!("expected 2 x 4 values, got {}", reference.len())));
+        return Err(KernelError::argument(
+            "reference",
+            format!("expected 2 x 4 values, got {}", reference.len()),
+        ));
     }
     positive("frame_time", params.frame_time)?;
     positive("height", params.height)?;
@@ -80,7 +90,10 @@ pub fn dynamic_features(points: &[f64], thighs: &[f64], contacts: &[bool], refer
         return Err(KernelError::argument("window", "must be at least 1"));
     }
     let air = air_time(contacts, 2, params.frame_time)?;
-    let references = [DQuat::from_slice(&reference[..4]), DQuat::from_slice(&reference[4..])];
+    let references = [
+        DQuat::from_slice(&reference[..4]),
+        DQuat::from_slice(&reference[4..]),
+    ];
     let point = |t: usize, k: usize| DVec3::from_slice(&points[9 * t + 3 * k..][..3]);
 
     let mut out = vec![0.0; frames * N_FEATURES];
@@ -88,7 +101,11 @@ pub fn dynamic_features(points: &[f64], thighs: &[f64], contacts: &[bool], refer
     let (mut yaw, mut sum) = (0.0, DVec3::ZERO);
     for (t, row) in out.chunks_mut(N_FEATURES).enumerate() {
         yaw = heading_yaw(point(t, 1), point(t, 2)).unwrap_or(yaw);
-        let world = if t == 0 { DVec3::ZERO } else { (point(t, 0) - point(t - 1, 0)) / params.frame_time / params.height };
+        let world = if t == 0 {
+            DVec3::ZERO
+        } else {
+            (point(t, 0) - point(t - 1, 0)) / params.frame_time / params.height
+        };
         let velocity = DQuat::from_rotation_y(-yaw) * world;
         // Running sum over the last `window` frames.
         velocities.push(velocity);
@@ -115,7 +132,13 @@ pub fn dynamic_features(points: &[f64], thighs: &[f64], contacts: &[bool], refer
 mod tests {
     use super::*;
 
-    const PARAMS: FeatureParams = FeatureParams { frame_time: 0.5, height: 2.0, hips_rest_height: 4.0, floor: 1.0, window: 2 };
+    const PARAMS: FeatureParams = FeatureParams {
+        frame_time: 0.5,
+        height: 2.0,
+        hips_rest_height: 4.0,
+        floor: 1.0,
+        window: 2,
+    };
 
     /// Hips moving along `step` each frame, upper legs facing along `facing`.
     fn walk(frames: usize, step: DVec3, left: DVec3) -> Vec<f64> {
@@ -144,25 +167,60 @@ mod tests {
         }
         assert!((row(1)[5] - 0.5).abs() < 1e-12, "mean of frames 0 and 1");
         assert!((row(2)[10] - 1.0).abs() < 1e-12, "(5 - 1) / 4");
-        assert!((row(3)[8] - 2.0).abs() < 1e-12, "air time of the 4th frame in flight");
+        assert!(
+            (row(3)[8] - 2.0).abs() < 1e-12,
+            "air time of the 4th frame in flight"
+        );
     }
 
     #[test]
     fn thighs_are_kept_on_the_reference_hemisphere() {
         let flipped = [0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0, 0.0];
         let reference = [0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0, 0.0];
-        let out = dynamic_features(&walk(1, DVec3::X, DVec3::X), &flipped, &[true; 2], &reference, &PARAMS).unwrap();
+        let out = dynamic_features(
+            &walk(1, DVec3::X, DVec3::X),
+            &flipped,
+            &[true; 2],
+            &reference,
+            &PARAMS,
+        )
+        .unwrap();
         assert_eq!(&out[11..19], &[0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0, 0.0]);
     }
 
     #[test]
     fn rejects_bad_arguments() {
-        let ok = (walk(2, DVec3::X, DVec3::X), vec![0.0; 16], vec![false; 4], vec![0.0; 8]);
+        let ok = (
+            walk(2, DVec3::X, DVec3::X),
+            vec![0.0; 16],
+            vec![false; 4],
+            vec![0.0; 8],
+        );
         assert!(dynamic_features(&ok.0[1..], &ok.1, &ok.2, &ok.3, &PARAMS).is_err());
         assert!(dynamic_features(&ok.0, &ok.1[1..], &ok.2, &ok.3, &PARAMS).is_err());
         assert!(dynamic_features(&ok.0, &ok.1, &ok.2[1..], &ok.3, &PARAMS).is_err());
         assert!(dynamic_features(&ok.0, &ok.1, &ok.2, &ok.3[1..], &PARAMS).is_err());
-        assert!(dynamic_features(&ok.0, &ok.1, &ok.2, &ok.3, &FeatureParams { window: 0, ..PARAMS }).is_err());
-        assert!(dynamic_features(&ok.0, &ok.1, &ok.2, &ok.3, &FeatureParams { height: f64::NAN, ..PARAMS }).is_err());
+        assert!(dynamic_features(
+            &ok.0,
+            &ok.1,
+            &ok.2,
+            &ok.3,
+            &FeatureParams {
+                window: 0,
+                ..PARAMS
+            }
+        )
+        .is_err());
+        assert!(dynamic_features(
+            &ok.0,
+            &ok.1,
+            &ok.2,
+            &ok.3,
+            &FeatureParams {
+                height: f64::NAN,
+                ..PARAMS
+            }
+        )
+        .is_err());
     }
 }

@@ -33,22 +33,40 @@ pub fn check_parents(parents: &[i64]) -> Result<()> {
 ///
 /// # Errors
 /// `KernelError::Argument` when the lengths do not match `parents` or `parents` is not ordered.
-pub fn forward_kinematics(rotations: &[f64], translations: &[f64], parents: &[i64]) -> Result<(Vec<f64>, Vec<f64>)> {
+pub fn forward_kinematics(
+    rotations: &[f64],
+    translations: &[f64],
+    parents: &[i64],
+) -> Result<(Vec<f64>, Vec<f64>)> {
     check_parents(parents)?;
     let joints = parents.len();
     if joints == 0 || rotations.len() % (4 * joints) != 0 {
-        return Err(KernelError::argument("rotations", format!("length {} is not frames x {joints} joints x 4", rotations.len())));
+        return Err(KernelError::argument(
+            "rotations",
+            format!(
+                "length {} is not frames x {joints} joints x 4",
+                rotations.len()
+            ),
+        ));
     }
     let frames = rotations.len() / (4 * joints);
     if translations.len() != frames * joints * 3 {
-        return Err(KernelError::argument("translations", format!("expected {frames} x {joints} x 3 values, got {}", translations.len())));
+        return Err(KernelError::argument(
+            "translations",
+            format!(
+                "expected {frames} x {joints} x 3 values, got {}",
+                translations.len()
+            ),
+        ));
     }
     let mut world_rotations = vec![0.0; rotations.len()];
     let mut world_positions = vec![0.0; translations.len()];
     let frame = |(((rot, trans), out_rot), out_pos): FrameSlices| {
         fk_frame(rot, trans, parents, out_rot, out_pos);
     };
-    let inputs = rotations.chunks(4 * joints).zip(translations.chunks(3 * joints));
+    let inputs = rotations
+        .chunks(4 * joints)
+        .zip(translations.chunks(3 * joints));
     if frames * joints >= PARALLEL_MIN_ITEMS {
         rotations
             .par_chunks(4 * joints)
@@ -58,7 +76,10 @@ pub fn forward_kinematics(rotations: &[f64], translations: &[f64], parents: &[i6
             .with_min_len(32)
             .for_each(frame);
     } else {
-        inputs.zip(world_rotations.chunks_mut(4 * joints)).zip(world_positions.chunks_mut(3 * joints)).for_each(frame);
+        inputs
+            .zip(world_rotations.chunks_mut(4 * joints))
+            .zip(world_positions.chunks_mut(3 * joints))
+            .for_each(frame);
     }
     Ok((world_rotations, world_positions))
 }
@@ -92,7 +113,10 @@ mod tests {
         let trans = [1.0, 0.0, 0.0, 2.0, 0.0, 0.0];
         let (wr, wp) = forward_kinematics(&rot, &trans, &[-1, 0]).unwrap();
         let child = DVec3::from_slice(&wp[3..6]);
-        assert!((child - DVec3::new(1.0, 2.0, 0.0)).length() < 1e-12, "{child}");
+        assert!(
+            (child - DVec3::new(1.0, 2.0, 0.0)).length() < 1e-12,
+            "{child}"
+        );
         assert!((wr[6] - s).abs() < 1e-12);
     }
 

@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 
-use crate::error::{product, zeros, KernelError, Result};
+use crate::error::{positive, product, zeros, KernelError, Result};
 
 /// How contacts are detected and filtered. Lengths in the positions' units.
 #[derive(Debug, Clone, Copy)]
@@ -23,14 +23,6 @@ pub struct ContactParams {
     pub causal: bool,
 }
 
-fn check_frame_time(frame_time: f64) -> Result<()> {
-    if frame_time.is_finite() && frame_time > 0.0 {
-        Ok(())
-    } else {
-        Err(KernelError::argument("frame_time", format!("must be a positive number of seconds, got {frame_time}")))
-    }
-}
-
 /// Contact flags `[F, S]` of `feet` feet from world positions `positions` `[F, S, P, 3]` of
 /// `points` points per foot (ankle, toe).
 ///
@@ -42,12 +34,23 @@ fn check_frame_time(frame_time: f64) -> Result<()> {
 /// # Errors
 /// `KernelError::Argument` when the length is not a multiple of `feet x points x 3`, either
 /// count is 0, `frame_time` is not positive or `min_frames` is 0.
-pub fn foot_contacts(positions: &[f64], feet: usize, points: usize, params: &ContactParams) -> Result<Vec<bool>> {
+pub fn foot_contacts(
+    positions: &[f64],
+    feet: usize,
+    points: usize,
+    params: &ContactParams,
+) -> Result<Vec<bool>> {
     let per_frame = product("feet", product("feet", feet, points)?, 3)?;
     if per_frame == 0 || positions.len() % per_frame != 0 {
-        return Err(KernelError::argument("feet", format!("length {} is not frames x {feet} feet x {points} points x 3", positions.len())));
+        return Err(KernelError::argument(
+            "feet",
+            format!(
+                "length {} is not frames x {feet} feet x {points} points x 3",
+                positions.len()
+            ),
+        ));
     }
-    check_frame_time(params.frame_time)?;
+    positive("frame_time", params.frame_time)?;
     if params.min_frames == 0 {
         return Err(KernelError::argument("min_frames", "must be at least 1"));
     }
@@ -57,7 +60,9 @@ pub fn foot_contacts(positions: &[f64], feet: usize, points: usize, params: &Con
         // `cargo fuzz`: the loop below ran once per foot).
         return Ok(Vec::new());
     }
-    let point = |t: usize, s: usize, p: usize| DVec3::from_slice(&positions[((t * feet + s) * points + p) * 3..][..3]);
+    let point = |t: usize, s: usize, p: usize| {
+        DVec3::from_slice(&positions[((t * feet + s) * points + p) * 3..][..3])
+    };
     let speed = |t: usize, s: usize, p: usize| match t {
         0 if params.causal || frames < 2 => 0.0,
         0 => point(1, s, p).distance(point(0, s, p)) / params.frame_time,
@@ -66,7 +71,12 @@ pub fn foot_contacts(positions: &[f64], feet: usize, points: usize, params: &Con
     let mut contacts = zeros("feet", frames * feet)?;
     for s in 0..feet {
         let mut raw: Vec<bool> = (0..frames)
-            .map(|t| (0..points).any(|p| point(t, s, p).y - params.floor < params.height_threshold && speed(t, s, p) < params.speed_threshold))
+            .map(|t| {
+                (0..points).any(|p| {
+                    point(t, s, p).y - params.floor < params.height_threshold
+                        && speed(t, s, p) < params.speed_threshold
+                })
+            })
             .collect();
         if params.causal {
             hold_filter(&mut raw, params.min_frames);
@@ -94,7 +104,9 @@ pub fn absorb_short_runs(signal: &mut [bool], min_frames: usize) {
     }
     while runs.len() >= 3 {
         // The shortest interior run; min_by_key keeps the first of equal minima.
-        let Some(i) = (1..runs.len() - 1).min_by_key(|&i| runs[i].1) else { break };
+        let Some(i) = (1..runs.len() - 1).min_by_key(|&i| runs[i].1) else {
+            break;
+        };
         if runs[i].1 >= min_frames {
             break;
         }
@@ -135,9 +147,12 @@ pub fn hold_filter(signal: &mut [bool], min_frames: usize) {
 /// not positive.
 pub fn air_time(contacts: &[bool], feet: usize, frame_time: f64) -> Result<Vec<f64>> {
     if feet == 0 || contacts.len() % feet != 0 {
-        return Err(KernelError::argument("contacts", format!("length {} is not frames x {feet} feet", contacts.len())));
+        return Err(KernelError::argument(
+            "contacts",
+            format!("length {} is not frames x {feet} feet", contacts.len()),
+        ));
     }
-    check_frame_time(frame_time)?;
+    positive("frame_time", frame_time)?;
     let mut out = zeros("contacts", contacts.len())?;
     // Frames since the last contact, per foot (`feet` <= the length unless there are no frames).
     let mut since = vec![0_usize; if contacts.is_empty() { 0 } else { feet }];
@@ -186,10 +201,23 @@ mod tests {
         // One foot, one point, high up but still on frames 20..=29 (speed 0 from 20 to 29).
         let mut positions = Vec::new();
         for t in 0..50 {
-            let x = f64::from(if t < 19 { t } else if t <= 29 { 19 } else { t - 10 });
+            let x = f64::from(if t < 19 {
+                t
+            } else if t <= 29 {
+                19
+            } else {
+                t - 10
+            });
             positions.extend([x, 0.0, 0.0]);
         }
-        let params = ContactParams { frame_time: 0.1, floor: 0.0, height_threshold: 1.0, speed_threshold: 1.0, min_frames: 3, causal: false };
+        let params = ContactParams {
+            frame_time: 0.1,
+            floor: 0.0,
+            height_threshold: 1.0,
+            speed_threshold: 1.0,
+            min_frames: 3,
+            causal: false,
+        };
         let contacts = foot_contacts(&positions, 1, 1, &params).unwrap();
         let frames: Vec<usize> = (0..50).filter(|&t| contacts[t]).collect();
         assert_eq!(frames, (20..30).collect::<Vec<_>>());
@@ -197,21 +225,56 @@ mod tests {
 
     #[test]
     fn rejects_bad_arguments() {
-        let params = ContactParams { frame_time: 0.1, floor: 0.0, height_threshold: 1.0, speed_threshold: 1.0, min_frames: 3, causal: false };
+        let params = ContactParams {
+            frame_time: 0.1,
+            floor: 0.0,
+            height_threshold: 1.0,
+            speed_threshold: 1.0,
+            min_frames: 3,
+            causal: false,
+        };
         assert!(foot_contacts(&[0.0; 7], 1, 1, &params).is_err());
         assert!(foot_contacts(&[0.0; 6], 0, 1, &params).is_err());
-        assert!(foot_contacts(&[0.0; 6], 1, 1, &ContactParams { min_frames: 0, ..params }).is_err());
-        assert!(foot_contacts(&[0.0; 6], 1, 1, &ContactParams { frame_time: 0.0, ..params }).is_err());
+        assert!(foot_contacts(
+            &[0.0; 6],
+            1,
+            1,
+            &ContactParams {
+                min_frames: 0,
+                ..params
+            }
+        )
+        .is_err());
+        assert!(foot_contacts(
+            &[0.0; 6],
+            1,
+            1,
+            &ContactParams {
+                frame_time: 0.0,
+                ..params
+            }
+        )
+        .is_err());
         assert!(air_time(&[true; 3], 2, 0.1).is_err());
     }
 
     #[test]
     fn overflowing_counts_are_errors() {
-        let params = ContactParams { frame_time: 0.1, floor: 0.0, height_threshold: 1.0, speed_threshold: 1.0, min_frames: 3, causal: false };
+        let params = ContactParams {
+            frame_time: 0.1,
+            floor: 0.0,
+            height_threshold: 1.0,
+            speed_threshold: 1.0,
+            min_frames: 3,
+            causal: false,
+        };
         assert!(foot_contacts(&[0.0; 6], usize::MAX / 2 + 1, 2, &params).is_err());
         assert!(foot_contacts(&[0.0; 6], 1 << 62, 1 << 62, &params).is_err());
         // No frames of a huge number of feet: nothing to allocate or loop over per foot.
         assert_eq!(air_time(&[], usize::MAX, 0.1).unwrap(), Vec::<f64>::new());
-        assert_eq!(foot_contacts(&[], 1 << 61, 1, &params).unwrap(), Vec::<bool>::new());
+        assert_eq!(
+            foot_contacts(&[], 1 << 61, 1, &params).unwrap(),
+            Vec::<bool>::new()
+        );
     }
 }

@@ -13,12 +13,30 @@ use crate::error::{KernelError, Result};
 /// # Errors
 /// `KernelError::Argument` when `values` is not a multiple of `channels` long or holds a
 /// non-finite number.
-pub fn format_motion_block(values: &[f64], channels: usize, decimals: Option<usize>) -> Result<String> {
+pub fn format_motion_block(
+    values: &[f64],
+    channels: usize,
+    decimals: Option<usize>,
+) -> Result<String> {
     if channels == 0 || values.len() % channels != 0 {
-        return Err(KernelError::argument("values", format!("length {} is not a multiple of {channels} channels", values.len())));
+        return Err(KernelError::argument(
+            "values",
+            format!(
+                "length {} is not a multiple of {channels} channels",
+                values.len()
+            ),
+        ));
     }
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        return Err(KernelError::argument("values", format!("frame {}, channel {} is {}", i / channels, i % channels, values[i])));
+        return Err(KernelError::argument(
+            "values",
+            format!(
+                "frame {}, channel {} is {}",
+                i / channels,
+                i % channels,
+                values[i]
+            ),
+        ));
     }
     let lines: Vec<String> = values
         .par_chunks(channels)
@@ -58,7 +76,10 @@ mod tests {
 
     #[test]
     fn fixed_decimals() {
-        assert_eq!(format_motion_block(&[1.0, -0.25], 2, Some(3)).unwrap(), "1.000 -0.250\n");
+        assert_eq!(
+            format_motion_block(&[1.0, -0.25], 2, Some(3)).unwrap(),
+            "1.000 -0.250\n"
+        );
         assert!(format_motion_block(&[f64::NAN], 1, None).is_err());
     }
 }

@@ -4,7 +4,7 @@
 //! operations in Python is what lets `expressive-mocap preprocess` keep both cores busy on an
 //! archive of short clips (the Python per-clip work holds the GIL).
 
-use crate::error::{KernelError, Result};
+use crate::error::{positive, KernelError, Result};
 use crate::features::{dynamic_features, FeatureParams};
 use crate::footsteps::{foot_contacts, ContactParams};
 
@@ -63,7 +63,11 @@ fn percentile(values: &mut [f64], q: f64) -> f64 {
     let below = rank.floor() as usize;
     let above = (below + 1).min(values.len() - 1);
     let (_, &mut low, rest) = values.select_nth_unstable_by(below, f64::total_cmp);
-    let high = if above == below { low } else { rest.iter().copied().min_by(f64::total_cmp).unwrap_or(low) };
+    let high = if above == below {
+        low
+    } else {
+        rest.iter().copied().min_by(f64::total_cmp).unwrap_or(low)
+    };
     let t = rank - below as f64;
     if t >= 0.5 {
         high - (high - low) * (1.0 - t)
@@ -82,7 +86,10 @@ fn check_index(name: &'static str, index: usize, joints: usize) -> Result<()> {
     if index < joints {
         Ok(())
     } else {
-        Err(KernelError::argument(name, format!("joint {index} out of range for {joints} joints")))
+        Err(KernelError::argument(
+            name,
+            format!("joint {index} out of range for {joints} joints"),
+        ))
     }
 }
 
@@ -93,6 +100,7 @@ fn check_index(name: &'static str, index: usize, joints: usize) -> Result<()> {
 /// `KernelError::Argument` when the lengths disagree with `joints`, a joint index is out of
 /// range, or a parameter is out of range (see the two kernels).
 #[allow(clippy::too_many_arguments)]
+#[allow(clippy::too_many_lines)] // one sequence: checks, floor, contacts, features of one clip
 pub fn clip_gait(
     positions: &[f64],
     rotations: &[f64],
@@ -106,39 +114,68 @@ pub fn clip_gait(
 ) -> Result<ClipGait> {
     let per_frame = joints.checked_mul(3).filter(|&n| n > 0);
     let Some(per_frame) = per_frame.filter(|&n| positions.len() % n == 0) else {
-        return Err(KernelError::argument("positions", format!("length {} is not frames x {joints} joints x 3", positions.len())));
+        return Err(KernelError::argument(
+            "positions",
+            format!(
+                "length {} is not frames x {joints} joints x 3",
+                positions.len()
+            ),
+        ));
     };
     let n_frames = positions.len() / per_frame;
     if rotations.len() / 4 != n_frames * joints || rotations.len() % 4 != 0 {
-        return Err(KernelError::argument("rotations", format!("expected {n_frames} x {joints} x 4 values, got {}", rotations.len())));
+        return Err(KernelError::argument(
+            "rotations",
+            format!(
+                "expected {n_frames} x {joints} x 4 values, got {}",
+                rotations.len()
+            ),
+        ));
     }
-    for (name, index) in [("hips", roles.hips), ("upper_legs", roles.upper_legs[0]), ("upper_legs", roles.upper_legs[1])] {
+    for (name, index) in [
+        ("hips", roles.hips),
+        ("upper_legs", roles.upper_legs[0]),
+        ("upper_legs", roles.upper_legs[1]),
+    ] {
         check_index(name, index, joints)?;
     }
-    for (name, index) in [("feet", roles.feet[0]), ("feet", roles.feet[1]), ("toes", roles.toes[0]), ("toes", roles.toes[1])] {
+    for (name, index) in [
+        ("feet", roles.feet[0]),
+        ("feet", roles.feet[1]),
+        ("toes", roles.toes[0]),
+        ("toes", roles.toes[1]),
+    ] {
         check_index(name, index, joints)?;
     }
-    if !(frame_time.is_finite() && frame_time > 0.0) {
-        return Err(KernelError::argument("frame_time", format!("must be a positive number of seconds, got {frame_time}")));
-    }
+    positive("frame_time", frame_time)?;
     if !(0.0..=100.0).contains(&params.floor_percentile) {
-        return Err(KernelError::argument("floor_percentile", format!("must be within 0 and 100, got {}", params.floor_percentile)));
+        return Err(KernelError::argument(
+            "floor_percentile",
+            format!("must be within 0 and 100, got {}", params.floor_percentile),
+        ));
     }
     if n_frames == 0 {
-        return Ok(ClipGait { features: features.map(|_| Vec::new()), contacts: contacts.then(Vec::new) });
+        return Ok(ClipGait {
+            features: features.map(|_| Vec::new()),
+            contacts: contacts.then(Vec::new),
+        });
     }
     let point = |t: usize, j: usize| &positions[(t * joints + j) * 3..][..3];
     let mut toe_floor = None;
     let mut floor_of = |wanted: Option<f64>| {
         wanted.unwrap_or_else(|| {
             *toe_floor.get_or_insert_with(|| {
-                let mut heights: Vec<f64> = (0..n_frames).flat_map(|t| roles.toes.map(|j| point(t, j)[1])).collect();
+                let mut heights: Vec<f64> = (0..n_frames)
+                    .flat_map(|t| roles.toes.map(|j| point(t, j)[1]))
+                    .collect();
                 percentile(&mut heights, params.floor_percentile)
             })
         })
     };
     let feet: Vec<f64> = (0..n_frames)
-        .flat_map(|t| [roles.feet[0], roles.toes[0], roles.feet[1], roles.toes[1]].map(|j| point(t, j)))
+        .flat_map(|t| {
+            [roles.feet[0], roles.toes[0], roles.feet[1], roles.toes[1]].map(|j| point(t, j))
+        })
         .flatten()
         .copied()
         .collect();
@@ -153,15 +190,29 @@ pub fn clip_gait(
 
     let mut out = ClipGait::default();
     if contacts {
-        out.contacts = Some(foot_contacts(&feet, 2, 2, &contact_params(floor_of(None), false))?);
+        out.contacts = Some(foot_contacts(
+            &feet,
+            2,
+            2,
+            &contact_params(floor_of(None), false),
+        )?);
     }
     if let Some(request) = features {
         let floor = floor_of(request.floor);
         let causal_contacts = foot_contacts(&feet, 2, 2, &contact_params(floor, true))?;
-        let points: Vec<f64> =
-            (0..n_frames).flat_map(|t| [roles.hips, roles.upper_legs[0], roles.upper_legs[1]].map(|j| point(t, j))).flatten().copied().collect();
+        let points: Vec<f64> = (0..n_frames)
+            .flat_map(|t| {
+                [roles.hips, roles.upper_legs[0], roles.upper_legs[1]].map(|j| point(t, j))
+            })
+            .flatten()
+            .copied()
+            .collect();
         let thigh = |t: usize, j: usize| &rotations[(t * joints + j) * 4..][..4];
-        let thighs: Vec<f64> = (0..n_frames).flat_map(|t| roles.upper_legs.map(|j| thigh(t, j))).flatten().copied().collect();
+        let thighs: Vec<f64> = (0..n_frames)
+            .flat_map(|t| roles.upper_legs.map(|j| thigh(t, j)))
+            .flatten()
+            .copied()
+            .collect();
         let reference = request.thigh_reference.unwrap_or_else(|| {
             let mut first = [0.0; 8];
             first.copy_from_slice(&thighs[..8]);
@@ -174,7 +225,13 @@ pub fn clip_gait(
             floor,
             window: at_least_one_frame(1.0 / frame_time / 3.0),
         };
-        out.features = Some(dynamic_features(&points, &thighs, &causal_contacts, &reference, &feature_params)?);
+        out.features = Some(dynamic_features(
+            &points,
+            &thighs,
+            &causal_contacts,
+            &reference,
+            &feature_params,
+        )?);
     }
     Ok(out)
 }
@@ -203,23 +260,116 @@ mod tests {
 
     #[test]
     fn bad_shapes_and_indices_are_errors() {
-        let roles = GaitJoints { hips: 0, upper_legs: [1, 2], feet: [3, 4], toes: [5, 6] };
-        let scale = BodyScale { height: 1.0, hips_rest_height: 0.5 };
-        let params = GaitParams { height_threshold: 0.1, speed_threshold: 1.0, min_duration: 0.1, floor_percentile: 5.0 };
+        let roles = GaitJoints {
+            hips: 0,
+            upper_legs: [1, 2],
+            feet: [3, 4],
+            toes: [5, 6],
+        };
+        let scale = BodyScale {
+            height: 1.0,
+            hips_rest_height: 0.5,
+        };
+        let params = GaitParams {
+            height_threshold: 0.1,
+            speed_threshold: 1.0,
+            min_duration: 0.1,
+            floor_percentile: 5.0,
+        };
         let positions = vec![0.0; 2 * 7 * 3];
         let rotations = vec![0.0; 2 * 7 * 4];
-        assert!(clip_gait(&positions, &rotations, 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_ok());
-        assert!(clip_gait(&positions[..20], &rotations, 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
-        assert!(clip_gait(&positions, &rotations[..20], 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
+        assert!(clip_gait(
+            &positions,
+            &rotations,
+            7,
+            1.0 / 30.0,
+            scale,
+            &roles,
+            &params,
+            None,
+            true
+        )
+        .is_ok());
+        assert!(clip_gait(
+            &positions[..20],
+            &rotations,
+            7,
+            1.0 / 30.0,
+            scale,
+            &roles,
+            &params,
+            None,
+            true
+        )
+        .is_err());
+        assert!(clip_gait(
+            &positions,
+            &rotations[..20],
+            7,
+            1.0 / 30.0,
+            scale,
+            &roles,
+            &params,
+            None,
+            true
+        )
+        .is_err());
         let empty = clip_gait(&[], &[], 7, 1.0 / 30.0, scale, &roles, &params, None, true).unwrap();
-        assert_eq!(empty, ClipGait { features: None, contacts: Some(Vec::new()) });
-        let far = GaitJoints { toes: [5, 7], ..roles };
-        assert!(clip_gait(&positions, &rotations, 7, 1.0 / 30.0, scale, &far, &params, None, true).is_err());
-        assert!(clip_gait(&positions, &rotations, 7, 0.0, scale, &roles, &params, None, true).is_err());
-        assert!(clip_gait(&positions, &rotations, usize::MAX, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
+        assert_eq!(
+            empty,
+            ClipGait {
+                features: None,
+                contacts: Some(Vec::new())
+            }
+        );
+        let far = GaitJoints {
+            toes: [5, 7],
+            ..roles
+        };
+        assert!(clip_gait(
+            &positions,
+            &rotations,
+            7,
+            1.0 / 30.0,
+            scale,
+            &far,
+            &params,
+            None,
+            true
+        )
+        .is_err());
+        assert!(
+            clip_gait(&positions, &rotations, 7, 0.0, scale, &roles, &params, None, true).is_err()
+        );
+        assert!(clip_gait(
+            &positions,
+            &rotations,
+            usize::MAX,
+            1.0 / 30.0,
+            scale,
+            &roles,
+            &params,
+            None,
+            true
+        )
+        .is_err());
         for q in [f64::NAN, -1.0, 100.5] {
-            let params = GaitParams { floor_percentile: q, ..params };
-            assert!(clip_gait(&positions, &rotations, 7, 1.0 / 30.0, scale, &roles, &params, None, true).is_err());
+            let params = GaitParams {
+                floor_percentile: q,
+                ..params
+            };
+            assert!(clip_gait(
+                &positions,
+                &rotations,
+                7,
+                1.0 / 30.0,
+                scale,
+                &roles,
+                &params,
+                None,
+                true
+            )
+            .is_err());
         }
     }
 }

@@ -7,12 +7,13 @@ pub mod decouple;
 pub mod error;
 pub mod features;
 pub mod fk;
-pub mod gait;
 pub mod footsteps;
 pub mod format;
+pub mod gait;
 pub mod mlp;
 pub mod parse;
 pub mod rotations;
+pub mod zeroable;
 
 #[cfg(feature = "python")]
 mod py;

@@ -52,12 +52,20 @@ pub fn parse_motion_block(block: &[u8], frames: usize, channels: usize) -> Resul
 /// `KernelError::Parse` naming the 0-based line within `block` of the first problem: a token
 /// that is not a number, a NaN or infinite number, a line with the wrong number of values, a
 /// frame line beyond `frames`, or (at the last line) fewer than `frames` frame lines.
-pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, sink: &S) -> Result<(Vec<f64>, Vec<f64>)> {
+pub fn parse_frames<S: FrameSink>(
+    block: &[u8],
+    frames: usize,
+    channels: usize,
+    sink: &S,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let (w0, w1) = sink.widths();
     if channels == 0 {
         // A skeleton without channels has blank frame lines; every frame decodes the same.
         if let Some(line) = lines(block).position(|l| !is_blank(l)) {
-            return Err(KernelError::Parse { line, message: "expected 0 values (the hierarchy has no CHANNELS)".into() });
+            return Err(KernelError::Parse {
+                line,
+                message: "expected 0 values (the hierarchy has no CHANNELS)".into(),
+            });
         }
         // Still one (blank) line a frame: Frames cannot claim more than the block has.
         let found = lines(block).count();
@@ -66,7 +74,11 @@ pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, 
         }
         let (mut first, mut second) = outputs(frames, w0, w1)?;
         for f in 0..frames {
-            sink.emit(&[], &mut first[f * w0..(f + 1) * w0], &mut second[f * w1..(f + 1) * w1]);
+            sink.emit(
+                &[],
+                &mut first[f * w0..(f + 1) * w0],
+                &mut second[f * w1..(f + 1) * w1],
+            );
         }
         return Ok((first, second));
     }
@@ -78,7 +90,8 @@ pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, 
     // frames, so that a bad line after them is still reached and named, as the NumPy twin does.
     let room = frames.min(block.len() / channels.saturating_mul(2) + 1);
     let (mut first, mut second) = outputs(room, w0, w1)?;
-    let end = parse_chunk(block, channels, room, sink, &mut first, &mut second).map_err(|(line, message)| KernelError::Parse { line, message })?;
+    let end = parse_chunk(block, channels, room, sink, &mut first, &mut second)
+        .map_err(|(line, message)| KernelError::Parse { line, message })?;
     if end.frames < frames {
         return Err(truncated(block, frames, end.frames));
     }
@@ -90,7 +103,12 @@ pub fn parse_frames<S: FrameSink>(block: &[u8], frames: usize, channels: usize, 
 
 /// A large block: count frame lines per chunk first, so each chunk knows which frames of the
 /// outputs are its own, then parse the chunks on all threads.
-fn parse_in_parallel<S: FrameSink>(block: &[u8], frames: usize, channels: usize, sink: &S) -> Result<(Vec<f64>, Vec<f64>)> {
+fn parse_in_parallel<S: FrameSink>(
+    block: &[u8],
+    frames: usize,
+    channels: usize,
+    sink: &S,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let (w0, w1) = sink.widths();
     let chunks = split_at_lines(block, rayon::current_num_threads() * 4);
     let counts: Vec<(usize, usize)> = chunks.par_iter().map(|c| count_lines(c)).collect();
@@ -113,7 +131,12 @@ fn parse_in_parallel<S: FrameSink>(block: &[u8], frames: usize, channels: usize,
     let results: Vec<Result<ChunkEnd>> = jobs
         .into_par_iter()
         .map(|(chunk, first_line, take, out0, out1)| {
-            parse_chunk(chunk, channels, take, sink, out0, out1).map_err(|(line, message)| KernelError::Parse { line: first_line + line, message })
+            parse_chunk(chunk, channels, take, sink, out0, out1).map_err(|(line, message)| {
+                KernelError::Parse {
+                    line: first_line + line,
+                    message,
+                }
+            })
         })
         .collect();
     // The first problem in line order wins: chunks are in line order.
@@ -129,7 +152,10 @@ fn parse_in_parallel<S: FrameSink>(block: &[u8], frames: usize, channels: usize,
 
 /// The two zeroed outputs of `frames` frames of `w0` and `w1` numbers.
 fn outputs(frames: usize, w0: usize, w1: usize) -> Result<(Vec<f64>, Vec<f64>)> {
-    Ok((zeros("frames", product("frames", frames, w0)?)?, zeros("frames", product("frames", frames, w1)?)?))
+    Ok((
+        zeros("frames", product("frames", frames, w0)?)?,
+        zeros("frames", product("frames", frames, w1)?)?,
+    ))
 }
 
 /// Split into about `parts` pieces, each ending just after a newline (the last at the end).
@@ -175,14 +201,23 @@ fn truncated(block: &[u8], frames: usize, found: usize) -> KernelError {
     let last_line = newlines + usize::from(!block.is_empty() && !block.ends_with(b"\n"));
     KernelError::Parse {
         line: last_line.saturating_sub(1),
-        message: format!("truncated MOTION block: Frames says {frames}, but only {found} frame lines follow"),
+        message: format!(
+            "truncated MOTION block: Frames says {frames}, but only {found} frame lines follow"
+        ),
     }
 }
 
 /// Error: more frame lines than `Frames` says. Points at frame `frames + 1`.
 fn too_many_frames(block: &[u8], frames: usize) -> KernelError {
-    let line = lines(block).enumerate().filter(|(_, l)| !is_blank(l)).nth(frames).map_or(0, |(i, _)| i);
-    KernelError::Parse { line, message: format!("more frame lines than Frames says ({frames})") }
+    let line = lines(block)
+        .enumerate()
+        .filter(|(_, l)| !is_blank(l))
+        .nth(frames)
+        .map_or(0, |(i, _)| i);
+    KernelError::Parse {
+        line,
+        message: format!("more frame lines than Frames says ({frames})"),
+    }
 }
 
 fn is_blank(line: &[u8]) -> bool {
@@ -225,7 +260,13 @@ fn parse_chunk<S: FrameSink>(
             match fast_float2::parse_partial::<f64, _>(rest) {
                 Ok((v, used)) if rest.get(used).is_none_or(u8::is_ascii_whitespace) => {
                     if !v.is_finite() {
-                        return Err((line, format!("{} is not a finite number (NaN and infinity are not allowed)", show(token_at(rest)))));
+                        return Err((
+                            line,
+                            format!(
+                                "{} is not a finite number (NaN and infinity are not allowed)",
+                                show(token_at(rest))
+                            ),
+                        ));
                     }
                     values.push(v);
                     i += used;
@@ -235,18 +276,34 @@ fn parse_chunk<S: FrameSink>(
         }
         if !values.is_empty() {
             if values.len() != channels {
-                return Err((line, format!("expected {channels} values (the CHANNELS of the hierarchy), found {}", values.len())));
+                return Err((
+                    line,
+                    format!(
+                        "expected {channels} values (the CHANNELS of the hierarchy), found {}",
+                        values.len()
+                    ),
+                ));
             }
-            sink.emit(&values, &mut out0[frame * w0..(frame + 1) * w0], &mut out1[frame * w1..(frame + 1) * w1]);
+            sink.emit(
+                &values,
+                &mut out0[frame * w0..(frame + 1) * w0],
+                &mut out1[frame * w1..(frame + 1) * w1],
+            );
             frame += 1;
         }
         line += 1;
     }
-    Ok(ChunkEnd { frames: frame, offset: i.min(chunk.len()) })
+    Ok(ChunkEnd {
+        frames: frame,
+        offset: i.min(chunk.len()),
+    })
 }
 
 fn token_at(rest: &[u8]) -> &[u8] {
-    &rest[..rest.iter().position(u8::is_ascii_whitespace).unwrap_or(rest.len())]
+    &rest[..rest
+        .iter()
+        .position(u8::is_ascii_whitespace)
+        .unwrap_or(rest.len())]
 }
 
 /// Bytes of a token shown in an error message: a 1 MB token must not make a 1 MB message.
@@ -297,16 +354,34 @@ mod tests {
 
     #[test]
     fn rejects_nan_wrong_counts_and_truncation() {
-        assert!(matches!(parse_motion_block(b"1 nan\n", 1, 2), Err(KernelError::Parse { line: 0, .. })));
-        assert!(matches!(parse_motion_block(b"1 2\n3\n", 2, 2), Err(KernelError::Parse { line: 1, .. })));
-        assert!(matches!(parse_motion_block(b"1 2\n", 2, 2), Err(KernelError::Parse { line: 0, .. })));
-        assert!(matches!(parse_motion_block(b"1 2\n3 4\n", 1, 2), Err(KernelError::Parse { line: 1, .. })));
+        assert!(matches!(
+            parse_motion_block(b"1 nan\n", 1, 2),
+            Err(KernelError::Parse { line: 0, .. })
+        ));
+        assert!(matches!(
+            parse_motion_block(b"1 2\n3\n", 2, 2),
+            Err(KernelError::Parse { line: 1, .. })
+        ));
+        assert!(matches!(
+            parse_motion_block(b"1 2\n", 2, 2),
+            Err(KernelError::Parse { line: 0, .. })
+        ));
+        assert!(matches!(
+            parse_motion_block(b"1 2\n3 4\n", 1, 2),
+            Err(KernelError::Parse { line: 1, .. })
+        ));
     }
 
     #[test]
     fn no_channels_means_blank_frame_lines() {
-        assert_eq!(parse_motion_block(b"\n\n", 2, 0).unwrap(), Vec::<f64>::new());
-        assert!(matches!(parse_motion_block(b"\n1\n", 2, 0), Err(KernelError::Parse { line: 1, .. })));
+        assert_eq!(
+            parse_motion_block(b"\n\n", 2, 0).unwrap(),
+            Vec::<f64>::new()
+        );
+        assert!(matches!(
+            parse_motion_block(b"\n1\n", 2, 0),
+            Err(KernelError::Parse { line: 1, .. })
+        ));
     }
 
     #[test]
@@ -325,9 +400,18 @@ mod tests {
         let lines = text.lines().count();
         text.push_str("1 2 oops\n");
         let e = parse_motion_block(text.as_bytes(), 60_001, 3).unwrap_err();
-        assert_eq!(e, KernelError::Parse { line: lines, message: "'oops' is not a number".into() });
+        assert_eq!(
+            e,
+            KernelError::Parse {
+                line: lines,
+                message: "'oops' is not a number".into()
+            }
+        );
         let e = parse_motion_block(text.as_bytes(), 59_000, 3).unwrap_err();
-        assert!(matches!(e, KernelError::Parse { line, .. } if line == 59_000 + 59), "{e:?}");
+        assert!(
+            matches!(e, KernelError::Parse { line, .. } if line == 59_000 + 59),
+            "{e:?}"
+        );
     }
 
     #[test]
@@ -337,25 +421,42 @@ mod tests {
         block.extend_from_slice(b"x\n");
         let e = parse_motion_block(&block, 1, 2).unwrap_err();
         let expected = format!("'{}'... (1048577 bytes) is not a number", "7".repeat(40));
-        assert_eq!(e, KernelError::Parse { line: 0, message: expected });
-        assert_eq!(show(b"a\x0bb\x1b\xc2\x85\xe2\x80\xa8\xff"), "'a\\x0bb\\x1b\\x85\\u2028\u{fffd}'");
+        assert_eq!(
+            e,
+            KernelError::Parse {
+                line: 0,
+                message: expected
+            }
+        );
+        assert_eq!(
+            show(b"a\x0bb\x1b\xc2\x85\xe2\x80\xa8\xff"),
+            "'a\\x0bb\\x1b\\x85\\u2028\u{fffd}'"
+        );
     }
 
     #[test]
     fn absurd_counts_are_refused_without_allocating() {
         // Found by `cargo fuzz` (motion_block): Vec::with_capacity(channels) panicked.
         assert!(parse_motion_block(b"1 2\n", 1, usize::MAX).is_err());
-        assert!(parse_motion_block(b"", 0, usize::MAX / 2 + 1).unwrap().is_empty());
+        assert!(parse_motion_block(b"", 0, usize::MAX / 2 + 1)
+            .unwrap()
+            .is_empty());
         // No channels: one blank line a frame, so Frames cannot claim more lines than there are.
         let e = parse_motion_block(b"\n\n", usize::MAX, 0).unwrap_err();
         assert!(e.to_string().contains("truncated"), "{e}");
-        assert_eq!(parse_motion_block(b"\n\n", 3, 0).unwrap(), Vec::<f64>::new());
+        assert_eq!(
+            parse_motion_block(b"\n\n", 3, 0).unwrap(),
+            Vec::<f64>::new()
+        );
     }
 
     #[test]
     fn a_short_line_is_named_even_when_frames_claims_more_than_the_block_holds() {
         // Found by benches/fuzz_bvh.py --compare: a tighter allocation bound stopped before line 0.
         let e = parse_motion_block(b"1.5 91.0\n2", 4, 6).unwrap_err();
-        assert!(matches!(e, KernelError::Parse { line: 0, ref message } if message.contains("expected 6 values")), "{e:?}");
+        assert!(
+            matches!(e, KernelError::Parse { line: 0, ref message } if message.contains("expected 6 values")),
+            "{e:?}"
+        );
     }
 }

@@ -23,7 +23,10 @@ pub fn check_orders(orders: &[Order]) -> Result<()> {
         let mut seen = [false; 3];
         for &axis in order {
             if axis > 2 || seen[axis as usize] {
-                return Err(KernelError::argument("orders", format!("joint {joint}: {order:?} is not a permutation of the axes 0, 1, 2")));
+                return Err(KernelError::argument(
+                    "orders",
+                    format!("joint {joint}: {order:?} is not a permutation of the axes 0, 1, 2"),
+                ));
             }
             seen[axis as usize] = true;
         }
@@ -90,7 +93,13 @@ pub fn euler_to_quat(angles: &[f64], orders: &[Order]) -> Result<Vec<f64>> {
     check_orders(orders)?;
     let joints = orders.len();
     if joints == 0 || angles.len() % (3 * joints) != 0 {
-        return Err(KernelError::argument("angles", format!("length {} is not frames x {joints} joints x 3", angles.len())));
+        return Err(KernelError::argument(
+            "angles",
+            format!(
+                "length {} is not frames x {joints} joints x 3",
+                angles.len()
+            ),
+        ));
     }
     let mut out = vec![0.0; angles.len() / 3 * 4];
     let frame = |(src, dst): (&[f64], &mut [f64])| {
@@ -111,7 +120,10 @@ pub fn quat_to_euler(quats: &[f64], orders: &[Order]) -> Result<Vec<f64>> {
     check_orders(orders)?;
     let joints = orders.len();
     if joints == 0 || quats.len() % (4 * joints) != 0 {
-        return Err(KernelError::argument("quats", format!("length {} is not frames x {joints} joints x 4", quats.len())));
+        return Err(KernelError::argument(
+            "quats",
+            format!("length {} is not frames x {joints} joints x 4", quats.len()),
+        ));
     }
     let mut out = vec![0.0; quats.len() / 4 * 3];
     let frame = |(src, dst): (&[f64], &mut [f64])| {
@@ -125,15 +137,25 @@ pub fn quat_to_euler(quats: &[f64], orders: &[Order]) -> Result<Vec<f64>> {
 }
 
 /// Run `per_frame` over matching frame slices of `src` and `dst`, in parallel when large.
-pub(crate) fn zip_frames<F>(src: &[f64], src_stride: usize, dst: &mut [f64], dst_stride: usize, per_frame: F)
-where
+pub(crate) fn zip_frames<F>(
+    src: &[f64],
+    src_stride: usize,
+    dst: &mut [f64],
+    dst_stride: usize,
+    per_frame: F,
+) where
     F: Fn((&[f64], &mut [f64])) + Sync + Send,
 {
     // About three values a joint: parallel once there are PARALLEL_MIN_ITEMS joint-frames.
     if src.len() >= 3 * PARALLEL_MIN_ITEMS {
-        src.par_chunks(src_stride).zip(dst.par_chunks_mut(dst_stride)).with_min_len(64).for_each(per_frame);
+        src.par_chunks(src_stride)
+            .zip(dst.par_chunks_mut(dst_stride))
+            .with_min_len(64)
+            .for_each(per_frame);
     } else {
-        src.chunks(src_stride).zip(dst.chunks_mut(dst_stride)).for_each(per_frame);
+        src.chunks(src_stride)
+            .zip(dst.chunks_mut(dst_stride))
+            .for_each(per_frame);
     }
 }
 
@@ -142,12 +164,24 @@ mod tests {
     use super::*;
     use glam::DVec3;
 
-    const ORDERS: [Order; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+    const ORDERS: [Order; 6] = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
 
     #[test]
     fn euler_round_trips_for_every_order_including_gimbal_lock() {
         for order in ORDERS {
-            for angles in [[10.0, 20.0, 30.0], [-170.0, 89.0, 45.0], [33.0, 90.0, 12.0], [5.0, -90.0, -60.0]] {
+            for angles in [
+                [10.0, 20.0, 30.0],
+                [-170.0, 89.0, 45.0],
+                [33.0, 90.0, 12.0],
+                [5.0, -90.0, -60.0],
+            ] {
                 let q = euler_to_quat_one(angles, order);
                 let back = euler_to_quat_one(quat_to_euler_one(q, order), order);
                 assert!(q.dot(back).abs() > 1.0 - 1e-12, "{order:?} {angles:?}");
@@ -164,7 +198,11 @@ mod tests {
 
     #[test]
     fn a_non_finite_quaternion_gives_three_nans() {
-        let e = quat_to_euler(&[f64::NAN, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, f64::INFINITY], &[[2, 0, 1]]).unwrap();
+        let e = quat_to_euler(
+            &[f64::NAN, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, f64::INFINITY],
+            &[[2, 0, 1]],
+        )
+        .unwrap();
         assert!(e.iter().all(|v| v.is_nan()), "{e:?}");
     }
 

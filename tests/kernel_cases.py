@@ -5,6 +5,8 @@ names of its array arguments."""
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from expressive_mocap import ops
+
 RNG = np.random.default_rng(7)
 
 
@@ -41,9 +43,11 @@ def pipeline_args(frames, joints=3):
     """Two clips of ``frames`` frames (MOTION text with positions on the root), every output asked for."""
     rotation_columns, orders, position_columns, offsets = layout(joints)
     block = b"".join(b" ".join(b"%.4f" % v for v in RNG.normal(scale=20, size=3 + 3 * joints)) + b"\n" for _ in range(frames))
-    clip = (block, 0, frames, 3 + 3 * joints, rotation_columns, orders, position_columns, offsets, 1 / 30, 1.7, 0.9)
-    requests = [(0.0, None), (None, quats(2))]
-    return ([clip, clip], np.arange(joints) - 1, [0, 1, 2, 1, 2, 2, 1], 0.05, 0.5, 0.1, 5.0, True, True, requests, True, False)
+    channels = ops.ChannelLayout(3 + 3 * joints, rotation_columns, orders, position_columns, offsets)
+    clip = ops.ClipInput(block, 0, frames, channels, 1 / 30, 1.7, 0.9)
+    requests = (ops.FeatureRequest(0.0), ops.FeatureRequest(None, quats(2)))
+    outputs = ops.PipelineOutputs(positions=True, rotations=True, features=requests, contacts=True)
+    return ([clip, clip], np.arange(joints) - 1, [0, 1, 2, 1, 2, 2, 1], ops.GaitSettings(0.05, 0.5, 0.1, 5.0), outputs)
 
 
 # Name -> (arguments for F frames, names of the array arguments by position; None: not an array).
@@ -51,7 +55,7 @@ CORE = {
     "parse_motion_block": (lambda f: (b"1 2 3\n" * f, 0, f, 3), []),
     "format_motion_block": (lambda f: (RNG.normal(size=(f, 3)),), ["values"]),
     "decode_channels": (lambda f: (RNG.normal(size=(f, 12)), *layout(3)), ["values", "rotation_columns", "orders", "position_columns", "offsets"]),
-    "read_motion_blocks": (lambda f: ([(b"1 2 3\n" * f, 0, f, 3, np.array([[0, 1, 2]]), *layout(1)[1:])],), []),
+    "read_motion_blocks": (lambda f: ([ops.MotionBlock(b"1 2 3\n" * f, 0, f, ops.ChannelLayout(3, np.array([[0, 1, 2]]), *layout(1)[1:]))],), []),
     "euler_to_quat": (lambda f: (RNG.normal(size=(f, 3, 3)), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))), ["angles", "orders"]),
     "quat_to_euler": (lambda f: (quats(f, 3), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))), ["quats", "orders"]),
     "forward_kinematics": (lambda f: (quats(f, 3), RNG.normal(size=(f, 3, 3)), np.array([-1, 0, 1])), ["rotations", "translations", "parents"]),

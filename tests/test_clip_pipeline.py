@@ -2,6 +2,7 @@
 ``rust/clip.rs`` and its NumPy twin), and headers read from a file's beginning
 (``bvh.read_header``), which the Rust kernel then reads whole."""
 
+import dataclasses
 import errno
 import os
 
@@ -12,21 +13,20 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap import bvh, reference
-from expressive_mocap.backend import kernels
+from expressive_mocap import ops
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
 
-GAIT = (HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
+GAIT = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
 
 
 def pipeline_input(source, data: bytes):
-    """``clip_pipeline_many``'s per-clip tuple, parents and gait joints for a clip whose text is ``data``."""
+    """``clip_pipeline_many``'s per-clip input, parents and gait joints for a clip whose text is ``data``."""
     header = bvh.parse_header(data, "clip")
     skeleton = header.skeleton
     roles = JointRoles.find(skeleton)
-    clip = (source, header.block_start, header.frames, skeleton.n_channels, *skeleton.layout(), skeleton.offsets,
-            header.frame_time, actor_height(skeleton, roles), hips_rest_height(skeleton, roles))
+    clip = ops.ClipInput.of(source, header, actor_height(skeleton, roles), hips_rest_height(skeleton, roles))
     return clip, np.ascontiguousarray(skeleton.parents, dtype=np.int64), roles.gait_joints
 
 
@@ -47,8 +47,9 @@ def run(module, walks, float32=False, by_path=True):
     for path, data in walks:
         clip, parents, joints = pipeline_input(str(path) if by_path else data, data)
         clips.append(clip)
-    requests = [(0.0, None), (None, np.array([[0, 0, 0, 1.0], [0, 0, 0, 1.0]]))]
-    return module.clip_pipeline_many(clips, parents, joints, *GAIT, True, True, requests, True, float32)
+    requests = (ops.FeatureRequest(0.0), ops.FeatureRequest(None, np.array([[0, 0, 0, 1.0], [0, 0, 0, 1.0]])))
+    outputs = ops.PipelineOutputs(positions=True, rotations=True, features=requests, contacts=True, float32=float32)
+    return module.clip_pipeline_many(clips, parents, joints, gait=GAIT, outputs=outputs)
 
 
 def test_the_numpy_twin_is_the_package_per_clip(walks):
@@ -79,9 +80,9 @@ def test_rust_matches_its_twin_and_the_kernels_one_by_one(walks, by_path, float3
         np.testing.assert_array_equal(got[3], expected[3])
         if not float32:  # the same Rust kernels called one by one: the same numbers, bit for bit
             clip, parents, joints = pipeline_input(data, data)
-            ((local, translations),) = core.read_motion_blocks([clip[:8]])
+            ((local, translations),) = core.read_motion_blocks([ops.MotionBlock(data, clip.start, clip.frames, clip.layout)])
             ((_, world),) = core.forward_kinematics_many([(local, translations, parents)])
-            gait = core.clip_gait_many([(world, local, *clip[8:])], joints, *GAIT, True, True, 0.0)
+            gait = core.clip_gait_many([(world, local, clip.frame_time, clip.height, clip.hips_rest_height)], joints, *GAIT, True, True, 0.0)
             np.testing.assert_array_equal(got[0], world)
             np.testing.assert_array_equal(got[1], local)
             np.testing.assert_array_equal(got[2][0], gait[0][0])
@@ -91,23 +92,25 @@ def test_rust_matches_its_twin_and_the_kernels_one_by_one(walks, by_path, float3
 def test_a_bad_block_and_a_missing_file_are_that_clips_result(walks, tmp_path, backend):
     path, data = walks[0]
     clip, parents, joints = pipeline_input(data, data)
-    block = data[clip[1]:].split(b"\n")
+    block = data[clip.start:].split(b"\n")
     block[2] = block[2].replace(b" ", b" x ", 1)  # the third frame line: not a number
-    broken = (data[: clip[1]] + b"\n".join(block), *clip[1:])
-    missing = (str(tmp_path / "gone.bvh"), *clip[1:])
-    good, bad, gone = kernels().clip_pipeline_many([clip, broken, missing], parents, joints, *GAIT, True, False, [], True, True)
+    broken = dataclasses.replace(clip, source=data[: clip.start] + b"\n".join(block))
+    missing = dataclasses.replace(clip, source=str(tmp_path / "gone.bvh"))
+    outputs = ops.PipelineOutputs(positions=True, contacts=True, float32=True)
+    good, bad, gone = ops.clip_pipeline_many([clip, broken, missing], parents, joints, GAIT, outputs)
     assert isinstance(good, tuple) and good[1] is None and good[2] == []
-    assert isinstance(bad, em.backend.PARSE_ERRORS) and bad.args == ("'x' is not a number", 2)
+    assert isinstance(bad, em.errors.ParseError) and bad.args == ("'x' is not a number", 2)
     assert isinstance(gone, OSError) and (gone.errno, gone.strerror) == (errno.ENOENT, os.strerror(errno.ENOENT))
 
 
 def test_the_body_scale_and_roles_must_fit_the_skeleton(walks, backend):
     path, data = walks[0]
     clip, parents, joints = pipeline_input(data, data)
-    with pytest.raises(ValueError, match="`toes`"):
-        kernels().clip_pipeline_many([clip], parents, joints[:6] + [99], *GAIT, True, False, [], True, False)
-    with pytest.raises(ValueError, match="`roles`"):
-        kernels().clip_pipeline_many([clip], parents, joints[:6], *GAIT, True, False, [], True, False)
+    outputs = ops.PipelineOutputs(positions=True, contacts=True)
+    with pytest.raises(em.errors.ArgumentError, match="`toes`"):
+        ops.clip_pipeline_many([clip], parents, joints[:6] + [99], GAIT, outputs)
+    with pytest.raises(em.errors.ArgumentError, match="`roles`"):
+        ops.clip_pipeline_many([clip], parents, joints[:6], GAIT, outputs)
 
 
 # ----------------------------------------------------------------------------- read_header

@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap import quat, reference
-from expressive_mocap.backend import kernels
+from expressive_mocap import ops
 from expressive_mocap.demo import bandai_like_skeleton, procedural_walk
 from expressive_mocap.features import FEATURE_NAMES, default_floor, dynamic_features
 from expressive_mocap.quat import mean_rotation
@@ -273,8 +273,8 @@ def test_kernel_errors_name_the_argument(backend, name):
         "hips_rest_height": float("nan"),
         "window": 0,
     }[name]
-    with pytest.raises(ValueError, match=f"`{name}`"):
-        kernels().dynamic_features(*arguments.values())
+    with pytest.raises(em.errors.ArgumentError, match=f"`{name}`"):
+        ops.dynamic_features(*arguments.values())
 
 
 # -- many clips at once (what preprocess uses) ----------------------------------------------
@@ -339,13 +339,13 @@ def test_gait_many_asks_only_for_what_is_wanted_and_names_bad_input(backend):
         em.gait_many([walk], fk=[])
     with pytest.raises(em.MocapError, match="`thigh_reference`"):
         em.gait_many([walk], thigh_reference=np.zeros(4))
-    with pytest.raises(ValueError, match="`roles`"):
-        kernels().clip_gait_many([], [0, 1], 0.05, 0.5, 0.1, 5.0, True, True)
+    with pytest.raises(em.errors.ArgumentError, match="`roles`"):
+        ops.clip_gait_many([], [0, 1], ops.GaitSettings(0.05, 0.5, 0.1, 5.0), features=True, contacts=True)
     positions = walk.positions()
-    with pytest.raises(ValueError, match="clip 0"):
-        kernels().clip_gait_many([(positions, walk.rotations[:, :3], walk.frame_time, 140.0, 90.0)], [0] * 7, 0.05, 0.5, 0.1, 5.0, True, True)
+    with pytest.raises(em.errors.ArgumentError, match="clip 0"):
+        ops.clip_gait_many([(positions, walk.rotations[:, :3], walk.frame_time, 140.0, 90.0)], [0] * 7, ops.GaitSettings(0.05, 0.5, 0.1, 5.0), features=True, contacts=True)
     if em.get_backend() == "rust":  # a strided array is named, as by every Rust kernel (the twin takes it)
         with pytest.raises(TypeError, match="`clips`"):
-            kernels().clip_gait_many([(np.asfortranarray(positions), walk.rotations, walk.frame_time, 140.0, 90.0)], [0] * 7, 0.05, 0.5, 0.1, 5.0, True, True)
-    with pytest.raises(ValueError, match="clip 0.*`toes`"):
-        kernels().clip_gait_many([(positions, walk.rotations, walk.frame_time, 140.0, 90.0)], [0, 1, 2, 3, 4, 5, 99], 0.05, 0.5, 0.1, 5.0, True, True)
+            ops.clip_gait_many([(np.asfortranarray(positions), walk.rotations, walk.frame_time, 140.0, 90.0)], [0] * 7, ops.GaitSettings(0.05, 0.5, 0.1, 5.0), features=True, contacts=True)
+    with pytest.raises(em.errors.ArgumentError, match="clip 0.*`toes`"):
+        ops.clip_gait_many([(positions, walk.rotations, walk.frame_time, 140.0, 90.0)], [0, 1, 2, 3, 4, 5, 99], ops.GaitSettings(0.05, 0.5, 0.1, 5.0), features=True, contacts=True)

@@ -60,11 +60,11 @@ def test_matches_scipy_on_real_clips(backend, bandai2_dir, bandai1_dir):
 def test_parents_and_shapes_are_checked(backend):
     q = np.tile([0.0, 0, 0, 1], (1, 2, 1))
     t = np.zeros((1, 2, 3))
-    with pytest.raises(ValueError, match="parents"):
+    with pytest.raises(em.errors.ArgumentError, match="parents"):
         em.forward_kinematics(q, t, [1, -1])
-    with pytest.raises(ValueError, match="translations"):
+    with pytest.raises(em.errors.ArgumentError, match="translations"):
         em.forward_kinematics(q, np.zeros((2, 2, 3)), [-1, 0])
-    with pytest.raises(ValueError, match="rotations"):
+    with pytest.raises(em.errors.ArgumentError, match="rotations"):
         em.forward_kinematics(np.zeros((1, 2, 3)), t, [-1, 0])
 
 

@@ -76,19 +76,19 @@ def test_errors_name_the_argument(backend):
     w1, b1 = rng.normal(size=(4, 6)), np.zeros(6)
     w2, b2 = rng.normal(size=(5, 2)), np.zeros(2)
     x = np.zeros((3, 4))
-    with pytest.raises(ValueError, match=r"`x`.*\[N, 4\]"):
+    with pytest.raises(em.errors.ArgumentError, match=r"`x`.*\[N, 4\]"):
         em.mlp_forward(np.zeros((3, 7)), [w1], [b1], ["tanh"])
-    with pytest.raises(ValueError, match="`weights`: layer 1 takes 5 inputs but layer 0 has 6 outputs"):
+    with pytest.raises(em.errors.ArgumentError, match="`weights`: layer 1 takes 5 inputs but layer 0 has 6 outputs"):
         em.mlp_forward(x, [w1, w2], [b1, b2], ["tanh", "linear"])
-    with pytest.raises(ValueError, match="`biases`: layer 0"):
+    with pytest.raises(em.errors.ArgumentError, match="`biases`: layer 0"):
         em.mlp_forward(x, [w1], [np.zeros(5)], ["tanh"])
-    with pytest.raises(ValueError, match="`activations`: layer 0.*'relu'|`activations`: layer 0.*\"relu\""):
+    with pytest.raises(em.errors.ArgumentError, match="`activations`: layer 0.*'relu'|`activations`: layer 0.*\"relu\""):
         em.mlp_forward(x, [w1], [b1], ["relu"])
-    with pytest.raises(ValueError, match="`biases`: expected one for each"):
+    with pytest.raises(em.errors.ArgumentError, match="`biases`: expected one for each"):
         em.mlp_forward(x, [w1], [], ["tanh"])
-    with pytest.raises(ValueError, match="`weights`: layer 0 must be 2-D"):
+    with pytest.raises(em.errors.ArgumentError, match="`weights`: layer 0 must be 2-D"):
         em.mlp_forward(x, [np.zeros(4)], [b1], ["tanh"])
-    with pytest.raises(ValueError, match="`weights`.*at least one layer"):
+    with pytest.raises(em.errors.ArgumentError, match="`weights`.*at least one layer"):
         em.mlp_forward(x, [], [], [])
     with pytest.raises(ArgumentError, match="layer 1 takes 5 inputs but layer 0 has 6 outputs"):
         Mlp([(w1, b1, "tanh"), (w2, b2, "linear")])

@@ -30,10 +30,10 @@ HAMMER = textwrap.dedent(
     """
     import json, sys, threading, time
     import numpy as np
-    from expressive_mocap import _core, bvh, demo, roles as R
+    from expressive_mocap import _core, bvh, demo, ops, roles as R
     from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 
-    GAIT = (HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
+    GAIT = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
 
     def fk_kernels():
         rng = np.random.default_rng(0)
@@ -49,12 +49,12 @@ HAMMER = textwrap.dedent(
         header = bvh.parse_header(data, "walk")
         skeleton = header.skeleton
         roles = R.JointRoles.find(skeleton)
-        clip = (data, header.block_start, header.frames, skeleton.n_channels, *skeleton.layout(), skeleton.offsets,
-                header.frame_time, R.actor_height(skeleton, roles), R.hips_rest_height(skeleton, roles))
+        clip = ops.ClipInput.of(data, header, R.actor_height(skeleton, roles), R.hips_rest_height(skeleton, roles))
+        outputs = ops.PipelineOutputs(positions=True, features=(ops.FeatureRequest(0.0),), contacts=True)
         parents = np.array(skeleton.parents, dtype=np.int64)  # the skeleton's own is read-only
         joint = skeleton.n_joints - 1
         valid = sorted({int(parents[joint]), 0, joint - 1})
-        call = lambda: _core.clip_pipeline_many([clip] * 2, parents, roles.gait_joints, *GAIT, True, False, [(0.0, None)], True, False)
+        call = lambda: _core.clip_pipeline_many([clip] * 2, parents, roles.gait_joints, gait=GAIT, outputs=outputs)
         yield "clip_pipeline_many", parents, joint, valid, call
 
     def flat(result):
@@ -178,7 +178,7 @@ def block_outcomes(token: str) -> list:
     for module in [reference] + ([importlib.import_module("expressive_mocap._core")] if em.rust_available() else []):
         try:
             outcomes.append(float(module.parse_motion_block(data, 0, 1, 1)[0, 0]))
-        except em.backend.PARSE_ERRORS as error:
+        except em.errors.ParseError as error:
             outcomes.append(error.args)
     return outcomes
 

@@ -5,6 +5,7 @@ reading), the run goes on, and Ctrl-C stops a run promptly and leaves it resumab
 
 from __future__ import annotations
 
+import dataclasses
 import errno
 import os
 import signal
@@ -22,13 +23,15 @@ import pytest
 import expressive_mocap as em
 import expressive_mocap.preprocess as preprocess_module
 from expressive_mocap import files as em_io
-from expressive_mocap.backend import kernels
+from expressive_mocap import ops
 from expressive_mocap.cli import main
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.preprocess import load_dataset, preprocess
 
 from test_clip_pipeline import GAIT, pipeline_input
 from test_inputs import _returns_within
+
+POSITIONS = ops.PipelineOutputs(positions=True)
 
 NOT_REGULAR = "not a regular file: only regular files are read"
 
@@ -72,22 +75,21 @@ def test_the_kernel_reads_only_regular_files_within_its_bound(walk, tmp_path, ba
     zero.symlink_to("/dev/zero")
     paths = [good, fifo, zero, tmp_path]
     try:
-        results = _returns_within(10, lambda: kernels().clip_pipeline_many(
-            [(str(p), *clip[1:]) for p in paths], parents, joints, *GAIT, True, False, [], False, False, max_bytes=len(walk)))
+        results = _returns_within(10, lambda: ops.clip_pipeline_many(
+            [dataclasses.replace(clip, source=str(p)) for p in paths], parents, joints, GAIT, POSITIONS, max_bytes=len(walk)))
     finally:
         release(fifo)
     assert isinstance(results[0], tuple)
     for result, kind, code in zip(results[1:], ("a FIFO", "a character device", "a folder"), (errno.EINVAL, errno.EINVAL, errno.EISDIR)):
         assert isinstance(result, OSError) and (result.errno, result.strerror) == (code, f"{kind}, {NOT_REGULAR}")
     # One byte under the file's size: refused before reading, with io.open_input's words.
-    (small,) = kernels().clip_pipeline_many([(str(good), *clip[1:])], parents, joints, *GAIT, True, False, [], False, False,
-                                            max_bytes=len(walk) - 1)
+    (small,) = ops.clip_pipeline_many([dataclasses.replace(clip, source=str(good))], parents, joints, GAIT, POSITIONS, max_bytes=len(walk) - 1)
     assert isinstance(small, OSError) and small.errno == errno.EFBIG
     assert small.strerror == f"{len(walk):,} bytes, more than the {len(walk) - 1:,} bytes read at most"
     # Without max_bytes, the package's bound.
     with open(good, "r+b") as handle:  # sparse: no disk space taken
         handle.truncate(em_io.MAX_INPUT_BYTES + 1)
-    (big,) = kernels().clip_pipeline_many([(str(good), *clip[1:])], parents, joints, *GAIT, True, False, [], False, False)
+    (big,) = ops.clip_pipeline_many([dataclasses.replace(clip, source=str(good))], parents, joints, GAIT, POSITIONS)
     assert isinstance(big, OSError) and "more than the 536,870,912 bytes read at most" in big.strerror
 
 

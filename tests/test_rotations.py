@@ -68,13 +68,13 @@ def test_rust_matches_numpy_twin():
 
 
 def test_bad_arguments_name_the_argument(backend):
-    with pytest.raises(ValueError, match="angles"):
+    with pytest.raises(em.errors.ArgumentError, match="angles"):
         em.euler_to_quat(np.zeros((3, 4)), "XYZ")
     with pytest.raises(em.MocapError, match="rotation order"):
         em.euler_to_quat(np.zeros((1, 1, 3)), "XXY")
-    with pytest.raises(ValueError, match="orders"):
+    with pytest.raises(em.errors.ArgumentError, match="orders"):
         em.euler_to_quat(np.zeros((1, 2, 3)), ["XYZ"])
-    with pytest.raises(ValueError, match="quats"):
+    with pytest.raises(em.errors.ArgumentError, match="quats"):
         em.quat_to_euler(np.zeros((1, 2, 3)), "XYZ")
 
 

@@ -8,7 +8,7 @@ from .backend import get_backend, rust_available, set_backend, use_backend
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .errors import BVHError, MocapError
 from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts, gait_many
-from .kernels import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
+from .ops import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
 from .decoupling.network import Mlp
 from .motion import Motion, Skeleton
 from .roles import JointRoles, actor_height

@@ -24,9 +24,6 @@ except ImportError:  # the extension was not built: NumPy twins only
 ENV_VAR = "EXPRESSIVE_MOCAP_BACKEND"
 BACKENDS = ("auto", "rust", "numpy")
 
-# Both implementations raise their own ParseError(message, line_in_block).
-PARSE_ERRORS: tuple[type[Exception], ...] = (reference.ParseError,) + ((_core.ParseError,) if _core else ())
-
 
 def _checked(name: str, source: str = "set_backend") -> str:
     name = name.strip().lower()

@@ -21,8 +21,8 @@ from typing import BinaryIO, Iterable, Union
 
 import numpy as np
 
-from .backend import PARSE_ERRORS, kernels
-from .errors import BVHError, MocapError
+from . import ops
+from .errors import BVHError, MocapError, ParseError
 from .files import MAX_INPUT_BYTES, atomic_write, open_input, read_input
 from .motion import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton, canonical_channels
 from .tokens import NUMBER_PATTERN, finite_number, shown
@@ -519,8 +519,7 @@ def _batches(sources: Iterable[Source], batch_bytes: int, results: list):
 
 def _decode(batch: list) -> list:
     """The kernel's (rotations, translations) or ParseError for each file of a batch."""
-    blocks = [(data, h.block_start, h.frames, h.skeleton.n_channels, *h.skeleton.layout(), h.skeleton.offsets) for _, _, h, data in batch]
-    return kernels().read_motion_blocks(blocks)
+    return ops.read_motion_blocks([(data, h) for _, _, h, data in batch])
 
 
 def _collect(batch: list, decoded: Future | list, results: list) -> None:
@@ -528,7 +527,7 @@ def _collect(batch: list, decoded: Future | list, results: list) -> None:
     if isinstance(decoded, Future):
         decoded = decoded.result()
     for (index, name, header, _), result in zip(batch, decoded):
-        if isinstance(result, PARSE_ERRORS):
+        if isinstance(result, ParseError):
             results[index] = block_error(name, header, result)
         else:
             results[index] = Motion(header.skeleton, *result, header.frame_time)
@@ -588,7 +587,7 @@ def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
         joint = np.searchsorted(np.cumsum([len(cs) for cs in skeleton.channels]), column, side="right")
         channel = skeleton.channels[joint][column - sum(len(cs) for cs in skeleton.channels[:joint])]
         raise MocapError(f"frame {frame}, {skeleton.names[joint]} {channel} is {values[frame, column]}: a BVH file holds finite numbers only")
-    return header + kernels().format_motion_block(values, decimals)
+    return header + ops.format_motion_block(values, decimals)
 
 
 def write_bvh(motion: Motion, path: str | os.PathLike, decimals: int | None = None) -> None:

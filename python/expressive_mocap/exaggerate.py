@@ -51,7 +51,7 @@ from .features import foot_contacts, footstrikes
 from .quat import mean_rotation
 from .ik import two_bone_ik
 from .files import atomic_write, check_keys, finite_array, read_model_file
-from .kernels import euler_to_quat, forward_kinematics, quat_to_euler
+from .ops import euler_to_quat, forward_kinematics, quat_to_euler
 from .motion import Motion, Skeleton
 from .roles import JointRoles, actor_height, facing_yaw
 

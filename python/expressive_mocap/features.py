@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .backend import kernels
+from . import ops
 from .errors import MocapError
 from .motion import Motion
 from .quat import mean_rotation
@@ -92,7 +92,7 @@ def _floor(floor, positions: np.ndarray, roles: JointRoles, causal: bool) -> flo
 
 def _contacts(motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration) -> np.ndarray:
     feet = positions[:, [[roles.feet[0], roles.toes[0]], [roles.feet[1], roles.toes[1]]]]
-    return kernels().foot_contacts(
+    return ops.foot_contacts(
         np.ascontiguousarray(feet),
         motion.frame_time,
         floor,
@@ -151,7 +151,7 @@ def air_time(contacts, frame_time: float) -> np.ndarray:
     contacts = np.asarray(contacts)
     if contacts.ndim != 2 or contacts.dtype.kind not in "biu":
         raise MocapError(f"argument `contacts`: expected flags [F, S] (bool or 0/1), got {contacts.dtype} of shape {list(contacts.shape)}")
-    return kernels().air_time(np.ascontiguousarray(contacts, dtype=bool), _positive("frame_time", frame_time))
+    return ops.air_time(np.ascontiguousarray(contacts, dtype=bool), _positive("frame_time", frame_time))
 
 
 def contact_intervals(contacts, frame_time: float) -> list:
@@ -231,7 +231,7 @@ def dynamic_features(
     thighs = np.ascontiguousarray(motion.rotations[:, list(roles.upper_legs)])
     reference = _thigh_reference(thigh_reference, thighs, causal)
     window = max(1, int(round(motion.fps / 3)))
-    return kernels().dynamic_features(
+    return ops.dynamic_features(
         points, thighs, contacts, reference, motion.frame_time, height, hips_rest_height(motion.skeleton, roles), floor, window
     )
 
@@ -277,9 +277,9 @@ def gait_many(
     for motion, (_, positions) in zip(motions, fk):
         skeleton = motion.skeleton
         clips.append((positions, motion.rotations, motion.frame_time, actor_height(skeleton, roles), hips_rest_height(skeleton, roles)))
-    return kernels().clip_gait_many(
-        clips, roles.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE, features, contacts,
-        None if floor is None else float(floor), thigh_reference,
+    return ops.clip_gait_many(
+        clips, roles.gait_joints, ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE), features=features,
+        contacts=contacts, feature_floor=None if floor is None else float(floor), thigh_reference=thigh_reference,
     )
 
 

@@ -15,7 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
-from . import kernels, quat
+from . import ops, quat
 from .errors import MocapError
 from .rotations import AXES, ORDERS, axes_of, order_name
 from .tokens import shown
@@ -169,12 +169,12 @@ class Skeleton:
 
     def decode(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``."""
-        return kernels.decode_channels(values, *_layout(self.channels), self.offsets)
+        return ops.decode_channels(values, *_layout(self.channels), self.offsets)
 
     def encode(self, rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:
         """Local rotations and translations -> channel values ``[F, C]`` (the inverse of :meth:`decode`)."""
         rot_cols, orders, pos_cols = _layout(self.channels)
-        angles = _prefer_written_axes(kernels.quat_to_euler(rotations, orders), rot_cols >= 0)
+        angles = _prefer_written_axes(ops.quat_to_euler(rotations, orders), rot_cols >= 0)
         values = np.zeros((len(rotations), self.n_channels))
         values[:, rot_cols[rot_cols >= 0]] = angles[:, rot_cols >= 0]
         values[:, pos_cols[pos_cols >= 0]] = translations[:, pos_cols >= 0]
@@ -237,7 +237,7 @@ class Skeleton:
         # Cached: the skeleton is immutable, and archives ask for it once per clip, several times.
         identity = np.zeros((1, self.n_joints, 4))
         identity[..., 3] = 1.0
-        _, positions = kernels.forward_kinematics(identity, self.offsets[None], self.parents)
+        _, positions = ops.forward_kinematics(identity, self.offsets[None], self.parents)
         joints = positions[0]
         sites = np.array([joints[j] + off for j, off in self.end_sites]).reshape(-1, 3)
         return _frozen(joints), _frozen(sites)
@@ -320,18 +320,18 @@ class Motion:
         order (or ``order``); ``translations`` default to the rest offsets."""
         angles = np.asarray(angles, dtype=np.float64)
         orders = skeleton.euler_orders if order is None else order
-        rotations = kernels.euler_to_quat(angles, orders)
+        rotations = ops.euler_to_quat(angles, orders)
         if translations is None:
             translations = np.broadcast_to(skeleton.offsets, angles.shape[:2] + (3,))
         return cls(skeleton, rotations, translations, frame_time)
 
     def to_euler(self, order: str | Sequence[str] | None = None) -> np.ndarray:
         """Euler angles ``[F, J, 3]`` in degrees, in each joint's own rotation order (or ``order``)."""
-        return kernels.quat_to_euler(self.rotations, self.skeleton.euler_orders if order is None else order)
+        return ops.quat_to_euler(self.rotations, self.skeleton.euler_orders if order is None else order)
 
     def fk(self) -> tuple[np.ndarray, np.ndarray]:
         """World rotations ``[F, J, 4]`` and positions ``[F, J, 3]`` of every joint."""
-        return kernels.forward_kinematics(self.rotations, self.translations, self.skeleton.parents)
+        return ops.forward_kinematics(self.rotations, self.translations, self.skeleton.parents)
 
     def positions(self) -> np.ndarray:
         """World positions ``[F, J, 3]`` of every joint, in file units."""

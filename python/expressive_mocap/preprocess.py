@@ -79,7 +79,8 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from .backend import get_backend, kernels
+from . import ops
+from .backend import get_backend
 from .bvh import block_error, parse_header, read_error, read_header
 from .dataset import (FORMAT, JOURNAL, KINDS, MANIFEST, OFFSETS, PARTIAL, RUN, VERSION, Dataset, FolderLock, data_file,
                       file_record, finished_manifest, load_dataset, read_manifest, remove_dataset, remove_partial, verify)
@@ -88,7 +89,7 @@ from .decoupling.algebra import EXPONENT, GAIN
 from .features import FEATURE_NAMES, FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from . import files as inputs
 from .files import atomic_write
-from .kernels import decouple_rotations
+from .ops import decouple_rotations
 from .progress import Progress
 from .roles import JointRoles, actor_height, hips_rest_height
 
@@ -852,10 +853,7 @@ def _prepare(batch: list[_Item], keep: tuple[str, ...], model) -> _Prepared:
             continue
         # Without features or contacts the gait joints and body scale are not used.
         scale = (lambda s: (actor_height(s, roles), hips_rest_height(s, roles))) if roles else (lambda s: (1.0, 1.0))
-        clips = [
-            (text, h.block_start, h.frames, h.skeleton.n_channels, *h.skeleton.layout(), h.skeleton.offsets, h.frame_time, *scale(h.skeleton))
-            for _, h, text in members
-        ]
+        clips = [ops.ClipInput.of(text, h, *scale(h.skeleton)) for _, h, text in members]
         gait_joints = roles.gait_joints if roles else [0] * 7
         groups.append(_Group([k for k, _, _ in members], [h for _, h, _ in members], clips,
                              np.ascontiguousarray(skeleton.parents, dtype=np.int64), gait_joints))
@@ -872,13 +870,14 @@ def _kernels(batch: list[_Item], prepared: _Prepared, keep: tuple[str, ...], mod
     requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
     kept = []  # (index, local rotations, model features) of each clip for the model
     for group in prepared.groups:
-        results = kernels().clip_pipeline_many(
-            group.clips, group.parents, group.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE,
-            "positions" in keep, "rotations" in keep or use_model, requests, "contacts" in keep, not use_model,
+        results = ops.clip_pipeline_many(
+            group.clips, group.parents, group.gait_joints, ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE),
+            ops.PipelineOutputs(positions="positions" in keep, rotations="rotations" in keep or use_model,
+                                features=tuple(ops.FeatureRequest(*r) for r in requests), contacts="contacts" in keep, float32=not use_model),
             max_bytes=inputs.MAX_INPUT_BYTES,
         )
         for k, header, clip, result in zip(group.indices, group.headers, group.clips, results):
-            if isinstance(clip[0], str) and not isinstance(result, OSError):  # the kernel read the file whole
+            if isinstance(clip.source, str) and not isinstance(result, OSError):  # the kernel read the file whole
                 outcomes[k]["bytes"] = batch[k].size
             if isinstance(result, Exception):
                 outcomes[k]["error"] = str(_clip_error(batch[k], header, result))

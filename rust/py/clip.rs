@@ -2,14 +2,15 @@
 
 use std::path::PathBuf;
 
-use numpy::ndarray::{Array, Dimension, Ix2, Ix3};
+use numpy::ndarray::{Dimension, Ix2, Ix3};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList};
 
-use super::features::{array2, gait_joints, thigh_reference_values};
-use super::{owned_indices, to_py, OwnedLayout};
+use super::decode::{LayoutArgs, OwnedLayout};
+use super::gait::{gait_joints, thigh_reference_values, GaitArgs};
+use super::{array, owned_indices};
 use crate::clip::{clip_outputs, read_input, ClipInput, ClipOutputs, ClipRequest, ReadError};
 use crate::error::KernelError;
 use crate::features::N_FEATURES;
@@ -49,18 +50,9 @@ impl Floats {
     }
 
     fn into_py<D: Dimension>(self, py: Python<'_>, shape: D) -> PyResult<Py<PyAny>> {
-        let error = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
         Ok(match self {
-            Self::F64(v) => Array::from_shape_vec(shape, v)
-                .map_err(error)?
-                .into_pyarray(py)
-                .into_any()
-                .unbind(),
-            Self::F32(v) => Array::from_shape_vec(shape, v)
-                .map_err(error)?
-                .into_pyarray(py)
-                .into_any()
-                .unbind(),
+            Self::F64(v) => array(v, shape)?.into_pyarray(py).into_any().unbind(),
+            Self::F32(v) => array(v, shape)?.into_pyarray(py).into_any().unbind(),
         })
     }
 }
@@ -72,53 +64,58 @@ struct Converted {
     contacts: Option<Vec<bool>>,
 }
 
-type ClipArgs<'py> = (
-    Source<'py>,
-    usize,
-    usize,
-    usize,
-    PyReadonlyArray2<'py, i64>,
-    PyReadonlyArray2<'py, u8>,
-    PyReadonlyArray2<'py, i64>,
-    PyReadonlyArray2<'py, f64>,
-    f64,
-    f64,
-    f64,
-);
+/// One clip (`expressive_mocap.ops.ClipInput`), read by attribute name: `source` the file's
+/// bytes or its path, `start` where its MOTION block begins, `frames`, its channel `layout`,
+/// `frame_time` and body scale (`height`, `hips_rest_height`).
+#[derive(FromPyObject)]
+struct ClipArgs<'py> {
+    source: Source<'py>,
+    start: usize,
+    frames: usize,
+    layout: LayoutArgs<'py>,
+    frame_time: f64,
+    height: f64,
+    hips_rest_height: f64,
+}
+
+/// One causal feature array to compute (`expressive_mocap.ops.FeatureRequest`).
+#[derive(FromPyObject)]
+struct FeatureArgs<'py> {
+    floor: Option<f64>,
+    thigh_reference: Option<PyReadonlyArray2<'py, f64>>,
+}
+
+/// What to keep of each clip (`expressive_mocap.ops.PipelineOutputs`).
+#[derive(FromPyObject)]
+#[allow(clippy::struct_excessive_bools)] // one flag per output, named
+struct OutputArgs<'py> {
+    positions: bool,
+    rotations: bool,
+    features: Vec<FeatureArgs<'py>>,
+    contacts: bool,
+    float32: bool,
+}
 
 /// The whole per-clip work of many clips of one skeleton: MOTION block, FK, features, contacts.
 ///
-/// `clips`: per clip `(source, start, frames, channels, rotation_columns, orders,
-/// position_columns, offsets, frame_time, height, hips_rest_height)`: `source` the file's bytes
-/// or its path (read here: a regular file of at most `max_bytes`, by default
-/// `expressive_mocap.files.MAX_INPUT_BYTES`), `start` where its MOTION block begins, the layout arrays as for
-/// `read_motion_blocks`, the body scale as for `clip_gait_many`. `parents` [J]; `roles` the 7
-/// gait joints. Kept per clip: world `positions` [F, J, 3], local `rotations` [F, J, 4], one
-/// causal feature array [F, 19] per `features` request `(floor or None, thigh_reference [2, 4]
-/// or None)`, offline `contacts` bool [F, 2]; float arrays in float32 when `float32`. Returns per
-/// clip `(positions or None, rotations or None, [features...], contacts or None)`, or a
-/// `ParseError` (malformed block) or `OSError` (unreadable or refused file) instance in its place.
+/// `clips`: `ClipArgs`, whose file, when given by path, is read here (a regular file of at most
+/// `max_bytes`, by default `expressive_mocap.files.MAX_INPUT_BYTES`). `parents` [J]; `roles` the
+/// 7 gait joints; `gait` the thresholds of contact detection. Kept per clip (`outputs`): world
+/// `positions` [F, J, 3], local `rotations` [F, J, 4], one causal feature array [F, 19] per
+/// `features` request `(floor or None, thigh_reference [2, 4] or None)`, offline `contacts` bool
+/// [F, 2]; float arrays in float32 when `float32`. Returns per clip `(positions or None,
+/// rotations or None, [features...], contacts or None)`, or a `ParseError` (malformed block) or
+/// `OSError` (unreadable or refused file) instance in its place.
 #[pyfunction]
-#[pyo3(signature = (clips, parents, roles, height_threshold, speed_threshold, min_duration, floor_percentile, positions, rotations, features, contacts, float32, max_bytes=None))]
-#[allow(
-    clippy::too_many_arguments,
-    clippy::too_many_lines,
-    clippy::fn_params_excessive_bools
-)] // Python keywords
+#[pyo3(signature = (clips, parents, roles, gait, outputs, max_bytes=None))]
+#[allow(clippy::too_many_lines)] // one sequence: arguments, parallel work, results
 fn clip_pipeline_many<'py>(
     py: Python<'py>,
     clips: Vec<ClipArgs<'py>>,
     parents: PyReadonlyArray1<'py, i64>,
     roles: Vec<usize>,
-    height_threshold: f64,
-    speed_threshold: f64,
-    min_duration: f64,
-    floor_percentile: f64,
-    positions: bool,
-    rotations: bool,
-    features: Vec<(Option<f64>, Option<PyReadonlyArray2<'py, f64>>)>,
-    contacts: bool,
-    float32: bool,
+    gait: GaitArgs,
+    outputs: OutputArgs<'py>,
     max_bytes: Option<u64>,
 ) -> PyResult<Vec<Py<PyAny>>> {
     use rayon::prelude::*;
@@ -130,12 +127,16 @@ fn clip_pipeline_many<'py>(
             .getattr("MAX_INPUT_BYTES")?
             .extract()?,
     };
-    let mut requests = Vec::with_capacity(features.len());
-    for (floor, reference) in &features {
-        let thigh_reference =
-            thigh_reference_values("features", "[2, 4] thigh reference", reference.as_ref())?;
+    let float32 = outputs.float32;
+    let mut requests = Vec::with_capacity(outputs.features.len());
+    for feature in &outputs.features {
+        let thigh_reference = thigh_reference_values(
+            "features",
+            "[2, 4] thigh reference",
+            feature.thigh_reference.as_ref(),
+        )?;
         requests.push(FeatureRequest {
-            floor: *floor,
+            floor: feature.floor,
             thigh_reference,
         });
     }
@@ -143,55 +144,29 @@ fn clip_pipeline_many<'py>(
     let request = ClipRequest {
         parents: &parents,
         roles: gait_joints(&roles)?,
-        params: GaitParams {
-            height_threshold,
-            speed_threshold,
-            min_duration,
-            floor_percentile,
-        },
-        positions,
-        rotations,
+        params: GaitParams::from(&gait),
+        positions: outputs.positions,
+        rotations: outputs.rotations,
         features: &requests,
-        contacts,
+        contacts: outputs.contacts,
     };
     let mut jobs = Vec::with_capacity(clips.len());
-    for (
-        source,
-        start,
-        frames,
-        channels,
-        rotation_columns,
-        orders,
-        position_columns,
-        offsets,
-        frame_time,
-        height,
-        hips_rest_height,
-    ) in &clips
-    {
-        let text = match source {
+    for clip in &clips {
+        let text = match &clip.source {
             Source::Bytes(bytes) => Text::Bytes(bytes.as_bytes()),
             Source::Path(path) => Text::Path(path.clone()),
         };
-        let layout = OwnedLayout::new(
-            *channels,
-            &(
-                rotation_columns.clone(),
-                orders.clone(),
-                position_columns.clone(),
-                offsets.clone(),
-            ),
-        )?;
+        let scale = BodyScale {
+            height: clip.height,
+            hips_rest_height: clip.hips_rest_height,
+        };
         jobs.push((
             text,
-            *start,
-            *frames,
-            layout,
-            *frame_time,
-            BodyScale {
-                height: *height,
-                hips_rest_height: *hips_rest_height,
-            },
+            clip.start,
+            clip.frames,
+            OwnedLayout::new(&clip.layout)?,
+            clip.frame_time,
+            scale,
         ));
     }
     let results: Vec<Result<Converted, Failure>> = py.detach(|| {
@@ -258,7 +233,7 @@ fn clip_pipeline_many<'py>(
                     .collect::<PyResult<Vec<_>>>()?;
                 let contacts = out
                     .contacts
-                    .map(|c| array2(c, (frames, 2)).map(|a| a.into_pyarray(py)))
+                    .map(|c| array(c, (frames, 2)).map(|a| a.into_pyarray(py)))
                     .transpose()?;
                 Ok((positions, rotations, PyList::new(py, features)?, contacts)
                     .into_pyobject(py)?
@@ -267,9 +242,9 @@ fn clip_pipeline_many<'py>(
             }
             // A malformed block or an unreadable file is that clip's result; a bad argument is the caller's error.
             Err(Failure::Kernel(error @ KernelError::Parse { .. })) => {
-                Ok(to_py(error).into_value(py).into_any())
+                Ok(PyErr::from(error).into_value(py).into_any())
             }
-            Err(Failure::Kernel(error)) => Err(to_py(error)),
+            Err(Failure::Kernel(error)) => Err(error.into()),
             Err(Failure::Read(error)) => Ok(os_error(&error).into_value(py).into_any()),
         })
         .collect()

@@ -3,13 +3,13 @@
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use super::{array3, contiguous, shape_error, to_py};
+use super::{array, contiguous, shape_error};
 
 /// Decouple `original` from `body` rotations (both [F, J, 4], x y z w): returns the filtered
 /// expressive rotations E* [F, J, 4], the recovered body mechanics B' [F, J, 4] and the
-/// activity index [F, J].
+/// activity index [F, J]. `gain` and `exponent` have no default here: the package's are
+/// `expressive_mocap.decouple.GAIN` and `EXPONENT`, passed by `expressive_mocap.ops`.
 #[pyfunction]
-#[pyo3(signature = (original, body, gain=2.0, exponent=4.0))]
 #[allow(clippy::type_complexity)]
 fn decouple_rotations<'py>(
     py: Python<'py>,
@@ -17,29 +17,55 @@ fn decouple_rotations<'py>(
     body: PyReadonlyArray3<'py, f64>,
     gain: f64,
     exponent: f64,
-) -> PyResult<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray3<f64>>, Bound<'py, PyArray2<f64>>)> {
+) -> PyResult<(
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray2<f64>>,
+)> {
     let shape = original.shape().to_vec();
     if shape[2] != 4 || body.shape() != shape.as_slice() {
-        return Err(shape_error("body", &format!("{shape:?} like `original` (quaternions [F, J, 4])"), body.shape()));
+        return Err(shape_error(
+            "body",
+            &format!("{shape:?} like `original` (quaternions [F, J, 4])"),
+            body.shape(),
+        ));
     }
-    let (o, b) = (contiguous("original", &original)?, contiguous("body", &body)?);
-    let (e, recovered, a) = py.detach(|| crate::decouple::decouple(o, b, gain, exponent)).map_err(to_py)?;
-    let activity = numpy::ndarray::Array2::from_shape_vec((shape[0], shape[1]), a).map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    let (o, b) = (
+        contiguous("original", &original)?,
+        contiguous("body", &body)?,
+    );
+    let (e, recovered, a) = py.detach(|| crate::decouple::decouple(o, b, gain, exponent))?;
     let dims = (shape[0], shape[1], 4);
-    Ok((array3(e, dims)?.into_pyarray(py), array3(recovered, dims)?.into_pyarray(py), activity.into_pyarray(py)))
+    Ok((
+        array(e, dims)?.into_pyarray(py),
+        array(recovered, dims)?.into_pyarray(py),
+        array(a, (shape[0], shape[1]))?.into_pyarray(py),
+    ))
 }
 
 /// Recompose `expressive^scale * body` for rotations [F, J, 4].
 #[pyfunction]
 #[pyo3(signature = (expressive, body, scale=1.0))]
-fn compose_rotations<'py>(py: Python<'py>, expressive: PyReadonlyArray3<'py, f64>, body: PyReadonlyArray3<'py, f64>, scale: f64) -> PyResult<Bound<'py, PyArray3<f64>>> {
+fn compose_rotations<'py>(
+    py: Python<'py>,
+    expressive: PyReadonlyArray3<'py, f64>,
+    body: PyReadonlyArray3<'py, f64>,
+    scale: f64,
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
     let shape = body.shape().to_vec();
     if shape[2] != 4 || expressive.shape() != shape.as_slice() {
-        return Err(shape_error("expressive", &format!("{shape:?} like `body` (quaternions [F, J, 4])"), expressive.shape()));
+        return Err(shape_error(
+            "expressive",
+            &format!("{shape:?} like `body` (quaternions [F, J, 4])"),
+            expressive.shape(),
+        ));
     }
-    let (e, b) = (contiguous("expressive", &expressive)?, contiguous("body", &body)?);
-    let out = py.detach(|| crate::decouple::compose(e, b, scale)).map_err(to_py)?;
-    Ok(array3(out, (shape[0], shape[1], 4))?.into_pyarray(py))
+    let (e, b) = (
+        contiguous("expressive", &expressive)?,
+        contiguous("body", &body)?,
+    );
+    let out = py.detach(|| crate::decouple::compose(e, b, scale))?;
+    Ok(array(out, (shape[0], shape[1], 4))?.into_pyarray(py))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import quat
 from ..errors import ModelError
-from ..kernels import compose_rotations, decouple_rotations
+from ..ops import compose_rotations, decouple_rotations
 from ..motion import Motion
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)

@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import quat
 from ..errors import ArgumentError
-from ..kernels import compose_rotations, forward_kinematics
+from ..ops import compose_rotations, forward_kinematics
 from ..motion import Motion
 from ..roles import JointRoles, facing_yaw, path_joint
 from .algebra import EXPONENT, GAIN, BodyMechanicsModel, decompose

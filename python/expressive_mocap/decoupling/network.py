@@ -15,8 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError, ModelError
-from ..kernels import mlp_forward
-from ..reference.mlp import ACTIVATIONS
+from ..ops import ACTIVATIONS, mlp_forward
 
 
 @dataclass(frozen=True)

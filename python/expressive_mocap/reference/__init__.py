@@ -10,17 +10,16 @@ written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in de
 from .clip import clip_pipeline_many
 from .decouple import compose_rotations, decouple_rotations
 from .features import dynamic_features
-from .gait import clip_gait_many
 from .fk import forward_kinematics, forward_kinematics_many
-from .mlp import mlp_forward
-from .motion_block import ParseError, decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
 from .footsteps import air_time, foot_contacts
+from .gait import clip_gait_many
+from .mlp import mlp_forward
+from .motion_block import decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
 from .rotations import euler_to_quat, quat_to_euler
 
 num_threads = 1
 
 __all__ = [
-    "ParseError",
     "air_time",
     "clip_gait_many",
     "clip_pipeline_many",

@@ -4,61 +4,52 @@ features, contacts), as the composition of the other kernels' twins, clip by cli
 from __future__ import annotations
 
 import os
+from types import SimpleNamespace
 
 import numpy as np
 
 from .. import files
+from ..errors import ArgumentError
 from .fk import forward_kinematics
 from .gait import GAIT_ROLES, clip_gait_many
 from .motion_block import read_motion_blocks
 
 
-def clip_pipeline_many(
-    clips,
-    parents,
-    roles,
-    height_threshold: float,
-    speed_threshold: float,
-    min_duration: float,
-    floor_percentile: float,
-    positions: bool,
-    rotations: bool,
-    features,
-    contacts: bool,
-    float32: bool,
-    max_bytes: int | None = None,
-) -> list:
-    """Per clip ``(source, start, frames, channels, rotation_columns, orders, position_columns,
-    offsets, frame_time, height, hips_rest_height)`` (``source``: the bytes, or a path read
-    here with :func:`~expressive_mocap.files.read_input`: a regular file of at most ``max_bytes``,
-    by default ``files.MAX_INPUT_BYTES``): ``(positions [F, J, 3] or None, rotations [F, J, 4] or
-    None, [features [F, 19] per (floor, thigh_reference) request], contacts bool [F, 2] or
-    None)``, float32 if asked; a ``ParseError`` or ``OSError`` in the place of a clip whose
-    block or file cannot be read (or is refused: not a regular file, or over the bound)."""
+def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | None = None) -> list:
+    """Per clip (``source``, ``start``, ``frames``, ``layout``, ``frame_time``, ``height``,
+    ``hips_rest_height``: see ``expressive_mocap.ops.ClipInput``; ``source``: the bytes, or a
+    path read here with :func:`~expressive_mocap.files.read_input`: a regular file of at most
+    ``max_bytes``, by default ``files.MAX_INPUT_BYTES``): ``(positions [F, J, 3] or None,
+    rotations [F, J, 4] or None, [features [F, 19] per ``outputs.features`` request], contacts
+    bool [F, 2] or None)``, float32 if ``outputs.float32``; a ``ParseError`` or ``OSError`` in
+    the place of a clip whose block or file cannot be read (or is refused: not a regular file,
+    or over the bound). ``gait``: the four thresholds (``expressive_mocap.ops.GaitSettings``)."""
     roles = [int(r) for r in roles]
     if len(roles) != 7:
-        raise ValueError(f"argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {len(roles)}")
+        raise ArgumentError(f"argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {len(roles)}")
     parents = np.asarray(parents)
-    dtype = np.float32 if float32 else np.float64
+    thresholds = (gait.height_threshold, gait.speed_threshold, gait.min_duration, gait.floor_percentile)
+    dtype = np.float32 if outputs.float32 else np.float64
     out = []
-    for source, start, frames, channels, *layout, frame_time, height, hips_rest_height in clips:
+    for clip in clips:
+        source = clip.source
         if isinstance(source, (str, os.PathLike)):
             try:
                 source = files.read_input(source, files.MAX_INPUT_BYTES if max_bytes is None else max_bytes)
             except OSError as error:
                 out.append(OSError(error.errno, error.strerror) if error.errno is not None else error)
                 continue
-        if start > len(source):
-            raise ValueError("argument `start`: past the end of the clip's text")
-        (decoded,) = read_motion_blocks([(source, start, frames, channels, *layout)])
+        if clip.start > len(source):
+            raise ArgumentError("argument `start`: past the end of the clip's text")
+        (decoded,) = read_motion_blocks([SimpleNamespace(data=source, start=clip.start, frames=clip.frames, layout=clip.layout)])
         if isinstance(decoded, Exception):
             out.append(decoded)
             continue
         local, translations = decoded
         _, world = forward_kinematics(local, translations, parents)
-        clip = (world, local, frame_time, height, hips_rest_height)
-        wanted = [clip_gait_many([clip], roles, height_threshold, speed_threshold, min_duration, floor_percentile, True, False, floor, reference)[0][0]
-                  for floor, reference in features]
-        found = clip_gait_many([clip], roles, height_threshold, speed_threshold, min_duration, floor_percentile, False, True)[0][1] if contacts else None
-        out.append((world.astype(dtype) if positions else None, local.astype(dtype) if rotations else None, [f.astype(dtype) for f in wanted], found))
+        gait_clip = (world, local, clip.frame_time, clip.height, clip.hips_rest_height)
+        wanted = [clip_gait_many([gait_clip], roles, *thresholds, True, False, f.floor, f.thigh_reference)[0][0] for f in outputs.features]
+        found = clip_gait_many([gait_clip], roles, *thresholds, False, True)[0][1] if outputs.contacts else None
+        out.append((world.astype(dtype) if outputs.positions else None, local.astype(dtype) if outputs.rotations else None,
+                    [f.astype(dtype) for f in wanted], found))
     return out

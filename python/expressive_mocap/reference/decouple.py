@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from .. import quat
+from ..errors import ArgumentError
 
 
 def _check(name: str, first: np.ndarray, second: np.ndarray) -> None:
     if first.ndim != 3 or first.shape[-1] != 4 or first.shape != second.shape:
-        raise ValueError(f"argument `{name}`: expected shape {list(first.shape)} (quaternions [F, J, 4]), got {list(second.shape)}")
+        raise ArgumentError(f"argument `{name}`: expected shape {list(first.shape)} (quaternions [F, J, 4]), got {list(second.shape)}")
 
 
 def decouple_rotations(original: np.ndarray, body: np.ndarray, gain: float = 2.0, exponent: float = 4.0):
@@ -18,7 +19,7 @@ def decouple_rotations(original: np.ndarray, body: np.ndarray, gain: float = 2.0
     _check("body", original, body)
     for name, value in (("gain", gain), ("exponent", exponent)):
         if not (np.isfinite(value) and value > 0):
-            raise ValueError(f"argument `{name}`: must be a positive number, got {value}")
+            raise ArgumentError(f"argument `{name}`: must be a positive number, got {value}")
     expressive = quat.mul(original, quat.conjugate(body))
     activity = np.clip((np.tanh(quat.angle(expressive)) * gain) ** exponent, 0.0, 1.0)
     filtered = quat.power(expressive, activity)
@@ -29,5 +30,5 @@ def compose_rotations(expressive: np.ndarray, body: np.ndarray, scale: float = 1
     """``expressive^scale * body``."""
     _check("expressive", body, expressive)
     if not np.isfinite(scale):
-        raise ValueError(f"argument `scale`: must be a finite number, got {scale}")
+        raise ArgumentError(f"argument `scale`: must be a finite number, got {scale}")
     return quat.mul(expressive if scale == 1.0 else quat.power(expressive, scale), body)

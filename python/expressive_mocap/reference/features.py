@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import quat
+from ..errors import ArgumentError
 from .footsteps import air_time
 
 N_FEATURES = 19
@@ -35,18 +36,18 @@ def heading_yaw(left: np.ndarray, right: np.ndarray) -> np.ndarray:
 def _check(points, thighs, contacts, reference, frame_time, height, hips_rest_height, window):
     frames = len(points)
     if points.ndim != 3 or points.shape[1:] != (3, 3):
-        raise ValueError(f"argument `points`: expected shape [F, 3, 3] (hips, left and right upper leg), got {list(points.shape)}")
+        raise ArgumentError(f"argument `points`: expected shape [F, 3, 3] (hips, left and right upper leg), got {list(points.shape)}")
     if thighs.shape != (frames, 2, 4):
-        raise ValueError(f"argument `thighs`: expected shape [{frames}, 2, 4], got {list(thighs.shape)}")
+        raise ArgumentError(f"argument `thighs`: expected shape [{frames}, 2, 4], got {list(thighs.shape)}")
     if contacts.shape != (frames, 2):
-        raise ValueError(f"argument `contacts`: expected shape [{frames}, 2], got {list(contacts.shape)}")
+        raise ArgumentError(f"argument `contacts`: expected shape [{frames}, 2], got {list(contacts.shape)}")
     if reference.shape != (2, 4):
-        raise ValueError(f"argument `reference`: expected shape [2, 4], got {list(reference.shape)}")
+        raise ArgumentError(f"argument `reference`: expected shape [2, 4], got {list(reference.shape)}")
     for name, value in (("frame_time", frame_time), ("height", height), ("hips_rest_height", hips_rest_height)):
         if not (np.isfinite(value) and value > 0):
-            raise ValueError(f"argument `{name}`: must be positive, got {value}")
+            raise ArgumentError(f"argument `{name}`: must be positive, got {value}")
     if int(window) < 1:
-        raise ValueError(f"argument `window`: must be at least 1, got {window}")
+        raise ArgumentError(f"argument `window`: must be at least 1, got {window}")
 
 
 def dynamic_features(

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ArgumentError
+
 
 def _check_min_frames(min_frames: int) -> int:
     if int(min_frames) < 1:
-        raise ValueError(f"argument `min_frames`: must be at least 1, got {min_frames}")
+        raise ArgumentError(f"argument `min_frames`: must be at least 1, got {min_frames}")
     return int(min_frames)
 
 
@@ -31,9 +33,9 @@ def foot_contacts(
     """
     feet = np.asarray(feet, dtype=np.float64)
     if feet.ndim != 4 or feet.shape[3] != 3 or feet.shape[1] == 0 or feet.shape[2] == 0:
-        raise ValueError(f"argument `feet`: expected shape [F, S, P, 3], got {list(feet.shape)}")
+        raise ArgumentError(f"argument `feet`: expected shape [F, S, P, 3], got {list(feet.shape)}")
     if not (np.isfinite(frame_time) and frame_time > 0):
-        raise ValueError(f"argument `frame_time`: must be a positive number of seconds, got {frame_time}")
+        raise ArgumentError(f"argument `frame_time`: must be a positive number of seconds, got {frame_time}")
     min_frames = _check_min_frames(min_frames)
     if len(feet) == 0:
         return np.zeros((0, feet.shape[1]), dtype=bool)
@@ -92,9 +94,9 @@ def air_time(contacts: np.ndarray, frame_time: float) -> np.ndarray:
     counts from one frame before its start)."""
     contacts = np.asarray(contacts, dtype=bool)
     if contacts.ndim != 2:
-        raise ValueError(f"argument `contacts`: expected shape [F, S], got {list(contacts.shape)}")
+        raise ArgumentError(f"argument `contacts`: expected shape [F, S], got {list(contacts.shape)}")
     if not (np.isfinite(frame_time) and frame_time > 0):
-        raise ValueError(f"argument `frame_time`: must be a positive number of seconds, got {frame_time}")
+        raise ArgumentError(f"argument `frame_time`: must be a positive number of seconds, got {frame_time}")
     frames = np.arange(1, len(contacts) + 1)[:, None]
     # Frame number (1-based) of the last contact at or before each frame, 0 if none yet.
     last = np.maximum.accumulate(np.where(contacts, frames, 0), axis=0)

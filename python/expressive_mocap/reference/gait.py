@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ArgumentError
 from .features import dynamic_features
 from .footsteps import foot_contacts
 
@@ -34,21 +35,21 @@ def clip_gait_many(
     contacts ``bool [F, 2]`` on the toe-percentile floor; each None unless asked for."""
     roles = [int(r) for r in roles]
     if len(roles) != 7:
-        raise ValueError(f"argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {len(roles)}")
+        raise ArgumentError(f"argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {len(roles)}")
     hips, left_leg, right_leg, left_foot, right_foot, left_toe, right_toe = roles
     if thigh_reference is not None and np.shape(thigh_reference) != (2, 4):
-        raise ValueError(f"argument `thigh_reference`: expected shape [2, 4], got {list(np.shape(thigh_reference))}")
+        raise ArgumentError(f"argument `thigh_reference`: expected shape [2, 4], got {list(np.shape(thigh_reference))}")
     out = []
     for index, (positions, rotations, frame_time, height, hips_rest_height) in enumerate(clips):
         positions, rotations = np.asarray(positions, dtype=np.float64), np.asarray(rotations, dtype=np.float64)
         if positions.ndim != 3 or positions.shape[2] != 3 or rotations.shape != (*positions.shape[:2], 4):
-            raise ValueError(f"argument `clips`: clip {index} has positions {list(positions.shape)} and rotations "
+            raise ArgumentError(f"argument `clips`: clip {index} has positions {list(positions.shape)} and rotations "
                              f"{list(rotations.shape)}, expected [F, J, 3] and [F, J, 4]")
         try:
             out.append(_clip(positions, rotations, float(frame_time), roles, float(height), float(hips_rest_height), height_threshold,
                              speed_threshold, min_duration, floor_percentile, features, contacts, feature_floor, thigh_reference))
         except (ValueError, IndexError) as error:
-            raise ValueError(f"clip {index}: {error}") from None
+            raise ArgumentError(f"clip {index}: {error}") from None
     return out
 
 
@@ -57,9 +58,9 @@ def _clip(positions, rotations, frame_time, roles, height, hips_rest_height, hei
     frames, joints = positions.shape[:2]
     for name, index in zip(("hips", "upper_legs", "upper_legs", "feet", "feet", "toes", "toes"), roles):
         if not 0 <= index < joints:
-            raise ValueError(f"argument `{name}`: joint {index} out of range for {joints} joints")
+            raise ArgumentError(f"argument `{name}`: joint {index} out of range for {joints} joints")
     if not (np.isfinite(frame_time) and frame_time > 0):
-        raise ValueError(f"argument `frame_time`: must be a positive number of seconds, got {frame_time}")
+        raise ArgumentError(f"argument `frame_time`: must be a positive number of seconds, got {frame_time}")
     if frames == 0:
         return (np.zeros((0, 19)) if want_features else None), (np.zeros((0, 2), bool) if want_contacts else None)
     hips, left_leg, right_leg, left_foot, right_foot, left_toe, right_toe = roles

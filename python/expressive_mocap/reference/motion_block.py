@@ -13,9 +13,9 @@ import warnings
 
 import numpy as np
 
+from ..errors import ArgumentError, ParseError
 from ..tokens import BLANKS, NOT_FINITE_BYTES, NUMBER_BYTES, shown
 from .rotations import euler_to_quat
-
 
 # The Rust parser's grammar (expressive_mocap.tokens): numbers separated by ASCII blanks, one
 # frame a line. Python's own split() also splits at other control characters, so the twin
@@ -28,14 +28,10 @@ def _tokens(line: bytes) -> list[bytes]:
     return [t for t in _BLANKS.split(line) if t]
 
 
-class ParseError(ValueError):
-    """A malformed MOTION block; ``args`` are ``(message, 0-based line within the block)``."""
-
-
 def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> np.ndarray:
     """Parse ``frames`` lines of ``channels`` finite numbers from ``data[start:]`` -> ``[frames, channels]``."""
     if start > len(data):
-        raise ValueError("argument `start`: past the end of `data`")
+        raise ArgumentError("argument `start`: past the end of `data`")
     block = data[start:]
     if channels == 0:
         # Frame lines of a skeleton without channels are blank, still one line a frame.
@@ -73,7 +69,7 @@ def decode_channels(values, rotation_columns, orders, position_columns, offsets)
     values = np.asarray(values, dtype=np.float64)
     for name, columns in (("rotation_columns", rotation_columns), ("position_columns", position_columns)):
         if columns.shape != offsets.shape or ((columns < -1) | (columns >= values.shape[1])).any():
-            raise ValueError(f"argument `{name}`: expected [J, 3] columns in -1..{values.shape[1] - 1}")
+            raise ArgumentError(f"argument `{name}`: expected [J, 3] columns in -1..{values.shape[1] - 1}")
     # A trailing zero column lets missing channels (-1) read as 0.
     padded = np.concatenate([values, np.zeros((len(values), 1))], axis=1)
     rotations = euler_to_quat(padded[:, rotation_columns], orders)
@@ -82,12 +78,14 @@ def decode_channels(values, rotation_columns, orders, position_columns, offsets)
 
 
 def read_motion_blocks(blocks: list) -> list:
-    """Parse and decode many blocks: per ``(data, start, frames, channels, rotation_columns,
-    orders, position_columns, offsets)`` a ``(rotations, translations)`` pair or a ``ParseError``."""
+    """Parse and decode many blocks: per block (``data``, ``start``, ``frames``, ``layout``: see
+    ``expressive_mocap.ops.MotionBlock``) a ``(rotations, translations)`` pair or a ``ParseError``."""
     results = []
-    for data, start, frames, channels, *layout in blocks:
+    for block in blocks:
+        layout = block.layout
         try:
-            results.append(decode_channels(parse_motion_block(data, start, frames, channels), *layout))
+            values = parse_motion_block(block.data, block.start, block.frames, layout.channels)
+            results.append(decode_channels(values, layout.rotation_columns, layout.orders, layout.position_columns, layout.offsets))
         except ParseError as error:
             results.append(error)
     return results
@@ -130,11 +128,11 @@ def format_motion_block(values: np.ndarray, decimals: int | None = None) -> byte
     """Text of ``values [F, C]``, one frame a line; ``decimals=None`` is the shortest exact text."""
     values = np.asarray(values, dtype=np.float64)
     if values.ndim != 2 or values.shape[1] == 0:
-        raise ValueError(f"argument `values`: expected shape [F, C] with C >= 1, got {list(values.shape)}")
+        raise ArgumentError(f"argument `values`: expected shape [F, C] with C >= 1, got {list(values.shape)}")
     bad = np.argwhere(~np.isfinite(values))
     if len(bad):
         f, c = bad[0]
-        raise ValueError(f"argument `values`: frame {f}, channel {c} is {values[f, c]}")
+        raise ArgumentError(f"argument `values`: frame {f}, channel {c} is {values[f, c]}")
     out = io.StringIO()
     if decimals is None:
         values = values + 0.0  # -0.0 -> 0.0, as the Rust kernel writes it

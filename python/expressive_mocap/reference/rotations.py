@@ -5,16 +5,17 @@ from __future__ import annotations
 import numpy as np
 
 from .. import quat
+from ..errors import ArgumentError
 
 
 def _check(values: np.ndarray, orders: np.ndarray, name: str, width: int) -> np.ndarray:
     orders = np.asarray(orders)
     if orders.ndim != 2 or orders.shape[1] != 3:
-        raise ValueError(f"argument `orders`: expected shape [J, 3], got {list(orders.shape)}")
+        raise ArgumentError(f"argument `orders`: expected shape [J, 3], got {list(orders.shape)}")
     if not all(sorted(o) == [0, 1, 2] for o in orders.tolist()):
-        raise ValueError("argument `orders`: every order must be a permutation of the axes 0, 1, 2")
+        raise ArgumentError("argument `orders`: every order must be a permutation of the axes 0, 1, 2")
     if values.ndim != 3 or values.shape[1:] != (len(orders), width):
-        raise ValueError(f"argument `{name}`: expected shape [F, {len(orders)}, {width}], got {list(values.shape)}")
+        raise ArgumentError(f"argument `{name}`: expected shape [F, {len(orders)}, {width}], got {list(values.shape)}")
     return orders.astype(np.intp)
 
 

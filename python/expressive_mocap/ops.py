@@ -1,0 +1,438 @@
+"""The only code that calls the kernels: one wrapper per kernel family, which checks and
+coerces its arguments (an :class:`~expressive_mocap.errors.ArgumentError` naming the bad one),
+builds the kernel's argument objects (:class:`ChannelLayout`, :class:`MotionBlock`,
+:class:`ClipInput`, :class:`GaitSettings`, :class:`PipelineOutputs`) and calls the backend in
+use: the Rust kernel or its NumPy twin (see :mod:`expressive_mocap.backend`), which take the
+same arguments and raise the same exceptions. Leading batch dimensions are folded into frames.
+
+Arrays written by another thread during a call: the Rust kernels run without the GIL, so
+other Python threads run meanwhile. Index arrays (``parents``, channel columns, gait joints)
+and bool flags are copied before the GIL is released, so a write to them during a call has no
+effect on it: it is computed from the values at the call, or refused with an ArgumentError. Float
+arrays are read in place (copying them would cost as much as some kernels): a write to one
+during a call gives results computed from a mix of its old and new values, and nothing worse
+(no crash, no error). Don't write to a kernel's inputs while it runs if you need its result.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from .backend import kernels
+from .errors import ArgumentError
+from .rotations import axes_of
+
+ACTIVATIONS = ("tanh", "linear")  # of a dense layer (mlp_forward); the kernels implement these
+
+
+def _array(name: str, value, dtype, kinds: str = "biuf") -> np.ndarray:
+    """``value`` as a C-contiguous array of ``dtype``; an ArgumentError naming the argument when its
+    dtype kind is not one of ``kinds`` (numbers; integers only where indices are expected)."""
+    array = np.asarray(value)
+    if array.dtype.kind not in kinds:
+        wanted = "integers" if kinds == "iu" else "numbers"
+        raise ArgumentError(f"argument `{name}`: expected an array of {wanted}, got dtype {array.dtype}")
+    return np.ascontiguousarray(array, dtype=dtype)
+
+
+def _f64(name: str, array, last: int) -> np.ndarray:
+    array = _array(name, array, np.float64)
+    if array.ndim < 2 or array.shape[-1] != last:
+        raise ArgumentError(f"argument `{name}`: expected shape [..., J, {last}], got {list(array.shape)}")
+    return array
+
+
+def _orders(orders, joints: int) -> np.ndarray:
+    """Orders as a ``[J, 3]`` uint8 array from one order ("ZXY") or one per joint."""
+    if isinstance(orders, str):
+        orders = [orders] * joints
+    axes = np.array([axes_of(o) if isinstance(o, str) else o for o in orders], dtype=np.uint8)
+    if axes.shape != (joints, 3):
+        raise ArgumentError(f"argument `orders`: expected one order or {joints} orders, got {axes.shape[0]}")
+    return axes
+
+
+def euler_to_quat(angles, orders) -> np.ndarray:
+    """Euler angles ``[..., J, 3]`` in degrees -> unit quaternions ``[..., J, 4]`` (x, y, z, w).
+
+    ``orders``: one order such as ``"ZXY"`` (the BVH channel order, intrinsic, first channel
+    outermost, like SciPy's upper-case orders) or a sequence of ``J`` orders.
+    """
+    angles = _f64("angles", angles, 3)
+    batch = angles.shape[:-2]
+    flat = angles.reshape(-1, *angles.shape[-2:])
+    return kernels().euler_to_quat(flat, _orders(orders, angles.shape[-2])).reshape(*batch, angles.shape[-2], 4)
+
+
+def quat_to_euler(quats, orders) -> np.ndarray:
+    """Unit quaternions ``[..., J, 4]`` (x, y, z, w) -> Euler angles ``[..., J, 3]`` in degrees.
+
+    The middle angle lies in [-90, 90]; at gimbal lock the third angle is 0.
+    """
+    quats = _f64("quats", quats, 4)
+    batch = quats.shape[:-2]
+    flat = quats.reshape(-1, *quats.shape[-2:])
+    return kernels().quat_to_euler(flat, _orders(orders, quats.shape[-2])).reshape(*batch, quats.shape[-2], 3)
+
+
+def forward_kinematics(rotations, translations, parents) -> tuple[np.ndarray, np.ndarray]:
+    """World rotations ``[F, J, 4]`` and positions ``[F, J, 3]`` from local ones.
+
+    ``rotations [F, J, 4]`` (x, y, z, w) and ``translations [F, J, 3]`` are relative to each
+    joint's parent; ``parents [J]`` lists each joint after its parent, roots as -1.
+    """
+    rotations = _f64("rotations", rotations, 4)
+    translations = _f64("translations", translations, 3)
+    parents = _array("parents", parents, np.int64, "iu")
+    if parents.ndim != 1:
+        raise ArgumentError(f"argument `parents`: expected shape [J], got {list(parents.shape)}")
+    return kernels().forward_kinematics(rotations, translations, parents)
+
+
+def forward_kinematics_many(motions) -> list[tuple[np.ndarray, np.ndarray]]:
+    """World rotations and positions of many motions at once (in parallel across motions with
+    the Rust kernels: the way to run FK over an archive of short clips)."""
+    clips = [(m.rotations, m.translations, np.ascontiguousarray(m.skeleton.parents, dtype=np.int64)) for m in motions]
+    return kernels().forward_kinematics_many(clips)
+
+
+def decode_channels(values, rotation_columns, orders, position_columns, offsets) -> tuple[np.ndarray, np.ndarray]:
+    """BVH channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``.
+
+    The layout arrays are those of :meth:`Skeleton.layout`; ``offsets [J, 3]`` are the rest offsets.
+    """
+    values = _array("values", values, np.float64)
+    if values.ndim != 2:
+        raise ArgumentError(f"argument `values`: expected shape [F, C], got {list(values.shape)}")
+    rotation_columns = _array("rotation_columns", rotation_columns, np.int64, "iu")
+    orders = _array("orders", orders, np.uint8, "iu")
+    position_columns = _array("position_columns", position_columns, np.int64, "iu")
+    offsets = _array("offsets", offsets, np.float64)
+    joints = len(orders)
+    for name, array in (
+        ("rotation_columns", rotation_columns),
+        ("orders", orders),
+        ("position_columns", position_columns),
+        ("offsets", offsets),
+    ):
+        if array.shape != (joints, 3):
+            raise ArgumentError(
+                f"argument `{name}`: expected shape [{joints}, 3] (one row per joint), got {list(array.shape)}"
+            )
+    return kernels().decode_channels(values, rotation_columns, orders, position_columns, offsets)
+
+
+def decouple_rotations(original, body, gain: float, exponent: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Split local rotations ``original [F, J, 4]`` given body-mechanics rotations ``body``:
+    ``E = O B^-1``; activity ``A = clip((tanh(angle(E)) * gain)^exponent, 0, 1)`` ``[F, J]``;
+    filtered expressive component ``E* = E^A``; recovered body mechanics ``B' = E*^-1 O``.
+    Returns ``(E*, B', A)``; ``E* * B' = O`` exactly. ``gain`` and ``exponent`` have no default
+    here: the package's are ``decouple.GAIN`` and ``decouple.EXPONENT``, passed by its callers."""
+    original, body = _f64("original", original, 4), _f64("body", body, 4)
+    batch = original.shape[:-1]
+    e, b, a = kernels().decouple_rotations(_frames(original), _frames(body), float(gain), float(exponent))
+    return e.reshape(original.shape), b.reshape(original.shape), a.reshape(batch)
+
+
+def compose_rotations(expressive, body, scale: float = 1.0) -> np.ndarray:
+    """``expressive^scale * body`` for rotations ``[F, J, 4]`` (modulation of expressiveness)."""
+    expressive, body = _f64("expressive", expressive, 4), _f64("body", body, 4)
+    return kernels().compose_rotations(_frames(expressive), _frames(body), float(scale)).reshape(body.shape)
+
+
+def _frames(array: np.ndarray) -> np.ndarray:
+    """``[..., J, k]`` as ``[F, J, k]``, all leading dimensions folded into frames."""
+    return array.reshape(-1, *array.shape[-2:])
+
+
+def _float(name: str, array) -> np.ndarray:
+    """``array`` as a C-contiguous float32 or float64 array (float32 kept, other numbers float64)."""
+    array = np.asarray(array)
+    return _array(name, array, np.float32 if array.dtype == np.float32 else np.float64)
+
+
+def mlp_forward(x, weights, biases, activations) -> np.ndarray:
+    """Batched forward pass of a dense network: ``h = act_i(h @ weights[i] + biases[i])``.
+
+    ``x [..., in]`` float32 or float64 (kept; other dtypes become float64), leading dimensions
+    folded into rows; ``weights[i] [in_i, out_i]``, ``biases[i] [out_i]`` (cast to the dtype of
+    ``x``), ``activations[i]`` ``"tanh"`` or ``"linear"``. Returns ``[..., out]``.
+    """
+    x = _float("x", x)
+    if x.ndim < 1:
+        raise ArgumentError(f"argument `x`: expected shape [..., in], got {list(x.shape)}")
+    weights, biases, activations = list(weights), list(biases), [str(a) for a in activations]
+    for i, activation in enumerate(activations):
+        if activation not in ACTIVATIONS:
+            raise ArgumentError(
+                f"argument `activations`: layer {i}: unknown activation {activation!r} (expected one of {ACTIVATIONS})"
+            )
+    for name, items in (("biases", biases), ("activations", activations)):
+        if len(items) != len(weights):
+            raise ArgumentError(
+                f"argument `{name}`: expected one for each of the {len(weights)} layers, got {len(items)}"
+            )
+    for i, (w, b) in enumerate(zip(weights, biases)):
+        if np.ndim(w) != 2:
+            raise ArgumentError(f"argument `weights`: layer {i} must be 2-D [in, out], got shape {list(np.shape(w))}")
+        if np.ndim(b) != 1:
+            raise ArgumentError(f"argument `biases`: layer {i} must be 1-D [out], got shape {list(np.shape(b))}")
+    weights = [_array("weights", w, x.dtype) for w in weights]
+    biases = [_array("biases", b, x.dtype) for b in biases]
+    batch = x.shape[:-1]
+    flat = x.reshape(-1, x.shape[-1])
+    out = kernels().mlp_forward(flat, weights, biases, activations)
+    return out.reshape(*batch, out.shape[-1])
+
+
+# -- MOTION blocks -----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ChannelLayout:
+    """Where each joint's numbers sit in a frame of ``channels`` values (see
+    :meth:`Skeleton.layout`): ``rotation_columns``, ``orders``, ``position_columns`` and rest
+    ``offsets``, each ``[J, 3]``. Built by :func:`channel_layout`."""
+
+    channels: int
+    rotation_columns: np.ndarray
+    orders: np.ndarray
+    position_columns: np.ndarray
+    offsets: np.ndarray
+
+
+def channel_layout(skeleton) -> ChannelLayout:
+    """The :class:`ChannelLayout` of a :class:`~expressive_mocap.motion.Skeleton`."""
+    rotation_columns, orders, position_columns = skeleton.layout()
+    return ChannelLayout(skeleton.n_channels, rotation_columns, orders, position_columns, skeleton.offsets)
+
+
+@dataclass(frozen=True)
+class MotionBlock:
+    """A MOTION number block to read: ``data[start:]`` holds ``frames`` lines laid out as ``layout``."""
+
+    data: bytes
+    start: int
+    frames: int
+    layout: ChannelLayout
+
+
+def read_motion_blocks(blocks: Sequence[tuple[bytes, Any]]) -> list:
+    """Parse and decode many MOTION blocks (in parallel across blocks with the Rust kernels):
+    per ``(data, header)`` (a :class:`~expressive_mocap.bvh.Header`: where its block starts,
+    how many frames, its skeleton) a ``(rotations [F, J, 4], translations [F, J, 3])`` pair, or
+    the :class:`~expressive_mocap.errors.ParseError` of a malformed block in its place."""
+    return kernels().read_motion_blocks(
+        [MotionBlock(data, h.block_start, h.frames, channel_layout(h.skeleton)) for data, h in blocks]
+    )
+
+
+def format_motion_block(values, decimals: int | None = None) -> bytes:
+    """Text of the MOTION number block of channel values ``[F, C]`` (finite numbers);
+    ``decimals=None`` is the shortest text that reads back exactly."""
+    values = _array("values", values, np.float64)
+    if values.ndim != 2:
+        raise ArgumentError(f"argument `values`: expected shape [F, C], got {list(values.shape)}")
+    return kernels().format_motion_block(values, decimals)
+
+
+# -- foot contacts and gait features ---------------------------------------------------------
+
+
+def foot_contacts(
+    feet,
+    frame_time: float,
+    floor: float,
+    height_threshold: float,
+    speed_threshold: float,
+    min_frames: int,
+    causal: bool,
+) -> np.ndarray:
+    """Contact flags ``bool [F, S]`` from world positions ``feet [F, S, P, 3]`` (P points a
+    foot: ankle, toe); thresholds in the positions' units (speed per second); runs shorter than
+    ``min_frames`` are filtered (offline, or a causal hold when ``causal``)."""
+    feet = _array("feet", feet, np.float64)
+    return kernels().foot_contacts(
+        feet,
+        float(frame_time),
+        float(floor),
+        float(height_threshold),
+        float(speed_threshold),
+        int(min_frames),
+        bool(causal),
+    )
+
+
+def air_time(contacts, frame_time: float) -> np.ndarray:
+    """Seconds since each foot last left contact ``[F, S]`` from ``contacts bool [F, S]``."""
+    return kernels().air_time(np.ascontiguousarray(contacts, dtype=bool), float(frame_time))
+
+
+def dynamic_features(
+    points,
+    thighs,
+    contacts,
+    reference,
+    frame_time: float,
+    height: float,
+    hips_rest_height: float,
+    floor: float,
+    window: int,
+) -> np.ndarray:
+    """The 19 dynamic features ``[F, 19]`` from ``points [F, 3, 3]`` (hips, left and right upper
+    leg, world), ``thighs [F, 2, 4]`` (local), ``contacts bool [F, 2]`` and the thighs'
+    hemisphere ``reference [2, 4]``."""
+    return kernels().dynamic_features(
+        _array("points", points, np.float64),
+        _array("thighs", thighs, np.float64),
+        np.ascontiguousarray(contacts, dtype=bool),
+        _array("reference", reference, np.float64),
+        float(frame_time),
+        float(height),
+        float(hips_rest_height),
+        float(floor),
+        int(window),
+    )
+
+
+class GaitSettings(NamedTuple):
+    """The thresholds of contact detection shared by the gait kernels (heights in actor heights,
+    speed in actor heights per second, duration in seconds, floor as a toe-height percentile)."""
+
+    height_threshold: float
+    speed_threshold: float
+    min_duration: float
+    floor_percentile: float
+
+
+def clip_gait_many(
+    clips,
+    roles,
+    gait: GaitSettings,
+    *,
+    features: bool,
+    contacts: bool,
+    feature_floor: float | None = None,
+    thigh_reference=None,
+) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
+    """Gait arrays of many clips (in parallel with the Rust kernels): per clip ``(positions
+    [F, J, 3] world, rotations [F, J, 4] local, frame_time, height, hips_rest_height)``, ``roles``
+    the 7 gait joints; per clip ``(features [F, 19] or None, contacts bool [F, 2] or None)``."""
+    return kernels().clip_gait_many(
+        clips, [int(r) for r in roles], *gait, bool(features), bool(contacts), feature_floor, thigh_reference
+    )
+
+
+# -- the whole per-clip work of preprocessing -----------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ClipInput:
+    """One clip for :func:`clip_pipeline_many`: ``source`` its bytes or its path (read by the
+    kernel), ``start`` where its MOTION block begins, its ``frames``, ``layout`` and
+    ``frame_time``, and its body scale (``height``, ``hips_rest_height``)."""
+
+    source: bytes | str
+    start: int
+    frames: int
+    layout: ChannelLayout
+    frame_time: float
+    height: float
+    hips_rest_height: float
+
+    @classmethod
+    def of(cls, source: bytes | str | os.PathLike, header, height: float, hips_rest_height: float) -> ClipInput:
+        """The clip of a :class:`~expressive_mocap.bvh.Header` whose text is ``source``."""
+        text = source if isinstance(source, bytes) else os.fspath(source)
+        return cls(
+            text,
+            header.block_start,
+            header.frames,
+            channel_layout(header.skeleton),
+            header.frame_time,
+            height,
+            hips_rest_height,
+        )
+
+
+@dataclass(frozen=True)
+class FeatureRequest:
+    """One causal feature array [F, 19] to compute: on ``floor`` (None: the toe-height
+    percentile) with ``thigh_reference [2, 4]`` (None: the first frame's thighs)."""
+
+    floor: float | None
+    thigh_reference: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class PipelineOutputs:
+    """What :func:`clip_pipeline_many` keeps of each clip; float arrays in float32 if ``float32``."""
+
+    positions: bool = False
+    rotations: bool = False
+    features: tuple[FeatureRequest, ...] = ()
+    contacts: bool = False
+    float32: bool = False
+
+
+def clip_pipeline_many(
+    clips: Sequence[ClipInput],
+    parents,
+    roles,
+    gait: GaitSettings,
+    outputs: PipelineOutputs,
+    max_bytes: int | None = None,
+) -> list:
+    """The whole per-clip work of many clips of one skeleton (``parents [J]``, ``roles`` its 7
+    gait joints), clips in parallel with the Rust kernels: reading the file (a path, at most
+    ``max_bytes``, default ``files.MAX_INPUT_BYTES``), MOTION block, FK, features, contacts.
+    Per clip ``(positions or None, rotations or None, [features per request], contacts or
+    None)``, or the ``ParseError`` / ``OSError`` of a clip whose block / file cannot be read."""
+    parents = _array("parents", parents, np.int64, "iu")
+    outputs = PipelineOutputs(
+        outputs.positions,
+        outputs.rotations,
+        tuple(
+            FeatureRequest(
+                f.floor, None if f.thigh_reference is None else _array("thigh_reference", f.thigh_reference, np.float64)
+            )
+            for f in outputs.features
+        ),
+        outputs.contacts,
+        outputs.float32,
+    )
+    return kernels().clip_pipeline_many(
+        list(clips), parents, [int(r) for r in roles], gait=GaitSettings(*gait), outputs=outputs, max_bytes=max_bytes
+    )
+
+
+__all__ = [
+    "ACTIVATIONS",
+    "ChannelLayout",
+    "ClipInput",
+    "FeatureRequest",
+    "GaitSettings",
+    "MotionBlock",
+    "PipelineOutputs",
+    "air_time",
+    "channel_layout",
+    "clip_gait_many",
+    "clip_pipeline_many",
+    "compose_rotations",
+    "decode_channels",
+    "decouple_rotations",
+    "dynamic_features",
+    "euler_to_quat",
+    "foot_contacts",
+    "format_motion_block",
+    "forward_kinematics",
+    "forward_kinematics_many",
+    "mlp_forward",
+    "quat_to_euler",
+    "read_motion_blocks",
+]
