@@ -27,7 +27,7 @@ import numpy as np
 
 with atheris.instrument_imports():
     import expressive_mocap as em
-    from expressive_mocap import exaggerate, model as em_model
+    from expressive_mocap import exaggeration, model as em_model
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / "tests"))
@@ -116,7 +116,7 @@ def tamper_once(fdp: atheris.FuzzedDataProvider, arrays: dict, meta):
 def check_model(data: bytes, models: dict) -> None:
     if data[:1] and data[0] % 2 == 1:
         data = tampered(atheris.FuzzedDataProvider(data[1:]), models)
-    for load in (em_model.BodyModel.load, exaggerate.ExaggerationModel.load):
+    for load in (em_model.BodyModel.load, exaggeration.ExaggerationModel.load):
         try:
             load(bytes(data))
         except em.MocapError:

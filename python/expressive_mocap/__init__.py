@@ -20,7 +20,7 @@ _LAZY = {
     "BodyModel": "model",
     "Dataset": "dataset",
     "Decomposition": "decouple",
-    "ExaggerationModel": "exaggerate",
+    "ExaggerationModel": "exaggeration",
     "decompose": "decouple",
     "load_dataset": "dataset",
 }
