@@ -27,7 +27,7 @@ import numpy as np
 
 import expressive_mocap as em
 from expressive_mocap.demo import procedural_walk
-from expressive_mocap.exaggerate import dof_positions, exaggerate, fit, leave_one_out, rank_agreement, swap_test, train, validation_table
+from expressive_mocap.exaggeration import dof_positions, exaggerate, fit, leave_one_out, rank_agreement, swap_test, train, validation_table
 from expressive_mocap.files import atomic_write
 from expressive_mocap.render import render
 
@@ -216,7 +216,7 @@ def main() -> None:
         report += [f"### cycle = `{cycle}` ({CYCLE_MEANING[cycle]})", "", "```", validation_table(*tests[cycle]), "```", ""]
     default = models["all"]
     pooled = union_pooled(default)
-    own_basis = np.any([fit(default.trajectories[p : p + 1], default.levels, default.weights, cycles=default.cycles_of([p]))["key"] for p in range(PEOPLE)], axis=0)
+    own_basis = np.any([fit(default.trajectories[p : p + 1], default.levels, default.weights, cycles=default.cycles_of([p])).key for p in range(PEOPLE)], axis=0)
     union = tests["all"][0][-1]
     report += [
         "### The union's size",

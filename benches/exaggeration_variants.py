@@ -21,17 +21,21 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import sys
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-import expressive_mocap.exaggerate as ex
+import expressive_mocap.exaggeration as ex
+import expressive_mocap.exaggeration.fitting as ex_fit
 from expressive_mocap import quat
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from exaggeration_experiment import DEFAULT_DATA, LEVELS, PEOPLE, STYLES, clip  # noqa: E402
 
-ORIGINAL = {name: getattr(ex, name) for name in ("fit", "rotations_to_dofs", "dofs_to_rotations", "_key_set", "subtree_weights")}
+# Where each patchable piece is defined; a patch replaces it in every module of the package that uses it.
+HOMES = {"fit": "fitting", "rotations_to_dofs": "dofs", "dofs_to_rotations": "dofs", "_key_set": "fitting", "subtree_weights": "dofs"}
+ORIGINAL = {name: getattr(sys.modules[f"expressive_mocap.exaggeration.{home}"], name) for name, home in HOMES.items()}
 
 
 def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", height_weight: float | None = None, samples: str = "cycles"):
@@ -51,20 +55,19 @@ def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", he
             w[-1] *= height_weight
         A = trajectories.transpose(2, 0, 1, 3).reshape(T, P * K * D)
         U, s, _ = np.linalg.svd(A, full_matrices=False)
-        r = out["basis"].shape[1]
+        r = out.basis.shape[1]
         Uo = U if observe == "all" else U[:, :r]
         Co = np.einsum("tr,pktd->pkdr", Uo, trajectories)
         observability = np.linalg.norm(Co[:, 0] - Co[:, -1], axis=-1) * w
         n = len(s) if over == "all" else r
-        rho = ex._cycle_correlation(U[:, :n], ex._single_cycles(trajectories) if cycles is None else cycles, levels, P)
+        rho = ex_fit._cycle_correlation(U[:, :n], ex_fit._single_cycles(trajectories) if cycles is None else cycles, levels, P)
         weight = s[:n] ** (2 if weighting == "s2" else 1)
         predictability = np.abs(rho) @ (weight / weight.sum())
         E = observability * predictability**2
         sums = E.sum(axis=1, keepdims=True)
         E = np.where(sums > 0, E / np.where(sums > 0, sums, 1.0), 0.0)
-        person_key = np.stack([ex._key_set(e, share) for e in E])
-        out.update(expressiveness=E, overall=E.mean(axis=0), key=person_key.any(axis=0), person_key=person_key)
-        return out
+        person_key = np.stack([ex_fit._key_set(e, share) for e in E])
+        return replace(out, expressiveness=E, overall=E.mean(axis=0), key=person_key.any(axis=0), person_key=person_key)
 
     return fit
 
@@ -123,15 +126,26 @@ VARIANTS = {
 }
 
 
+def _package_modules() -> list:
+    return [m for n, m in list(sys.modules.items()) if n == ex.__name__ or n.startswith(ex.__name__ + ".")]
+
+
+def _swap(name: str, old, new) -> None:
+    """``name`` rebound from ``old`` to ``new`` in every module of the package that holds ``old``."""
+    for module in _package_modules():
+        if getattr(module, name, None) is old:
+            setattr(module, name, new)
+
+
 @contextmanager
 def patched(names: dict):
     try:
         for name, value in names.items():
-            setattr(ex, name, value)
+            _swap(name, ORIGINAL[name], value)
         yield
     finally:
-        for name, value in ORIGINAL.items():
-            setattr(ex, name, value)
+        for name, value in names.items():
+            _swap(name, value, ORIGINAL[name])
 
 
 def measure(people, name: str = "default", cycle="all") -> dict:

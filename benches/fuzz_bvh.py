@@ -27,7 +27,7 @@ import numpy as np
 
 with atheris.instrument_imports():
     import expressive_mocap as em
-    from expressive_mocap import exaggerate
+    from expressive_mocap import exaggeration
     from expressive_mocap.decoupling import body_model as em_model
 
 REPO = Path(__file__).resolve().parent.parent
@@ -117,7 +117,7 @@ def tamper_once(fdp: atheris.FuzzedDataProvider, arrays: dict, meta):
 def check_model(data: bytes, models: dict) -> None:
     if data[:1] and data[0] % 2 == 1:
         data = tampered(atheris.FuzzedDataProvider(data[1:]), models)
-    for load in (em_model.BodyModel.load, exaggerate.ExaggerationModel.load):
+    for load in (em_model.BodyModel.load, exaggeration.ExaggerationModel.load):
         try:
             load(bytes(data))
         except em.MocapError:

@@ -6,8 +6,10 @@ import json
 
 import numpy as np
 
-from expressive_mocap import exaggerate, files as em_io
+from expressive_mocap import files as em_io
 from expressive_mocap.decoupling import body_model as em_model
+from expressive_mocap.exaggeration.model import FORMAT, VERSION
+from expressive_mocap.exaggeration.settings import REPRESENTATIONS
 
 
 def small_models() -> dict[str, tuple[dict, dict]]:
@@ -36,9 +38,9 @@ def small_models() -> dict[str, tuple[dict, dict]]:
         "cycle_trajectories": rng.normal(size=(5, T, D)), "cycle_performance": np.array([[0, 0], [0, 1], [1, 0], [1, 1], [1, 1]]),
     }
     exag_meta = {
-        "format": exaggerate.FORMAT, "version": exaggerate.VERSION, "joint_names": ["Hips", "Spine"],
+        "format": FORMAT, "version": VERSION, "joint_names": ["Hips", "Spine"],
         "dof_names": [f"{j}.{a}" for j in ("Hips", "Spine") for a in "xyz"] + ["Hips.height"], "height": 170.0, "hips": 0,
-        "representation": exaggerate.REPRESENTATIONS[0], "energy": 0.99, "settings": {},
+        "representation": REPRESENTATIONS[0], "energy": 0.99, "settings": {},
     }
     body_meta = dict(meta, joint_names=list(meta["joint_names"]), settings={}, report={})
     return {"body": (body, body_meta), "exaggeration": (exag, exag_meta)}

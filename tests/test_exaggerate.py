@@ -7,7 +7,8 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap import quat
 from expressive_mocap.demo import LOADED_JOINTS, loaded_walk, procedural_walk
-from expressive_mocap.exaggerate import (
+from expressive_mocap.errors import ArgumentError, ClipError, ModelError
+from expressive_mocap.exaggeration import (
     Cycle,
     ExaggerationModel,
     exaggerate,
@@ -136,19 +137,19 @@ def test_predictability_is_measured_over_every_cycle():
     weights = np.ones(3)
     over_cycles = fit(performances, levels, weights, cycles=(cycles.reshape(3 * n, T, 3), owners), rank=2)
     over_performances = fit(performances, levels, weights, rank=2)
-    E = over_performances["expressiveness"][0]
+    E = over_performances.expressiveness[0]
     assert E[0] == pytest.approx(E[1], rel=1e-9)
-    E = over_cycles["expressiveness"][0]
+    E = over_cycles.expressiveness[0]
     assert E[0] > 2 * E[1] > 0
     # The predictability behind it: SciPy's Pearson correlation over the cycles' coefficients.
-    u = over_cycles["basis"][:, 0]
+    u = over_cycles.basis[:, 0]
     rho = [abs(pearsonr(cycles[..., d].reshape(3 * n, T) @ u, levels[owners[:, 1]])[0]) for d in (0, 1)]
     assert rho[0] > 0.99 and rho[1] < 0.8
 
 
 def test_leave_one_out_fits_on_the_other_peoples_cycles():
     """Person p's warp uses exactly what training on the other people (every one of their cycles) gives."""
-    from expressive_mocap.exaggerate import leave_one_out
+    from expressive_mocap.exaggeration import leave_one_out
 
     people = [[loaded_walk(k, seconds=3.5 + p, wobble=0.3, seed=10 * p + i) for i, k in enumerate(LEVELS)] for p in range(3)]
     model = train(people, LEVELS)
@@ -320,7 +321,7 @@ def test_foot_locking_on_a_real_walk(bandai2_dir):
 def test_the_issue_targets_on_real_walks(bandai2_dir):
     """The paper's validation on dataset-2's walks, takes 1-8 as people (benches/EXAGGERATION.md has
     the full tables): the issue's bars for the swap test and the leave-one-person-out warp."""
-    from expressive_mocap.exaggerate import leave_one_out
+    from expressive_mocap.exaggeration import leave_one_out
 
     model = train(real_walk_people(bandai2_dir, range(1, 9)), LEVELS)
     *per_person, union = swap_test(model, draws=100)
@@ -364,9 +365,9 @@ def test_save_load_round_trip(model, walk, tmp_path):
 
 
 def test_damaged_model_files_give_clear_errors(model, tmp_path):
-    with pytest.raises(em.MocapError, match="not a readable"):
+    with pytest.raises(ModelError, match="not a readable"):
         ExaggerationModel.load(b"not a zip")
-    with pytest.raises(em.MocapError, match="cannot read"):
+    with pytest.raises(ModelError, match="cannot read"):
         ExaggerationModel.load(tmp_path / "missing.npz")
     import io
 
@@ -375,12 +376,12 @@ def test_damaged_model_files_give_clear_errors(model, tmp_path):
     arrays["basis"] = arrays["basis"][:, :1]
     buffer = io.BytesIO()
     np.savez(buffer, **arrays)
-    with pytest.raises(em.MocapError, match="expected finite numbers of shape"):
+    with pytest.raises(ModelError, match="expected finite numbers of shape"):
         ExaggerationModel.load(buffer.getvalue())
     del arrays["mappings"]
     buffer = io.BytesIO()
     np.savez(buffer, **arrays)
-    with pytest.raises(em.MocapError, match="lacks"):
+    with pytest.raises(ModelError, match="lacks"):
         ExaggerationModel.load(buffer.getvalue())
 
 
@@ -389,25 +390,25 @@ def test_damaged_model_files_give_clear_errors(model, tmp_path):
 
 def test_bad_inputs_give_clear_errors(clean_model, walk):
     walks = [loaded_walk(k, 2.0) for k in LEVELS]
-    with pytest.raises(em.MocapError, match="increasing"):
+    with pytest.raises(ArgumentError, match="increasing"):
         train([walks], [3, 2, 1])
-    with pytest.raises(em.MocapError, match="one clip per intensity"):
+    with pytest.raises(ArgumentError, match="one clip per intensity"):
         train([walks[:2]], LEVELS)
-    with pytest.raises(em.MocapError, match="degree"):
+    with pytest.raises(ArgumentError, match="degree"):
         train([walks], LEVELS, degree=3)
-    with pytest.raises(em.MocapError, match="representation"):
+    with pytest.raises(ArgumentError, match="representation"):
         train([walks], LEVELS, representation="matrix")
-    with pytest.raises(em.MocapError, match="cycle must be"):
+    with pytest.raises(ArgumentError, match="cycle must be"):
         train([walks], LEVELS, cycle="best")
-    with pytest.raises(em.MocapError, match="foot must be"):
+    with pytest.raises(ArgumentError, match="foot must be"):
         train([walks], LEVELS, foot=2)
-    with pytest.raises(em.MocapError, match="no gait cycle"):
+    with pytest.raises(ClipError, match="no gait cycle"):
         train([[w[:20] for w in walks]], LEVELS)
-    with pytest.raises(em.MocapError, match="skeleton"):
+    with pytest.raises(ModelError, match="skeleton"):
         exaggerate(clean_model, _renamed(walk), 3.0)
-    with pytest.raises(em.MocapError, match="finite"):
+    with pytest.raises(ArgumentError, match="finite"):
         exaggerate(clean_model, walk, float("nan"))
-    with pytest.raises(em.MocapError, match="reference"):
+    with pytest.raises(ArgumentError, match="reference"):
         exaggerate(clean_model, walk, 3.0, reference="mine")
 
 

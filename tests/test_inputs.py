@@ -74,7 +74,7 @@ def test_bvh_reader_refuses_files_over_the_bound_before_reading(reader, tmp_path
 
 
 def test_model_loaders_refuse_fifo_and_devices(fifo, zero_link):
-    from expressive_mocap.exaggerate import ExaggerationModel
+    from expressive_mocap.exaggeration import ExaggerationModel
 
     for path in (fifo, zero_link):
         for load in (BodyModel.load, ExaggerationModel.load):

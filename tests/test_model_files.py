@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap.exaggerate import ExaggerationModel
+from expressive_mocap.exaggeration import ExaggerationModel
 from expressive_mocap.files import MAX_MODEL_BYTES
 from expressive_mocap.decoupling.body_model import BodyModel
 

@@ -28,7 +28,7 @@ def test_the_main_entry_points_are_importable_from_the_top_level():
     # Failed before with ImportError: none of these were exported.
     from expressive_mocap import BodyModel as body_model
     from expressive_mocap import ExaggerationModel, decompose as top_decompose, load_dataset as top_load_dataset
-    from expressive_mocap.exaggerate import ExaggerationModel as exaggeration_itself
+    from expressive_mocap.exaggeration import ExaggerationModel as exaggeration_itself
 
     assert top_decompose is decompose and body_model is BodyModel and top_load_dataset is load_dataset
     assert ExaggerationModel is exaggeration_itself
@@ -41,7 +41,7 @@ def test_importing_the_package_does_not_load_the_models_or_the_dataset_reader():
     code = "import sys, expressive_mocap; print(' '.join(sorted(sys.modules)))"
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                             env={"PYTHONPATH": str(PYTHON)}).stdout.split()
-    for heavy in ("expressive_mocap.exaggerate", "expressive_mocap.decoupling.body_model", "expressive_mocap.decoupling.algebra", "expressive_mocap.dataset"):
+    for heavy in ("expressive_mocap.exaggeration", "expressive_mocap.decoupling.body_model", "expressive_mocap.decoupling.algebra", "expressive_mocap.dataset"):
         assert heavy not in loaded
 
 

@@ -122,7 +122,7 @@ def test_exaggeration_is_unit_free(bandai2_dir, clips_cm_and_m):
     was divided by the model's actor height (139 cm): this test failed with rotations 33.9 degrees
     apart; on walk_normal_001 in metres (--to 3.5) the hips rose from 0.90 m to 1.45 m on average
     and foot locking reported 'out of reach by up to 2.52' (m)."""
-    from expressive_mocap.exaggerate import exaggerate, train
+    from expressive_mocap.exaggeration import exaggerate, train
 
     people = real_walk_people(bandai2_dir, (1, 2))
     model = train(people, [1, 2, 3])
@@ -181,7 +181,7 @@ def test_leg_ik_is_unit_free():
 @pytest.fixture(scope="module")
 def walks_model(bandai2_dir):
     """Dataset-2's walks exhausted / normal / active = 1 / 2 / 3, takes 1-8 as people."""
-    from expressive_mocap.exaggerate import train
+    from expressive_mocap.exaggeration import train
 
     people = real_walk_people(bandai2_dir, range(1, 9))
     return train(people, [1, 2, 3]), people
@@ -192,7 +192,7 @@ def test_training_walks_are_estimated_near_their_own_intensity(walks_model):
     coefficients, mean and bootstrap). Measured per level, mean (standard deviation) over the 8
     takes: 1.06 (0.05), 1.88 (0.09), 3.06 (0.09); largest error 0.24 (take 5's normal walk,
     1.76). Before (unweighted least squares): 1.28 (0.02), 1.43 (0.03), 3.29 (0.05)."""
-    from expressive_mocap.exaggerate import exaggerate
+    from expressive_mocap.exaggeration import exaggerate
 
     model, people = walks_model
     estimates = np.array([[exaggerate(model, clip, 2.0, lock_feet=False)[1].estimate for clip in person] for person in people])
@@ -214,7 +214,7 @@ def test_the_estimate_is_reported_and_warns_outside_the_trained_range(walks_mode
     """An active run is not a walk more 'active' than any trained: its estimate lies beyond the
     range (measured 4.18 +- 0.32), the fit residual says it fits badly (3.5; the training walks
     at most 1.12), and both the report and a warning say so. Before: a bare number and no warning."""
-    from expressive_mocap.exaggerate import exaggerate
+    from expressive_mocap.exaggeration import exaggerate
 
     model, _ = walks_model
     run = em.read_bvh(bandai2_dir / "dataset-2_run_active_001.bvh")
@@ -232,7 +232,7 @@ def test_dataset1_walks_are_estimated_near_their_own_intensity(bandai1_dir):
     """dataset-1's walks tired / normal / active = 1 / 2 / 3 (take 1: one person; take 2's normal
     walk is 31 frames, no cycle), each estimated with a model from those three. Measured 0.97,
     2.06, 2.97. Before: 0.66, 2.68, 2.66 (normal and active in the wrong order)."""
-    from expressive_mocap.exaggerate import exaggerate, train
+    from expressive_mocap.exaggeration import exaggerate, train
 
     clips = [em.read_bvh(bandai1_dir / f"dataset-1_walk_{style}_001.bvh") for style in ("tired", "normal", "active")]
     model = train([clips], [1, 2, 3])

@@ -20,7 +20,7 @@ _LAZY = {
     "BodyModel": "decoupling",
     "Dataset": "dataset",
     "Decomposition": "decoupling",
-    "ExaggerationModel": "exaggerate",
+    "ExaggerationModel": "exaggeration",
     "decompose": "decoupling",
     "load_dataset": "dataset",
 }

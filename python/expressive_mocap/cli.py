@@ -455,7 +455,7 @@ def _levels(args) -> tuple[list[list[Motion]], list[float], list[list[str]]]:
 
 
 def _train_from_args(args):
-    from .exaggerate import ExaggerationModel, train
+    from .exaggeration import ExaggerationModel, train
 
     if getattr(args, "model", None):
         return ExaggerationModel.load(args.model), None
@@ -490,7 +490,7 @@ def cmd_rank(args) -> int:
 
 
 def cmd_exaggerate(args) -> int:
-    from .exaggerate import ExaggerationModel, exaggerate
+    from .exaggeration import ExaggerationModel, exaggerate
 
     model = ExaggerationModel.load(args.model)
     motion = _read_for_model(args.input, model, EXAGGERATION_MODEL_FIX)
@@ -505,7 +505,7 @@ def cmd_exaggerate(args) -> int:
 
 
 def cmd_validate(args) -> int:
-    from .exaggerate import leave_one_out, rank_agreement, swap_test, validation_table
+    from .exaggeration import leave_one_out, rank_agreement, swap_test, validation_table
 
     model, paths = _train_from_args(args)
     if paths:

@@ -29,9 +29,9 @@ MIN_GIF_DELAY = 0.02  # s: browsers play shorter GIF frame delays as 0.1 s
 def heading(motion: Motion, positions: np.ndarray | None = None) -> np.ndarray:
     """The walker's forward direction, a horizontal unit vector ``[3]``: the hips' travel from the
     first frame to the last, or their facing where they barely travel (the yaw of
-    :func:`~expressive_mocap.exaggerate.cycle_heading` over the whole clip); +Z when the
+    :func:`~expressive_mocap.exaggeration.cycle_heading` over the whole clip); +Z when the
     skeleton's hips and upper legs cannot be told by name."""
-    from .exaggerate import Cycle, cycle_heading
+    from .exaggeration import Cycle, cycle_heading
     from .roles import JointRoles
 
     try:

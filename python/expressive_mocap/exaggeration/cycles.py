@@ -1,0 +1,186 @@
+"""Cycles: a walk's footstrike-to-footstrike cycles (or a whole clip), their time normalisation
+to ``T`` samples and back, and their heading (the travel direction, removed before measuring)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import quat
+from ..errors import ArgumentError, MocapError
+from ..features import foot_contacts, footstrikes
+from ..motion import Motion
+from ..roles import JointRoles, actor_height, facing_yaw
+from .settings import CYCLE_CHOICES, TRAINING, CycleChoice
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """Frames ``start`` to ``end`` (both included; ``end`` is the next footstrike of ``foot``,
+    0 = left, 1 = right, -1 for a whole clip or a given range)."""
+
+    start: int
+    end: int
+    foot: int = -1
+
+    @property
+    def n_frames(self) -> int:
+        return self.end - self.start + 1
+
+
+def find_cycles(
+    motion: Motion,
+    roles: JointRoles | None = None,
+    contacts: np.ndarray | None = None,
+    foot: int | None = TRAINING.foot,
+) -> list[Cycle]:
+    """Gait cycles of a walk: footstrike to next footstrike of ``foot`` (0 = left, the default, so
+    that every cycle of every clip starts in the same phase; None: the foot whose cycles cover
+    more frames). The cycles follow each other without gaps; empty when the foot never strikes twice."""
+    if contacts is None:
+        contacts = foot_contacts(motion, roles)
+    strikes = footstrikes(contacts)
+    best: list[Cycle] = []
+    for side in (0, 1) if foot is None else (int(foot),):
+        frames = strikes[strikes[:, 1] == side, 0]
+        cycles = [Cycle(int(a), int(b), side) for a, b in zip(frames[:-1], frames[1:]) if b - a >= 2]
+        if sum(c.n_frames for c in cycles) > sum(c.n_frames for c in best):
+            best = cycles
+    return best
+
+
+def normalise_cycle(motion: Motion, cycle: Cycle, samples: int = TRAINING.samples) -> Motion:
+    """The frames of ``cycle`` resampled to ``samples`` frames over the same span (slerp for
+    rotations, linear for translations): the time-normalised cycle."""
+    if cycle.start < 0 or cycle.end >= motion.n_frames or cycle.end - cycle.start < 1:
+        raise ArgumentError(f"cycle frames {cycle.start}-{cycle.end} do not fit a {motion.n_frames}-frame motion")
+    return motion[cycle.start : cycle.end + 1].resample(n_frames=samples)
+
+
+def to_cycle_timing(trajectory: np.ndarray, n_frames: int) -> np.ndarray:
+    """Map a normalised trajectory ``[T, ...]`` back to a cycle of ``n_frames`` frames (the
+    inverse of the uniform time normalisation: linear interpolation at each frame's phase)."""
+    trajectory = np.asarray(trajectory, dtype=np.float64)
+    samples = len(trajectory)
+    position = np.linspace(0.0, samples - 1, n_frames)
+    i0 = np.minimum(np.floor(position).astype(int), samples - 2)
+    t = (position - i0).reshape((-1,) + (1,) * (trajectory.ndim - 1))
+    return (1 - t) * trajectory[i0] + t * trajectory[i0 + 1]
+
+
+def check_cycle_choice(cycle: CycleChoice) -> None:
+    """Refuse a ``cycle`` that is neither a name of :data:`CYCLE_CHOICES`, an index nor a range."""
+    if not isinstance(cycle, tuple) and cycle not in CYCLE_CHOICES and not isinstance(cycle, (int, np.integer)):
+        raise ArgumentError(
+            f"cycle must be one of {', '.join(CYCLE_CHOICES)}, an index or a (start, end) range, got {cycle!r}"
+        )
+
+
+def choose_cycles(motion: Motion, roles: JointRoles, cycle: CycleChoice, foot: int = TRAINING.foot) -> list[Cycle]:
+    """The cycles of a training clip for ``cycle`` = "all" (every one), "middle" (the one nearest the
+    clip's middle: steady walking), "first", "whole" (the clip), an index, or a ``(start, end)``
+    frame range; walking cycles run from one footstrike of ``foot`` to the next."""
+    if isinstance(cycle, tuple):
+        start, end = (int(v) for v in cycle)
+        return [Cycle(start, end)]
+    if cycle == "whole":
+        return [Cycle(0, motion.n_frames - 1)]
+    check_cycle_choice(cycle)
+    cycles = find_cycles(motion, roles, foot=foot)
+    if not cycles:
+        raise MocapError(
+            f"no gait cycle found in its {motion.n_frames} frames (no foot strikes twice): for an action other than "
+            "walking take the whole clip (--cycle whole; in Python cycle='whole') or a (start, end) frame range"
+        )
+    if cycle == "first":
+        return cycles[:1]
+    if cycle == "all":
+        return cycles
+    if cycle == "middle":
+        middle = motion.n_frames / 2
+        return [min(cycles, key=lambda c: abs((c.start + c.end) / 2 - middle))]
+    assert isinstance(cycle, (int, np.integer))  # check_cycle_choice let nothing else through
+    if not -len(cycles) <= cycle < len(cycles):
+        raise MocapError(f"cycle {cycle}: the clip has {len(cycles)} cycles")
+    return [cycles[cycle]]
+
+
+# --------------------------------------------------------------------------- heading
+
+
+def _yaw(vector: np.ndarray) -> float:
+    """Degrees about Y that turn +Z towards the horizontal ``vector``."""
+    return float(np.degrees(np.arctan2(vector[0], vector[2])))
+
+
+def cycle_heading(motion: Motion, roles: JointRoles, cycle: Cycle, positions: np.ndarray | None = None) -> float:
+    """The yaw (degrees) of a cycle's travel direction: the hips' horizontal displacement from its
+    first to its last frame; where the hips barely travel (< 5% of the actor's height), the
+    facing direction (perpendicular to the line from the right to the left upper leg)."""
+    if positions is None:
+        positions = motion.positions()
+    hips = positions[[cycle.start, cycle.end], roles.hips]
+    travel = hips[1] - hips[0]
+    travel[1] = 0.0
+    if np.linalg.norm(travel) >= 0.05 * actor_height(motion.skeleton, roles):
+        return _yaw(travel)
+    return facing_yaw(positions[cycle.start : cycle.end + 1], roles)
+
+
+def frame_yaw(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], positions: np.ndarray) -> np.ndarray:
+    """Heading (degrees) of every frame: its cycle's; before the first / after the last, the nearest."""
+    yaw = np.zeros(motion.n_frames)
+    if not cycles:
+        return yaw + cycle_heading(motion, roles, Cycle(0, motion.n_frames - 1), positions)
+    headings = [cycle_heading(motion, roles, c, positions) for c in cycles]
+    yaw[: cycles[0].start] = headings[0]
+    for c, h in zip(cycles, headings):
+        yaw[c.start : c.end + 1] = h
+    yaw[cycles[-1].end :] = headings[-1]
+    return yaw
+
+
+def without_heading(rotations: np.ndarray, hips: int, yaw: np.ndarray | float) -> np.ndarray:
+    """Rotations with the hips pre-multiplied by the inverse of ``yaw`` (degrees, per frame or one)."""
+    out = rotations.copy()
+    out[:, hips] = quat.mul(quat.about("Y", -np.broadcast_to(yaw, len(rotations))), rotations[:, hips])
+    return out
+
+
+@dataclass
+class SampledCycles:
+    """Time-normalised cycles of one clip: heading-free rotations ``[C, T, J, 4]`` and hips
+    heights / actor height ``[C, T]``."""
+
+    rotations: np.ndarray
+    heights: np.ndarray
+
+
+def sample_cycles(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], samples: int) -> SampledCycles:
+    """Each of ``cycles`` time-normalised to ``samples`` frames with its own heading removed."""
+    positions = motion.positions()
+    height = actor_height(motion.skeleton, roles)
+    rots, heights = [], []
+    for cycle in cycles:
+        yaw = cycle_heading(motion, roles, cycle, positions)
+        part = normalise_cycle(motion, cycle, samples)
+        rots.append(without_heading(part.rotations, roles.hips, yaw))
+        heights.append(part.positions()[:, roles.hips, 1] / height)
+    return SampledCycles(np.stack(rots), np.stack(heights))
+
+
+__all__ = [
+    "Cycle",
+    "SampledCycles",
+    "check_cycle_choice",
+    "choose_cycles",
+    "cycle_heading",
+    "find_cycles",
+    "frame_yaw",
+    "normalise_cycle",
+    "sample_cycles",
+    "to_cycle_timing",
+    "without_heading",
+]

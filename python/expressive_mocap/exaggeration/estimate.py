@@ -1,0 +1,150 @@
+"""A motion's current intensity (step 6): weighted least squares over the key DOFs' mapped
+coefficients, with an uncertainty (key joints left out, cycles resampled, the training
+performances' own error) and a fit residual: :class:`IntensityEstimate`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .fitting import mapped
+
+if TYPE_CHECKING:
+    from .model import ExaggerationModel
+
+BOOTSTRAP_DRAWS = 200
+POOR_FIT = 2.0  # estimate residual above which the motion is reported as unlike the training performances
+
+
+@dataclass(frozen=True)
+class IntensityEstimate:
+    """A motion's estimated current intensity ``k``. ``uncertainty`` (one standard deviation, in
+    intensity units) combines how much the key joints disagree (``jackknife``: leave one joint's
+    DOFs out), how much the motion's own cycles do (``bootstrap``: resampled) and how far the
+    training performances come out from their own intensities (``training``: RMS). ``residual``:
+    the weighted misfit at ``k`` relative to the training performances' own (about 1 for a
+    performance like the training ones; well above 1, the motion is not much like them).
+    ``trained``: the lowest and highest trained intensity."""
+
+    k: float
+    uncertainty: float
+    residual: float
+    jackknife: float
+    bootstrap: float
+    training: float
+    trained: tuple[float, float]
+
+    @property
+    def outside(self) -> bool:
+        """Outside the trained range by more than twice the uncertainty."""
+        low, high = self.trained
+        return self.k + 2 * self.uncertainty < low or self.k - 2 * self.uncertainty > high
+
+    @property
+    def poor_fit(self) -> bool:
+        """The residual is above :data:`POOR_FIT` (a model of dataset-2's walks: its own walks
+        0.55-1.12, each take left out of training 0.59-1.19, a turning walk 1.75, runs 2.4-3.5,
+        a wave 5.8)."""
+        return self.residual > POOR_FIT
+
+    def warning(self) -> str:
+        """What is wrong with the estimate ("" when nothing)."""
+        low, high = self.trained
+        problems = []
+        if self.outside:
+            problems.append(
+                f"the estimated current intensity {self.k:.3g} +- {self.uncertainty:.2g} is outside the trained range "
+                f"{low:g}-{high:g} (the mappings extrapolate there)"
+            )
+        if self.poor_fit:
+            problems.append(
+                f"the motion fits the model poorly (residual {self.residual:.2f}; the training performances' about 1): "
+                "is it the same action?"
+            )
+        return "; ".join(problems) + ("; give the current intensity if known" if problems else "")
+
+
+def weighted_intensity(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """Weighted least-squares intensities ``[B]`` of coefficients ``c [B, n, r]`` under polynomial
+    ``mappings [n, r, degree + 1]`` with ``weights [n, r]``: closed form for lines; otherwise the
+    best of a grid over the trained range widened by twice its span, refined by Gauss-Newton."""
+    degree = mappings.shape[-1] - 1
+    if degree == 0:
+        return np.full(len(c), float(np.mean(levels)))
+    if degree == 1:
+        slope, intercept = mappings[..., 0], mappings[..., 1]
+        denominator = float(np.sum(weights * slope * slope))
+        if denominator <= 0:
+            return np.full(len(c), float(np.mean(levels)))
+        return np.sum(weights * slope * (c - intercept), axis=(1, 2)) / denominator
+    span = float(levels[-1] - levels[0])
+    grid = np.linspace(levels[0] - 2 * span, levels[-1] + 2 * span, 401)
+    errors = np.einsum("nr,bgnr->bg", weights, (mapped(mappings, grid)[None] - c[:, None]) ** 2)
+    k = grid[np.argmin(errors, axis=1)]
+    derivative = mappings[..., :-1] * np.arange(degree, 0, -1)
+    for _ in range(8):
+        gap, slope = mapped(mappings, k) - c, mapped(derivative, k)  # [B, n, r]
+        denominator = np.einsum("nr,bnr->b", weights, slope * slope)
+        step = np.einsum("nr,bnr->b", weights, slope * gap) / np.where(denominator > 0, denominator, 1.0)
+        k = k - np.where(denominator > 0, step, 0.0)
+    return k
+
+
+def _jackknife(key: np.ndarray, mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, levels: np.ndarray) -> float:
+    """The spread of the intensity with one key joint's DOFs left out at a time (they move together)."""
+    joints = np.flatnonzero(key) // 3
+    groups = [joints == j for j in np.unique(joints)]
+    if len(groups) <= 1:
+        return 0.0
+    left_out = np.array([weighted_intensity(mappings, weights * ~g[:, None], c[None], levels)[0] for g in groups])
+    n = len(groups)
+    return float(np.sqrt((n - 1) / n * np.sum((left_out - left_out.mean()) ** 2)))
+
+
+def _bootstrap(cycles: np.ndarray | None, mappings: np.ndarray, weights: np.ndarray, levels: np.ndarray) -> float:
+    """The spread of the intensity over resampled cycles ``[C, n, r]`` (0 with fewer than two)."""
+    if cycles is None or len(cycles) <= 1:
+        return 0.0
+    draws = np.random.default_rng(0).integers(0, len(cycles), size=(BOOTSTRAP_DRAWS, len(cycles)))
+    return float(np.std(weighted_intensity(mappings, weights, cycles[draws].mean(axis=1), levels)))
+
+
+def estimate_intensity(
+    model: ExaggerationModel, coefficients: np.ndarray, cycle_coefficients: np.ndarray | None = None
+) -> IntensityEstimate:
+    """The current intensity of a motion from its coefficients ``[D, r]`` under ``model``; see
+    :meth:`ExaggerationModel.estimate <expressive_mocap.exaggeration.ExaggerationModel.estimate>`."""
+    key, levels = model.key, model.levels
+    mappings, c = model.mappings[key], np.asarray(coefficients, dtype=np.float64)[key]
+    # No coefficient counts as predicted better than to a tenth of the typical change over the
+    # trained range: training data exactly on the lines (one noiseless person) would otherwise
+    # weigh in without bound; with that floor alone the weights are equal (plain least squares).
+    change = mapped(mappings, levels[-1]) - mapped(mappings, levels[0])
+    floor = 0.01 * float(np.mean(change**2)) if change.size else 0.0
+    weights = 1.0 / (model.coefficient_spread()[key] + (floor if floor > 0 else 1.0))
+    k = float(weighted_intensity(mappings, weights, c[None], levels)[0])
+    jackknife = _jackknife(key, mappings, weights, c, levels)
+    cycles = None if cycle_coefficients is None else np.asarray(cycle_coefficients, dtype=np.float64)[:, key]
+    bootstrap = _bootstrap(cycles, mappings, weights, levels)
+    # ... and how far the training performances themselves come out from their intensities.
+    trained = np.einsum("tr,pktd->pkdr", model.basis, model.trajectories)[:, :, key]
+    P, K = trained.shape[:2]
+    trained = trained.reshape(P * K, *trained.shape[2:])
+    trained_k = weighted_intensity(mappings, weights, trained, levels)
+    training = float(np.sqrt(np.mean((trained_k - np.tile(levels, P)) ** 2)))
+
+    def misfit(c: np.ndarray, k: np.ndarray) -> np.ndarray:  # weighted RMS distance from the mapping at k
+        return np.sqrt(np.einsum("nr,bnr->b", weights, (mapped(mappings, k) - c) ** 2) / weights.sum())
+
+    # The residual in units of the training performances' own (at least the floor's tenth of the change).
+    typical = max(float(np.sqrt(np.mean(misfit(trained, trained_k) ** 2))), np.sqrt(floor))
+    residual = float(misfit(c[None], np.array([k]))[0] / typical) if typical > 0 else 0.0
+    uncertainty = float(np.sqrt(jackknife**2 + bootstrap**2 + training**2))
+    return IntensityEstimate(
+        k, uncertainty, residual, jackknife, bootstrap, training, (float(levels[0]), float(levels[-1]))
+    )
+
+
+__all__ = ["BOOTSTRAP_DRAWS", "POOR_FIT", "IntensityEstimate", "estimate_intensity", "weighted_intensity"]
