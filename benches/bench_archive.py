@@ -16,7 +16,7 @@ Measures, in one run (machines here drift by +-30 %, so only ratios taken in the
    targets marked pass / fail.
 
 Data: Bandai-Namco-Research-Motiondataset (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
-The repository never contains it (see the README, Data): ``--data DIR``, else the ``unpack``
+The repository never contains it (see docs/data.md): ``--data DIR``, else the ``unpack``
 script of ``../shared/data`` next to the checkout.
 """
 
