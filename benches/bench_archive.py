@@ -12,10 +12,11 @@ Measures, in one run (machines here drift by +-30 %, so only ratios taken in the
 3. peers (upc-pymotion, bvhio, pybvh; ``pip install -r benches/requirements.txt``), with a
    spot check of their world positions against ours;
 4. end-to-end (read + FK) ratios and peak RSS, each in its own child process;
-5. a table on stdout and ``benches/RESULTS.md`` with the targets marked pass / fail.
+5. a table on stdout and its own section of ``benches/RESULTS.md`` (the others kept), with the
+   targets marked pass / fail.
 
 Data: Bandai-Namco-Research-Motiondataset (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
-The repository never contains it (see the README, Data): ``--data DIR``, else the ``unpack``
+The repository never contains it (see docs/data.md): ``--data DIR``, else the ``unpack``
 script of ``../shared/data`` next to the checkout.
 """
 
@@ -44,8 +45,10 @@ import numpy as np
 from tqdm import tqdm
 
 import expressive_mocap as em
+from results import write_section  # benches/results.py: this script rewrites only its own section
 
 REPO = Path(__file__).resolve().parent.parent
+TITLE = "Whole archive: reading and forward kinematics"  # its section of benches/RESULTS.md
 DATASET2 = Path("Bandai-Namco-Research-Motiondataset-2") / "data"
 CITATION = (
     "Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022; "
@@ -556,7 +559,6 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
 
     command = " ".join(["python", os.path.relpath(sys.argv[0], REPO)] + sys.argv[1:])
     out = [
-        "# expressive-mocap: whole-archive benchmark\n",
         f"- date: {started:%Y-%m-%d %H:%M} (the run took {elapsed / 60:.1f} min)",
         f"- machine: {info['cpu']}, {info['cores']} cores, {info['ram_gib']:.1f} GiB RAM; Python {info['python']}, NumPy {info['numpy']}",
         f"- package: {info['package']}",
@@ -573,7 +575,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     if e2e and e2e["failed"]:
         out.append(f"**Child runs that failed (see stderr): {', '.join(e2e['failed'])}.**\n")
 
-    out.append("## 1. Read: parse + Euler->quaternion, every clip into memory\n")
+    out.append("### 1. Read: parse + Euler->quaternion, every clip into memory\n")
     rows = [
         rate_row("reading the bytes only: the floor", t["floor"]),
         rate_row("**ours, Rust: `read_bvh_many`**", t["rust_many"], vs=f"{ratio_median(times['numpy_read'], times['rust_many']):.1f}x faster than the NumPy twin"),
@@ -596,7 +598,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
             rows.append(rate_row(f"{PEER_LABEL[name]} load (1 run)", r["read_s"], vs=f"{r['read_s'] / ours:.1f}x ours' time in a fresh process"))
     out.append(md_table(["implementation", "wall s", "MB/s", "frames/s", "ratio / notes"], rows) + "\n")
 
-    out.append("## 2. Forward kinematics of every frame of every clip (same loaded motions)\n")
+    out.append("### 2. Forward kinematics of every frame of every clip (same loaded motions)\n")
 
     def fk_row(label, key, vs=""):
         return [label, f"{t[key]:.3f}", f"{joint_frames / t[key] / 1e6:.1f} M", vs]
@@ -618,7 +620,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     out.append(md_table(["implementation", "wall s", "joint-frames/s", "ratio"], rows) + "\n")
 
     if runs:
-        out.append("## 3. End to end (read + FK), each run in a fresh process; peak memory\n")
+        out.append("### 3. End to end (read + FK), each run in a fresh process; peak memory\n")
         base = min(x["baseline_rss"] for results in runs.values() for x in results)
         out.append(f"Decoded float64 arrays (rotations F*J*4*8 + translations F*J*3*8 bytes): **{decoded / MB:.0f} MB**. "
                    "Peak = the child's RSS high-water mark, `VmHWM` from /proc/self/status (`ru_maxrss` would report the "
@@ -643,11 +645,11 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
                        "were timed on those same converted files.\n")
 
     if checks:
-        out.append("## 4. Correctness spot check: world positions against ours (cm)\n")
+        out.append("### 4. Correctness spot check: world positions against ours (cm)\n")
         out.append(md_table(["implementation", "max abs difference", "clips"], [[a, f"{b:.1e}", c] for a, b, c in checks]) + "\n")
 
     if breakdown:
-        out.append("## 5. Where our reader's time goes (one `read_bvh_many` call, Rust backend, warm process)\n")
+        out.append("### 5. Where our reader's time goes (one `read_bvh_many` call, Rust backend, warm process)\n")
         whole = breakdown[0][1]
         out.append(md_table(["step", "s", "share of the call"], [[l.replace("  ", "&nbsp;&nbsp;&nbsp;"), f"{v:.3f}", "" if l.startswith(("split", "  parsing", "  the rest")) else f"{v / whole:.0%}"] for l, v in breakdown]) + "\n")
         out.append("cProfile of one more call (profiling inflates the Python parts):\n\n```\n"
@@ -683,7 +685,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     if "rust" in runs:
         peak = max(x["peak_rss"] for x in runs["rust"])
         targets.append(["(info) peak memory of read + FK, FK outputs kept too", f"{peak / MB:.0f} MB = {peak / decoded:.2f}x", ""])
-    out.append("## Targets we set\n")
+    out.append("### Targets we set\n")
     out.append(md_table(["target", "measured", "result"], targets) + "\n")
     return "\n".join(out)
 
@@ -697,7 +699,7 @@ def main() -> None:
     parser.add_argument("--peers", default=",".join(PEERS), help="comma-separated peers to run: pymotion, bvhio, pybvh ('' for none)")
     parser.add_argument("--limit", type=int, help="only the first N clips (a quick run; targets are not judged)")
     parser.add_argument("--rounds", type=int, default=3, help="rounds of the read / FK measurements (default 3)")
-    parser.add_argument("--out", default=str(Path(__file__).resolve().parent / "RESULTS.md"), help="markdown report to write")
+    parser.add_argument("--out", default=str(Path(__file__).resolve().parent / "RESULTS.md"), help="markdown file whose section %r this rewrites (the others are kept)" % TITLE)
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--paths-file", help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -753,8 +755,8 @@ def main() -> None:
         log("WARNING: the package's files changed during the run: the figures mix versions")
     text = report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_stats, started, time.perf_counter() - t_start)
     print(text)
-    Path(args.out).write_text(text)
-    log(f"wrote {args.out}")
+    write_section(TITLE, text, args.out)
+    log(f"wrote the section {TITLE!r} of {args.out}")
 
 
 if __name__ == "__main__":

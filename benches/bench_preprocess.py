@@ -41,7 +41,10 @@ import time
 import zipfile
 from pathlib import Path
 
+from results import write_section  # benches/results.py: this script rewrites only its own section
+
 REPO = Path(__file__).resolve().parent.parent
+TITLE = "Preprocessing the archive: `expressive-mocap preprocess`"  # its section of benches/RESULTS.md
 DEFAULT_DATA = Path.home() / ".cache" / "motion-data" / "dataset" / "Bandai-Namco-Research-Motiondataset-2" / "data"
 CITATION = "Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), licensed CC BY-NC 4.0."
 MB = 1e6
@@ -160,7 +163,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3, help="rounds of the Rust configurations (default 3)")
     parser.add_argument("--limit", type=int, help="only the first N clips (copied into a temporary folder; a quick run)")
     parser.add_argument("--no-numpy", action="store_true", help="skip the NumPy-twin run")
-    parser.add_argument("--out", default=str(REPO / "benches" / "RESULTS.md"), help="markdown file to append the section to")
+    parser.add_argument("--out", default=str(REPO / "benches" / "RESULTS.md"), help="markdown file whose section %r this rewrites (the others are kept)" % TITLE)
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--child-kernels", help=argparse.SUPPRESS)
     parser.add_argument("--child-out", help=argparse.SUPPRESS)
@@ -210,17 +213,14 @@ def main() -> None:
         shutil.rmtree(work, ignore_errors=True)
     text = report(args, info, started, time.perf_counter() - t0, len(paths), size, zip_size, zip_seconds, runs, ceiling)
     print(text)
-    with open(args.out, "a") as out:
-        out.write("\n" + text)
-    log(f"appended to {args.out}")
+    write_section(TITLE, text, args.out)
+    log(f"wrote the section {TITLE!r} of {args.out}")
 
 
 def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, runs, ceiling) -> str:
     med = lambda name, key: statistics.median(r[key] for r in runs[name])  # noqa: E731
     frames = next(r["frames"] for rs in runs.values() for r in rs)
     lines = [
-        "# Preprocessing the archive: `expressive-mocap preprocess`",
-        "",
         f"- date: {started:%Y-%m-%d %H:%M} (the run took {seconds / 60:.1f} min)",
         f"- machine: {info}",
         f"- command: `python benches/bench_preprocess.py{' --limit ' + str(args.limit) if args.limit else ''}`; "

@@ -1,5 +1,7 @@
-"""The README's command examples, run as written on the real clips they name (placeholders such as
-walk.bvh and wave.bvh stand for the dataset-2 clips below), in order, in one folder; then every BVH
+"""The command examples of the README and of docs/*.md, run as written on the real clips they name
+(placeholders such as walk.bvh and wave.bvh stand for the dataset-2 clips below), page after page in
+the order of PAGES (a page's commands may use what an earlier one wrote), each distinct command
+once, in one folder; then every BVH
 they write is checked for plausibility: no hips step longer than 5 cm a frame at 30 fps or than
 the inputs' own longest (in the file's units, relative to its actor's height), and an exaggerated
 walk's stance feet no higher than the input's (foot locking). Data: Bandai-Namco-Research-
@@ -26,13 +28,18 @@ PLACEHOLDERS = {
     "wave.bvh": "dataset-2_wave-right-hand_normal_001.bvh",
     "other_session_walk.bvh": "dataset-1_walk_normal_001.bvh",
 }
-NOT_RUN = {"info broken.bvh": "shows an error message for a file the README does not give"}
+NOT_RUN = {"info broken.bvh": "shows an error message for a file the pages do not give"}
+# The pages whose examples run, in this order: the README's tour, then the manual. A page's commands
+# may use an earlier one's outputs (exaggerate --model walks.npz after rank ... -o walks.npz).
+PAGES = ["README.md", "docs/demo.md", "docs/bvh.md", "docs/decoupling.md", "docs/exaggeration.md",
+         "docs/preprocessing.md", "docs/speed.md", "docs/safety.md", "docs/methods.md", "docs/data.md"]
 
 
-def readme_commands() -> list[str]:
-    """Every `expressive-mocap ...` line of the README's code blocks (after `$ ` in transcripts),
-    without trailing comments, in order; `validate ...` is given the model written before it."""
-    text = (REPO / "README.md").read_text()
+def page_commands(page: str) -> list[str]:
+    """Every `expressive-mocap ...` line of a page's ```sh and ```text blocks (after `$ ` in
+    transcripts), without trailing comments, in order; `validate ...` is given the model written
+    before it."""
+    text = (REPO / page).read_text()
     commands = []
     for block in re.findall(r"```(?:sh|text)\n(.*?)```", text, re.S):
         for line in block.splitlines():
@@ -42,6 +49,16 @@ def readme_commands() -> list[str]:
                 if not any(skip in command for skip in NOT_RUN):
                     commands.append(command)
     return commands
+
+
+def readme_commands() -> list[str]:
+    """The commands of every page of PAGES, page after page."""
+    return [command for page in PAGES for command in page_commands(page)]
+
+
+def test_every_page_of_the_manual_is_run():
+    pages = {"README.md"} | {f"docs/{p.name}" for p in (REPO / "docs").glob("*.md")}
+    assert pages == set(PAGES), f"add the new pages to PAGES, in an order their commands run in: {sorted(pages ^ set(PAGES))}"
 
 
 def real_arguments(command: str, dataset1: Path, dataset2: Path) -> tuple[list[str], str | None]:
@@ -80,8 +97,12 @@ def test_the_readme_examples_run_and_their_outputs_are_plausible(bandai1_dir, ba
     commands = readme_commands()
     assert any(c.startswith("expressive-mocap blend ") for c in commands) and len(commands) >= 15
     longest_input_step = {}
+    done = set()
     for command in commands:
         args, backend = real_arguments(command, bandai1_dir, bandai2_dir)
+        if (backend, *args) in done:  # the README's tour repeats a few of the manual's examples
+            continue
+        done.add((backend, *args))
         with em.use_backend(backend or "auto"):
             status = main(args)
         err = capsys.readouterr().err
