@@ -17,9 +17,10 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-import expressive_mocap.preprocess as preprocess_module
+import expressive_mocap.dataset.finish as finish_module
+import expressive_mocap.dataset.npy as npy_module
 from expressive_mocap.demo import procedural_walk
-from expressive_mocap.preprocess import load_dataset, preprocess
+from expressive_mocap.dataset import load_dataset, preprocess
 
 # Child processes import the package the tests import: the installed one in CI, not the sources.
 PACKAGE_ROOT = str(Path(em.__file__).resolve().parent.parent)
@@ -120,7 +121,7 @@ def test_a_rerun_after_a_kill_before_partial_was_removed_keeps_the_arrays(clips,
     def killed(_out):
         raise KeyboardInterrupt  # the process dies after the manifest is in place
 
-    monkeypatch.setattr(preprocess_module, "remove_partial", killed)
+    monkeypatch.setattr(finish_module, "remove_partial", killed)
     with pytest.raises(KeyboardInterrupt):
         run(clips, out)
     monkeypatch.undo()
@@ -145,7 +146,7 @@ def test_a_rerun_after_a_kill_during_the_final_moves_finishes_them(clips, refere
             moved.append(a)
         return real_replace(a, b)
 
-    monkeypatch.setattr(preprocess_module.os, "replace", replace)
+    monkeypatch.setattr(finish_module.os, "replace", replace)
     with pytest.raises(KeyboardInterrupt):
         run(clips, out)
     monkeypatch.undo()
@@ -304,7 +305,7 @@ def test_a_full_disk_names_the_file_and_the_run_resumes(clips, reference, tmp_pa
                 return Full(handle)
         return handle
 
-    monkeypatch.setattr(preprocess_module, "open", full_after_one_batch, raising=False)
+    monkeypatch.setattr(npy_module, "open", full_after_one_batch, raising=False)
     with pytest.raises(em.MocapError, match=r"cannot write .*\.partial/\w+\.npy: No space left on device \(rerun"):
         run(clips, out, batch_mb=1e-6)
     monkeypatch.undo()

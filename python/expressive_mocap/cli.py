@@ -535,7 +535,7 @@ def _add_training_options(p, model: bool = False) -> None:
 
 
 def cmd_preprocess(args) -> int:
-    from .preprocess import preprocess
+    from .dataset import preprocess
 
     summary = preprocess(args.source, args.output, args.keep, args.model, batch_mb=args.batch_mb,
                          max_batches=args.max_batches, model_float32=args.model_float32, cluster=args.dask, overwrite=args.overwrite,
