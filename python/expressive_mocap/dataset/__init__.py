@@ -61,8 +61,23 @@ manifest checks, verification), :mod:`.lock`, :mod:`.folder` (whose folder it is
 from .format import KINDS
 from .lock import FolderLock
 from .reader import Clip, Dataset, load_dataset
-from .run import preprocess
-from .sources import open_source
-from .summary import Summary
+
+# The writing side loads on first use: reading a dataset (load_dataset) stays light.
+_LAZY = {"Summary": "summary", "open_source": "sources", "preprocess": "run"}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value  # later look-ups skip this function
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = ["KINDS", "Clip", "Dataset", "FolderLock", "Summary", "load_dataset", "open_source", "preprocess"]
