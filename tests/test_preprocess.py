@@ -23,6 +23,7 @@ from expressive_mocap.demo import procedural_walk
 from expressive_mocap.model import BodyModel
 import expressive_mocap.dataset.work as work_module
 from expressive_mocap.dataset import load_dataset, preprocess
+from expressive_mocap.errors import DatasetError
 
 BROKEN = b"HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 2 Xposition\n}\n"
 KEEP = "positions,rotations,features,contacts,activity,body,expressive"
@@ -201,7 +202,7 @@ def test_interrupted_run_resumes_without_redoing_finished_clips(archive, tmp_pat
     first = run(archive / "clips", out, batch_mb=1e-6, max_batches=2)
     assert not first.finished and first.batches == 2
     assert not (out / "manifest.json").exists() and (out / ".partial").is_dir()
-    with pytest.raises(em.MocapError, match="interrupted run"):
+    with pytest.raises(DatasetError, match="interrupted run"):
         load_dataset(out)
     journal = [json.loads(line) for line in (out / ".partial" / "journal.jsonl").read_text().splitlines()]
     done = [key for entry in journal for key in entry["items"]]
@@ -221,10 +222,10 @@ def test_interrupted_run_resumes_without_redoing_finished_clips(archive, tmp_pat
 def test_resume_refuses_other_options_and_finished_output_needs_overwrite(archive, tmp_path):
     out = tmp_path / "ds"
     run(archive / "clips", out, batch_mb=1e-6, max_batches=1)
-    with pytest.raises(em.MocapError, match="other options"):
+    with pytest.raises(DatasetError, match="other options"):
         run(archive / "clips", out, keep="positions")
     run(archive / "clips", out)
-    with pytest.raises(em.MocapError, match="--overwrite"):
+    with pytest.raises(DatasetError, match="--overwrite"):
         run(archive / "clips", out)
     run(archive / "clips", out, keep="positions", overwrite=True)
     ds = load_dataset(out)
