@@ -74,7 +74,7 @@ def peak_rss() -> int:
 def child(src: str, out: str, model: str | None) -> None:
     """One preprocess run; prints one JSON line."""
     import expressive_mocap as em
-    from expressive_mocap.preprocess import preprocess
+    from expressive_mocap.dataset import preprocess
 
     start = time.perf_counter()
     summary = preprocess(src, out, model="" if model else None, model_float32=model == "float32", progress=False,
@@ -92,13 +92,13 @@ def kernels_child(folder: str) -> None:
     MOTION blocks, FK, features, contacts; headers prepared beforehand), and where its time goes:
     the same work split into the kernels it fuses (reading the files, parsing and decoding the
     MOTION blocks, FK, features and contacts), each timed on its own. Best of 3; one JSON line."""
-    from expressive_mocap import preprocess as pre
     from expressive_mocap import ops
+    from expressive_mocap.dataset import format as fmt, sources, work
     from expressive_mocap.backend import kernels
     from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 
-    items = pre.open_source(folder).items
-    prepared = pre._prepare(items, pre.DEFAULT_KEEP, None)
+    items = sources.open_source(folder).items
+    prepared = work.prepare(items, fmt.DEFAULT_KEEP, None)
     (group,) = prepared.groups  # dataset-2: one hierarchy
     core = kernels()
     best: dict[str, float] = {}
@@ -110,7 +110,7 @@ def kernels_child(folder: str) -> None:
         return result
 
     for _ in range(3):
-        timed("kernels", lambda: pre._kernels(items, prepared, pre.DEFAULT_KEEP, None, False))
+        timed("kernels", lambda: work.run_kernels(items, prepared, fmt.DEFAULT_KEEP, None, False))
         texts = timed("read", lambda: [Path(clip.source).read_bytes() for clip in group.clips])
         blocks = [ops.MotionBlock(text, clip.start, clip.frames, clip.layout) for text, clip in zip(texts, group.clips)]
         decoded = timed("parse", lambda: core.read_motion_blocks(blocks))

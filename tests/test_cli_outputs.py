@@ -175,7 +175,7 @@ def test_an_output_that_is_not_a_regular_file_is_refused_before_any_work(name, k
 
     import expressive_mocap.cli as cli
     import expressive_mocap.demo as demo
-    import expressive_mocap.preprocess as preprocess
+    import expressive_mocap.dataset as preprocess
 
     if kind == "character device" and os.geteuid() != 0:
         pytest.skip("mknod needs root")

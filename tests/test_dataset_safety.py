@@ -17,9 +17,11 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-import expressive_mocap.preprocess as preprocess_module
+import expressive_mocap.dataset.finish as finish_module
+import expressive_mocap.dataset.npy as npy_module
 from expressive_mocap.demo import procedural_walk
-from expressive_mocap.preprocess import load_dataset, preprocess
+from expressive_mocap.dataset import load_dataset, preprocess
+from expressive_mocap.errors import ArgumentError, DatasetError
 
 # Child processes import the package the tests import: the installed one in CI, not the sources.
 PACKAGE_ROOT = str(Path(em.__file__).resolve().parent.parent)
@@ -120,7 +122,7 @@ def test_a_rerun_after_a_kill_before_partial_was_removed_keeps_the_arrays(clips,
     def killed(_out):
         raise KeyboardInterrupt  # the process dies after the manifest is in place
 
-    monkeypatch.setattr(preprocess_module, "remove_partial", killed)
+    monkeypatch.setattr(finish_module, "remove_partial", killed)
     with pytest.raises(KeyboardInterrupt):
         run(clips, out)
     monkeypatch.undo()
@@ -145,7 +147,7 @@ def test_a_rerun_after_a_kill_during_the_final_moves_finishes_them(clips, refere
             moved.append(a)
         return real_replace(a, b)
 
-    monkeypatch.setattr(preprocess_module.os, "replace", replace)
+    monkeypatch.setattr(finish_module.os, "replace", replace)
     with pytest.raises(KeyboardInterrupt):
         run(clips, out)
     monkeypatch.undo()
@@ -196,9 +198,9 @@ def test_overwrite_deletes_only_the_formats_own_files(clips, tmp_path):
     manifest = json.loads((out / "manifest.json").read_text())
     manifest["kinds"]["positions"]["file"] = "../victim.txt"
     (out / "manifest.json").write_text(json.dumps(manifest))
-    with pytest.raises(em.MocapError, match="names a file its format does not have"):
+    with pytest.raises(DatasetError, match="names a file its format does not have"):
         run(clips, out, overwrite=True)
-    with pytest.raises(em.MocapError, match="names a file its format does not have"):
+    with pytest.raises(DatasetError, match="names a file its format does not have"):
         load_dataset(out)
     assert victim.read_text() == "the user's" and (out / "positions.npy").exists()
     manifest["kinds"]["positions"]["file"] = "positions.npy"
@@ -215,12 +217,12 @@ def test_a_folder_with_the_users_files_is_refused(clips, tmp_path):
     np.save(out / "offsets.npy", np.arange(2))
     before = snapshot(out)
     for overwrite in (False, True):
-        with pytest.raises(em.MocapError, match="not empty .* holds no dataset"):
+        with pytest.raises(DatasetError, match="not empty .* holds no dataset"):
             run(clips, out, overwrite=overwrite)
     assert snapshot(out) == before
     afile = tmp_path / "afile"
     afile.write_text("x")
-    with pytest.raises(em.MocapError, match="not a folder"):
+    with pytest.raises(DatasetError, match="not a folder"):
         run(clips, afile)
     assert afile.read_text() == "x"
     elsewhere = tmp_path / "elsewhere"
@@ -228,7 +230,7 @@ def test_a_folder_with_the_users_files_is_refused(clips, tmp_path):
     linked = tmp_path / "linked"
     linked.mkdir()
     (linked / ".partial").symlink_to(elsewhere)
-    with pytest.raises(em.MocapError, match="not a folder of ours"):
+    with pytest.raises(DatasetError, match="not a folder of ours"):
         run(clips, linked)
     assert list(elsewhere.iterdir()) == []
 
@@ -269,7 +271,7 @@ def test_load_dataset_refuses_files_the_manifest_does_not_vouch_for(clips, tmp_p
         positions.rename(tmp_path / "elsewhere.npy")
         positions.symlink_to(tmp_path / "elsewhere.npy")
         expected = "not a regular file"
-    with pytest.raises(em.MocapError, match=expected):
+    with pytest.raises(DatasetError, match=expected):
         load_dataset(out)
     if damage == "touched":  # a copy that did not keep times can opt out of the time check only
         assert load_dataset(out, check_times=False).positions.shape[0] > 0
@@ -304,8 +306,8 @@ def test_a_full_disk_names_the_file_and_the_run_resumes(clips, reference, tmp_pa
                 return Full(handle)
         return handle
 
-    monkeypatch.setattr(preprocess_module, "open", full_after_one_batch, raising=False)
-    with pytest.raises(em.MocapError, match=r"cannot write .*\.partial/\w+\.npy: No space left on device \(rerun"):
+    monkeypatch.setattr(npy_module, "open", full_after_one_batch, raising=False)
+    with pytest.raises(DatasetError, match=r"cannot write .*\.partial/\w+\.npy: No space left on device \(rerun"):
         run(clips, out, batch_mb=1e-6)
     monkeypatch.undo()
     run(clips, out, batch_mb=1e-6)
@@ -317,7 +319,7 @@ def test_a_failed_background_flush_stops_the_run(clips, tmp_path, monkeypatch):
         raise OSError(errno.EIO, "Input/output error")
 
     monkeypatch.setattr(os, "fdatasync", fails)
-    with pytest.raises(em.MocapError, match=r"cannot write .*\.npy: Input/output error"):
+    with pytest.raises(DatasetError, match=r"cannot write .*\.npy: Input/output error"):
         run(clips, tmp_path / "ds", batch_mb=1e-6)
     assert not (tmp_path / "ds" / "manifest.json").exists()
 
@@ -325,7 +327,7 @@ def test_a_failed_background_flush_stops_the_run(clips, tmp_path, monkeypatch):
 def test_a_bad_source_leaves_the_output_folder_untouched(tmp_path):
     out = tmp_path / "ds"
     for _ in range(2):  # twice: a first failed run must not change what the second says
-        with pytest.raises(em.MocapError, match="no such folder or archive"):
+        with pytest.raises(ArgumentError, match="no such folder or archive"):
             run(tmp_path / "nothing", out)
     assert not out.exists()
 

@@ -21,8 +21,9 @@ from expressive_mocap.cli import main
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.decoupling.body_model import BodyModel
-import expressive_mocap.preprocess as preprocess_module
-from expressive_mocap.preprocess import load_dataset, preprocess
+import expressive_mocap.dataset.work as work_module
+from expressive_mocap.dataset import load_dataset, preprocess
+from expressive_mocap.errors import DatasetError
 
 BROKEN = b"HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 2 Xposition\n}\n"
 KEEP = "positions,rotations,features,contacts,activity,body,expressive"
@@ -110,14 +111,14 @@ def test_a_clip_that_cannot_be_read_is_a_failure_not_the_end(archive, tmp_path, 
     assert summary.finished and sorted(errors) == ["broken", "dangling"]
     assert errors["dangling"] == f"{folder / 'dangling.bvh'}: cannot read the file: No such file or directory"
     # A file that goes away after its header was read: the kernel's own read fails, that clip only.
-    prepare = preprocess_module._prepare
+    prepare = work_module.prepare
 
     def prepare_then_remove(batch, *args):
         prepared = prepare(batch, *args)
         (folder / "walk_b.bvh").unlink(missing_ok=True)
         return prepared
 
-    monkeypatch.setattr(preprocess_module, "_prepare", prepare_then_remove)
+    monkeypatch.setattr(work_module, "prepare", prepare_then_remove)
     run(folder, tmp_path / "gone")
     gone = load_dataset(tmp_path / "gone")
     errors = {f["name"]: f["error"] for f in gone.failures}
@@ -182,14 +183,14 @@ def test_mixed_orders_file_positions_and_rotations(mixed_path, tmp_path):
 
 def test_batches_read_out_of_order_are_written_in_order(archive, tmp_path, monkeypatch):
     run(archive / "clips", tmp_path / "one_batch")
-    prepare = preprocess_module._prepare
+    prepare = work_module.prepare
 
     def first_batch_slow(batch, *args):
         if any(item.name == "broken" for item in batch):  # the first clip in name order
             time.sleep(0.3)  # the second header thread finishes the next batch first
         return prepare(batch, *args)
 
-    monkeypatch.setattr(preprocess_module, "_prepare", first_batch_slow)
+    monkeypatch.setattr(work_module, "prepare", first_batch_slow)
     run(archive / "clips", tmp_path / "one_clip_a_batch", batch_mb=1e-6)
     assert_same_dataset(load_dataset(tmp_path / "one_batch"), load_dataset(tmp_path / "one_clip_a_batch"))
 
@@ -201,7 +202,7 @@ def test_interrupted_run_resumes_without_redoing_finished_clips(archive, tmp_pat
     first = run(archive / "clips", out, batch_mb=1e-6, max_batches=2)
     assert not first.finished and first.batches == 2
     assert not (out / "manifest.json").exists() and (out / ".partial").is_dir()
-    with pytest.raises(em.MocapError, match="interrupted run"):
+    with pytest.raises(DatasetError, match="interrupted run"):
         load_dataset(out)
     journal = [json.loads(line) for line in (out / ".partial" / "journal.jsonl").read_text().splitlines()]
     done = [key for entry in journal for key in entry["items"]]
@@ -221,10 +222,10 @@ def test_interrupted_run_resumes_without_redoing_finished_clips(archive, tmp_pat
 def test_resume_refuses_other_options_and_finished_output_needs_overwrite(archive, tmp_path):
     out = tmp_path / "ds"
     run(archive / "clips", out, batch_mb=1e-6, max_batches=1)
-    with pytest.raises(em.MocapError, match="other options"):
+    with pytest.raises(DatasetError, match="other options"):
         run(archive / "clips", out, keep="positions")
     run(archive / "clips", out)
-    with pytest.raises(em.MocapError, match="--overwrite"):
+    with pytest.raises(DatasetError, match="--overwrite"):
         run(archive / "clips", out)
     run(archive / "clips", out, keep="positions", overwrite=True)
     ds = load_dataset(out)

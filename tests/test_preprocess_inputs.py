@@ -21,12 +21,13 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-import expressive_mocap.preprocess as preprocess_module
+import expressive_mocap.dataset.sources as sources_module
+import expressive_mocap.dataset.work as work_module
 from expressive_mocap import files as em_io
 from expressive_mocap import ops
 from expressive_mocap.cli import main
 from expressive_mocap.demo import procedural_walk
-from expressive_mocap.preprocess import load_dataset, preprocess
+from expressive_mocap.dataset import load_dataset, preprocess
 
 from test_clip_pipeline import GAIT, pipeline_input
 from test_inputs import _returns_within
@@ -98,17 +99,17 @@ def test_a_file_swapped_for_a_fifo_after_its_header_was_read_fails_alone(walk, t
     # between for a FIFO, the kernel's read must not wait for a writer.
     for name in ("a", "b"):
         (tmp_path / f"{name}.bvh").write_bytes(walk)
-    batch = preprocess_module.open_source(tmp_path).items
+    batch = sources_module.open_source(tmp_path).items
     keep = ("positions", "contacts")
-    prepared = preprocess_module._prepare(batch, keep, None)
+    prepared = work_module.prepare(batch, keep, None)
     (tmp_path / "b.bvh").unlink()
     fifo = make_fifo(tmp_path / "b.bvh")
     try:
-        outcomes, _, _ = _returns_within(10, lambda: preprocess_module._kernels(batch, prepared, keep, None, False))
+        outcomes, _, _ = _returns_within(10, lambda: work_module.run_kernels(batch, prepared, keep, None, False))
     finally:
         release(fifo)
-    assert "error" not in outcomes[0] and outcomes[0]["frames"] == em.read_bvh(tmp_path / "a.bvh").n_frames
-    assert outcomes[1]["error"] == f"{fifo}: cannot read the file: a FIFO, {NOT_REGULAR}"
+    assert outcomes[0].error is None and outcomes[0].frames == em.read_bvh(tmp_path / "a.bvh").n_frames
+    assert outcomes[1].error == f"{fifo}: cannot read the file: a FIFO, {NOT_REGULAR}"
 
 
 # ----------------------------------------------------------------------------- folders and globs
@@ -149,7 +150,7 @@ def test_listing_a_folder_opens_nothing(hostile_folder, monkeypatch):
         raise AssertionError("a file was opened while listing")
 
     monkeypatch.setattr(os, "open", no_open)
-    items = {item.name: item.size for item in preprocess_module._folder(hostile_folder)}
+    items = {item.name: item.size for item in sources_module._folder(hostile_folder)}
     assert items == {"gone": 0, "good": (hostile_folder / "good.bvh").stat().st_size, "pipe": 0, "sock": 0, "zero": 0}
 
 
@@ -239,7 +240,7 @@ def test_zip_members_over_the_bound_are_not_decompressed(walk, tmp_path, small_b
     patch_zip(path, "lies.bvh", size=small_bound)  # declares the bound, holds 64 MiB
     assert path.stat().st_size < 1 << 20
     # Listed for batching and the progress bar: a member refused unread counts 0, not its claim.
-    listed = {item.name: item.size for item in preprocess_module.open_source(path).items}
+    listed = {item.name: item.size for item in sources_module.open_source(path).items}
     assert listed == {"good": len(walk), "huge": 0, "lies": small_bound, "over": 0}
     tracemalloc.start()
     try:
@@ -362,16 +363,16 @@ def test_a_blocked_thread_does_not_keep_an_interrupted_run_alive(walk, tmp_path)
     marker = tmp_path / "blocked"
     script = f"""
 import sys, threading
-import expressive_mocap.preprocess as p
+import expressive_mocap.dataset.work as p
 from expressive_mocap.cli import main
-prepare, calls = p._prepare, []
+prepare, calls = p.prepare, []
 def blocking(*args):
     calls.append(1)
     if len(calls) == 2:
         open({str(marker)!r}, "w").close()
         threading.Event().wait()
     return prepare(*args)
-p._prepare = blocking
+p.prepare = blocking
 sys.exit(main(["preprocess", {str(clips)!r}, "-o", {str(tmp_path / "ds")!r}, "--batch-mb", "0.1", "-q"]))
 """
     process = _start(["-c", script], tmp_path)

@@ -536,7 +536,7 @@ def _add_training_options(p, model: bool = False) -> None:
 
 
 def cmd_preprocess(args) -> int:
-    from .preprocess import preprocess
+    from .dataset import preprocess
 
     summary = preprocess(args.source, args.output, args.keep, args.model, batch_mb=args.batch_mb,
                          max_batches=args.max_batches, model_float32=args.model_float32, cluster=args.dask, overwrite=args.overwrite,
@@ -699,7 +699,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="a whole archive of BVH clips (folder, glob, .zip, .tar.gz/.xz) into a dataset of arrays: positions, features, contacts, activity",
         description="Parse every clip, run FK, dynamic features, foot contacts and optionally the decomposition, in batches "
         "(parallel Rust parsing and FK), into OUT: one memory-mappable .npy per kind, offsets.npy and manifest.json "
-        "(load with expressive_mocap.preprocess.load_dataset(OUT)). Bad clips are listed with their errors; an interrupted "
+        "(load with expressive_mocap.dataset.load_dataset(OUT)). Bad clips are listed with their errors; an interrupted "
         "run resumes where it stopped when run again.",
     )
     p.add_argument("source", metavar="SRC", help="a folder (*.bvh, recursive), a quoted glob, a .zip or a .tar/.tar.gz/.tar.xz")

@@ -1,0 +1,83 @@
+"""Preprocessing a whole archive of BVH clips into a dataset of arrays (``expressive-mocap preprocess``),
+and reading it back (:func:`load_dataset`).
+
+Per clip: parse, forward kinematics (world positions), dynamic features, foot contacts and,
+with a body-mechanics model, the decomposition's activity per joint (optionally its body and
+expressive rotations). Clips are read in batches. Python reads each clip's header from the
+file's first bytes (:func:`~expressive_mocap.bvh.read_header`); everything else of a clip
+(reading the file, its MOTION block, FK, features, contacts, float32 outputs) is one task of
+one Rust call per batch, clips in parallel (``clip_pipeline_many``), then the network runs on
+the whole batch. Header threads prepare the next batches while a kernel thread runs this one's
+kernels and the main thread appends the previous one's rows to the output, so memory stays
+bounded and both cores stay busy (the kernels release the GIL).
+
+The output format: a folder ::
+
+    OUT/manifest.json      clips (name, source, frames, fps, start row), failures with their
+                           errors, the skeleton (joint names, parents), the kinds kept and their
+                           shapes, the options, the package version; written last
+    OUT/offsets.npy        int64 [C + 1]: clip i is rows offsets[i]:offsets[i + 1] of every kind
+    OUT/positions.npy      float32 [N, J, 3]  world positions (file units)
+    OUT/rotations.npy      float32 [N, J, 4]  local rotations (x, y, z, w)
+    OUT/features.npy       float32 [N, 19]    dynamic_features (causal; FEATURE_NAMES)
+    OUT/contacts.npy       bool    [N, 2]     foot_contacts (offline; left, right)
+    OUT/activity.npy       float32 [N, J]     decomposition activity per joint (--model)
+    OUT/body.npy, OUT/expressive.npy  float32 [N, J, 4]  B' and E* (--model)
+
+(N = frames of all clips, rows in clip order.) Why NumPy ``.npy`` files and a JSON manifest:
+they need nothing beyond NumPy, every array can be memory-mapped (``np.load(mmap_mode="r")``:
+a 500 MB archive opens in milliseconds and a training loop reads only the rows it touches),
+one concatenated array per kind is what batch samplers want (clip ``i`` is one slice), and
+the whole dataset loads in one line: ``load_dataset(OUT)``. HDF5 or Zarr would add a
+dependency for little gain here; ``.npz`` cannot be memory-mapped; Parquet does not hold
+``[N, J, 3]`` tensors naturally.
+
+Robustness: a clip that cannot be read or processed is listed in the manifest's failures with
+its error and the run goes on. The run writes into ``OUT/.partial``: each batch's rows are
+appended to the data files, then one line is appended to a journal; an interrupted run
+restarts from the journal (the data files are cut back to the last journaled batch, finished
+clips are skipped). At the end the data are synced to disk, the files renamed into ``OUT`` and
+the manifest written last: a folder with a ``manifest.json`` is a complete dataset, never a
+half-written one. (An interrupted process loses nothing; the journal is not synced per batch,
+so after a power cut mid-run delete ``OUT/.partial`` and run again.)
+
+Safety (:mod:`.lock`, :mod:`.folder`, :mod:`.format`): a run holds an advisory lock on ``OUT/.lock`` from start
+to end, so a second run on the same OUT fails at once naming the first; OUT must be new, empty,
+or one of our datasets (finished or unfinished), never a folder of the user's own files; a rerun
+over a finished dataset never rewrites it (``overwrite`` redoes it, deleting only the format's
+own file names); clips are keyed by name, so a resumed run may spell SRC otherwise, and a
+second clip of a name already taken is a failure; the manifest records each file's size and
+mtime, and :func:`load_dataset` refuses files that do not match it.
+
+The modules: :mod:`.sources` (the clips of SRC), :mod:`.work` (one batch's headers and
+kernels; the model through :func:`expressive_mocap.decoupling.decompose_many`), :mod:`.pipeline` (threads on
+this machine), :mod:`.cluster` (Dask), :mod:`.collect` (a batch's outcomes into its journal
+record), :mod:`.npy` (the data files written in pieces), :mod:`.journal`, :mod:`.finish` (the
+manifest, last), :mod:`.run` (:func:`preprocess`), :mod:`.summary`; :mod:`.format` (file names,
+manifest checks, verification), :mod:`.lock`, :mod:`.folder` (whose folder it is),
+:mod:`.reader` (:class:`Dataset`, :func:`load_dataset`).
+"""
+
+from .format import KINDS
+from .lock import FolderLock
+from .reader import Clip, Dataset, load_dataset
+
+# The writing side loads on first use: reading a dataset (load_dataset) stays light.
+_LAZY = {"Summary": "summary", "open_source": "sources", "preprocess": "run"}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value  # later look-ups skip this function
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+__all__ = ["KINDS", "Clip", "Dataset", "FolderLock", "Summary", "load_dataset", "open_source", "preprocess"]

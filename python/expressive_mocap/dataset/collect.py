@@ -1,0 +1,99 @@
+"""A batch's outcomes, in order, into its journal record (clips and failures) and the rows to
+append per kind: one dataset holds one skeleton, in one unit, and each clip name once."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .journal import JournalRecord
+from .sources import Item
+from .work import Outcome
+
+# People differ in size by less than this factor; units (cm/inch 2.54, m/cm 100) by more.
+SAME_UNITS_RATIO = 2.0
+
+
+@dataclass
+class Collected:
+    """A batch collected: the arrays to append per kind, the row count after the batch and the
+    dataset's skeleton (the manifest's record: names, parents, bone_length; None until a clip's
+    header was read)."""
+
+    arrays: dict[str, list[np.ndarray]]
+    rows: int
+    skeleton: dict | None
+
+
+def collect(
+    batch: list[Item],
+    outcomes: list[Outcome],
+    skeleton: dict | None,
+    keep,
+    record: JournalRecord,
+    rows: int,
+    taken: set,
+) -> Collected:
+    """The batch's outcomes in order: clips and failures into ``record`` (a clip of another
+    skeleton than the dataset's, the first parsed clip's, is a failure; so is a clip whose name
+    ``taken``, the names taken so far, already holds), their arrays per kind."""
+    arrays: dict[str, list[np.ndarray]] = {k: [] for k in keep}
+    for item, outcome in zip(batch, outcomes):
+        shape, error = outcome.skeleton, outcome.error
+        if item.name in taken:
+            shape, error = (
+                None,
+                (
+                    f"{item.source}: a clip named {item.name!r} is already in the dataset "
+                    "(names are paths below the source without .bvh; one dataset holds each name once)"
+                ),
+            )
+        taken.add(item.name)
+        if shape is not None:
+            if skeleton is None:
+                names, parents = list(shape[0]), list(shape[1])
+                skeleton = record.skeleton = {"names": names, "parents": parents, "bone_length": outcome.bone_length}
+            else:
+                error = _skeleton_error(item, shape, outcome.bone_length, skeleton, error)
+        if error is not None:
+            record.failures.append({"name": item.name, "source": item.source, "error": error})
+            continue
+        for kind in keep:
+            arrays[kind].append(outcome.values[kind])
+        record.clips.append({"name": item.name, "source": item.source, "frames": outcome.frames,
+                             "fps": outcome.fps, "frame_time": outcome.frame_time, "start": rows})  # fmt: skip
+        rows += outcome.frames
+    return Collected(arrays, rows, skeleton)
+
+
+def _skeleton_error(item: Item, shape: tuple, length: float, skeleton: dict, error: str | None) -> str | None:
+    """The error of a clip of joint names and parents ``shape`` whose own error is ``error``:
+    another hierarchy than the dataset's, else its own error, else bones in other units."""
+    names, parents = list(shape[0]), list(shape[1])
+    if names != skeleton["names"] or parents != skeleton["parents"]:
+        return (
+            f"{item.source}: another skeleton ({len(names)} joints) than the dataset's "
+            f"({len(skeleton['names'])} joints, {', '.join(skeleton['names'][:3])}, ...): "
+            "one dataset holds one skeleton"
+        )
+    return _units_error(item, length, skeleton) if error is None else error
+
+
+def _units_error(item: Item, length: float, skeleton: dict) -> str | None:
+    """Why a clip of the dataset's skeleton is in other units than its first clip, or None:
+    positions in two units in one array would be silently wrong."""
+    reference = skeleton.get("bone_length")
+    if not reference or not length:
+        return None
+    ratio = length / reference
+    if 1 / SAME_UNITS_RATIO <= ratio <= SAME_UNITS_RATIO:
+        return None
+    return (
+        f"{item.source}: its bones are {ratio:.3g}x as long as the dataset's "
+        f"(summed {length:.4g} against {reference:.4g}): "
+        "other units? One dataset holds one unit: rescale it first (expressive-mocap convert --scale)"
+    )
+
+
+__all__ = ["SAME_UNITS_RATIO", "Collected", "collect"]

@@ -1,0 +1,74 @@
+"""The end of a run: the data files' real headers, the offsets and the manifest written into
+``OUT/.partial``, then everything renamed into ``OUT``, manifest last: a folder with a
+``manifest.json`` is a complete dataset, never a half-written one."""
+
+from __future__ import annotations
+
+import datetime
+import io
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..features import FEATURE_NAMES
+from ..files import atomic_write
+from .folder import remove_partial
+from .format import FORMAT, MANIFEST, OFFSETS, PARTIAL, VERSION, data_file, file_record, read_manifest
+from .npy import Kind, write_final_header
+
+
+def finish(out: Path, kinds: list[Kind], clips: list, failures: list, skeleton, rows: int, options: dict) -> None:
+    """Headers into the data files, offsets and manifest (with each file's size and mtime) into
+    .partial, then everything renamed into ``out``, manifest last."""
+    from .. import __version__
+
+    partial = out / PARTIAL
+    for kind in kinds:
+        write_final_header(partial / data_file(kind.name), kind, rows)
+    offsets = np.array([c["start"] for c in clips] + [rows], dtype=np.int64)
+    buffer = io.BytesIO()
+    np.save(buffer, offsets)
+    atomic_write(partial / OFFSETS, buffer.getvalue())
+    manifest = {
+        "format": FORMAT,
+        "version": VERSION,
+        "package_version": __version__,
+        "created": datetime.datetime.now().isoformat(timespec="seconds"),
+        "options": options,
+        "skeleton": skeleton,
+        "frames": rows,
+        "kinds": {
+            k.name: {
+                "file": data_file(k.name),
+                "dtype": k.dtype.name,
+                "shape": [rows, *k.row],
+                "description": k.description,
+            }
+            for k in kinds
+        },
+        "files": file_record(partial, [OFFSETS] + [data_file(k.name) for k in kinds]),
+        "feature_names": list(FEATURE_NAMES) if any(k.name == "features" for k in kinds) else None,
+        "clips": clips,
+        "failures": failures,
+    }
+    atomic_write(partial / MANIFEST, json.dumps(manifest, indent=1).encode())
+    move_into_place(out)
+
+
+def move_into_place(out: Path) -> dict:
+    """Rename the finished files of ``out/.partial`` into ``out`` (manifest last), then drop
+    .partial; returns the manifest. Safe to repeat after a crash: files already moved are
+    skipped. Only the fixed names of the format move: a manifest cannot name others."""
+    partial = out / PARTIAL
+    manifest = read_manifest(partial / MANIFEST)
+    for name in [data_file(k) for k in manifest["kinds"]] + [OFFSETS]:
+        if (partial / name).exists():
+            os.replace(partial / name, out / name)
+    os.replace(partial / MANIFEST, out / MANIFEST)
+    remove_partial(out)
+    return manifest
+
+
+__all__ = ["finish", "move_into_place"]

@@ -1,0 +1,190 @@
+"""The work on one batch of clips, one :class:`Outcome` per clip: :func:`prepare` (Python: the
+clips' headers, joint roles, body scales and the kernel's arguments) then :func:`run_kernels`
+(one Rust call per hierarchy, clips in parallel, then the body-mechanics model on the whole
+batch). The two run in different threads on this machine (:mod:`.pipeline`), or together on a
+cluster's worker (:func:`compute`)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import files as inputs
+from .. import ops
+from ..bvh import block_error, read_error
+from ..errors import BVHError, MocapError
+from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from ..roles import JointRoles, actor_height, hips_rest_height
+from .format import MODEL_KINDS
+from ..decoupling.algebra import decompose_many
+from .sources import Item
+
+
+@dataclass
+class Outcome:
+    """What became of one clip of a batch: the ``bytes`` of BVH text read, its ``error`` (text)
+    when it failed, else ``frames``, ``fps``, ``frame_time`` and ``values`` (kind -> array as
+    stored); ``skeleton`` (joint names, parents) and ``bone_length`` for every clip whose header
+    was read. Plain values, so a cluster's worker can send them back."""
+
+    bytes: int = 0
+    error: str | None = None
+    skeleton: tuple[tuple[str, ...], tuple[int, ...]] | None = None
+    bone_length: float = 0.0
+    frames: int = 0
+    fps: float = 0.0
+    frame_time: float = 0.0
+    values: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+@dataclass
+class Group:
+    """The clips of one hierarchy in a batch, ready for one kernel call: their indices in the
+    batch, headers, the kernel's per-clip tuples, the skeleton's parents and gait joints."""
+
+    indices: list[int]
+    headers: list
+    clips: list[ops.ClipInput]
+    parents: np.ndarray
+    gait_joints: list[int]
+
+
+@dataclass
+class Prepared:
+    """A batch with its headers read: outcomes so far (errors, skeletons), its groups, seconds taken."""
+
+    outcomes: list[Outcome]
+    groups: list[Group]
+    seconds: float
+
+
+def load_model(model):
+    """The body-mechanics model of a file, or the shipped one for ``""``."""
+    from ..decoupling.body_model import BodyModel
+
+    return BodyModel.load(None if model == "" else model)
+
+
+def bone_length(skeleton) -> float:
+    """The summed lengths of a skeleton's bones (offsets, End Sites included), in file units:
+    what tells a skeleton in metres from the same one in centimetres, whatever its axes."""
+    sites = sum(float(np.linalg.norm(offset)) for _, offset in skeleton.end_sites)
+    return float(np.linalg.norm(skeleton.offsets, axis=1).sum()) + sites
+
+
+def compute(batch: list[Item], keep: tuple[str, ...], model, model_float32: bool) -> tuple[list[Outcome], float, float]:
+    """The work on one batch, one outcome per item, as a cluster's worker does it. Returns the
+    outcomes and the seconds spent preparing (headers) and in the kernels."""
+    return run_kernels(batch, prepare(batch, keep, model), keep, model, model_float32)
+
+
+def prepare(batch: list[Item], keep: tuple[str, ...], model) -> Prepared:
+    """The Python work before a batch's kernels: the clips' headers, from the files' first bytes
+    (:func:`~expressive_mocap.bvh.read_header`; zip members are decompressed here, a tar's
+    members come already read), each hierarchy's joint roles and each clip's body scale and
+    channel layout."""
+    start = time.perf_counter()
+    outcomes = [Outcome() for _ in batch]
+    by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
+    for k, item in enumerate(batch):
+        try:
+            header, text = item.header(outcomes[k])
+        except BVHError as error:
+            outcomes[k].error = str(error)
+            continue
+        shape = (tuple(header.skeleton.names), tuple(header.skeleton.parents.tolist()))
+        outcomes[k].skeleton = shape
+        outcomes[k].bone_length = bone_length(header.skeleton)
+        by_hierarchy.setdefault(shape, []).append((k, header, text))
+    use_model = any(k in MODEL_KINDS for k in keep)
+    needs_roles = use_model or "features" in keep or "contacts" in keep
+    groups = []
+    for members in by_hierarchy.values():
+        group = _group(members, needs_roles, use_model, model)
+        if isinstance(group, MocapError):  # the hierarchy lacks a role, or does not fit the model
+            for k, _, _ in members:
+                outcomes[k].error = f"{batch[k].source}: {group}"
+            continue
+        groups.append(group)
+    return Prepared(outcomes, groups, time.perf_counter() - start)
+
+
+def _group(members: list, needs_roles: bool, use_model: bool, model) -> Group | MocapError:
+    """One hierarchy's clips ``(index, header, text)`` as one kernel call's arguments, or why not."""
+    skeleton = members[0][1].skeleton
+    try:
+        roles = JointRoles.find(skeleton) if needs_roles else None
+        if use_model:
+            model.check_skeleton(skeleton)
+    except MocapError as error:
+        return error
+
+    def scale(s) -> tuple[float, float]:  # without features or contacts the body scale is not used
+        return (actor_height(s, roles), hips_rest_height(s, roles)) if roles else (1.0, 1.0)
+
+    clips = [ops.ClipInput.of(text, h, *scale(h.skeleton)) for _, h, text in members]
+    gait_joints = roles.gait_joints if roles else [0] * 7  # without features or contacts: not used
+    parents = np.ascontiguousarray(skeleton.parents, dtype=np.int64)
+    return Group([k for k, _, _ in members], [h for _, h, _ in members], clips, parents, gait_joints)
+
+
+def run_kernels(
+    batch: list[Item], prepared: Prepared, keep: tuple[str, ...], model, model_float32: bool
+) -> tuple[list[Outcome], float, float]:
+    """Everything else of each clip (reading the file, its MOTION block, FK, features, contacts)
+    as one task of one kernel call per hierarchy, clips in parallel (``clip_pipeline_many``; the
+    NumPy twin composes the other kernels' twins), then the model on the whole batch. Returns the
+    outcomes, the seconds :func:`prepare` took and the seconds taken here."""
+    start = time.perf_counter()
+    outcomes = prepared.outcomes
+    use_model = any(k in MODEL_KINDS for k in keep)
+    requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
+    kept = []  # (index, local rotations, model features) of each clip for the model
+    for group in prepared.groups:
+        outputs = ops.PipelineOutputs(
+            positions="positions" in keep,
+            rotations="rotations" in keep or use_model,
+            features=tuple(ops.FeatureRequest(*r) for r in requests),
+            contacts="contacts" in keep,
+            float32=not use_model,
+        )
+        gait = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
+        results = ops.clip_pipeline_many(group.clips, group.parents, group.gait_joints, gait, outputs, inputs.MAX_INPUT_BYTES)
+        for k, header, clip, result in zip(group.indices, group.headers, group.clips, results):
+            if _finish_clip(batch[k], outcomes[k], header, clip, result, keep) and use_model:
+                kept.append((k, result[1], result[2][-1]))
+    if use_model:
+        parts = decompose_many([r for _, r, _ in kept], [f for _, _, f in kept], model, model_float32)
+        for (k, _, _), clip_parts in zip(kept, parts):
+            outcomes[k].values.update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
+    return outcomes, prepared.seconds, time.perf_counter() - start
+
+
+def _finish_clip(item: Item, outcome: Outcome, header, clip: ops.ClipInput, result, keep: tuple[str, ...]) -> bool:
+    """One clip's kernel ``result`` into its outcome: its arrays as stored, or its error. True if it succeeded."""
+    if isinstance(clip.source, str) and not isinstance(result, OSError):  # the kernel read the file whole
+        outcome.bytes = item.size
+    if isinstance(result, Exception):
+        outcome.error = str(_clip_error(item, header, result))
+        return False
+    positions, rotations, features, contacts = result
+    values = {"positions": positions, "rotations": rotations, "contacts": contacts}
+    if "features" in keep:
+        values["features"] = features[0]
+    outcome.frames, outcome.fps, outcome.frame_time = header.frames, 1.0 / header.frame_time, header.frame_time
+    outcome.values = {
+        kind: v.astype(np.float32) if v.dtype == np.float64 else v for kind, v in values.items() if kind in keep
+    }
+    return True
+
+
+def _clip_error(item: Item, header, error: Exception) -> BVHError:
+    """The BVHError of a clip whose number block (ParseError) or file (OSError) could not be read."""
+    if isinstance(error, OSError):
+        return read_error(item.source, error)
+    return block_error(item.source, header, error)
+
+
+__all__ = ["Group", "Outcome", "Prepared", "bone_length", "compute", "load_model", "prepare", "run_kernels"]
