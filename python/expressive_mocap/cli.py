@@ -21,8 +21,7 @@ from . import __version__, backend
 from .bvh import bvh_bytes, read_bvh, write_bvh
 from .errors import ClipError, MocapError
 from .files import atomic_write, atomic_write_all, file_kind, is_standard_output, open_input, output_target
-from .motion import Motion
-from .rotations import ORDERS
+from .motion import ORDERS, Motion
 
 PROG = "expressive-mocap"
 
