@@ -67,15 +67,39 @@ def rotation_order(channels: tuple[str, ...]) -> str:
     return "".join(written + [a for a in AXES if a not in written])
 
 
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array.setflags(write=False)
+    return array
+
+
+@lru_cache(maxsize=256)
+def _channel_lists(channels: tuple[tuple[str, ...], ...]) -> tuple[tuple[tuple[str, ...], ...], int]:
+    """:func:`canonical_channels` of every joint's list, and the first joint that lists a channel
+    twice (-1: none). Cached: skeletons are made for every clip read, from a handful of layouts."""
+    canonical = tuple(canonical_channels(cs) for cs in channels)
+    return canonical, next((j for j, cs in enumerate(canonical) if len(set(cs)) != len(cs)), -1)
+
+
+def _checked_offsets(
+    joints: int, offsets: np.ndarray, site_joints: list[int], site_offsets: np.ndarray
+) -> tuple[np.ndarray, tuple]:
+    """The checks of a skeleton's rest offsets ``[J, 3]`` and End Sites (the joint each is attached
+    to, and its offset; float64 arrays): read-only offsets and the End Sites as ``(joint, offset)``
+    tuples of Python numbers, or a MocapError."""
+    if not np.isfinite(offsets).all():
+        raise MocapError("joint offsets must be finite")
+    if not np.isfinite(site_offsets).all():
+        raise MocapError("End Site offsets must be finite")
+    if site_joints and not (min(site_joints) >= 0 and max(site_joints) < joints):
+        j = next(j for j in site_joints if not 0 <= j < joints)
+        raise MocapError(f"End Site attached to joint {j}, but there are {joints} joints")
+    return _frozen(offsets), tuple(zip(site_joints, map(tuple, site_offsets.tolist())))
+
+
 @lru_cache(maxsize=256)
 def _euler_orders(channels: tuple[tuple[str, ...], ...]) -> np.ndarray:
     """See :attr:`Skeleton.euler_orders`. Cached: archives share a handful of channel layouts."""
     return _frozen(np.array([axes_of(rotation_order(cs)) for cs in channels], dtype=np.uint8).reshape(-1, 3))
-
-
-def _frozen(array: np.ndarray) -> np.ndarray:
-    array.setflags(write=False)
-    return array
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,10 +120,10 @@ class Skeleton:
     end_sites: tuple[tuple[int, tuple[float, float, float]], ...] = field(default=())
 
     def __post_init__(self):
-        names = tuple(str(n) for n in self.names)
+        names = tuple(map(str, self.names))
         parents = np.array(self.parents, dtype=np.int64).reshape(-1)
         offsets = np.array(self.offsets, dtype=np.float64)
-        channels = tuple(canonical_channels(tuple(cs)) for cs in self.channels)
+        channels, listed_twice = _channel_lists(tuple(map(tuple, self.channels)))
         joints = len(names)
         if joints == 0:
             raise MocapError("a skeleton needs at least one joint")
@@ -110,26 +134,22 @@ class Skeleton:
         if len(set(names)) != joints:
             duplicate = next(n for n in names if names.count(n) > 1)
             raise MocapError(f"joint name {shown(duplicate)} appears more than once")
-        if parents[0] != -1 or (parents[1:] < 0).any():
-            raise MocapError("a skeleton has exactly one root, the first joint (parent -1)")
-        if (parents[1:] >= np.arange(1, joints)).any():
+        later = parents[1:]
+        if parents[0] != -1 or not ((later >= 0) & (later < np.arange(1, joints))).all():
+            if parents[0] != -1 or (later < 0).any():
+                raise MocapError("a skeleton has exactly one root, the first joint (parent -1)")
             raise MocapError("every joint must come after its parent")
-        if not np.isfinite(offsets).all():
-            raise MocapError("joint offsets must be finite")
-        if not np.isfinite(np.array([off for _, off in self.end_sites], dtype=np.float64)).all():
-            raise MocapError("End Site offsets must be finite")
-        for j, cs in enumerate(channels):
-            if len(set(cs)) != len(cs):
-                raise MocapError(f"joint {names[j]!r} lists a channel twice: {' '.join(cs)}")
-        end_sites = tuple((int(j), tuple(float(v) for v in off)) for j, off in self.end_sites)
-        for j, _ in end_sites:
-            if not 0 <= j < joints:
-                raise MocapError(f"End Site attached to joint {j}, but there are {joints} joints")
-        object.__setattr__(self, "names", names)
-        object.__setattr__(self, "parents", _frozen(parents))
-        object.__setattr__(self, "offsets", _frozen(offsets))
-        object.__setattr__(self, "channels", channels)
-        object.__setattr__(self, "end_sites", end_sites)
+        site_offsets = np.array([off for _, off in self.end_sites], dtype=np.float64)
+        offsets, end_sites = _checked_offsets(joints, offsets, [int(j) for j, _ in self.end_sites], site_offsets)
+        if listed_twice >= 0:
+            raise MocapError(f"joint {names[listed_twice]!r} lists a channel twice: {' '.join(channels[listed_twice])}")
+        self._set(names, _frozen(parents), offsets, channels, end_sites)
+
+    def _set(self, names, parents, offsets, channels, end_sites) -> None:
+        """Set the fields of a checked skeleton (the dataclass is frozen)."""
+        fields = {"names": names, "parents": parents, "offsets": offsets, "channels": channels, "end_sites": end_sites}
+        for name, value in fields.items():
+            object.__setattr__(self, name, value)
 
     def __repr__(self) -> str:
         # One line: the dataclass default prints every offset.
@@ -190,10 +210,14 @@ class Skeleton:
         site_offsets = np.array(end_site_offsets, dtype=np.float64).reshape(-1, 3)
         if offsets.shape != self.offsets.shape or len(site_offsets) != len(self.end_sites):
             raise MocapError(f"with_offsets: expected {list(self.offsets.shape)} joint and {len(self.end_sites)} End Site offsets")
-        if not (np.isfinite(offsets).all() and np.isfinite(site_offsets).all()):
-            raise MocapError("joint offsets must be finite")
-        sites = tuple((j, tuple(off)) for (j, _), off in zip(self.end_sites, site_offsets.tolist()))
-        return Skeleton(self.names, self.parents, offsets, self.channels, sites)
+        # The private constructor path: the hierarchy and channels are this skeleton's (immutable,
+        # checked when it was made), the new offsets get the constructor's checks. Constructing
+        # anew would check everything again, 10x the time, on every clip of a known hierarchy read.
+        site_joints = [j for j, _ in self.end_sites]
+        joint_offsets, sites = _checked_offsets(self.n_joints, offsets, site_joints, site_offsets)
+        copy = object.__new__(Skeleton)
+        copy._set(self.names, self.parents, joint_offsets, self.channels, sites)
+        return copy
 
     def scaled(self, factor: float) -> Skeleton:
         """The same skeleton with every length multiplied by ``factor``."""
