@@ -137,6 +137,7 @@ def _find_motion_line(data: bytes) -> re.Match | None:
 def parse_header(data: bytes, name: str, size: int | None = None) -> Header:
     """The header of the BVH text ``data``; ``size``: the whole file's length when ``data`` is
     only its beginning (see :func:`~expressive_mocap.bvh.reader.read_header`)."""
+    # The header's parts in file order, each refused with its line: one function reads best.
     text_start = _check_text(data, name)
     motion = _find_motion_line(data)
     hierarchy_end = motion.start() if motion else len(data)
