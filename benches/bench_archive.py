@@ -168,7 +168,7 @@ def reader_breakdown(paths) -> tuple[list, str]:
     same thread, is shown as "of which"). Steps in different threads may overlap."""
     import threading
 
-    from expressive_mocap import bvh as B
+    from expressive_mocap.bvh import reader as B
 
     core = em.backend._core
     spots = [

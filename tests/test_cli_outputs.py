@@ -87,7 +87,7 @@ def test_outputs_go_only_where_asked(name, inputs, tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(expected)
     assert not [p for p in tmp_path.rglob("*.tmp")], "a temporary file was left behind"
     if name == "demo":  # the list its outputs are checked from before any work
-        from expressive_mocap.cli import DEMO_FILES
+        from expressive_mocap.cli.demo import DEMO_FILES
 
         assert sorted(p.name for p in (tmp_path / "demo").iterdir()) == sorted(DEMO_FILES)
 
@@ -173,16 +173,18 @@ def _no_work(*args, **kwargs):
 def test_an_output_that_is_not_a_regular_file_is_refused_before_any_work(name, kind, inputs, tmp_path, capsys, monkeypatch):
     import stat
 
-    import expressive_mocap.cli as cli
     import expressive_mocap.demo as demo
     import expressive_mocap.dataset as preprocess
+    from expressive_mocap.cli import common, data, decoupling, exaggeration, files
+    from expressive_mocap.cli import demo as cli_demo
 
     if kind == "character device" and os.geteuid() != 0:
         pytest.skip("mknod needs root")
     special = tmp_path / command(name, inputs, tmp_path)[1][0]  # decouple: PREFIX_body.bvh
     {"FIFO": os.mkfifo, "folder": os.mkdir, "character device": lambda p: os.mknod(p, stat.S_IFCHR | 0o666, os.makedev(1, 3))}[kind](special)
     before = os.lstat(special)
-    for module, function in ((cli, "read_bvh"), (demo, "walk_and_wave"), (preprocess, "preprocess")):
+    commands = [(module, "read_bvh") for module in (common, data, decoupling, exaggeration, files, cli_demo) if hasattr(module, "read_bvh")]
+    for module, function in (*commands, (demo, "walk_and_wave"), (preprocess, "preprocess")):
         monkeypatch.setattr(module, function, _no_work)
     status, err, _ = run(name, inputs, tmp_path, capsys)
     assert status == 1 and err.count("\n") == 1 and f"cannot write {special}: it is a {kind}, not a " in err, err

@@ -14,6 +14,7 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap import bvh, reference
 from expressive_mocap import ops
+from expressive_mocap.bvh import header as bvh_header
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
@@ -182,11 +183,11 @@ def test_read_header_errors_are_read_bvh_errors(tmp_path):
 def test_the_motion_line_is_found_as_the_regex_finds_it(pieces, padding):
     # Padding moves the candidates across the first 4 KB window when there is no upper-case MOTION.
     for data in (b"".join(pieces), b"x" * padding + b"".join(pieces), b"\n" * padding + b"".join(pieces)):
-        expected, found = bvh._MOTION.search(data), bvh._find_motion_line(data)
+        expected, found = bvh_header._MOTION.search(data), bvh_header._find_motion_line(data)
         assert (found is None) == (expected is None) and (found is None or found.span() == expected.span())
 
 
 def test_finding_the_motion_line_stays_linear_on_hostile_headers():
     # Millions of candidates on one line, or one line each: each line is matched once.
     for data in (b"motion" * 600_000, b" " * 2_000_000 + b"motion" * 300_000, b"\n motion x" * 400_000):
-        assert bvh._find_motion_line(data) is None and bvh._MOTION.search(data) is None
+        assert bvh_header._find_motion_line(data) is None and bvh_header._MOTION.search(data) is None

@@ -46,13 +46,13 @@ def test_line_log_redraws_running_lines_only_on_a_terminal():
 
 
 def test_commands_reading_many_clips_show_a_bar_on_a_terminal_and_nothing_quick_in_logs(mixed_path, monkeypatch):
-    from expressive_mocap import cli
+    from expressive_mocap.cli import common
 
     terminal = Terminal()
     monkeypatch.setattr("sys.stderr", terminal)
-    assert len(cli._read_all([str(mixed_path)] * 3, "clips")) == 3
+    assert len(common.read_all([str(mixed_path)] * 3, "clips")) == 3
     assert terminal.getvalue().startswith("\rreading clips [") and "3 files/3 files (100%)" in terminal.getvalue()
     log = io.StringIO()
     monkeypatch.setattr("sys.stderr", log)
-    cli._read_all([str(mixed_path)] * 3, "clips")
+    common.read_all([str(mixed_path)] * 3, "clips")
     assert log.getvalue() == ""  # under 10 s: no line in a log

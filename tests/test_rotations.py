@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap import reference
-from expressive_mocap.rotations import ORDERS
+from expressive_mocap.motion import ORDERS
 
 ATOL = 1e-12  # float64 arithmetic, a few dozen operations
 

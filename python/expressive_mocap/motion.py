@@ -17,9 +17,30 @@ import numpy as np
 
 from . import ops, quat
 from .errors import MocapError
-from .rotations import AXES, ORDERS, axes_of, order_name
 from .tokens import shown
 
+# Euler orders. An order is written as in a BVH CHANNELS line, e.g. "ZXY": intrinsic rotations, the
+# first channel outermost, i.e. R = Rz(a) @ Rx(b) @ Ry(c) (SciPy: Rotation.from_euler("ZXY", [a, b, c],
+# degrees=True)).
+AXES = "XYZ"
+ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
+
+
+def axes_of(order: str) -> tuple[int, int, int]:
+    """``"ZXY"`` -> ``(2, 0, 1)``."""
+    upper = order.upper()
+    if upper not in ORDERS:
+        raise MocapError(f"rotation order must be one of {', '.join(ORDERS)}, got {order!r}")
+    first, second, third = (AXES.index(a) for a in upper)
+    return first, second, third
+
+
+def order_name(axes) -> str:
+    """``(2, 0, 1)`` -> ``"ZXY"``."""
+    return "".join(AXES[int(a)] for a in axes)
+
+
+# The six BVH channels, by their canonical names.
 POSITION_CHANNELS = tuple(f"{a}position" for a in AXES)
 ROTATION_CHANNELS = tuple(f"{a}rotation" for a in AXES)
 _CANONICAL = {c.lower(): c for c in POSITION_CHANNELS + ROTATION_CHANNELS}
@@ -39,54 +60,52 @@ def canonical_channels(names: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(canonical_channel(n) for n in names)
 
 
+def rotation_order(channels: tuple[str, ...]) -> str:
+    """The Euler order of a joint's canonical ``channels`` as written (e.g. ``"ZXY"``); axes without
+    a channel follow in X, Y, Z order; ``"XYZ"`` for a joint without rotations."""
+    written = [c[0] for c in channels if c in ROTATION_CHANNELS]
+    return "".join(written + [a for a in AXES if a not in written])
+
+
 def _frozen(array: np.ndarray) -> np.ndarray:
     array.setflags(write=False)
     return array
 
 
-def _rotation_order(channels: tuple[str, ...]) -> str:
-    written = [c[0] for c in channels if c in ROTATION_CHANNELS]
-    return "".join(written + [a for a in AXES if a not in written])
+@lru_cache(maxsize=256)
+def _channel_lists(channels: tuple[tuple[str, ...], ...]) -> tuple[tuple[tuple[str, ...], ...], int]:
+    """:func:`canonical_channels` of every joint's list, and the first joint that lists a channel
+    twice (-1: none). Cached: skeletons are made for every clip read, from a handful of layouts."""
+    canonical = tuple(canonical_channels(cs) for cs in channels)
+    return canonical, next((j for j, cs in enumerate(canonical) if len(set(cs)) != len(cs)), -1)
 
 
-def _prefer_written_axes(angles: np.ndarray, written: np.ndarray) -> np.ndarray:
-    """Every rotation has two Tait-Bryan decompositions, (a, b, c) and (a + 180, 180 - b,
-    c + 180). Where a joint has no channel for some axis, pick the one whose unwritten angles are
-    nearer 0, so a rotation the channels can express is written exactly (``angles [F, J, 3]``,
-    ``written [J, 3]``)."""
-    missing = ~written
-    if not missing.any():
-        return angles
-    other = angles + np.array([180.0, 0.0, 180.0])
-    other[..., 1] = 180.0 - angles[..., 1]
-    other = (other + 180.0) % 360.0 - 180.0
-    cost = np.sum(np.abs(angles) * missing, axis=-1)
-    other_cost = np.sum(np.abs(other) * missing, axis=-1)
-    return np.where((other_cost < cost)[..., None], other, angles)
+def _checked_offsets(
+    joints: int, offsets: np.ndarray, site_joints: list[int], site_offsets: np.ndarray
+) -> tuple[np.ndarray, tuple]:
+    """The checks of a skeleton's rest offsets ``[J, 3]`` and End Sites (the joint each is attached
+    to, and its offset; float64 arrays): read-only offsets and the End Sites as ``(joint, offset)``
+    tuples of Python numbers, or a MocapError."""
+    if not np.isfinite(offsets).all():
+        raise MocapError("joint offsets must be finite")
+    if not np.isfinite(site_offsets).all():
+        raise MocapError("End Site offsets must be finite")
+    if site_joints and not (min(site_joints) >= 0 and max(site_joints) < joints):
+        j = next(j for j in site_joints if not 0 <= j < joints)
+        raise MocapError(f"End Site attached to joint {j}, but there are {joints} joints")
+    return _frozen(offsets), tuple(zip(site_joints, map(tuple, site_offsets.tolist())))
 
 
 @lru_cache(maxsize=256)
-def _layout(channels: tuple[tuple[str, ...], ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """See :meth:`Skeleton.layout`. Cached: archives share a handful of channel layouts."""
-    rot = np.full((len(channels), 3), -1, dtype=np.int64)
-    pos = np.full((len(channels), 3), -1, dtype=np.int64)
-    orders = np.zeros((len(channels), 3), dtype=np.uint8)
-    column = 0
-    for j, cs in enumerate(channels):
-        order = _rotation_order(cs)
-        orders[j] = axes_of(order)
-        for c in cs:
-            if c in ROTATION_CHANNELS:
-                rot[j, order.index(c[0])] = column
-            else:
-                pos[j, AXES.index(c[0])] = column
-            column += 1
-    return _frozen(rot), _frozen(orders), _frozen(pos)
+def _euler_orders(channels: tuple[tuple[str, ...], ...]) -> np.ndarray:
+    """See :attr:`Skeleton.euler_orders`. Cached: archives share a handful of channel layouts."""
+    return _frozen(np.array([axes_of(rotation_order(cs)) for cs in channels], dtype=np.uint8).reshape(-1, 3))
 
 
 @dataclass(frozen=True, eq=False)
 class Skeleton:
-    """A joint hierarchy with its BVH channel layout, enough to write a file back as it came.
+    """A joint hierarchy with its BVH channel names, enough to write a file back as it came (the
+    channel layout of a frame, and encoding and decoding it, are in :mod:`expressive_mocap.bvh.channels`).
 
     ``names[j]``, ``parents[j]`` (-1 for the root; parents come before children, depth first),
     ``offsets[j]`` (rest offset from the parent), ``channels[j]`` (channel names in file order,
@@ -101,10 +120,10 @@ class Skeleton:
     end_sites: tuple[tuple[int, tuple[float, float, float]], ...] = field(default=())
 
     def __post_init__(self):
-        names = tuple(str(n) for n in self.names)
+        names = tuple(map(str, self.names))
         parents = np.array(self.parents, dtype=np.int64).reshape(-1)
         offsets = np.array(self.offsets, dtype=np.float64)
-        channels = tuple(canonical_channels(tuple(cs)) for cs in self.channels)
+        channels, listed_twice = _channel_lists(tuple(map(tuple, self.channels)))
         joints = len(names)
         if joints == 0:
             raise MocapError("a skeleton needs at least one joint")
@@ -115,26 +134,22 @@ class Skeleton:
         if len(set(names)) != joints:
             duplicate = next(n for n in names if names.count(n) > 1)
             raise MocapError(f"joint name {shown(duplicate)} appears more than once")
-        if parents[0] != -1 or (parents[1:] < 0).any():
-            raise MocapError("a skeleton has exactly one root, the first joint (parent -1)")
-        if (parents[1:] >= np.arange(1, joints)).any():
+        later = parents[1:]
+        if parents[0] != -1 or not ((later >= 0) & (later < np.arange(1, joints))).all():
+            if parents[0] != -1 or (later < 0).any():
+                raise MocapError("a skeleton has exactly one root, the first joint (parent -1)")
             raise MocapError("every joint must come after its parent")
-        if not np.isfinite(offsets).all():
-            raise MocapError("joint offsets must be finite")
-        if not np.isfinite(np.array([off for _, off in self.end_sites], dtype=np.float64)).all():
-            raise MocapError("End Site offsets must be finite")
-        for j, cs in enumerate(channels):
-            if len(set(cs)) != len(cs):
-                raise MocapError(f"joint {names[j]!r} lists a channel twice: {' '.join(cs)}")
-        end_sites = tuple((int(j), tuple(float(v) for v in off)) for j, off in self.end_sites)
-        for j, _ in end_sites:
-            if not 0 <= j < joints:
-                raise MocapError(f"End Site attached to joint {j}, but there are {joints} joints")
-        object.__setattr__(self, "names", names)
-        object.__setattr__(self, "parents", _frozen(parents))
-        object.__setattr__(self, "offsets", _frozen(offsets))
-        object.__setattr__(self, "channels", channels)
-        object.__setattr__(self, "end_sites", end_sites)
+        site_offsets = np.array([off for _, off in self.end_sites], dtype=np.float64)
+        offsets, end_sites = _checked_offsets(joints, offsets, [int(j) for j, _ in self.end_sites], site_offsets)
+        if listed_twice >= 0:
+            raise MocapError(f"joint {names[listed_twice]!r} lists a channel twice: {' '.join(channels[listed_twice])}")
+        self._set(names, _frozen(parents), offsets, channels, end_sites)
+
+    def _set(self, names, parents, offsets, channels, end_sites) -> None:
+        """Set the fields of a checked skeleton (the dataclass is frozen)."""
+        fields = {"names": names, "parents": parents, "offsets": offsets, "channels": channels, "end_sites": end_sites}
+        for name, value in fields.items():
+            object.__setattr__(self, name, value)
 
     def __repr__(self) -> str:
         # One line: the dataclass default prints every offset.
@@ -160,31 +175,19 @@ class Skeleton:
     def rotation_order(self, joint: int) -> str:
         """The joint's Euler order as written (e.g. ``"ZXY"``); axes without a channel follow
         in X, Y, Z order (their angle is always 0); ``"XYZ"`` for a joint without rotations."""
-        return _rotation_order(self.channels[joint])
+        return rotation_order(self.channels[joint])
 
     @property
     def euler_orders(self) -> np.ndarray:
         """``[J, 3]`` uint8 axis indices of every joint's rotation order."""
-        return _layout(self.channels)[1]
-
-    def decode(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``."""
-        return ops.decode_channels(values, *_layout(self.channels), self.offsets)
-
-    def encode(self, rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:
-        """Local rotations and translations -> channel values ``[F, C]`` (the inverse of :meth:`decode`)."""
-        rot_cols, orders, pos_cols = _layout(self.channels)
-        angles = _prefer_written_axes(ops.quat_to_euler(rotations, orders), rot_cols >= 0)
-        values = np.zeros((len(rotations), self.n_channels))
-        values[:, rot_cols[rot_cols >= 0]] = angles[:, rot_cols >= 0]
-        values[:, pos_cols[pos_cols >= 0]] = translations[:, pos_cols >= 0]
-        return values
+        return _euler_orders(self.channels)
 
     def layout(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Where each joint's numbers sit in a frame of channel values: ``rotation_columns
-        [J, 3]`` (column of each angle, in the joint's order; -1 where there is no channel),
-        ``orders [J, 3]`` (axis indices) and ``position_columns [J, 3]`` (x, y, z; -1: none)."""
-        return _layout(self.channels)
+        """Where each joint's numbers sit in a frame of channel values: see
+        :func:`expressive_mocap.bvh.channels.layout`."""
+        from .bvh.channels import layout  # imported here: the bvh package imports this module
+
+        return layout(self)
 
     def with_rotation_order(self, order: str) -> Skeleton:
         """The same skeleton with every joint's rotation channels written in ``order``
@@ -207,14 +210,13 @@ class Skeleton:
         site_offsets = np.array(end_site_offsets, dtype=np.float64).reshape(-1, 3)
         if offsets.shape != self.offsets.shape or len(site_offsets) != len(self.end_sites):
             raise MocapError(f"with_offsets: expected {list(self.offsets.shape)} joint and {len(self.end_sites)} End Site offsets")
-        if not (np.isfinite(offsets).all() and np.isfinite(site_offsets).all()):
-            raise MocapError("joint offsets must be finite")
-        # The structure is unchanged and was checked when this skeleton was made.
+        # The private constructor path: the hierarchy and channels are this skeleton's (immutable,
+        # checked when it was made), the new offsets get the constructor's checks. Constructing
+        # anew would check everything again, 10x the time, on every clip of a known hierarchy read.
+        site_joints = [j for j, _ in self.end_sites]
+        joint_offsets, sites = _checked_offsets(self.n_joints, offsets, site_joints, site_offsets)
         copy = object.__new__(Skeleton)
-        copy.__dict__.update(self.__dict__)
-        copy.__dict__.pop("_rest", None)  # the cached rest pose belongs to the old offsets
-        object.__setattr__(copy, "offsets", _frozen(offsets))
-        object.__setattr__(copy, "end_sites", tuple((j, tuple(off)) for (j, _), off in zip(self.end_sites, site_offsets.tolist())))
+        copy._set(self.names, self.parents, joint_offsets, self.channels, sites)
         return copy
 
     def scaled(self, factor: float) -> Skeleton:
@@ -339,7 +341,9 @@ class Motion:
 
     def channel_values(self) -> np.ndarray:
         """The BVH channel values ``[F, C]`` of every frame, in the skeleton's layout."""
-        return self.skeleton.encode(self.rotations, self.translations)
+        from .bvh.channels import encode  # imported here: the bvh package imports this module
+
+        return encode(self.skeleton, self.rotations, self.translations)
 
     def resample(self, fps: float | None = None, n_frames: int | None = None) -> Motion:
         """The same movement sampled at ``fps`` frames a second, or with ``n_frames`` frames over the
@@ -398,4 +402,16 @@ class Motion:
         return Motion(self.skeleton.with_rotation_order(order), self.rotations, self.translations, self.frame_time)
 
 
-__all__ = ["Motion", "Skeleton", "ORDERS", "POSITION_CHANNELS", "ROTATION_CHANNELS", "canonical_channel", "canonical_channels"]
+__all__ = [
+    "AXES",
+    "Motion",
+    "ORDERS",
+    "POSITION_CHANNELS",
+    "ROTATION_CHANNELS",
+    "Skeleton",
+    "axes_of",
+    "canonical_channel",
+    "canonical_channels",
+    "order_name",
+    "rotation_order",
+]

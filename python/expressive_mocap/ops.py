@@ -25,7 +25,7 @@ import numpy as np
 
 from .backend import kernels
 from .errors import ArgumentError
-from .rotations import axes_of
+from . import motion  # its Euler order names (a module import: motion imports this module)
 
 ACTIVATIONS = ("tanh", "linear")  # of a dense layer (mlp_forward); the kernels implement these
 
@@ -51,7 +51,7 @@ def _orders(orders, joints: int) -> np.ndarray:
     """Orders as a ``[J, 3]`` uint8 array from one order ("ZXY") or one per joint."""
     if isinstance(orders, str):
         orders = [orders] * joints
-    axes = np.array([axes_of(o) if isinstance(o, str) else o for o in orders], dtype=np.uint8)
+    axes = np.array([motion.axes_of(o) if isinstance(o, str) else o for o in orders], dtype=np.uint8)
     if axes.shape != (joints, 3):
         raise ArgumentError(f"argument `orders`: expected one order or {joints} orders, got {axes.shape[0]}")
     return axes

@@ -1,0 +1,130 @@
+"""The ``expressive-mocap`` command: a thin layer over the package's functions.
+
+Each group of commands is a module that adds its subparsers next to its command functions
+(:mod:`.files`, :mod:`.decoupling`, :mod:`.exaggeration`, :mod:`.data`, :mod:`.demo`); this one
+builds the parser and runs a command: outputs are checked before any work, and bad input ends the
+command with a one-line message on stderr and a non-zero exit, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import sys
+import warnings
+from pathlib import Path
+
+from .. import __version__, backend
+from ..errors import MocapError
+from ..files import file_kind, is_standard_output, output_target
+from . import data, decoupling, demo, exaggeration, files
+from .common import PROG, Parser
+from .decoupling import DECOUPLE_SUFFIXES
+from .demo import DEMO_FILES
+
+__all__ = ["DEMO_FILES", "PROG", "build_parser", "main"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = Parser(prog=PROG, description="Find, measure and edit the expressive part of motion capture (BVH files).")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument(
+        "--backend",
+        choices=backend.BACKENDS,
+        help=f"kernels to use (default: ${backend.ENV_VAR} or auto = Rust when built)",
+    )
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser, required=True)
+    for group in (files, decoupling, exaggeration, data, demo):
+        group.add_parsers(commands)
+    # --backend is also taken after the command (`info FILE --backend numpy`); SUPPRESS keeps a
+    # command without it from overwriting the value given before the command.
+    for command in commands.choices.values():
+        command.add_argument(
+            "--backend",
+            choices=backend.BACKENDS,
+            default=argparse.SUPPRESS,
+            help="kernels to use (as before the command)",
+        )
+    return parser
+
+
+# Commands whose one output may be standard output (`-o -` or `-o /dev/stdout`): a BVH or .npz
+# streamed as it is; their report lines then go to stderr. Pictures pick their format from the
+# name, decouple writes three files and demo/preprocess a folder, so they take none.
+_STREAMING = ("convert", "positions", "modulate", "mix", "blend", "exaggerate", "calibrate", "train")
+_MAKE_FOLDERS = ("demo", "preprocess")  # their OUT is a folder, made if new
+
+
+def _output_paths(args) -> list[str]:
+    """The files a command will write, as given (``-o``, ``--plot``; decouple's three)."""
+    outputs = args.output if isinstance(getattr(args, "output", None), list) else [getattr(args, "output", None)]
+    outputs = [o for o in [*outputs, getattr(args, "plot", None)] if o is not None]
+    if args.command == "decouple" and not is_standard_output(outputs[0]):  # `-o -` is refused, not "-_body.bvh"
+        outputs = [f"{outputs[0]}{suffix}" for suffix in DECOUPLE_SUFFIXES]
+    return [str(o) for o in outputs]
+
+
+def _check_outputs(args) -> None:
+    """Refuse, before any work, an output whose folder is missing or unwritable, or that is
+    anything but a regular file or a new one (a folder, FIFO, socket, device, or a symlink to
+    one: :func:`expressive_mocap.files.output_target`): files go where they are asked to (``-o``,
+    ``--plot``), never next to an input, and the folders of ``demo`` and ``preprocess`` are
+    created only inside an existing one. ``-`` is standard output for the commands that stream."""
+    for output in _output_paths(args):
+        if is_standard_output(output):
+            if args.command not in _STREAMING:
+                raise MocapError(
+                    f"cannot write {output}: {args.command} does not write to standard output "
+                    f"(these do: {', '.join(_STREAMING)})"
+                )
+            continue
+        path = Path(output)
+        if args.command in _MAKE_FOLDERS:
+            if path.exists() and not path.is_dir():
+                raise MocapError(f"cannot write {output}: it is {file_kind(path.stat().st_mode)}, not a folder")
+            folder = path if path.is_dir() else path.parent
+            if path.is_dir() and args.command == "demo":
+                for name in DEMO_FILES:
+                    output_target(path / name)
+        else:
+            folder = output_target(path).parent  # a symlink to a regular file is written through
+        if not folder.is_dir():
+            what = "is not a folder" if folder.exists() else "does not exist"
+            raise MocapError(f"cannot write {output}: the folder {folder} {what}")
+        if not os.access(folder, os.W_OK):
+            raise MocapError(f"cannot write {output}: the folder {folder} is not writable")
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"{PROG}: warning: {message}", file=sys.stderr)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line ``argv`` (default: the process's); returns the exit status."""
+    args = build_parser().parse_args(argv)
+    with warnings.catch_warnings():  # the package's warnings as one line each, like its errors
+        warnings.showwarning = _show_warning
+        return _run(args)
+
+
+def _run(args) -> int:
+    try:
+        if args.backend:
+            backend.set_backend(args.backend)
+        backend.kernels()  # a bad $EXPRESSIVE_MOCAP_BACKEND fails here, in one line
+        _check_outputs(args)
+        # Streaming an output (`-o -`): standard output carries the data alone, reports go to stderr.
+        streaming = any(is_standard_output(output) for output in _output_paths(args))
+        with contextlib.redirect_stdout(sys.stderr) if streaming else contextlib.nullcontext():
+            return args.run(args)
+    except BrokenPipeError:
+        # The reader went away (`| head`): stop quietly, and keep Python from complaining at exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+    except (MocapError, OSError) as error:
+        print(f"{PROG}: error: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130

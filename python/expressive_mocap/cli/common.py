@@ -1,0 +1,76 @@
+"""What the command modules share: the parser class, option types, reading inputs, and the
+defaults of the domain functions (typed once, in the domain code)."""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import math
+from typing import Any, Callable
+
+from ..bvh import read_bvh
+from ..errors import MocapError
+from ..motion import Motion
+
+__all__ = ["PROG", "Parser", "default", "finite", "positive", "read_all", "read_for_model"]
+
+PROG = "expressive-mocap"
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse, but a usage mistake is one line (and exit status 2), like every other error."""
+
+    def error(self, message: str):  # type: ignore[override]  # argparse's returns NoReturn
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def finite(text: str) -> float:
+    """A float option: "nan" and "inf" parse as floats, and are refused here, before any work."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
+    return value
+
+
+finite.__name__ = "float"  # argparse's "invalid float value: 'x'"
+
+
+def positive(kind: Callable[[str], Any]) -> Callable[[str], Any]:
+    """An option type: ``kind`` (int or float) of the text, positive and finite."""
+
+    def parse(text: str):
+        value = kind(text)
+        if not (math.isfinite(value) and value > 0):  # float("inf") and float("nan") parse
+            raise argparse.ArgumentTypeError(f"must be positive and finite, got {text}")
+        return value
+
+    parse.__name__ = kind.__name__
+    return parse
+
+
+def default(function: Callable, name: str) -> Any:
+    """The default of ``function``'s parameter ``name``: an option's default is the domain code's."""
+    return inspect.signature(function).parameters[name].default
+
+
+def read_for_model(path: str, model, fix: str) -> Motion:
+    """A BVH file that the model can take: another skeleton is an error naming the file and
+    what to do about it (``fix``)."""
+    motion = read_bvh(path)
+    try:
+        model.check_skeleton(motion)
+    except MocapError as error:
+        raise MocapError(f"{path}: {error}: {fix}") from None
+    return motion
+
+
+def read_all(paths: list[str], what: str, quiet: bool = False) -> list[Motion]:
+    """BVH files read one after the other, with a progress bar on stderr (see progress.Progress)."""
+    from ..progress import Progress
+
+    with Progress(len(paths), f"reading {what}", "files", enabled=bool(paths) and not quiet) as bar:
+        motions = []
+        for path in paths:
+            motions.append(read_bvh(path))
+            bar.update()
+    return motions

@@ -1,0 +1,181 @@
+"""Commands on captured data: ``footsteps`` (one walk) and ``preprocess`` (a whole archive)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..bvh import read_bvh
+from ..errors import MocapError
+from ..features import HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from ..dataset import preprocess
+from .common import default, finite, positive
+
+__all__ = ["add_parsers", "cmd_footsteps", "cmd_preprocess"]
+
+
+def add_footsteps(commands) -> None:
+    p = commands.add_parser(
+        "footsteps",
+        help="foot contacts of a walk: contact intervals per foot, step count and cadence, optionally a gait diagram",
+        description="Foot contacts after Lee et al. 2002: a foot (ankle or toe) touches when it is both low and slow; "
+        f"contacts and flights shorter than {MIN_DURATION:g} s are absorbed (offline) or held off (--causal). "
+        "Prints each foot's contact intervals in frames and seconds, then the steps and the cadence.",
+    )
+    p.add_argument("file", metavar="FILE", help="BVH file (joints found by name: Bandai-Namco, CMU or Mixamo)")
+    p.add_argument("--plot", metavar="OUT.png", help="also write a gait diagram: one row per foot, a bar per contact")
+    p.add_argument(
+        "--causal", action="store_true", help="streaming detector: frame t sees frames <= t only (hold filter, floor 0)"
+    )
+    p.add_argument(
+        "--height-threshold",
+        type=positive(float),
+        default=HEIGHT_THRESHOLD,
+        metavar="X",
+        help=f"contact below X x actor height above the floor (default: {HEIGHT_THRESHOLD:g})",
+    )
+    p.add_argument(
+        "--speed-threshold",
+        type=positive(float),
+        default=SPEED_THRESHOLD,
+        metavar="X",
+        help=f"contact below X x actor height per second (default: {SPEED_THRESHOLD:g})",
+    )
+    p.add_argument(
+        "--floor",
+        type=finite,
+        metavar="Y",
+        help="floor height in file units (default: 5th percentile of toe heights; 0 with --causal)",
+    )
+    p.set_defaults(run=cmd_footsteps)
+
+
+def cmd_footsteps(args) -> int:
+    from ..features import cadence, contact_intervals, default_floor, foot_contacts, footstrikes
+    from ..roles import JointRoles, actor_height
+
+    motion = read_bvh(args.file)
+    roles = JointRoles.find(motion.skeleton)
+    names = roles.names(motion.skeleton)
+    height = actor_height(motion.skeleton, roles)
+    floor = args.floor if args.floor is not None else (0.0 if args.causal else default_floor(motion.positions(), roles))
+    contacts = foot_contacts(
+        motion,
+        roles,
+        floor=floor,
+        causal=args.causal,
+        height_threshold=args.height_threshold,
+        speed_threshold=args.speed_threshold,
+    )
+    dt = motion.frame_time
+    print(f"{args.file}: {motion.n_frames} frames at {motion.fps:.6g} fps ({motion.duration:.2f} s)")
+    print(f"  actor height {height:.4g}, floor at {floor:.4g} (file units)")
+    print(
+        f"  contact: height < {args.height_threshold:g} x height = {args.height_threshold * height:.3g} and "
+        f"speed < {args.speed_threshold:g} x height/s = {args.speed_threshold * height:.3g}/s, "
+        f"{'causal hold' if args.causal else 'offline filter'} of {MIN_DURATION:g} s"
+    )
+    for side, intervals in zip(("left", "right"), contact_intervals(contacts, dt)):
+        count = f"{len(intervals)} contact{'s' * (len(intervals) != 1)}"
+        print(f"{side} foot ({names[f'{side}_foot']}, {names[f'{side}_toe']}): {count}")
+        for i in intervals:
+            print(
+                f"  frames {i.start:5d}-{i.end:<5d} {i.start * dt:8.3f}-{(i.end + 1) * dt:.3f} s  ({i.seconds:.3f} s)"
+            )
+    strikes = footstrikes(contacts)
+    steps_per_second = cadence(contacts, dt)
+    left = int(np.count_nonzero(strikes[:, 1] == 0))
+    rate = f"cadence {steps_per_second:.2f} steps/s" if np.isfinite(steps_per_second) else "cadence: too few steps"
+    print(f"summary: {len(strikes)} steps ({left} left, {len(strikes) - left} right), {rate}")
+    if args.plot:
+        from ..render import plot_contacts
+
+        title = f"{Path(args.file).name}: foot contacts ({len(strikes)} steps, {rate})"
+        plot_contacts(contacts, dt, args.plot, title=title)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def add_preprocess(commands) -> None:
+    p = commands.add_parser(
+        "preprocess",
+        help="a whole archive of BVH clips (folder, glob, .zip, .tar.gz/.xz) into a dataset of arrays: "
+        "positions, features, contacts, activity",
+        description="Parse every clip, run FK, dynamic features, foot contacts and optionally the decomposition, "
+        "in batches (parallel Rust parsing and FK), into OUT: one memory-mappable .npy per kind, offsets.npy and "
+        "manifest.json (load with expressive_mocap.dataset.load_dataset(OUT)). Bad clips are listed with their "
+        "errors; an interrupted run resumes where it stopped when run again.",
+    )
+    p.add_argument(
+        "source", metavar="SRC", help="a folder (*.bvh, recursive), a quoted glob, a .zip or a .tar/.tar.gz/.tar.xz"
+    )
+    p.add_argument("-o", "--output", required=True, metavar="OUT", help="dataset folder")
+    p.add_argument(
+        "--keep",
+        metavar="KINDS",
+        help="comma-separated: positions,rotations,features,contacts,activity,body,expressive "
+        "(default: positions,features,contacts, plus activity with --model)",
+    )
+    p.add_argument(
+        "--model",
+        nargs="?",
+        const="",
+        metavar="MODEL.npz",
+        help="decompose with this body-mechanics model (no value: the shipped one)",
+    )
+    p.add_argument(
+        "--model-float32",
+        action="store_true",
+        help="run the network in float32: ~2x faster, activity within ~2e-5 of float64",
+    )
+    p.add_argument(
+        "--dask",
+        nargs="?",
+        const="local",
+        metavar="ADDRESS",
+        help="run the batches on a Dask cluster at ADDRESS (no value: a local cluster of 2 worker processes on "
+        "127.0.0.1); needs pip install 'expressive-mocap[distributed]'",
+    )
+    batch_mb = default(preprocess, "batch_mb")
+    p.add_argument(
+        "--batch-mb",
+        type=positive(float),
+        default=batch_mb,
+        help=f"MB of BVH text read per batch (default {batch_mb:g})",
+    )
+    p.add_argument("--max-batches", type=positive(int), metavar="N", help="stop after N batches (rerun to resume)")
+    p.add_argument("--overwrite", action="store_true", help="redo OUT if it already holds a finished dataset")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(run=cmd_preprocess)
+
+
+def cmd_preprocess(args) -> int:
+    from ..dataset import preprocess
+
+    summary = preprocess(
+        args.source,
+        args.output,
+        args.keep,
+        args.model,
+        batch_mb=args.batch_mb,
+        max_batches=args.max_batches,
+        model_float32=args.model_float32,
+        cluster=args.dask,
+        overwrite=args.overwrite,
+        progress=not args.quiet,
+    )
+    print("\n".join(summary.lines()))
+    if summary.finished and summary.clips_ok == 0:  # a dataset of nothing is not a success
+        if summary.clips_failed:
+            found = f"none of its {summary.clips_failed} clips could be read (see the failures above)"
+        else:
+            found = "it holds no .bvh clips"
+        raise MocapError(f"{args.source}: {found}; {args.output} holds no data")
+    return 0
+
+
+def add_parsers(commands) -> None:
+    """The subparsers of this module's commands, in the order ``--help`` lists them."""
+    for add in (add_footsteps, add_preprocess):
+        add(commands)

@@ -1,0 +1,273 @@
+"""Commands of the exaggeration method (Davis & Kannappan): ``rank``, ``exaggerate`` and
+``validate``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..bvh import write_bvh
+from ..errors import ClipError, MocapError
+from ..exaggeration import exaggerate, swap_test, train
+from ..motion import Motion
+from .common import default, finite, positive, read_all, read_for_model
+
+__all__ = ["EXAGGERATION_MODEL_FIX", "add_parsers", "cmd_exaggerate", "cmd_rank", "cmd_validate"]
+
+EXAGGERATION_MODEL_FIX = (
+    "an exaggeration model applies to its own skeleton only; train one on clips of this skeleton "
+    "(`expressive-mocap rank --level ... -o MODEL.npz`)"
+)
+FEET = ("left", "right")  # train's foot: 0 or 1
+
+
+def _add_training_options(p, model: bool = False) -> None:
+    """--level K FILE... and the options of :func:`~expressive_mocap.exaggerate.train`."""
+    p.add_argument(
+        "--level",
+        action="append",
+        nargs="+",
+        metavar=("K", "FILE"),
+        help="an intensity K and its BVH files, one per person (person i = the i-th file of every level); "
+        "repeat per intensity",
+    )
+    if model:
+        p.add_argument(
+            "--model", metavar="MODEL.npz", help="a model saved by `rank -o MODEL.npz` instead of --level files"
+        )
+    share, energy = default(train, "share"), default(train, "energy")
+    degree, samples = default(train, "degree"), default(train, "samples")
+    p.add_argument(
+        "--share",
+        type=positive(float),
+        default=share,
+        help=f"expressiveness share of the key features (default {share:g})",
+    )
+    p.add_argument(
+        "--energy", type=positive(float), default=energy, help=f"basis share of sum(s^2) (default {energy:g})"
+    )
+    p.add_argument("--rank", type=positive(int), help="number of basis vectors (default: by --energy)")
+    p.add_argument(
+        "--degree",
+        type=int,
+        default=degree,
+        help=f"degree of the intensity-to-coefficient mappings (default {degree}: lines)",
+    )
+    p.add_argument(
+        "--samples",
+        type=positive(int),
+        default=samples,
+        help=f"samples per time-normalised cycle T (default {samples})",
+    )
+    cycle = default(train, "cycle")
+    p.add_argument(
+        "--cycle",
+        default=cycle,
+        help=f"cycles of each clip: {cycle} (default: their mean is the performance, predictability is measured over "
+        "every one), middle (the paper's single cycle), first, whole (not a walk), or an index",
+    )
+    foot = FEET[default(train, "foot")]
+    p.add_argument(
+        "--foot",
+        choices=FEET,
+        default=foot,
+        help=f"walking cycles run from one footstrike of this foot to the next (default {foot})",
+    )
+    p.add_argument(
+        "--euler",
+        action="store_true",
+        help="DOFs are the Euler channels (relative to the mean) instead of rotation vectors",
+    )
+
+
+def _levels(args) -> tuple[list[list[Motion]], list[float], list[list[str]]]:
+    """``--level K FILE...`` options -> people (person i = the i-th file of every level), the
+    intensities in increasing order, and the file names per person."""
+    if not args.level or len(args.level) < 2:
+        raise MocapError("give at least two --level K FILE... options (one per intensity)")
+    levels = []
+    for values in args.level:
+        try:
+            k = finite(values[0])
+        except (ValueError, argparse.ArgumentTypeError):
+            raise MocapError(f"--level {values[0]}: the first value is the intensity, a finite number") from None
+        if len(values) < 2:
+            raise MocapError(f"--level {values[0]}: give at least one BVH file after the intensity")
+        levels.append((k, values[1:]))
+    levels.sort(key=lambda kv: kv[0])
+    counts = {len(files) for _, files in levels}
+    if len(counts) != 1:
+        raise MocapError(
+            f"every --level needs the same number of files (one per person); got {[len(f) for _, f in levels]}"
+        )
+    n = counts.pop()
+    paths = [[files[i] for _, files in levels] for i in range(n)]
+    people = read_all([path for person in paths for path in person], "clips")
+    return [people[i * len(levels) : (i + 1) * len(levels)] for i in range(n)], [k for k, _ in levels], paths
+
+
+def _train_from_args(args):
+    """The model of --model, or trained on the --level files (with those files' names)."""
+    from ..exaggeration import ExaggerationModel, train
+
+    if getattr(args, "model", None):
+        return ExaggerationModel.load(args.model), None
+    people, levels, paths = _levels(args)
+    cycle = int(args.cycle) if args.cycle.lstrip("-").isdigit() else args.cycle  # names are checked by train
+    try:
+        model = train(
+            people,
+            levels,
+            samples=args.samples,
+            share=args.share,
+            energy=args.energy,
+            rank=args.rank,
+            degree=args.degree,
+            representation="euler" if args.euler else "rotvec",
+            cycle=cycle,
+            foot=FEET.index(args.foot),
+        )
+    except ClipError as error:
+        raise MocapError(f"{paths[error.person][error.level]}: {error}") from None
+    return model, paths
+
+
+def add_rank(commands) -> None:
+    p = commands.add_parser(
+        "rank", help="rank the expressive features of an action performed at several intensities (Davis & Kannappan)"
+    )
+    _add_training_options(p)
+    p.add_argument(
+        "-o",
+        "--output",
+        action="append",
+        metavar="OUT.png|MODEL.npz",
+        help="write the bar plot (.png) and/or the model (.npz); repeatable",
+    )
+    p.add_argument("--top", type=positive(int), default=20, help="DOFs listed (default 20)")
+    p.set_defaults(run=cmd_rank)
+
+
+def cmd_rank(args) -> int:
+    outputs = args.output or []
+    bad = [o for o in outputs if not o.lower().endswith((".png", ".npz"))]
+    if bad:
+        raise MocapError(f"-o {bad[0]}: outputs must end in .png (the plot) or .npz (the model)")
+    model, paths = _train_from_args(args)
+    for i, person in enumerate(paths):
+        print(f"person {i}: " + " < ".join(Path(p).name for p in person))
+    print(model.table(top=args.top))
+    for out in outputs:
+        if out.lower().endswith(".png"):
+            levels = ", ".join(f"{k:g}" for k in model.levels)
+            model.plot(out, title=f"expressiveness of {len(paths)} person(s), intensities {levels}")
+        else:
+            model.save(out)
+        print(f"wrote {out}")
+    return 0
+
+
+def add_exaggerate(commands) -> None:
+    p = commands.add_parser("exaggerate", help="exaggerate or diminish a motion with a model from `rank -o MODEL.npz`")
+    p.add_argument("--model", required=True, metavar="MODEL.npz", help="exaggeration model")
+    p.add_argument("--input", required=True, metavar="IN.bvh", help="the motion (same skeleton and action)")
+    p.add_argument(
+        "--from",
+        dest="current",
+        type=finite,
+        metavar="K0",
+        help="its current intensity (default: estimated by least squares over the key DOFs' mapped coefficients, "
+        "each weighted by how well the mapping predicts it; printed with its uncertainty and fit residual, with a "
+        "warning when outside the trained range)",
+    )
+    p.add_argument(
+        "--to",
+        type=finite,
+        required=True,
+        metavar="K1",
+        help="target intensity (beyond the trained range extrapolates)",
+    )
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
+    margin, fade, blend = (default(exaggerate, name) for name in ("margin", "fade", "blend"))
+    p.add_argument(
+        "--margin",
+        type=finite,
+        default=margin,
+        help=f"DOFs stay within the training range widened by this share of its width (default {margin:g})",
+    )
+    p.add_argument(
+        "--fade", type=finite, default=fade, help=f"cross-fade at cycle boundaries, seconds (default {fade:g})"
+    )
+    reference = default(exaggerate, "reference")
+    p.add_argument(
+        "--reference",
+        choices=["model", "own"],
+        default=reference,
+        help="rotations measured from the training mean pose (default) or the motion's own",
+    )
+    p.add_argument("--no-foot-lock", action="store_true", help="do not pin the stance feet with leg IK during contacts")
+    p.add_argument(
+        "--blend",
+        type=finite,
+        default=blend,
+        help=f"foot locking eases in and out over this many seconds (default {blend:g})",
+    )
+    p.set_defaults(run=cmd_exaggerate)
+
+
+def cmd_exaggerate(args) -> int:
+    from ..exaggeration import ExaggerationModel, exaggerate
+
+    model = ExaggerationModel.load(args.model)
+    motion = read_for_model(args.input, model, EXAGGERATION_MODEL_FIX)
+    out, report = exaggerate(
+        model,
+        motion,
+        args.to,
+        current=args.current,
+        margin=args.margin,
+        fade=args.fade,
+        lock_feet=not args.no_foot_lock,
+        blend=args.blend,
+        reference=args.reference,
+    )
+    write_bvh(out, args.output)
+    print(report.text())
+    print(f"wrote {args.output}")
+    return 0
+
+
+def add_validate(commands) -> None:
+    p = commands.add_parser(
+        "validate", help="the swap test (with random and best same-size sets) and the leave-one-person-out warp"
+    )
+    _add_training_options(p, model=True)
+    draws, seed = default(swap_test, "draws"), default(swap_test, "seed")
+    p.add_argument(
+        "--draws", type=positive(int), default=draws, help=f"random same-size sets averaged (default {draws})"
+    )
+    p.add_argument("--seed", type=int, default=seed, help=f"random seed (default {seed})")
+    p.set_defaults(run=cmd_validate)
+
+
+def cmd_validate(args) -> int:
+    from ..exaggeration import leave_one_out, rank_agreement, swap_test, validation_table
+
+    model, paths = _train_from_args(args)
+    if paths:
+        for i, person in enumerate(paths):
+            print(f"person {i}: " + " < ".join(Path(p).name for p in person))
+    swaps = swap_test(model, draws=args.draws, seed=args.seed)
+    several = model.trajectories.shape[0] > 1
+    warps = leave_one_out(model) if several else []
+    share = model.settings.get("share", default(train, "share"))
+    ratio = "||swap - heaviest|| / ||lightest - heaviest||"
+    print(f"swap test at share {share:g}: {ratio} over DOF trajectories and joint positions")
+    print(validation_table(swaps, warps, rank_agreement(model) if several else None))
+    return 0
+
+
+def add_parsers(commands) -> None:
+    """The subparsers of this module's commands, in the order ``--help`` lists them."""
+    for add in (add_rank, add_exaggerate, add_validate):
+        add(commands)

@@ -1,0 +1,203 @@
+"""Commands on BVH files: ``info``, ``positions``, ``convert`` and ``render``."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ..bvh import read_bvh, write_bvh
+from ..errors import MocapError
+from ..files import atomic_write, is_standard_output
+from ..motion import ORDERS, Motion
+from ..render import render_animation, render_poses
+from .common import PROG, default, positive
+from .decoupling import add_model_options, body_model
+
+__all__ = ["add_parsers", "cmd_convert", "cmd_info", "cmd_positions", "cmd_render"]
+
+
+def add_info(commands) -> None:
+    p = commands.add_parser("info", help="joints, frames, fps, duration, channel layout and rest height of BVH files")
+    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files")
+    p.set_defaults(run=cmd_info)
+
+
+def cmd_info(args) -> int:
+    failures = 0
+    for path in args.files:
+        try:
+            motion = read_bvh(path)
+        except MocapError as error:
+            print(f"{PROG}: error: {error}", file=sys.stderr)
+            failures += 1
+            continue
+        skeleton = motion.skeleton
+        print(f"{path}")
+        print(f"  joints    {skeleton.n_joints} (+{len(skeleton.end_sites)} End Sites), root {skeleton.names[0]}")
+        print(f"  frames    {motion.n_frames} at {motion.fps:.6g} fps (frame time {motion.frame_time:.7g} s)")
+        print(f"  duration  {motion.duration:.3f} s")
+        print(f"  channels  {skeleton.n_channels} a frame: {skeleton.channel_layout()}")
+        print(f"  rest pose height {skeleton.rest_height():.4g} (file units, Y extent incl. End Sites)")
+    return 1 if failures else 0
+
+
+def add_positions(commands) -> None:
+    p = commands.add_parser("positions", help="world positions and rotations of every joint, to an .npz file")
+    p.add_argument("file", metavar="FILE", help="BVH file")
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="OUT.npz|OUT.csv",
+        help=".npz: arrays positions [F,J,3], rotations [F,J,4] (x,y,z,w), joints, parents, frame_time; "
+        ".csv: time and x,y,z of every joint, a row per frame",
+    )
+    p.set_defaults(run=cmd_positions)
+
+
+def cmd_positions(args) -> int:
+    kind = ".npz" if is_standard_output(args.output) else Path(args.output).suffix.lower()
+    if kind not in (".npz", ".csv"):
+        raise MocapError(
+            f"-o {args.output}: positions writes .npz (every array) or .csv (positions, a row per frame), "
+            "by the name's extension"
+        )
+    motion = read_bvh(args.file)
+    rotations, positions = motion.fk()
+    if not np.isfinite(positions).all():  # offsets near 1e308 add up past float64
+        frame, joint = np.argwhere(~np.isfinite(positions))[0, :2]
+        raise MocapError(
+            f"{args.file}: the position of {motion.skeleton.names[joint]} at frame {frame} is not finite "
+            "(beyond float64): nothing written"
+        )
+    joints, frames = motion.skeleton.n_joints, motion.n_frames
+    if kind == ".csv":
+        atomic_write(args.output, _positions_csv(motion, positions))
+        print(f"wrote {args.output}: positions of {joints} joints x {frames} frames (world, file units)")
+        return 0
+    buffer = io.BytesIO()
+    np.savez(
+        buffer,
+        positions=positions,
+        rotations=rotations,
+        joints=np.array(motion.skeleton.names),
+        parents=motion.skeleton.parents,
+        frame_time=np.float64(motion.frame_time),
+    )
+    atomic_write(args.output, buffer.getvalue())
+    print(f"wrote {args.output}: positions and rotations of {joints} joints x {frames} frames (world, x,y,z,w)")
+    return 0
+
+
+def _positions_csv(motion: Motion, positions: np.ndarray) -> bytes:
+    """World positions as CSV: a header row, then per frame its time and x, y, z of every joint."""
+    columns = ["time"] + [f"{name}_{axis}" for name in motion.skeleton.names for axis in "xyz"]
+    times = np.arange(motion.n_frames) * motion.frame_time
+    table = np.column_stack([times, positions.reshape(motion.n_frames, -1)])
+    text = io.StringIO()
+    np.savetxt(text, table, fmt="%.9g", delimiter=",", header=",".join(columns), comments="")
+    return text.getvalue().encode()
+
+
+def add_convert(commands) -> None:
+    p = commands.add_parser(
+        "convert", help="rewrite a BVH file, optionally resampled, scaled or in another rotation order"
+    )
+    p.add_argument("input", metavar="IN", help="BVH file")
+    p.add_argument(
+        "-o", "--output", required=True, metavar="OUT.bvh", help="where to write (atomically; - for standard output)"
+    )
+    p.add_argument("--fps", type=positive(float), help="resample to this frame rate (slerp)")
+    p.add_argument("--scale", type=positive(float), help="multiply every length, e.g. 0.01 for cm to m")
+    p.add_argument(
+        "--order", type=str.upper, choices=ORDERS, help="write every joint's rotation channels in this order"
+    )
+    p.add_argument(
+        "--decimals", type=int, help="digits after the point (default: the shortest text that reads back exactly)"
+    )
+    p.set_defaults(run=cmd_convert)
+
+
+@contextlib.contextmanager
+def _option(path: str, option: str, value):
+    """An edit's MocapError, naming the file and the option it came from."""
+    try:
+        yield
+    except MocapError as error:
+        reason = str(error).removeprefix("resample: ").removeprefix("scaled: ")
+        raise MocapError(f"{path}: {option} {value:g}: {reason}") from None
+
+
+def cmd_convert(args) -> int:
+    motion = read_bvh(args.input)
+    if args.fps:
+        with _option(args.input, "--fps", args.fps):
+            motion = motion.resample(fps=args.fps)
+    if args.scale:
+        with _option(args.input, "--scale", args.scale):
+            motion = motion.scaled(args.scale)
+    if args.order:
+        motion = motion.with_rotation_order(args.order)
+    write_bvh(motion, args.output, decimals=args.decimals)
+    print(f"wrote {args.output}: {motion.n_frames} frames at {motion.fps:.6g} fps")
+    return 0
+
+
+def add_render(commands) -> None:
+    p = commands.add_parser("render", help="stick figures side by side: poses as PNG or an animated GIF")
+    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files, one panel each")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.png|OUT.gif", help="picture to write")
+    view = default(render_poses, "view")
+    p.add_argument(
+        "--view",
+        choices=["side", "front"],
+        default=view,
+        help=f"camera, relative to the walker's heading: side (walking to the right) or front (default: {view})",
+    )
+    poses, speed = default(render_poses, "poses"), default(render_animation, "speed")
+    p.add_argument("--poses", type=positive(int), default=poses, help=f"poses per panel in a PNG (default: {poses})")
+    p.add_argument(
+        "--speed", type=positive(float), default=speed, help=f"GIF playback speed, 1 = real time (default: {speed:g})"
+    )
+    p.add_argument("--start", type=int, default=0, help="first frame (default: 0)")
+    p.add_argument("--end", type=int, help="frame to stop before (default: the end)")
+    what = p.add_mutually_exclusive_group()
+    what.add_argument("--decoupled", action="store_true", help="one file: original | body mechanics | expressive")
+    what.add_argument("--modulated", action="store_true", help="one file: expressiveness at 50%% | 100%% | 150%%")
+    add_model_options(p)
+    p.set_defaults(run=cmd_render)
+
+
+def cmd_render(args) -> int:
+    from ..render import render
+
+    motions = [read_bvh(path) for path in args.files]
+    titles = [Path(p).stem for p in args.files]
+    if args.decoupled or args.modulated:
+        from ..decoupling.algebra import decompose
+
+        if len(motions) != 1:
+            raise MocapError("--decoupled and --modulated draw one file: give exactly one")
+        parts = decompose(motions[0], body_model(args), args.gain, args.exponent)
+        if args.decoupled:
+            motions = [motions[0], parts.body_motion(), parts.expressive_motion()]
+            titles = ["original", "body mechanics", "expressive"]
+        else:
+            motions = [parts.recompose(s) for s in (0.5, 1.0, 1.5)]
+            titles = ["50% expressive", "100% (original)", "150% expressive"]
+    if args.start or args.end:
+        motions = [m[args.start : args.end] for m in motions]
+    options = {"poses": args.poses} if args.output.lower().endswith(".png") else {"speed": args.speed}
+    played = render(motions, args.output, titles=titles, view=args.view, **options)
+    print(f"wrote {args.output}" + (f": {played}" if played else ""))
+    return 0
+
+
+def add_parsers(commands) -> None:
+    """The subparsers of this module's commands, in the order ``--help`` lists them."""
+    for add in (add_info, add_positions, add_convert, add_render):
+        add(commands)
