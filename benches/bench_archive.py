@@ -77,7 +77,9 @@ def find_data(folder: str | None) -> Path:
     """The folder of dataset-2 .bvh files: --data (that folder, or the unpack root), else unpack."""
     if folder is None:
         unpack = REPO.parent / "shared" / "data" / "unpack"
-        out = subprocess.run([str(unpack), str(Path.home() / ".cache" / "motion-data")], check=True, capture_output=True, text=True)
+        out = subprocess.run(
+            [str(unpack), str(Path.home() / ".cache" / "motion-data")], check=True, capture_output=True, text=True
+        )
         folder = out.stdout.strip().splitlines()[-1]
     root = Path(folder).expanduser()
     for candidate in (root, root / DATASET2, root / "dataset" / DATASET2):
@@ -87,10 +89,14 @@ def find_data(folder: str | None) -> Path:
 
 
 def machine() -> dict:
-    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor())
+    cpu = next(
+        (l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor()
+    )
     mem_kb = next(int(l.split()[1]) for l in open("/proc/meminfo") if l.startswith("MemTotal"))
     try:
-        commit = subprocess.run(["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True).stdout.strip()
+        commit = subprocess.run(
+            ["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True
+        ).stdout.strip()
     except OSError:
         commit = "?"
     return {
@@ -195,6 +201,7 @@ def reader_breakdown(paths) -> tuple[list, str]:
             finally:
                 spent[key] = spent.get(key, 0.0) + time.perf_counter() - t0
                 stack.pop()
+
         return timed_fn
 
     saved = [(owner, name, getattr(owner, name)) for owner, name, _ in spots if hasattr(owner, name)]
@@ -220,7 +227,12 @@ def reader_breakdown(paths) -> tuple[list, str]:
     if top <= total:
         rows.append(("other Python glue in `read_bvh_many` (the rest)", total - top))
     else:
-        rows.append((f"(the steps above overlap: threads run concurrently; their sum exceeds the call by {top - total:.3f} s)", top - total))
+        rows.append(
+            (
+                f"(the steps above overlap: threads run concurrently; their sum exceeds the call by {top - total:.3f} s)",
+                top - total,
+            )
+        )
     # Split the fused Rust call: the number parsing alone, on exactly the inputs it was given.
     fused_label = labels["read_motion_blocks"]
     if fused_label in captured:
@@ -234,7 +246,12 @@ def reader_breakdown(paths) -> tuple[list, str]:
                 with ThreadPoolExecutor(core.num_threads) as pool:
                     parse_only, _ = timed(lambda: list(pool.map(lambda b: core.parse_motion_block(*b), blocks)))
             size = sum(len(b[0]) - b[1] for b in blocks)
-            rows.append((f"split of the Rust call on its first batch ({len(blocks)} files, {size / MB:.0f} MB, called again alone):", fused))
+            rows.append(
+                (
+                    f"split of the Rust call on its first batch ({len(blocks)} files, {size / MB:.0f} MB, called again alone):",
+                    fused,
+                )
+            )
             rows.append(("  parsing the numbers only (the parse kernel on the same blocks, same threads)", parse_only))
             rows.append(("  the rest: Euler->quaternion, translations, output arrays", fused - parse_only))
         except (TypeError, ValueError, IndexError) as error:
@@ -307,7 +324,9 @@ def rotation_only(motion: em.Motion) -> em.Motion:
     (pybvh rejects position channels on non-root joints). Those joints then sit at their
     header offsets: the converted clips are a different motion, used for speed only."""
     sk = motion.skeleton
-    channels = tuple(cs if j == 0 else tuple(c for c in cs if c.endswith("rotation")) for j, cs in enumerate(sk.channels))
+    channels = tuple(
+        cs if j == 0 else tuple(c for c in cs if c.endswith("rotation")) for j, cs in enumerate(sk.channels)
+    )
     skeleton = em.Skeleton(sk.names, sk.parents, sk.offsets, channels, sk.end_sites)
     return em.Motion(skeleton, motion.rotations, motion.translations, motion.frame_time)
 
@@ -352,7 +371,11 @@ def child_main(kind: str, paths_file: str) -> None:
             motions = em.read_bvh_many(progress(paths, f"{kind}: read"))
         r1, t1 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
         # CPU and page faults of a first read in a fresh process: all its memory is new.
-        result.update(read_user_s=r1.ru_utime - r0.ru_utime, read_sys_s=r1.ru_stime - r0.ru_stime, read_minflt=r1.ru_minflt - r0.ru_minflt)
+        result.update(
+            read_user_s=r1.ru_utime - r0.ru_utime,
+            read_sys_s=r1.ru_stime - r0.ru_stime,
+            read_minflt=r1.ru_minflt - r0.ru_minflt,
+        )
         fk = [] if kind == "rust-read" else fk_many(motions, backend) if HAS_FK_MANY else fk_all(motions, backend)
         t2 = time.perf_counter()
         result.update(read_s=t1 - t0, fk_s=t2 - t1, kept="motions and FK outputs" if fk else "motions")
@@ -371,7 +394,9 @@ def child_main(kind: str, paths_file: str) -> None:
             read_s += t1 - t0
             fk_s += t2 - t1
             del loaded
-        result.update(read_s=read_s, fk_s=fk_s, kept="positions only", joint_frames=sum(k.shape[0] * k.shape[1] for k in kept))
+        result.update(
+            read_s=read_s, fk_s=fk_s, kept="positions only", joint_frames=sum(k.shape[0] * k.shape[1] for k in kept)
+        )
     result["total_s"] = result["read_s"] + result["fk_s"]
     result["peak_rss"] = peak_rss()
     result["baseline_rss"] = baseline
@@ -397,7 +422,19 @@ def run_child(kind: str, paths_file: str) -> dict | None:
 
 def measure_read_and_fk(paths, rounds: int) -> tuple[dict, list]:
     """Rounds of read and FK, the implementations' order rotated each round (drift hits all)."""
-    times: dict[str, list] = {k: [] for k in ("floor", "rust_many", "rust_loop", "numpy_read", "rust_fk", "numpy_fk", "rust_fk_many", "numpy_fk_many")}
+    times: dict[str, list] = {
+        k: []
+        for k in (
+            "floor",
+            "rust_many",
+            "rust_loop",
+            "numpy_read",
+            "rust_fk",
+            "numpy_fk",
+            "rust_fk_many",
+            "numpy_fk_many",
+        )
+    }
     motions = None
     for r in range(rounds):
         order = ["floor", "rust_many", "rust_loop", "numpy_read"]
@@ -432,9 +469,16 @@ def spot_check(paths, converted, peers) -> list:
     with em.use_backend("rust"):
         ours = {i: em.read_bvh(paths[i]) for i in picks}
         ours_pos = {i: ours[i].positions() for i in picks}
-    rows.append(("SciPy reference (Rotation.from_euler, composed per joint)", max(np.abs(scipy_positions(paths[i]) - ours_pos[i]).max() for i in picks)))
+    rows.append(
+        (
+            "SciPy reference (Rotation.from_euler, composed per joint)",
+            max(np.abs(scipy_positions(paths[i]) - ours_pos[i]).max() for i in picks),
+        )
+    )
     with em.use_backend("numpy"):
-        rows.append(("NumPy twin backend", max(np.abs(em.read_bvh(paths[i]).positions() - ours_pos[i]).max() for i in picks)))
+        rows.append(
+            ("NumPy twin backend", max(np.abs(em.read_bvh(paths[i]).positions() - ours_pos[i]).max() for i in picks))
+        )
     for name in peers:
         errors = []
         for i in picks:
@@ -444,9 +488,14 @@ def spot_check(paths, converted, peers) -> list:
                 warnings.simplefilter("ignore")
                 got = peer_positions(name, peer_read(name, path), ours[i].skeleton.names)
             errors.append(np.abs(got - reference).max())
-        label = PEER_LABEL[name] + (" (on the rotation-only converted clips, vs ours on them)" if name == "pybvh" else "")
+        label = PEER_LABEL[name] + (
+            " (on the rotation-only converted clips, vs ours on them)" if name == "pybvh" else ""
+        )
         rows.append((label, max(errors)))
-    return [(label, err, f"{len(picks)} clips: " + ", ".join(Path(paths[i]).stem.replace("dataset-2_", "") for i in picks)) for label, err in rows]
+    return [
+        (label, err, f"{len(picks)} clips: " + ", ".join(Path(paths[i]).stem.replace("dataset-2_", "") for i in picks))
+        for label, err in rows
+    ]
 
 
 def scipy_positions(path: str) -> np.ndarray:
@@ -495,7 +544,9 @@ def measure_end_to_end(paths_file: str, conv_file: str | None, peers) -> dict:
             failed.append(key)
             return None
         runs.setdefault(key, []).append(result)
-        log(f"end-to-end: {key} read {result['read_s']:.2f}s + fk {result['fk_s']:.2f}s, peak RSS {result['peak_rss'] / MB:.0f} MB")
+        log(
+            f"end-to-end: {key} read {result['read_s']:.2f}s + fk {result['fk_s']:.2f}s, peak RSS {result['peak_rss'] / MB:.0f} MB"
+        )
         return result
 
     def ratio(other, *ours):
@@ -571,31 +622,59 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         f"- {CITATION}\n",
     ]
     if info.get("changed"):
-        out.append("**Warning: the package's files changed during this run (rebuilt or edited): the figures mix versions; run again.**\n")
+        out.append(
+            "**Warning: the package's files changed during this run (rebuilt or edited): the figures mix versions; run again.**\n"
+        )
     if e2e and e2e["failed"]:
         out.append(f"**Child runs that failed (see stderr): {', '.join(e2e['failed'])}.**\n")
 
     out.append("### 1. Read: parse + Euler->quaternion, every clip into memory\n")
     rows = [
         rate_row("reading the bytes only: the floor", t["floor"]),
-        rate_row("**ours, Rust: `read_bvh_many`**", t["rust_many"], vs=f"{ratio_median(times['numpy_read'], times['rust_many']):.1f}x faster than the NumPy twin"),
-        rate_row("ours, Rust: `read_bvh` per file", t["rust_loop"], vs=f"{ratio_median(times['numpy_read'], times['rust_loop']):.1f}x faster than the NumPy twin"),
+        rate_row(
+            "**ours, Rust: `read_bvh_many`**",
+            t["rust_many"],
+            vs=f"{ratio_median(times['numpy_read'], times['rust_many']):.1f}x faster than the NumPy twin",
+        ),
+        rate_row(
+            "ours, Rust: `read_bvh` per file",
+            t["rust_loop"],
+            vs=f"{ratio_median(times['numpy_read'], times['rust_loop']):.1f}x faster than the NumPy twin",
+        ),
         rate_row("ours, NumPy twin backend: `read_bvh_many`", t["numpy_read"], vs="1.0x"),
     ]
     if "rust" in runs:
         cpu = f"user {child_median('rust', 'read_user_s'):.1f} s + sys {child_median('rust', 'read_sys_s'):.1f} s CPU, {child_median('rust', 'read_minflt') / 1e3:.0f} k page faults"
-        rows.append(rate_row(f"ours, Rust: `read_bvh_many`, first call in a fresh process ({len(runs['rust'])} runs)", child_median("rust", "read_s"), vs=cpu))
+        rows.append(
+            rate_row(
+                f"ours, Rust: `read_bvh_many`, first call in a fresh process ({len(runs['rust'])} runs)",
+                child_median("rust", "read_s"),
+                vs=cpu,
+            )
+        )
     for name in args.peers:
         if name not in runs:
             continue
         r = runs[name][0]
         if name == "pybvh" and "rust-converted" in runs:
             ours = child_median("rust-converted", "read_s")
-            rows.append(rate_row(f"{PEER_LABEL[name]} `read_bvh_file`, converted clips (1 run)", r["read_s"], nb=conv_stats["bytes"],
-                                 vs=f"{r['read_s'] / ours:.1f}x ours' time ({ours:.2f} s on the same files, fresh process)"))
+            rows.append(
+                rate_row(
+                    f"{PEER_LABEL[name]} `read_bvh_file`, converted clips (1 run)",
+                    r["read_s"],
+                    nb=conv_stats["bytes"],
+                    vs=f"{r['read_s'] / ours:.1f}x ours' time ({ours:.2f} s on the same files, fresh process)",
+                )
+            )
         elif "rust" in runs:
             ours = child_median("rust", "read_s")
-            rows.append(rate_row(f"{PEER_LABEL[name]} load (1 run)", r["read_s"], vs=f"{r['read_s'] / ours:.1f}x ours' time in a fresh process"))
+            rows.append(
+                rate_row(
+                    f"{PEER_LABEL[name]} load (1 run)",
+                    r["read_s"],
+                    vs=f"{r['read_s'] / ours:.1f}x ours' time in a fresh process",
+                )
+            )
     out.append(md_table(["implementation", "wall s", "MB/s", "frames/s", "ratio / notes"], rows) + "\n")
 
     out.append("### 2. Forward kinematics of every frame of every clip (same loaded motions)\n")
@@ -605,9 +684,20 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
 
     rows = []
     if times["rust_fk_many"]:
-        rows.append(fk_row("**ours, Rust: `em.forward_kinematics_many(motions)`**", "rust_fk_many",
-                           f"{ratio_median(times['numpy_fk_many'], times['rust_fk_many']):.1f}x faster than the NumPy twin"))
-    rows.append(fk_row("ours, Rust: `m.fk()` per clip", "rust_fk", f"{ratio_median(times['numpy_fk'], times['rust_fk']):.1f}x faster than the NumPy twin"))
+        rows.append(
+            fk_row(
+                "**ours, Rust: `em.forward_kinematics_many(motions)`**",
+                "rust_fk_many",
+                f"{ratio_median(times['numpy_fk_many'], times['rust_fk_many']):.1f}x faster than the NumPy twin",
+            )
+        )
+    rows.append(
+        fk_row(
+            "ours, Rust: `m.fk()` per clip",
+            "rust_fk",
+            f"{ratio_median(times['numpy_fk'], times['rust_fk']):.1f}x faster than the NumPy twin",
+        )
+    )
     if times["numpy_fk_many"]:
         rows.append(fk_row("ours, NumPy twin: `em.forward_kinematics_many(motions)`", "numpy_fk_many", "1.0x"))
     rows.append(fk_row("ours, NumPy twin: `m.fk()` per clip", "numpy_fk", "1.0x"))
@@ -615,57 +705,127 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         key = "rust-converted" if name == "pybvh" else "rust"
         if name in runs and key in runs:
             r, ours = runs[name][0], child_median(key, "fk_s")
-            rows.append([f"{PEER_LABEL[name]}{', converted clips' if name == 'pybvh' else ''} (1 run)", f"{r['fk_s']:.3f}",
-                         f"{r['joint_frames'] / r['fk_s'] / 1e6:.2f} M", f"{r['fk_s'] / ours:.0f}x ours' time in a fresh process"])
+            rows.append(
+                [
+                    f"{PEER_LABEL[name]}{', converted clips' if name == 'pybvh' else ''} (1 run)",
+                    f"{r['fk_s']:.3f}",
+                    f"{r['joint_frames'] / r['fk_s'] / 1e6:.2f} M",
+                    f"{r['fk_s'] / ours:.0f}x ours' time in a fresh process",
+                ]
+            )
     out.append(md_table(["implementation", "wall s", "joint-frames/s", "ratio"], rows) + "\n")
 
     if runs:
         out.append("### 3. End to end (read + FK), each run in a fresh process; peak memory\n")
         base = min(x["baseline_rss"] for results in runs.values() for x in results)
-        out.append(f"Decoded float64 arrays (rotations F*J*4*8 + translations F*J*3*8 bytes): **{decoded / MB:.0f} MB**. "
-                   "Peak = the child's RSS high-water mark, `VmHWM` from /proc/self/status (`ru_maxrss` would report the "
-                   f"parent's peak, which survives exec), interpreter and imports included (about {base / MB:.0f} MB before reading).\n")
+        out.append(
+            f"Decoded float64 arrays (rotations F*J*4*8 + translations F*J*3*8 bytes): **{decoded / MB:.0f} MB**. "
+            "Peak = the child's RSS high-water mark, `VmHWM` from /proc/self/status (`ru_maxrss` would report the "
+            f"parent's peak, which survives exec), interpreter and imports included (about {base / MB:.0f} MB before reading).\n"
+        )
         labels = {
             "rust-read": "ours, Rust, read only (keeps the motions)",
-            "rust": "**ours, Rust**: `read_bvh_many` + " + ("`forward_kinematics_many`" if HAS_FK_MANY else "`m.fk()`") + " (keeps motions and FK outputs)",
+            "rust": "**ours, Rust**: `read_bvh_many` + "
+            + ("`forward_kinematics_many`" if HAS_FK_MANY else "`m.fk()`")
+            + " (keeps motions and FK outputs)",
             "numpy": "ours, NumPy twin (keeps motions and FK outputs)",
             "rust-converted": "ours, Rust, converted clips (keeps motions and FK outputs)",
         }
         rows = []
         for key, results in runs.items():
-            label = labels.get(key) or f"{PEER_LABEL[key]}{', converted clips' if key == 'pybvh' else ''} (keeps positions only)"
+            label = (
+                labels.get(key)
+                or f"{PEER_LABEL[key]}{', converted clips' if key == 'pybvh' else ''} (keeps positions only)"
+            )
             peak = max(x["peak_rss"] for x in results)
-            rows.append([label, len(results), f"{child_median(key, 'total_s'):.2f}", f"{ratios[key]:.1f}x" if key in ratios else "",
-                         f"{peak / MB:.0f} MB", f"{peak / decoded:.2f}x"])
-        out.append(md_table(["implementation", "runs", "read+FK s", "time / ours' (neighbouring runs)", "peak RSS", "peak / decoded"], rows) + "\n")
+            rows.append(
+                [
+                    label,
+                    len(results),
+                    f"{child_median(key, 'total_s'):.2f}",
+                    f"{ratios[key]:.1f}x" if key in ratios else "",
+                    f"{peak / MB:.0f} MB",
+                    f"{peak / decoded:.2f}x",
+                ]
+            )
+        out.append(
+            md_table(
+                [
+                    "implementation",
+                    "runs",
+                    "read+FK s",
+                    "time / ours' (neighbouring runs)",
+                    "peak RSS",
+                    "peak / decoded",
+                ],
+                rows,
+            )
+            + "\n"
+        )
         if conv_stats:
-            out.append("pybvh cannot read the Bandai files (it rejects position channels on non-root joints), so every clip was "
-                       "converted once, with our writer, to a rotation-only file (non-root joints keep only their three rotation "
-                       f"channels; 6 decimals): {conv_stats['bytes'] / MB:.1f} MB in {conv_stats['seconds']:.1f} s. pybvh and ours "
-                       "were timed on those same converted files.\n")
+            out.append(
+                "pybvh cannot read the Bandai files (it rejects position channels on non-root joints), so every clip was "
+                "converted once, with our writer, to a rotation-only file (non-root joints keep only their three rotation "
+                f"channels; 6 decimals): {conv_stats['bytes'] / MB:.1f} MB in {conv_stats['seconds']:.1f} s. pybvh and ours "
+                "were timed on those same converted files.\n"
+            )
 
     if checks:
         out.append("### 4. Correctness spot check: world positions against ours (cm)\n")
-        out.append(md_table(["implementation", "max abs difference", "clips"], [[a, f"{b:.1e}", c] for a, b, c in checks]) + "\n")
+        out.append(
+            md_table(["implementation", "max abs difference", "clips"], [[a, f"{b:.1e}", c] for a, b, c in checks])
+            + "\n"
+        )
 
     if breakdown:
         out.append("### 5. Where our reader's time goes (one `read_bvh_many` call, Rust backend, warm process)\n")
         whole = breakdown[0][1]
-        out.append(md_table(["step", "s", "share of the call"], [[l.replace("  ", "&nbsp;&nbsp;&nbsp;"), f"{v:.3f}", "" if l.startswith(("split", "  parsing", "  the rest")) else f"{v / whole:.0%}"] for l, v in breakdown]) + "\n")
-        out.append("cProfile of one more call (profiling inflates the Python parts):\n\n```\n"
-                   + "\n".join(l.rstrip() for l in profile_text.strip().splitlines() if l.strip())[:4000] + "\n```\n")
+        out.append(
+            md_table(
+                ["step", "s", "share of the call"],
+                [
+                    [
+                        l.replace("  ", "&nbsp;&nbsp;&nbsp;"),
+                        f"{v:.3f}",
+                        "" if l.startswith(("split", "  parsing", "  the rest")) else f"{v / whole:.0%}",
+                    ]
+                    for l, v in breakdown
+                ],
+            )
+            + "\n"
+        )
+        out.append(
+            "cProfile of one more call (profiling inflates the Python parts):\n\n```\n"
+            + "\n".join(l.rstrip() for l in profile_text.strip().splitlines() if l.strip())[:4000]
+            + "\n```\n"
+        )
 
     targets = []
 
     def target(name, value, goal_met, shown):
-        verdict = "n/a (partial run)" if not full else "not measured" if value is None else "**pass**" if goal_met else "**FAIL**"
+        verdict = (
+            "n/a (partial run)"
+            if not full
+            else "not measured"
+            if value is None
+            else "**pass**"
+            if goal_met
+            else "**FAIL**"
+        )
         targets.append([name, shown, verdict])
 
-    target("read the whole archive < 1.5 s (`read_bvh_many`, warm process)", t["rust_many"], t["rust_many"] < 1.5, f"{t['rust_many']:.2f} s")
+    target(
+        "read the whole archive < 1.5 s (`read_bvh_many`, warm process)",
+        t["rust_many"],
+        t["rust_many"] < 1.5,
+        f"{t['rust_many']:.2f} s",
+    )
     if "rust" in runs:
         v = child_median("rust", "read_s")
         target("... the same, first call in a fresh process", v, v < 1.5, f"{v:.2f} s")
-    fk_key, fk_api = ("rust_fk_many", "`forward_kinematics_many`") if times["rust_fk_many"] else ("rust_fk", "`m.fk()` per clip")
+    fk_key, fk_api = (
+        ("rust_fk_many", "`forward_kinematics_many`") if times["rust_fk_many"] else ("rust_fk", "`m.fk()` per clip")
+    )
     target(f"FK of everything < 0.2 s ({fk_api})", t[fk_key], t[fk_key] < 0.2, f"{t[fk_key]:.3f} s")
     if fk_key != "rust_fk":
         target("... the same with `m.fk()` per clip", t["rust_fk"], t["rust_fk"] < 0.2, f"{t['rust_fk']:.3f} s")
@@ -678,13 +838,25 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         target("... the same with `m.fk()` per clip", r, r >= 20, f"{r:.1f}x")
     for name, goal in (("pymotion", 20), ("pybvh", 3)):
         r = ratios.get(name)
-        target(f"end-to-end >= {goal}x faster than {PEER_LABEL[name]}", r, r is not None and r >= goal, f"{r:.1f}x" if r else "not run")
+        target(
+            f"end-to-end >= {goal}x faster than {PEER_LABEL[name]}",
+            r,
+            r is not None and r >= goal,
+            f"{r:.1f}x" if r else "not run",
+        )
     if "rust-read" in runs:
         peak = max(x["peak_rss"] for x in runs["rust-read"])
-        target("peak memory of reading <= 3x the decoded float64 arrays", peak, peak <= 3 * decoded, f"{peak / MB:.0f} MB = {peak / decoded:.2f}x {decoded / MB:.0f} MB")
+        target(
+            "peak memory of reading <= 3x the decoded float64 arrays",
+            peak,
+            peak <= 3 * decoded,
+            f"{peak / MB:.0f} MB = {peak / decoded:.2f}x {decoded / MB:.0f} MB",
+        )
     if "rust" in runs:
         peak = max(x["peak_rss"] for x in runs["rust"])
-        targets.append(["(info) peak memory of read + FK, FK outputs kept too", f"{peak / MB:.0f} MB = {peak / decoded:.2f}x", ""])
+        targets.append(
+            ["(info) peak memory of read + FK, FK outputs kept too", f"{peak / MB:.0f} MB = {peak / decoded:.2f}x", ""]
+        )
     out.append("### Targets we set\n")
     out.append(md_table(["target", "measured", "result"], targets) + "\n")
     return "\n".join(out)
@@ -695,11 +867,19 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--data", help="folder of dataset-2 .bvh files, or the unpack root (default: run ../shared/data/unpack)")
-    parser.add_argument("--peers", default=",".join(PEERS), help="comma-separated peers to run: pymotion, bvhio, pybvh ('' for none)")
+    parser.add_argument(
+        "--data", help="folder of dataset-2 .bvh files, or the unpack root (default: run ../shared/data/unpack)"
+    )
+    parser.add_argument(
+        "--peers", default=",".join(PEERS), help="comma-separated peers to run: pymotion, bvhio, pybvh ('' for none)"
+    )
     parser.add_argument("--limit", type=int, help="only the first N clips (a quick run; targets are not judged)")
     parser.add_argument("--rounds", type=int, default=3, help="rounds of the read / FK measurements (default 3)")
-    parser.add_argument("--out", default=str(Path(__file__).resolve().parent / "RESULTS.md"), help="markdown file whose section %r this rewrites (the others are kept)" % TITLE)
+    parser.add_argument(
+        "--out",
+        default=str(Path(__file__).resolve().parent / "RESULTS.md"),
+        help="markdown file whose section %r this rewrites (the others are kept)" % TITLE,
+    )
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--paths-file", help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -753,7 +933,19 @@ def main() -> None:
     if package_fingerprint() != fingerprint:
         info["changed"] = True
         log("WARNING: the package's files changed during the run: the figures mix versions")
-    text = report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_stats, started, time.perf_counter() - t_start)
+    text = report(
+        args,
+        info,
+        stats,
+        times,
+        breakdown,
+        profile_text,
+        e2e,
+        checks,
+        conv_stats,
+        started,
+        time.perf_counter() - t_start,
+    )
     print(text)
     write_section(TITLE, text, args.out)
     log(f"wrote the section {TITLE!r} of {args.out}")

@@ -38,8 +38,12 @@ def kernel_inputs(motion: em.Motion) -> tuple:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", help="folder of dataset-2 .bvh files, or the unpack root (default: run ../shared/data/unpack)")
-    parser.add_argument("--pattern", default="dataset-2_walk*.bvh", help="clips to use (default: every walk, turns included)")
+    parser.add_argument(
+        "--data", help="folder of dataset-2 .bvh files, or the unpack root (default: run ../shared/data/unpack)"
+    )
+    parser.add_argument(
+        "--pattern", default="dataset-2_walk*.bvh", help="clips to use (default: every walk, turns included)"
+    )
     parser.add_argument("--rounds", type=int, default=3)
     args = parser.parse_args()
     if not em.rust_available():
@@ -76,8 +80,10 @@ def main() -> None:
             best[label] = min(best[label], time.perf_counter() - start)
     for label, seconds in best.items():
         print(f"{label:26s} {seconds * 1e3:8.1f} ms  {frames / seconds / 1e6:6.2f} M frames/s")
-    print(f"Rust / NumPy: kernels {best['kernels, NumPy twin'] / best['kernels, Rust']:.1f}x, "
-          f"end to end {best['dynamic_features, NumPy'] / best['dynamic_features, Rust']:.1f}x")
+    print(
+        f"Rust / NumPy: kernels {best['kernels, NumPy twin'] / best['kernels, Rust']:.1f}x, "
+        f"end to end {best['dynamic_features, NumPy'] / best['dynamic_features, Rust']:.1f}x"
+    )
 
 
 if __name__ == "__main__":

@@ -33,8 +33,12 @@ def main() -> None:
     args = parser.parse_args()
     widths = (19, 300, 300, 80)
     flops = 2 * args.rows * sum(a * b for a, b in zip(widths[:-1], widths[1:]))
-    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cpus, rayon threads {_core.num_threads}, NumPy {np.__version__}")
-    print(f"network {' -> '.join(map(str, widths))}, {args.rows} rows, {flops / 1e9:.1f} GFLOP a pass, best of {args.repeat}")
+    print(
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cpus, rayon threads {_core.num_threads}, NumPy {np.__version__}"
+    )
+    print(
+        f"network {' -> '.join(map(str, widths))}, {args.rows} rows, {flops / 1e9:.1f} GFLOP a pass, best of {args.repeat}"
+    )
     for dtype in (np.float32, np.float64):
         rng = np.random.default_rng(0)
         weights, biases, activations = net_arrays(rng, widths, dtype)

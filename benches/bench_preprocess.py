@@ -46,7 +46,9 @@ from results import write_section  # benches/results.py: this script rewrites on
 REPO = Path(__file__).resolve().parent.parent
 TITLE = "Preprocessing the archive: `expressive-mocap preprocess`"  # its section of benches/RESULTS.md
 DEFAULT_DATA = Path.home() / ".cache" / "motion-data" / "dataset" / "Bandai-Namco-Research-Motiondataset-2" / "data"
-CITATION = "Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), licensed CC BY-NC 4.0."
+CITATION = (
+    "Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), licensed CC BY-NC 4.0."
+)
 MB = 1e6
 
 # name -> (source kind, environment, model: None, "float64" or "float32" network, cores: None = all)
@@ -56,7 +58,12 @@ CONFIGS = {
     "folder + --model, Rust, 2 cores": ("folder", {}, "float64", None),
     "folder + --model --model-float32, Rust, 2 cores": ("folder", {}, "float32", None),
     "folder, Rust, 1 core": ("folder", {}, None, 1),
-    "folder, Dask LocalCluster (2 worker processes, loopback; start-up included)": ("folder", {"BENCH_CLUSTER": "local"}, None, None),
+    "folder, Dask LocalCluster (2 worker processes, loopback; start-up included)": (
+        "folder",
+        {"BENCH_CLUSTER": "local"},
+        None,
+        None,
+    ),
     "folder, NumPy twins, 2 cores": ("folder", {"EXPRESSIVE_MOCAP_BACKEND": "numpy"}, None, None),
 }
 
@@ -77,14 +84,32 @@ def child(src: str, out: str, model: str | None) -> None:
     from expressive_mocap.dataset import preprocess
 
     start = time.perf_counter()
-    summary = preprocess(src, out, model="" if model else None, model_float32=model == "float32", progress=False,
-                         cluster=os.environ.get("BENCH_CLUSTER"))
+    summary = preprocess(
+        src,
+        out,
+        model="" if model else None,
+        model_float32=model == "float32",
+        progress=False,
+        cluster=os.environ.get("BENCH_CLUSTER"),
+    )
     wall = time.perf_counter() - start
-    print(json.dumps({
-        "wall": wall, "headers": summary.headers_s, "kernels": summary.kernels_s, "write": summary.write_s,
-        "clips": summary.clips_ok, "failed": summary.clips_failed, "frames": summary.frames, "bytes": summary.bytes_read,
-        "peak": peak_rss(), "backend": em.get_backend(), "threads": getattr(em.backend._core, "num_threads", None),
-    }))
+    print(
+        json.dumps(
+            {
+                "wall": wall,
+                "headers": summary.headers_s,
+                "kernels": summary.kernels_s,
+                "write": summary.write_s,
+                "clips": summary.clips_ok,
+                "failed": summary.clips_failed,
+                "frames": summary.frames,
+                "bytes": summary.bytes_read,
+                "peak": peak_rss(),
+                "backend": em.get_backend(),
+                "threads": getattr(em.backend._core, "num_threads", None),
+            }
+        )
+    )
 
 
 def kernels_child(folder: str) -> None:
@@ -93,8 +118,9 @@ def kernels_child(folder: str) -> None:
     the same work split into the kernels it fuses (reading the files, parsing and decoding the
     MOTION blocks, FK, features and contacts), each timed on its own. Best of 3; one JSON line."""
     from expressive_mocap import ops
-    from expressive_mocap.dataset import format as fmt, sources, work
     from expressive_mocap.backend import kernels
+    from expressive_mocap.dataset import format as fmt
+    from expressive_mocap.dataset import sources, work
     from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 
     items = sources.open_source(folder).items
@@ -115,15 +141,37 @@ def kernels_child(folder: str) -> None:
         blocks = [ops.MotionBlock(text, clip.start, clip.frames, clip.layout) for text, clip in zip(texts, group.clips)]
         decoded = timed("parse", lambda: core.read_motion_blocks(blocks))
         posed = timed("fk", lambda: core.forward_kinematics_many([(r, t, group.parents) for r, t in decoded]))
-        gait = [(world, local, clip.frame_time, clip.height, clip.hips_rest_height) for (_, world), (local, _), clip in zip(posed, decoded, group.clips)]
-        timed("gait", lambda: core.clip_gait_many(gait, group.gait_joints, HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE, True, True, 0.0))
+        gait = [
+            (world, local, clip.frame_time, clip.height, clip.hips_rest_height)
+            for (_, world), (local, _), clip in zip(posed, decoded, group.clips)
+        ]
+        timed(
+            "gait",
+            lambda: core.clip_gait_many(
+                gait,
+                group.gait_joints,
+                HEIGHT_THRESHOLD,
+                SPEED_THRESHOLD,
+                MIN_DURATION,
+                FLOOR_PERCENTILE,
+                True,
+                True,
+                0.0,
+            ),
+        )
     print(json.dumps(best))
 
 
 def run_kernels_child(folder: Path, cores: int | None) -> dict:
     pin = (lambda: os.sched_setaffinity(0, set(sorted(os.sched_getaffinity(0))[:cores]))) if cores else None
     environment = {**os.environ, "PYTHONPATH": str(REPO / "python")}
-    result = subprocess.run([sys.executable, __file__, "--child-kernels", str(folder)], env=environment, capture_output=True, text=True, preexec_fn=pin)
+    result = subprocess.run(
+        [sys.executable, __file__, "--child-kernels", str(folder)],
+        env=environment,
+        capture_output=True,
+        text=True,
+        preexec_fn=pin,
+    )
     if result.returncode != 0:
         raise SystemExit(f"kernel ceiling run failed:\n{result.stderr}")
     return json.loads(result.stdout.strip().splitlines()[-1])
@@ -134,7 +182,9 @@ def run_child(name: str, sources: dict, work: Path) -> dict:
     out = work / "out"
     shutil.rmtree(out, ignore_errors=True)
     environment = {**os.environ, "PYTHONPATH": str(REPO / "python"), **env}
-    command = [sys.executable, __file__, "--child", str(sources[kind]), "--child-out", str(out)] + (["--child-model", model] if model else [])
+    command = [sys.executable, __file__, "--child", str(sources[kind]), "--child-out", str(out)] + (
+        ["--child-model", model] if model else []
+    )
     pin = (lambda: os.sched_setaffinity(0, set(sorted(os.sched_getaffinity(0))[:cores]))) if cores else None
     result = subprocess.run(command, env=environment, capture_output=True, text=True, preexec_fn=pin)
     if result.returncode != 0:
@@ -142,28 +192,44 @@ def run_child(name: str, sources: dict, work: Path) -> dict:
     figures = json.loads(result.stdout.strip().splitlines()[-1])
     figures["out_bytes"] = sum(p.stat().st_size for p in out.iterdir())
     shutil.rmtree(out, ignore_errors=True)
-    log(f"{name}: {figures['wall']:.2f} s (headers {figures['headers']:.2f}, kernels {figures['kernels']:.2f}, write {figures['write']:.2f}), peak {figures['peak'] / MB:.0f} MB")
+    log(
+        f"{name}: {figures['wall']:.2f} s (headers {figures['headers']:.2f}, kernels {figures['kernels']:.2f}, write {figures['write']:.2f}), peak {figures['peak'] / MB:.0f} MB"
+    )
     return figures
 
 
 def machine() -> str:
-    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor())
+    cpu = next(
+        (l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor()
+    )
     mem = next(int(l.split()[1]) for l in open("/proc/meminfo") if l.startswith("MemTotal")) / 2**20
     load = os.getloadavg()
-    commit = subprocess.run(["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True).stdout.strip()
+    commit = subprocess.run(
+        ["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True
+    ).stdout.strip()
     import numpy
 
-    return (f"{cpu}, {os.cpu_count()} cores, {mem:.1f} GiB RAM; Python {platform.python_version()}, NumPy {numpy.__version__}; "
-            f"commit {commit}; load average at the start {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}")
+    return (
+        f"{cpu}, {os.cpu_count()} cores, {mem:.1f} GiB RAM; Python {platform.python_version()}, NumPy {numpy.__version__}; "
+        f"commit {commit}; load average at the start {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}"
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--data", default=str(DEFAULT_DATA), help=f"folder of dataset-2 .bvh files (default {DEFAULT_DATA})")
+    parser.add_argument(
+        "--data", default=str(DEFAULT_DATA), help=f"folder of dataset-2 .bvh files (default {DEFAULT_DATA})"
+    )
     parser.add_argument("--rounds", type=int, default=3, help="rounds of the Rust configurations (default 3)")
-    parser.add_argument("--limit", type=int, help="only the first N clips (copied into a temporary folder; a quick run)")
+    parser.add_argument(
+        "--limit", type=int, help="only the first N clips (copied into a temporary folder; a quick run)"
+    )
     parser.add_argument("--no-numpy", action="store_true", help="skip the NumPy-twin run")
-    parser.add_argument("--out", default=str(REPO / "benches" / "RESULTS.md"), help="markdown file whose section %r this rewrites (the others are kept)" % TITLE)
+    parser.add_argument(
+        "--out",
+        default=str(REPO / "benches" / "RESULTS.md"),
+        help="markdown file whose section %r this rewrites (the others are kept)" % TITLE,
+    )
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--child-kernels", help=argparse.SUPPRESS)
     parser.add_argument("--child-out", help=argparse.SUPPRESS)
@@ -203,7 +269,7 @@ def main() -> None:
         runs: dict[str, list] = {name: [] for name in CONFIGS}
         rust = [n for n in CONFIGS if "NumPy" not in n]
         for r in range(args.rounds):
-            for name in rust[r % len(rust):] + rust[: r % len(rust)]:  # rotate the order each round
+            for name in rust[r % len(rust) :] + rust[: r % len(rust)]:  # rotate the order each round
                 runs[name].append(run_child(name, sources, work))
         if not args.no_numpy:
             runs["folder, NumPy twins, 2 cores"].append(run_child("folder, NumPy twins, 2 cores", sources, work))
@@ -245,10 +311,24 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
     folder = med("folder, Rust, 2 cores", "wall")
     targets = [
         ("folder < 3 s", folder, folder < 3, f"{folder:.2f} s"),
-        ("zip < 5 s", med("zip, Rust, 2 cores", "wall"), med("zip, Rust, 2 cores", "wall") < 5, f"{med('zip, Rust, 2 cores', 'wall'):.2f} s"),
-        ("with --model < 5 s", None, med("folder + --model, Rust, 2 cores", "wall") < 5, f"{med('folder + --model, Rust, 2 cores', 'wall'):.2f} s"),
-        ("... with --model --model-float32", None, med("folder + --model --model-float32, Rust, 2 cores", "wall") < 5,
-         f"{med('folder + --model --model-float32, Rust, 2 cores', 'wall'):.2f} s"),
+        (
+            "zip < 5 s",
+            med("zip, Rust, 2 cores", "wall"),
+            med("zip, Rust, 2 cores", "wall") < 5,
+            f"{med('zip, Rust, 2 cores', 'wall'):.2f} s",
+        ),
+        (
+            "with --model < 5 s",
+            None,
+            med("folder + --model, Rust, 2 cores", "wall") < 5,
+            f"{med('folder + --model, Rust, 2 cores', 'wall'):.2f} s",
+        ),
+        (
+            "... with --model --model-float32",
+            None,
+            med("folder + --model --model-float32, Rust, 2 cores", "wall") < 5,
+            f"{med('folder + --model --model-float32, Rust, 2 cores', 'wall'):.2f} s",
+        ),
     ]
     if runs["folder, NumPy twins, 2 cores"]:
         ratio = runs["folder, NumPy twins, 2 cores"][0]["wall"] / folder
@@ -256,12 +336,26 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
     peak = max(r["peak"] for rs in runs.values() for r in rs)
     targets.append(("peak memory < 2 GB", None, peak < 2e9, f"{peak / MB:.0f} MB (largest of all runs)"))
     one = med("folder, Rust, 1 core", "wall")
-    targets.append(("near-linear 1 -> 2 workers (>= 1.7x)", None, one / folder >= 1.7, f"{one / folder:.2f}x faster on 2 cores than on 1 ({one:.2f} s -> {folder:.2f} s)"))
+    targets.append(
+        (
+            "near-linear 1 -> 2 workers (>= 1.7x)",
+            None,
+            one / folder >= 1.7,
+            f"{one / folder:.2f}x faster on 2 cores than on 1 ({one:.2f} s -> {folder:.2f} s)",
+        )
+    )
     lines += ["", "| target | measured | result |", "|---|---|---|"]
     lines += [f"| {t} | {shown} | {'**pass**' if ok else '**FAIL**'} |" for t, _, ok, shown in targets]
     one_core, all_cores = ceiling[1], ceiling[None]
-    parts = ", ".join(f"{label} {one_core[key]:.2f} s -> {all_cores[key]:.2f} s" for key, label in
-                      (("read", "reading the files"), ("parse", "parsing and decoding the MOTION blocks"), ("fk", "FK"), ("gait", "features and contacts")))
+    parts = ", ".join(
+        f"{label} {one_core[key]:.2f} s -> {all_cores[key]:.2f} s"
+        for key, label in (
+            ("read", "reading the files"),
+            ("parse", "parsing and decoding the MOTION blocks"),
+            ("fk", "FK"),
+            ("gait", "features and contacts"),
+        )
+    )
     lines += [
         "",
         "The scaling ceiling on this machine, same run: the pipeline's kernel step alone (`clip_pipeline_many` on every clip, "

@@ -11,9 +11,9 @@ import time
 import numpy as np
 
 import expressive_mocap as em
+from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.streaming import StreamingDecoupler
 from expressive_mocap.demo import walk_and_wave
-from expressive_mocap.decoupling.body_model import BodyModel
 
 
 def latencies(motion: em.Motion, model: BodyModel) -> np.ndarray:
@@ -29,7 +29,9 @@ def latencies(motion: em.Motion, model: BodyModel) -> np.ndarray:
 def main() -> None:
     motion = walk_and_wave(seconds=10.0).waving
     model = BodyModel.load()
-    print(f"streaming decoupler, {motion.n_frames} frames at {motion.fps:g} fps (budget {1000 * motion.frame_time:.1f} ms a frame)")
+    print(
+        f"streaming decoupler, {motion.n_frames} frames at {motion.fps:g} fps (budget {1000 * motion.frame_time:.1f} ms a frame)"
+    )
     print("| kernels | median ms | 95th percentile ms | max ms |\n|---|---|---|---|")
     for backend in ("rust", "numpy"):
         with em.use_backend(backend):

@@ -24,9 +24,19 @@ def main() -> None:
     parser.add_argument("--max-iter", type=int, default=400)
     args = parser.parse_args()
     X, P, groups = synthetic_data(args.clips, args.frames)
-    print(f"{len(X)} rows, {X.shape[1]} features, D = {P.shape[1]}, H = {args.hidden}, max_iter {args.max_iter} a stage, {os.cpu_count()} cpus")
+    print(
+        f"{len(X)} rows, {X.shape[1]} features, D = {P.shape[1]}, H = {args.hidden}, max_iter {args.max_iter} a stage, {os.cpu_count()} cpus"
+    )
     start = time.perf_counter()
-    train_stacked_network(X, P, groups, hidden=args.hidden, regression_hidden=args.hidden, max_iter=args.max_iter, log=lambda line: print(line, flush=True))
+    train_stacked_network(
+        X,
+        P,
+        groups,
+        hidden=args.hidden,
+        regression_hidden=args.hidden,
+        max_iter=args.max_iter,
+        log=lambda line: print(line, flush=True),
+    )
     print(f"total {time.perf_counter() - start:.0f} s")  # the report above comes from the training log
 
 

@@ -24,20 +24,44 @@ import numpy as np
 import expressive_mocap as em
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
-from expressive_mocap.render import render
 from expressive_mocap.decoupling.training import split_by_group
+from expressive_mocap.render import render
 
 HERE = Path(__file__).resolve().parent
-NEUTRAL_CONTENTS = ("walk", "walk-turn-left", "walk-turn-right", "run")  # the shipped model's training set, in its order
+NEUTRAL_CONTENTS = (
+    "walk",
+    "walk-turn-left",
+    "walk-turn-right",
+    "run",
+)  # the shipped model's training set, in its order
 ARMS = {"L": ["UpperArm_L", "LowerArm_L", "Hand_L"], "R": ["UpperArm_R", "LowerArm_R", "Hand_R"]}
-SHOWN = ["Spine", "Chest", "Neck", "Head", "Shoulder_L", "UpperArm_L", "LowerArm_L", "Hand_L", "Shoulder_R", "UpperArm_R", "LowerArm_R", "Hand_R", "UpperLeg_L", "LowerLeg_L", "UpperLeg_R", "LowerLeg_R"]
+SHOWN = [
+    "Spine",
+    "Chest",
+    "Neck",
+    "Head",
+    "Shoulder_L",
+    "UpperArm_L",
+    "LowerArm_L",
+    "Hand_L",
+    "Shoulder_R",
+    "UpperArm_R",
+    "LowerArm_R",
+    "Hand_R",
+    "UpperLeg_L",
+    "LowerLeg_L",
+    "UpperLeg_R",
+    "LowerLeg_R",
+]
 
 
 def dataset_root(given: str | None) -> Path:
     if given:
         return Path(given)
     unpack = HERE.parent.parent / "shared" / "data" / "unpack"
-    out = subprocess.run([str(unpack), str(Path.home() / ".cache" / "motion-data")], capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [str(unpack), str(Path.home() / ".cache" / "motion-data")], capture_output=True, text=True, check=True
+    )
     return Path(out.stdout.strip())
 
 
@@ -77,21 +101,37 @@ def main() -> None:
     args = parser.parse_args()
     started = time.time()
     root = dataset_root(args.data)
-    data1, data2 = root / "Bandai-Namco-Research-Motiondataset-1" / "data", root / "Bandai-Namco-Research-Motiondataset-2" / "data"
+    data1, data2 = (
+        root / "Bandai-Namco-Research-Motiondataset-1" / "data",
+        root / "Bandai-Namco-Research-Motiondataset-2" / "data",
+    )
     model = BodyModel.load(args.model)
     names = model.joint_names
 
     groups2 = {"neutral walks and runs (test split)": neutral_test_clips(data2)}
-    for content in ["wave-left-hand", "wave-right-hand", "wave-both-hands", "raise-up-left-hand", "raise-up-right-hand", "raise-up-both-hands"]:
+    for content in [
+        "wave-left-hand",
+        "wave-right-hand",
+        "wave-both-hands",
+        "raise-up-left-hand",
+        "raise-up-right-hand",
+        "raise-up-both-hands",
+    ]:
         groups2[content + " (normal style)"] = sorted(data2.glob(f"dataset-2_{content}_normal_*.bvh"))
     rows2 = {label: mean_activity(paths, model) for label, paths in groups2.items()}
     counts = {label: len(paths) for label, paths in groups2.items()}
 
     # Dataset-1: calibrate on one walk and one run, evaluate the other neutral locomotion clips.
     calibration_clips = [data1 / "dataset-1_walk_normal_001.bvh", data1 / "dataset-1_run_normal_001.bvh"]
-    neutral1 = [p for c in ("walk", "walk-back", "walk-left", "walk-right", "dash") for p in sorted(data1.glob(f"dataset-1_{c}_normal_*.bvh"))]
+    neutral1 = [
+        p
+        for c in ("walk", "walk-back", "walk-left", "walk-right", "dash")
+        for p in sorted(data1.glob(f"dataset-1_{c}_normal_*.bvh"))
+    ]
     calibrated = model.calibrated(em.read_bvh_many(calibration_clips))
-    groups1 = {"neutral walk (also back/left/right), dash (normal style)": [p for p in neutral1 if p not in calibration_clips]}
+    groups1 = {
+        "neutral walk (also back/left/right), dash (normal style)": [p for p in neutral1 if p not in calibration_clips]
+    }
     for content in ["bye", "byebye", "call", "guide", "respond", "bow"]:
         groups1[f"{content} (normal style)"] = sorted(data1.glob(f"dataset-1_{content}_normal_*.bvh"))
     rows1, rows1c = {}, {}
@@ -103,11 +143,28 @@ def main() -> None:
     wave = em.read_bvh(data2 / "dataset-2_wave-right-hand_normal_001.bvh")
     parts = decompose(wave, model)
     figures = HERE / "figures"
-    render([wave, parts.body_motion(), parts.expressive_motion()], figures / "decouple_wave.png", ["original", "body mechanics", "expressive (on mean body pose)"], view="front", poses=5)
-    render([parts.recompose(s) for s in (0.5, 1.0, 1.5)], figures / "modulate_wave.png", ["50% expressive", "100% (original)", "150% expressive"], view="front", poses=5)
+    render(
+        [wave, parts.body_motion(), parts.expressive_motion()],
+        figures / "decouple_wave.png",
+        ["original", "body mechanics", "expressive (on mean body pose)"],
+        view="front",
+        poses=5,
+    )
+    render(
+        [parts.recompose(s) for s in (0.5, 1.0, 1.5)],
+        figures / "modulate_wave.png",
+        ["50% expressive", "100% (original)", "150% expressive"],
+        view="front",
+        poses=5,
+    )
     middle = wave[wave.n_frames // 3 : wave.n_frames // 3 + 60]
     mparts = decompose(middle, model)
-    render([middle, mparts.body_motion(), mparts.expressive_motion()], figures / "decouple_wave.gif", ["original", "body mechanics", "expressive"], view="front")
+    render(
+        [middle, mparts.body_motion(), mparts.expressive_motion()],
+        figures / "decouple_wave.gif",
+        ["original", "body mechanics", "expressive"],
+        view="front",
+    )
 
     calibration = calibrated.calibration_angles()
     largest = sorted(calibration.items(), key=lambda kv: -kv[1])[:6]

@@ -27,7 +27,16 @@ import numpy as np
 
 import expressive_mocap as em
 from expressive_mocap.demo import procedural_walk
-from expressive_mocap.exaggeration import dof_positions, exaggerate, fit, leave_one_out, rank_agreement, swap_test, train, validation_table
+from expressive_mocap.exaggeration import (
+    dof_positions,
+    exaggerate,
+    fit,
+    leave_one_out,
+    rank_agreement,
+    swap_test,
+    train,
+    validation_table,
+)
 from expressive_mocap.files import atomic_write
 from expressive_mocap.render import render
 
@@ -79,7 +88,11 @@ def elbow_flexion(motion: em.Motion) -> np.ndarray:
     for side in "LR":
         s, e, h = (names.index(f"{n}_{side}") for n in ("UpperArm", "LowerArm", "Hand"))
         u, f = p[:, e] - p[:, s], p[:, h] - p[:, e]
-        out.append(np.degrees(np.arccos(np.clip(np.sum(u * f, 1) / np.linalg.norm(u, axis=1) / np.linalg.norm(f, axis=1), -1, 1))))
+        out.append(
+            np.degrees(
+                np.arccos(np.clip(np.sum(u * f, 1) / np.linalg.norm(u, axis=1) / np.linalg.norm(f, axis=1), -1, 1))
+            )
+        )
     return np.stack(out, axis=1)
 
 
@@ -113,7 +126,11 @@ def readings_checked(people, default) -> list[str]:
                 f"{u.swapped} ({u.share:.0%}) | {u.ratio:.3f} ({u.random:.2f} / {u.best:.2f}) | {u.ratio_positions:.3f} | "
                 f"{m['warp']:.3f} ({m['warp_positions']:.3f}) | {m['spearman']:.3f} |"
             )
-    both = [f"{n} (`{c}`)" for (n, c), m in measured.items() if m["union"].ratio <= 0.30 and m["union"].ratio_positions <= 0.10]
+    both = [
+        f"{n} (`{c}`)"
+        for (n, c), m in measured.items()
+        if m["union"].ratio <= 0.30 and m["union"].ratio_positions <= 0.10
+    ]
     former = measured["P-over-performances", "all"]["union"]
     lines += [
         "",
@@ -124,7 +141,7 @@ def readings_checked(people, default) -> list[str]:
         "the deviation in the joint's own mean frame) is the usual reading and the one the edit uses, and the DOF that "
         "reaches the share is part of the set ('accumulate until ... reached'). None of these readings was adopted. "
         "The one change from our reading that was adopted is the first row against `P-over-performances` (every cycle "
-        f"averaged, predictability over the performances: the former `cycle=\"mean\"` option; union {former.ratio:.3f} / {former.ratio_positions:.3f}): with one sample per "
+        f'averaged, predictability over the performances: the former `cycle="mean"` option; union {former.ratio:.3f} / {former.ratio_positions:.3f}): with one sample per '
         "intensity the correlation behind predictability rests on three points, and for three points the correlation of "
         "pure noise follows the arcsine law (median |rho| 0.71); measured over every cycle it also sees how much a DOF "
         "varies from one step to the next. Which single cycle of each clip is taken moves the figures as much as any "
@@ -191,7 +208,7 @@ def main() -> None:
     report = ["# Exaggeration on Bandai-Namco dataset-2 walks", ""]
     report += [
         "Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0), walks `exhausted` < `normal` < `active` as "
-        f"intensities 1 < 2 < 3. No actor label: \"person\" p (p = 1..{PEOPLE}) is take p of every style "
+        f'intensities 1 < 2 < 3. No actor label: "person" p (p = 1..{PEOPLE}) is take p of every style '
         f"(`walk_exhausted_00p`, `walk_normal_00p`, `walk_active_00p`); the held-out walk is `{HELD_OUT}` (in no person).",
         "Defaults of our reading of the paper (T = 50, rotation vectors relative to each person's mean, heading removed, "
         "hips height / actor height, 99% energy, share 0.9, lines), except where a row says otherwise, and except one "
@@ -213,10 +230,23 @@ def main() -> None:
     tests = {}
     for cycle, model in models.items():
         tests[cycle] = swap_test(model), leave_one_out(model), rank_agreement(model)
-        report += [f"### cycle = `{cycle}` ({CYCLE_MEANING[cycle]})", "", "```", validation_table(*tests[cycle]), "```", ""]
+        report += [
+            f"### cycle = `{cycle}` ({CYCLE_MEANING[cycle]})",
+            "",
+            "```",
+            validation_table(*tests[cycle]),
+            "```",
+            "",
+        ]
     default = models["all"]
     pooled = union_pooled(default)
-    own_basis = np.any([fit(default.trajectories[p : p + 1], default.levels, default.weights, cycles=default.cycles_of([p])).key for p in range(PEOPLE)], axis=0)
+    own_basis = np.any(
+        [
+            fit(default.trajectories[p : p + 1], default.levels, default.weights, cycles=default.cycles_of([p])).key
+            for p in range(PEOPLE)
+        ],
+        axis=0,
+    )
     union = tests["all"][0][-1]
     report += [
         "### The union's size",
@@ -261,8 +291,20 @@ def main() -> None:
     report.append("")
     report += readings_checked(people, default)
     model = default
-    model.plot(figures / "exaggeration_rank.png", title=f"Bandai dataset-2 walks, {PEOPLE} takes as people: expressiveness (red: key features)")
-    report += ["## Key features (cycle = `all`)", "", "![expressiveness](figures/exaggeration_rank.png)", "", "```", model.table(top=30), "```", ""]
+    model.plot(
+        figures / "exaggeration_rank.png",
+        title=f"Bandai dataset-2 walks, {PEOPLE} takes as people: expressiveness (red: key features)",
+    )
+    report += [
+        "## Key features (cycle = `all`)",
+        "",
+        "![expressiveness](figures/exaggeration_rank.png)",
+        "",
+        "```",
+        model.table(top=30),
+        "```",
+        "",
+    ]
 
     # Exaggerate and diminish the held-out walk.
     walk = clip(data, HELD_OUT)

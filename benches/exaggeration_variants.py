@@ -34,11 +34,23 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from exaggeration_experiment import DEFAULT_DATA, LEVELS, PEOPLE, STYLES, clip  # noqa: E402
 
 # Where each patchable piece is defined; a patch replaces it in every module of the package that uses it.
-HOMES = {"fit": "fitting", "rotations_to_dofs": "dofs", "dofs_to_rotations": "dofs", "_key_set": "fitting", "subtree_weights": "dofs"}
+HOMES = {
+    "fit": "fitting",
+    "rotations_to_dofs": "dofs",
+    "dofs_to_rotations": "dofs",
+    "_key_set": "fitting",
+    "subtree_weights": "dofs",
+}
 ORIGINAL = {name: getattr(sys.modules[f"expressive_mocap.exaggeration.{home}"], name) for name, home in HOMES.items()}
 
 
-def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", height_weight: float | None = None, samples: str = "cycles"):
+def make_fit(
+    weighting: str = "s",
+    over: str = "kept",
+    observe: str = "kept",
+    height_weight: float | None = None,
+    samples: str = "cycles",
+):
     """``fit`` with predictability weighted by ``s`` / ``s2`` (eigenvalues) of the ``kept`` vectors or
     of ``all`` of them and measured over every ``cycles`` or over the ``performances`` (each the mean
     of its cycles), observability over the ``kept`` basis or ``all`` vectors, and optionally the hips
@@ -47,7 +59,9 @@ def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", he
     def fit(trajectories, levels, weights, *, cycles=None, share=0.9, energy=0.99, rank=None, degree=1):
         if samples == "performances":
             cycles = None
-        out = ORIGINAL["fit"](trajectories, levels, weights, cycles=cycles, share=share, energy=energy, rank=rank, degree=degree)
+        out = ORIGINAL["fit"](
+            trajectories, levels, weights, cycles=cycles, share=share, energy=energy, rank=rank, degree=degree
+        )
         P, K, T, D = trajectories.shape
         levels = np.asarray(levels, dtype=np.float64)
         w = weights.copy()
@@ -60,7 +74,9 @@ def make_fit(weighting: str = "s", over: str = "kept", observe: str = "kept", he
         Co = np.einsum("tr,pktd->pkdr", Uo, trajectories)
         observability = np.linalg.norm(Co[:, 0] - Co[:, -1], axis=-1) * w
         n = len(s) if over == "all" else r
-        rho = ex_fit._cycle_correlation(U[:, :n], ex_fit._single_cycles(trajectories) if cycles is None else cycles, levels, P)
+        rho = ex_fit._cycle_correlation(
+            U[:, :n], ex_fit._single_cycles(trajectories) if cycles is None else cycles, levels, P
+        )
         weight = s[:n] ** (2 if weighting == "s2" else 1)
         predictability = np.abs(rho) @ (weight / weight.sum())
         E = observability * predictability**2
@@ -105,22 +121,52 @@ def key_before_crossing(values, share):
 # name: (what is read differently, module patches, train options)
 VARIANTS = {
     "default": ("our reading of the paper, as implemented", {}, {}),
-    "P-over-performances": ("predictability over the performances (each the mean of its cycles) instead of over every cycle",
-                            {"fit": make_fit(samples="performances")}, {}),
-    "mean-right": ("rotation vector of `q m^-1` (deviation in the parent's frame) instead of `m^-1 q`",
-                   {"rotations_to_dofs": right_to_dofs, "dofs_to_rotations": right_to_rotations}, {}),
-    "euler": ("Euler channels relative to the mean (the package's option) instead of rotation vectors", {}, {"representation": "euler"}),
-    "P-eigenvalues": ("predictability weighted by `s_i^2` (the paper's 'eigenvalue-weighted', eigenvalues of `A A^T`) instead of `s_i`",
-                      {"fit": make_fit("s2")}, {}),
-    "P-all-vectors": ("predictability summed over all 50 basis vectors instead of the kept `r`", {"fit": make_fit("s", over="all")}, {}),
+    "P-over-performances": (
+        "predictability over the performances (each the mean of its cycles) instead of over every cycle",
+        {"fit": make_fit(samples="performances")},
+        {},
+    ),
+    "mean-right": (
+        "rotation vector of `q m^-1` (deviation in the parent's frame) instead of `m^-1 q`",
+        {"rotations_to_dofs": right_to_dofs, "dofs_to_rotations": right_to_rotations},
+        {},
+    ),
+    "euler": (
+        "Euler channels relative to the mean (the package's option) instead of rotation vectors",
+        {},
+        {"representation": "euler"},
+    ),
+    "P-eigenvalues": (
+        "predictability weighted by `s_i^2` (the paper's 'eigenvalue-weighted', eigenvalues of `A A^T`) instead of `s_i`",
+        {"fit": make_fit("s2")},
+        {},
+    ),
+    "P-all-vectors": (
+        "predictability summed over all 50 basis vectors instead of the kept `r`",
+        {"fit": make_fit("s", over="all")},
+        {},
+    ),
     "P-all-eigenvalues": ("both of the above", {"fit": make_fit("s2", over="all")}, {}),
-    "O-all-vectors": ("observability over all 50 basis vectors (the whole trajectory difference) instead of the kept `r`",
-                      {"fit": make_fit(observe="all")}, {}),
-    "height-weight-0": ("hips height DOF weight 0 instead of the hips' subtree (no weight is defined for it)",
-                        {"fit": make_fit(height_weight=0.0)}, {}),
-    "children-weights": ("`w_j` = the joint's own bones only (the paper's literal 'bone lengths of the joint's children') instead of the whole subtree",
-                         {"subtree_weights": children_weights}, {}),
-    "no-crossing-DOF": ("key set stops before the DOF that crosses the share instead of including it", {"_key_set": key_before_crossing}, {}),
+    "O-all-vectors": (
+        "observability over all 50 basis vectors (the whole trajectory difference) instead of the kept `r`",
+        {"fit": make_fit(observe="all")},
+        {},
+    ),
+    "height-weight-0": (
+        "hips height DOF weight 0 instead of the hips' subtree (no weight is defined for it)",
+        {"fit": make_fit(height_weight=0.0)},
+        {},
+    ),
+    "children-weights": (
+        "`w_j` = the joint's own bones only (the paper's literal 'bone lengths of the joint's children') instead of the whole subtree",
+        {"subtree_weights": children_weights},
+        {},
+    ),
+    "no-crossing-DOF": (
+        "key set stops before the DOF that crosses the share instead of including it",
+        {"_key_set": key_before_crossing},
+        {},
+    ),
     "energy-0.95": ("basis keeps 95% of `sum(s^2)` instead of 99%", {}, {"energy": 0.95}),
     "energy-0.999": ("basis keeps 99.9% of `sum(s^2)` instead of 99%", {}, {"energy": 0.999}),
 }
@@ -158,9 +204,14 @@ def measure(people, name: str = "default", cycle="all") -> dict:
         agreement = ex.rank_agreement(model)
     person, union = swaps[:-1], swaps[-1]
     return {
-        "share": [r.share for r in person], "ratio": [r.ratio for r in person], "random": [r.random for r in person],
-        "best": [r.best for r in person], "union": union, "warp": float(np.mean([w.ratio for w in warps])),
-        "warp_positions": float(np.mean([w.ratio_positions for w in warps])), "spearman": agreement.mean,
+        "share": [r.share for r in person],
+        "ratio": [r.ratio for r in person],
+        "random": [r.random for r in person],
+        "best": [r.best for r in person],
+        "union": union,
+        "warp": float(np.mean([w.ratio for w in warps])),
+        "warp_positions": float(np.mean([w.ratio_positions for w in warps])),
+        "spearman": agreement.mean,
         "height_key": bool(model.key[-1]),
     }
 

@@ -22,7 +22,9 @@ def dataset_dir(given: str | None) -> Path:
     if given:
         return Path(given)
     unpack = HERE.parent.parent / "shared" / "data" / "unpack"
-    out = subprocess.run([str(unpack), str(Path.home() / ".cache" / "motion-data")], capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [str(unpack), str(Path.home() / ".cache" / "motion-data")], capture_output=True, text=True, check=True
+    )
     return Path(out.stdout.strip()) / "Bandai-Namco-Research-Motiondataset-2" / "data"
 
 
@@ -36,7 +38,11 @@ def main() -> None:
     walks = [em.read_bvh(data / f"dataset-2_walk_{style}_001.bvh") for style in ("normal", "exhausted")]
     # The demo at the real clip's speed, with and without its wave, above 4 s of that clip.
     demo = walk_and_wave(seconds=4.0, speed=1.1)
-    titles = ["procedural walk (demo), 1.1 m/s", "the same, waving the right arm", "dataset-2_walk_normal_001, 1.1 m/s (Bandai-Namco, CC BY-NC 4.0)"]
+    titles = [
+        "procedural walk (demo), 1.1 m/s",
+        "the same, waving the right arm",
+        "dataset-2_walk_normal_001, 1.1 m/s (Bandai-Namco, CC BY-NC 4.0)",
+    ]
     render([demo.walk, demo.waving, walks[0][30:151]], out / "demo_walk.png", titles=titles)
     render(walks, out / "bandai_walks.png", titles=["walk, normal", "walk, exhausted"], poses=6)
     contacts_figure(walks[0], out / "bandai_walk_contacts.png")

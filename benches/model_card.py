@@ -14,7 +14,14 @@ from expressive_mocap.decoupling.body_model import BodyModel
 
 HERE = Path(__file__).resolve().parent
 CARD = HERE.parent / "python" / "expressive_mocap" / "data" / "MODEL_CARD.md"
-PAPER = {"autoencoder": "0.0131", "regression": "0.037", "fine_tuned": "0.0286", "stack": "", "mean_pose": "", "plain": ""}
+PAPER = {
+    "autoencoder": "0.0131",
+    "regression": "0.037",
+    "fine_tuned": "0.0286",
+    "stack": "",
+    "mean_pose": "",
+    "plain": "",
+}
 PAPER_SWEEP = {"300": "0.0131", "150": "0.0135", "50": "0.0156", "15": "0.0196"}
 COMMAND = (
     "D=~/.cache/motion-data/dataset/Bandai-Namco-Research-Motiondataset-2/data\n"
@@ -36,20 +43,24 @@ def main() -> None:
     ]
     rows = "\n".join(
         f"| {label} | {r[key]['train_mse']:.3g} | {r[key]['test_mse']:.3g} | {r[key]['test_variance_explained']:.3f} | {PAPER[key]} |"
-        for key, label in stages if key in r
+        for key, label in stages
+        if key in r
     )
     sweep_file = HERE / "sweep_autoencoder.json"
     sweep = ""
     if sweep_file.exists():
         results = json.loads(sweep_file.read_text())
         sweep = "\n".join(
-            f"| {h} | {v['train_mse']:.3g} | {v['test_mse']:.3g} | {v['test_variance_explained']:.4f} | {PAPER_SWEEP.get(h, '')} |" for h, v in results.items()
+            f"| {h} | {v['train_mse']:.3g} | {v['test_mse']:.3g} | {v['test_variance_explained']:.4f} | {PAPER_SWEEP.get(h, '')} |"
+            for h, v in results.items()
         )
         sweep = (
             "\n## Autoencoder size\n\nThe same neutral clips and split, each autoencoder trained on the neutral training clips only "
             "(`python benches/sweep_autoencoder.py`; the shipped one also learned 40,000 frames of every kind of clip, which costs "
             "it some accuracy on neutral poses: 1.33e-4 against 0.94e-4):\n\n"
-            "| hidden units | train MSE | test MSE | test variance explained | paper (CMU) |\n|---|---|---|---|---|\n" + sweep + "\n"
+            "| hidden units | train MSE | test MSE | test variance explained | paper (CMU) |\n|---|---|---|---|---|\n"
+            + sweep
+            + "\n"
         )
     split = r["split"]
     card = f"""# Model card: the shipped body-mechanics model
@@ -70,10 +81,10 @@ Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022
 al., "Motion Capture Dataset for Practical Use of AI-based Motion Editing and Stylization",
 arXiv:2306.08861), licensed **CC BY-NC 4.0**: this model is a derivative of that data and is for
 non-commercial use under the same licence.
-- neutral (supervised) set: `{{walk,walk-turn-left,walk-turn-right,run}}_normal_*`, {s['neutral_clips']} clips, {s['neutral_frames']} frames,
-  split 70/30 **by clip**: {split['train_groups']} training clips ({split['train_rows']} frames), {split['test_groups']} test clips ({split['test_rows']} frames);
-- autoencoder: also {s['unlabelled_frames']} frames ({s['unlabelled_frames'] - split['train_rows']} drawn at random from all
-  {s['unlabelled_clips']} dataset-2 clips, gestures included, with the neutral test clips left out, plus the neutral training frames).
+- neutral (supervised) set: `{{walk,walk-turn-left,walk-turn-right,run}}_normal_*`, {s["neutral_clips"]} clips, {s["neutral_frames"]} frames,
+  split 70/30 **by clip**: {split["train_groups"]} training clips ({split["train_rows"]} frames), {split["test_groups"]} test clips ({split["test_rows"]} frames);
+- autoencoder: also {s["unlabelled_frames"]} frames ({s["unlabelled_frames"] - split["train_rows"]} drawn at random from all
+  {s["unlabelled_clips"]} dataset-2 clips, gestures included, with the neutral test clips left out, plus the neutral training frames).
 
 ## Settings
 {json.dumps(s, indent=1)}
@@ -87,7 +98,7 @@ on the hemisphere of its mean training rotation (80 numbers a frame).
 Mean squared error per pose value (quaternion components), train and **test** (held-out clips),
 and the share of the test poses' variance explained. The paper's figures are on CMU data with
 another pose scale, so they are context, not a bar: on this data predicting the mean pose
-already scores {r['mean_pose']['test_mse']:.3g}.
+already scores {r["mean_pose"]["test_mse"]:.3g}.
 
 | stage | train MSE | test MSE | test variance explained | paper (CMU) |
 |---|---|---|---|---|

@@ -28,15 +28,25 @@ STYLES = ("walk", "walk-turn-left", "walk-turn-right", "run")
 
 
 def neutral_clips() -> list[Path]:
-    dataset = Path(subprocess.run([str(SHARED / "unpack"), str(Path.home() / ".cache" / "motion-data")],
-                                  capture_output=True, text=True, check=True).stdout.strip().splitlines()[-1])
+    dataset = Path(
+        subprocess.run(
+            [str(SHARED / "unpack"), str(Path.home() / ".cache" / "motion-data")],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        .stdout.strip()
+        .splitlines()[-1]
+    )
     folder = dataset / "Bandai-Namco-Research-Motiondataset-2" / "data"
     return sorted(p for s in STYLES for p in folder.glob(f"dataset-2_{s}_normal_*.bvh"))
 
 
 def held_out_mse(model, training, motions) -> tuple[float, float]:
     """Pose MSE on ``motions`` of the model's network and of the mean pose of its ``training`` clips."""
-    vectors = lambda clips, pick: np.concatenate([pose_vectors(pick(m), model.predicted, model.hemispheres) for m in clips])  # noqa: E731
+    vectors = lambda clips, pick: np.concatenate(
+        [pose_vectors(pick(m), model.predicted, model.hemispheres) for m in clips]
+    )  # noqa: E731
     actual = vectors(motions, lambda m: m.rotations)
     mean_pose = vectors(training, lambda m: m.rotations).mean(axis=0)
     return float(np.mean((vectors(motions, model.predict) - actual) ** 2)), float(np.mean((actual - mean_pose) ** 2))
@@ -62,7 +72,10 @@ def main() -> None:
         seconds = time.perf_counter() - start
         network, baseline = held_out_mse(model, chosen, test)
         rows.append((n, sum(m.n_frames for m in chosen), network, baseline, seconds))
-        print(f"{n} clips: held-out MSE {network:.3g} (mean pose {baseline:.3g}, ratio {network / baseline:.2f}) in {seconds:.0f} s", flush=True)
+        print(
+            f"{n} clips: held-out MSE {network:.3g} (mean pose {baseline:.3g}, ratio {network / baseline:.2f}) in {seconds:.0f} s",
+            flush=True,
+        )
     lines = [
         "# How much neutral data a body-mechanics model needs",
         "",
@@ -73,7 +86,10 @@ def main() -> None:
         "",
         "| training clips | frames | held-out MSE | mean-pose MSE | ratio | seconds |",
         "|---|---|---|---|---|---|",
-        *[f"| {n} | {frames:,} | {net:.3g} | {base:.3g} | {net / base:.2f} | {s:.0f} |" for n, frames, net, base, s in rows],
+        *[
+            f"| {n} | {frames:,} | {net:.3g} | {base:.3g} | {net / base:.2f} | {s:.0f} |"
+            for n, frames, net, base, s in rows
+        ],
         "",
     ]
     (HERE / "NEUTRAL_DATA.md").write_text("\n".join(lines))

@@ -15,10 +15,9 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
+from eval_decoupling import NEUTRAL_CONTENTS, dataset_root
 from expressive_mocap.decoupling.body_model import BodyModel, pose_vectors
 from expressive_mocap.decoupling.training import sweep_autoencoder
-
-from eval_decoupling import NEUTRAL_CONTENTS, dataset_root
 
 HERE = Path(__file__).resolve().parent
 
@@ -26,7 +25,9 @@ HERE = Path(__file__).resolve().parent
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", help="folder holding Bandai-Namco-Research-Motiondataset-2")
-    parser.add_argument("--max-iter", type=int, default=300, help="L-BFGS iterations (default 300, as the shipped model)")
+    parser.add_argument(
+        "--max-iter", type=int, default=300, help="L-BFGS iterations (default 300, as the shipped model)"
+    )
     args = parser.parse_args()
     data2 = dataset_root(args.data) / "Bandai-Namco-Research-Motiondataset-2" / "data"
     paths = [p for content in NEUTRAL_CONTENTS for p in sorted(data2.glob(f"dataset-2_{content}_normal_*.bvh"))]

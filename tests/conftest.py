@@ -111,7 +111,18 @@ def stick_walker(hips, left_foot, right_foot, fps: float = 30.0, prefix: str = "
     names = ["Hips", "Spine", "Head", "LeftUpLeg", "LeftFoot", "LeftToeBase", "RightUpLeg", "RightFoot", "RightToeBase"]
     parents = [-1, 0, 1, 0, 3, 4, 0, 6, 7]
     offsets = np.array(
-        [[0, 90, 0], [0, 20, 0], [0, 30, 0], [10, -5, 0], [0, -80, 0], [0, 0, 10], [-10, -5, 0], [0, -80, 0], [0, 0, 10]], dtype=float
+        [
+            [0, 90, 0],
+            [0, 20, 0],
+            [0, 30, 0],
+            [10, -5, 0],
+            [0, -80, 0],
+            [0, 0, 10],
+            [-10, -5, 0],
+            [0, -80, 0],
+            [0, 0, 10],
+        ],
+        dtype=float,
     )
     six = ("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")
     skeleton = em.Skeleton(tuple(prefix + n for n in names), parents, offsets, (six,) * len(names))

@@ -67,10 +67,10 @@ def peak_mb() -> float:
 
 
 def main(backend: str) -> None:
-    import expressive_mocap as em
-
     import ctypes
     import gc
+
+    import expressive_mocap as em
 
     trim = ctypes.CDLL("libc.so.6").malloc_trim
     report = {}

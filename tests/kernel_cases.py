@@ -19,11 +19,21 @@ def layout(joints):
     rotation_columns = np.arange(3, 3 + 3 * joints).reshape(joints, 3)
     position_columns = np.full((joints, 3), -1)
     position_columns[0] = [0, 1, 2]
-    return rotation_columns, np.tile(np.array([2, 0, 1], np.uint8), (joints, 1)), position_columns, RNG.normal(size=(joints, 3))
+    return (
+        rotation_columns,
+        np.tile(np.array([2, 0, 1], np.uint8), (joints, 1)),
+        position_columns,
+        RNG.normal(size=(joints, 3)),
+    )
 
 
 def mlp_args(frames, inputs=5):
-    return RNG.normal(size=(frames, inputs)), [RNG.normal(size=(inputs, 4)), RNG.normal(size=(4, 3))], [RNG.normal(size=4), RNG.normal(size=3)], ["tanh", "linear"]
+    return (
+        RNG.normal(size=(frames, inputs)),
+        [RNG.normal(size=(inputs, 4)), RNG.normal(size=(4, 3))],
+        [RNG.normal(size=4), RNG.normal(size=3)],
+        ["tanh", "linear"],
+    )
 
 
 def contacts_args(frames, feet=2, points=2):
@@ -31,7 +41,17 @@ def contacts_args(frames, feet=2, points=2):
 
 
 def features_args(frames):
-    return (RNG.normal(size=(frames, 3, 3)), quats(frames, 2), RNG.random((frames, 2)) > 0.5, quats(1, 2)[0], 1 / 30, 1.7, 0.9, 0.0, 10)
+    return (
+        RNG.normal(size=(frames, 3, 3)),
+        quats(frames, 2),
+        RNG.random((frames, 2)) > 0.5,
+        quats(1, 2)[0],
+        1 / 30,
+        1.7,
+        0.9,
+        0.0,
+        10,
+    )
 
 
 def gait_args(frames, joints=7):
@@ -42,7 +62,9 @@ def gait_args(frames, joints=7):
 def pipeline_args(frames, joints=3):
     """Two clips of ``frames`` frames (MOTION text with positions on the root), every output asked for."""
     rotation_columns, orders, position_columns, offsets = layout(joints)
-    block = b"".join(b" ".join(b"%.4f" % v for v in RNG.normal(scale=20, size=3 + 3 * joints)) + b"\n" for _ in range(frames))
+    block = b"".join(
+        b" ".join(b"%.4f" % v for v in RNG.normal(scale=20, size=3 + 3 * joints)) + b"\n" for _ in range(frames)
+    )
     channels = ops.ChannelLayout(3 + 3 * joints, rotation_columns, orders, position_columns, offsets)
     clip = ops.ClipInput(block, 0, frames, channels, 1 / 30, 1.7, 0.9)
     requests = (ops.FeatureRequest(0.0), ops.FeatureRequest(None, quats(2)))
@@ -54,11 +76,25 @@ def pipeline_args(frames, joints=3):
 CORE = {
     "parse_motion_block": (lambda f: (b"1 2 3\n" * f, 0, f, 3), []),
     "format_motion_block": (lambda f: (RNG.normal(size=(f, 3)),), ["values"]),
-    "decode_channels": (lambda f: (RNG.normal(size=(f, 12)), *layout(3)), ["values", "rotation_columns", "orders", "position_columns", "offsets"]),
-    "read_motion_blocks": (lambda f: ([ops.MotionBlock(b"1 2 3\n" * f, 0, f, ops.ChannelLayout(3, np.array([[0, 1, 2]]), *layout(1)[1:]))],), []),
-    "euler_to_quat": (lambda f: (RNG.normal(size=(f, 3, 3)), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))), ["angles", "orders"]),
+    "decode_channels": (
+        lambda f: (RNG.normal(size=(f, 12)), *layout(3)),
+        ["values", "rotation_columns", "orders", "position_columns", "offsets"],
+    ),
+    "read_motion_blocks": (
+        lambda f: (
+            [ops.MotionBlock(b"1 2 3\n" * f, 0, f, ops.ChannelLayout(3, np.array([[0, 1, 2]]), *layout(1)[1:]))],
+        ),
+        [],
+    ),
+    "euler_to_quat": (
+        lambda f: (RNG.normal(size=(f, 3, 3)), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))),
+        ["angles", "orders"],
+    ),
     "quat_to_euler": (lambda f: (quats(f, 3), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))), ["quats", "orders"]),
-    "forward_kinematics": (lambda f: (quats(f, 3), RNG.normal(size=(f, 3, 3)), np.array([-1, 0, 1])), ["rotations", "translations", "parents"]),
+    "forward_kinematics": (
+        lambda f: (quats(f, 3), RNG.normal(size=(f, 3, 3)), np.array([-1, 0, 1])),
+        ["rotations", "translations", "parents"],
+    ),
     "forward_kinematics_many": (lambda f: ([(quats(f, 3), RNG.normal(size=(f, 3, 3)), np.array([-1, 0, 1]))] * 2,), []),
     "foot_contacts": (contacts_args, ["feet"]),
     "air_time": (lambda f: (RNG.random((f, 2)) > 0.5, 1 / 30), ["contacts"]),
@@ -66,6 +102,9 @@ CORE = {
     "clip_gait_many": (gait_args, []),
     "clip_pipeline_many": (pipeline_args, [None, "parents"]),
     "mlp_forward": (lambda f: mlp_args(f), ["x"]),
-    "decouple_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0), ["original", "body"]),
+    "decouple_rotations": (
+        lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0),
+        ["original", "body"],
+    ),
     "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
 }

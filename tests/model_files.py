@@ -29,18 +29,36 @@ def small_models() -> dict[str, tuple[dict, dict]]:
     }
     J, D, T, r, P, K = 2, 7, 3, 2, 2, 2
     exag = {
-        "parents": np.array([-1, 0]), "offsets": rng.normal(size=(J, 3)), "orders": np.array([[2, 0, 1], [2, 0, 1]], np.uint8),
-        "weights": rng.uniform(size=D), "levels": np.array([1.0, 2.0]), "basis": rng.normal(size=(T, r)),
-        "singular_values": np.array([2.0, 1.0]), "expressiveness": rng.uniform(size=(P, D)), "overall": rng.uniform(size=D),
-        "key": np.ones(D, bool), "person_key": np.ones((P, D), bool), "mappings": rng.normal(size=(D, r, 2)),
-        "reference": np.tile([0.0, 0.0, 0.0, 1.0], (J, 1)), "person_reference": np.tile([0.0, 0.0, 0.0, 1.0], (P, J, 1)),
-        "lower": -np.ones(D), "upper": np.ones(D), "trajectories": rng.normal(size=(P, K, T, D)),
-        "cycle_trajectories": rng.normal(size=(5, T, D)), "cycle_performance": np.array([[0, 0], [0, 1], [1, 0], [1, 1], [1, 1]]),
+        "parents": np.array([-1, 0]),
+        "offsets": rng.normal(size=(J, 3)),
+        "orders": np.array([[2, 0, 1], [2, 0, 1]], np.uint8),
+        "weights": rng.uniform(size=D),
+        "levels": np.array([1.0, 2.0]),
+        "basis": rng.normal(size=(T, r)),
+        "singular_values": np.array([2.0, 1.0]),
+        "expressiveness": rng.uniform(size=(P, D)),
+        "overall": rng.uniform(size=D),
+        "key": np.ones(D, bool),
+        "person_key": np.ones((P, D), bool),
+        "mappings": rng.normal(size=(D, r, 2)),
+        "reference": np.tile([0.0, 0.0, 0.0, 1.0], (J, 1)),
+        "person_reference": np.tile([0.0, 0.0, 0.0, 1.0], (P, J, 1)),
+        "lower": -np.ones(D),
+        "upper": np.ones(D),
+        "trajectories": rng.normal(size=(P, K, T, D)),
+        "cycle_trajectories": rng.normal(size=(5, T, D)),
+        "cycle_performance": np.array([[0, 0], [0, 1], [1, 0], [1, 1], [1, 1]]),
     }
     exag_meta = {
-        "format": FORMAT, "version": VERSION, "joint_names": ["Hips", "Spine"],
-        "dof_names": [f"{j}.{a}" for j in ("Hips", "Spine") for a in "xyz"] + ["Hips.height"], "height": 170.0, "hips": 0,
-        "representation": REPRESENTATIONS[0], "energy": 0.99, "settings": {},
+        "format": FORMAT,
+        "version": VERSION,
+        "joint_names": ["Hips", "Spine"],
+        "dof_names": [f"{j}.{a}" for j in ("Hips", "Spine") for a in "xyz"] + ["Hips.height"],
+        "height": 170.0,
+        "hips": 0,
+        "representation": REPRESENTATIONS[0],
+        "energy": 0.99,
+        "settings": {},
     }
     body_meta = dict(meta, joint_names=list(meta["joint_names"]), settings={}, report={})
     return {"body": (body, body_meta), "exaggeration": (exag, exag_meta)}

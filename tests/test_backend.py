@@ -19,7 +19,12 @@ def test_environment_variable_picks_the_backend():
     result = python("import expressive_mocap as em; print(em.get_backend())", EXPRESSIVE_MOCAP_BACKEND="numpy")
     assert result.stdout.strip() == "numpy"
     if em.rust_available():
-        assert python("import expressive_mocap as em; print(em.get_backend())", EXPRESSIVE_MOCAP_BACKEND="rust").stdout.strip() == "rust"
+        assert (
+            python(
+                "import expressive_mocap as em; print(em.get_backend())", EXPRESSIVE_MOCAP_BACKEND="rust"
+            ).stdout.strip()
+            == "rust"
+        )
 
 
 def test_use_backend_restores_the_previous_choice():
@@ -73,8 +78,12 @@ def test_backend_option_after_the_command(mixed_path, capsys, monkeypatch):
 
 def test_a_bad_backend_in_the_environment_is_a_one_line_error_not_an_import_failure(mixed_path):
     env = {**os.environ, "EXPRESSIVE_MOCAP_BACKEND": "bogus", "PYTHONPATH": str(Path(em.__file__).parent.parent)}
-    imported = subprocess.run([sys.executable, "-c", "import expressive_mocap"], env=env, capture_output=True, text=True)
+    imported = subprocess.run(
+        [sys.executable, "-c", "import expressive_mocap"], env=env, capture_output=True, text=True
+    )
     assert imported.returncode == 0, imported.stderr
-    ran = subprocess.run([sys.executable, "-m", "expressive_mocap.cli", "info", str(mixed_path)], env=env, capture_output=True, text=True)
+    ran = subprocess.run(
+        [sys.executable, "-m", "expressive_mocap.cli", "info", str(mixed_path)], env=env, capture_output=True, text=True
+    )
     assert ran.returncode == 1 and ran.stderr.count("\n") == 1
     assert "got 'bogus' (from the environment variable EXPRESSIVE_MOCAP_BACKEND)" in ran.stderr

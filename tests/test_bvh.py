@@ -8,7 +8,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-
 from conftest import bvh_values
 
 
@@ -127,7 +126,10 @@ def test_changing_order_and_scale_keeps_the_world_pose(mixed_path, backend):
 
 @pytest.mark.real_data
 def test_real_clips_round_trip(tmp_path, bandai2_dir, bandai1_dir, backend):
-    paths = sorted(bandai2_dir.glob("dataset-2_walk-turn-left_*.bvh"))[:3] + sorted(bandai1_dir.glob("dataset-1_dance*.bvh"))[:2]
+    paths = (
+        sorted(bandai2_dir.glob("dataset-2_walk-turn-left_*.bvh"))[:3]
+        + sorted(bandai1_dir.glob("dataset-1_dance*.bvh"))[:2]
+    )
     for path in paths:
         motion = em.read_bvh(path)
         assert motion.skeleton.n_joints == 22 and motion.fps == pytest.approx(30.0, rel=1e-4)
@@ -136,14 +138,20 @@ def test_real_clips_round_trip(tmp_path, bandai2_dir, bandai1_dir, backend):
             assert_same_motion(again, motion, rtol)
         # Every position channel of the file reads back (angles are compared as rotations above).
         values = bvh_values(path)
-        position_columns = [i for i, c in enumerate(c for cs in motion.skeleton.channels for c in cs) if c.endswith("position")]
-        np.testing.assert_allclose(motion.channel_values()[:, position_columns], values[:, position_columns], rtol=1e-12, atol=1e-12)
+        position_columns = [
+            i for i, c in enumerate(c for cs in motion.skeleton.channels for c in cs) if c.endswith("position")
+        ]
+        np.testing.assert_allclose(
+            motion.channel_values()[:, position_columns], values[:, position_columns], rtol=1e-12, atol=1e-12
+        )
 
 
 def test_files_sharing_a_hierarchy_shape_keep_their_own_offsets(mixed_path, backend):
     # The second file differs only in OFFSET numbers: it reuses the cached shape.
     text = mixed_path.read_bytes()
-    other = text.replace(b"OFFSET 0.0 12.0 0.0", b"OFFSET 0.5 13.0 -1.0").replace(b"OFFSET 8.0 0.0 0.0", b"OFFSET 7.0 1.0 0.0")
+    other = text.replace(b"OFFSET 0.0 12.0 0.0", b"OFFSET 0.5 13.0 -1.0").replace(
+        b"OFFSET 8.0 0.0 0.0", b"OFFSET 7.0 1.0 0.0"
+    )
     first, second = em.read_bvh(text), em.read_bvh(other)
     np.testing.assert_array_equal(second.skeleton.offsets[2], [0.5, 13.0, -1.0])
     assert second.skeleton.end_sites[1] == (5, (7.0, 1.0, 0.0))

@@ -12,7 +12,9 @@ from expressive_mocap.cli import main
 
 def run(*args):
     """Run the installed command in a subprocess, as a user would."""
-    return subprocess.run([sys.executable, "-m", "expressive_mocap.cli", *map(str, args)], capture_output=True, text=True)
+    return subprocess.run(
+        [sys.executable, "-m", "expressive_mocap.cli", *map(str, args)], capture_output=True, text=True
+    )
 
 
 def test_info_reports_layout_and_rest_height(mixed_path, capsys):
@@ -70,7 +72,9 @@ def test_demo_runs_without_data(tmp_path):
     assert "hips travelled 4.80 m in 4.00 s" in result.stdout
     assert "footsteps: 7 (3 left, 4 right), cadence 1.88 steps/s" in result.stdout
     assert "joints that differ: UpperArm_R, LowerArm_R, Hand_R" in result.stdout
-    np.testing.assert_array_equal(np.delete(waving.rotations, [11, 12, 13], axis=1), np.delete(walk.rotations, [11, 12, 13], axis=1))
+    np.testing.assert_array_equal(
+        np.delete(waving.rotations, [11, 12, 13], axis=1), np.delete(walk.rotations, [11, 12, 13], axis=1)
+    )
     assert (tmp_path / "demo" / "walk.png").exists() and (tmp_path / "demo" / "walk.gif").exists()
 
 
@@ -91,7 +95,9 @@ def test_bad_input_is_one_line_and_nonzero(tmp_path, mixed_path, args, words):
     broken = tmp_path / "broken.bvh"
     broken.write_bytes(mixed_path.read_bytes().replace(b"93.0", b"9x3"))
     args = [str(mixed_path) if a == "GOOD" else str(broken) if a == "BROKEN" else a for a in args]
-    result = subprocess.run([sys.executable, "-m", "expressive_mocap.cli", *args], capture_output=True, text=True, cwd=tmp_path)
+    result = subprocess.run(
+        [sys.executable, "-m", "expressive_mocap.cli", *args], capture_output=True, text=True, cwd=tmp_path
+    )
     assert result.returncode != 0
     assert "Traceback" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1, result.stderr
@@ -112,7 +118,12 @@ def test_positions_csv_is_csv_and_other_extensions_are_refused(tmp_path, mixed_p
     assert main(["positions", str(mixed_path), "-o", str(tmp_path / "p.csv")]) == 0
     table = np.loadtxt(tmp_path / "p.csv", delimiter=",", skiprows=1, ndmin=2)
     header = (tmp_path / "p.csv").read_text().splitlines()[0].split(",")
-    assert header[:4] == ["time", f"{motion.skeleton.names[0]}_x", f"{motion.skeleton.names[0]}_y", f"{motion.skeleton.names[0]}_z"]
+    assert header[:4] == [
+        "time",
+        f"{motion.skeleton.names[0]}_x",
+        f"{motion.skeleton.names[0]}_y",
+        f"{motion.skeleton.names[0]}_z",
+    ]
     np.testing.assert_allclose(table[:, 0], np.arange(motion.n_frames) * motion.frame_time, rtol=1e-8)
     np.testing.assert_allclose(table[:, 1:].reshape(motion.n_frames, -1, 3), motion.positions(), rtol=1e-8, atol=1e-9)
     capsys.readouterr()
@@ -126,4 +137,9 @@ def test_decouple_output_ending_in_bvh_is_a_prefix(tmp_path, capsys):
 
     em.write_bvh(walk_and_wave(seconds=1.0).waving, tmp_path / "wave.bvh")
     assert main(["decouple", str(tmp_path / "wave.bvh"), "-o", str(tmp_path / "out.bvh")]) == 0
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out_activity.csv", "out_body.bvh", "out_expressive.bvh", "wave.bvh"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "out_activity.csv",
+        "out_body.bvh",
+        "out_expressive.bvh",
+        "wave.bvh",
+    ]

@@ -9,8 +9,8 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling.algebra import decompose
-from expressive_mocap.demo import walk_and_wave
 from expressive_mocap.decoupling.body_model import BodyModel
+from expressive_mocap.demo import walk_and_wave
 
 ARM = ["UpperArm_R", "LowerArm_R", "Hand_R"]
 
@@ -51,11 +51,30 @@ def test_modulate_by_one_is_the_input_and_zero_is_the_body(files):
     wave = em.read_bvh(files / "wave.bvh")
     np.testing.assert_allclose(same_rotation(em.read_bvh(files / "m1.bvh").rotations, wave.rotations), 1.0, atol=1e-9)
     main(["decouple", str(files / "wave.bvh"), "-o", str(files / "w")])
-    np.testing.assert_allclose(same_rotation(em.read_bvh(files / "m0.bvh").rotations, em.read_bvh(files / "w_body.bvh").rotations), 1.0, atol=1e-9)
+    np.testing.assert_allclose(
+        same_rotation(em.read_bvh(files / "m0.bvh").rotations, em.read_bvh(files / "w_body.bvh").rotations),
+        1.0,
+        atol=1e-9,
+    )
 
 
 def test_mix_lays_the_wave_on_another_walk(files):
-    assert main(["mix", "--body", str(files / "slow.bvh"), "--expressive", str(files / "wave.bvh"), "--align", "resample", "-o", str(files / "mixed.bvh")]) == 0
+    assert (
+        main(
+            [
+                "mix",
+                "--body",
+                str(files / "slow.bvh"),
+                "--expressive",
+                str(files / "wave.bvh"),
+                "--align",
+                "resample",
+                "-o",
+                str(files / "mixed.bvh"),
+            ]
+        )
+        == 0
+    )
     mixed, slow = em.read_bvh(files / "mixed.bvh"), em.read_bvh(files / "slow.bvh")
     assert mixed.n_frames == slow.n_frames
     np.testing.assert_array_equal(mixed.translations, slow.translations)  # root trajectory of the body source
@@ -66,7 +85,21 @@ def test_mix_lays_the_wave_on_another_walk(files):
 
 def test_blend_and_naive_blend(files):
     for extra in (["--expressive-window", "40:50"], ["--naive"]):
-        assert main(["blend", str(files / "walk.bvh"), str(files / "wave.bvh"), "--body-window", "20:35", *extra, "-o", str(files / "b.bvh")]) == 0
+        assert (
+            main(
+                [
+                    "blend",
+                    str(files / "walk.bvh"),
+                    str(files / "wave.bvh"),
+                    "--body-window",
+                    "20:35",
+                    *extra,
+                    "-o",
+                    str(files / "b.bvh"),
+                ]
+            )
+            == 0
+        )
         blended = em.read_bvh(files / "b.bvh")
         assert blended.n_frames == 20 + em.read_bvh(files / "wave.bvh").n_frames
 
@@ -76,15 +109,47 @@ def test_calibrate_writes_a_calibrated_model(files):
     calibrated = BodyModel.load(files / "cal.npz")
     assert calibrated.calibration is not None and calibrated.calibration.shape == (22, 4)
     assert main(["decouple", str(files / "wave.bvh"), "--model", str(files / "cal.npz"), "-o", str(files / "c")]) == 0
-    assert main(["modulate", str(files / "wave.bvh"), "--scale", "1.5", "--calibrate", str(files / "walk.bvh"), "-o", str(files / "c15.bvh")]) == 0
+    assert (
+        main(
+            [
+                "modulate",
+                str(files / "wave.bvh"),
+                "--scale",
+                "1.5",
+                "--calibrate",
+                str(files / "walk.bvh"),
+                "-o",
+                str(files / "c15.bvh"),
+            ]
+        )
+        == 0
+    )
 
 
 def test_train_writes_a_loadable_model(files):
     out = files / "tiny.npz"
     result = subprocess.run(
-        [sys.executable, "-m", "expressive_mocap.cli", "train", str(files / "walk.bvh"), str(files / "slow.bvh"), str(files / "wave.bvh"),
-         "--unlabelled", str(files / "wave.bvh"), "--hidden", "6", "--regression-hidden", "6", "--max-iter", "5", "-o", str(out)],
-        capture_output=True, text=True,
+        [
+            sys.executable,
+            "-m",
+            "expressive_mocap.cli",
+            "train",
+            str(files / "walk.bvh"),
+            str(files / "slow.bvh"),
+            str(files / "wave.bvh"),
+            "--unlabelled",
+            str(files / "wave.bvh"),
+            "--hidden",
+            "6",
+            "--regression-hidden",
+            "6",
+            "--max-iter",
+            "5",
+            "-o",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
     )
     assert result.returncode == 0, result.stderr
     assert "fine_tuned" in result.stdout and "iteration" not in result.stdout  # progress on stderr
@@ -109,19 +174,36 @@ def test_render_decoupled_and_modulated(files):
 )
 def test_bad_input_is_one_line(files, mixed_path, tmp_path, args, words):
     args = [str(files / "walk.bvh") if a == "WALK" else str(mixed_path) if a == "OTHER" else a for a in args]
-    result = subprocess.run([sys.executable, "-m", "expressive_mocap.cli", *args], capture_output=True, text=True, cwd=tmp_path)
+    result = subprocess.run(
+        [sys.executable, "-m", "expressive_mocap.cli", *args], capture_output=True, text=True, cwd=tmp_path
+    )
     assert result.returncode != 0 and "Traceback" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr
     assert not list(tmp_path.iterdir())
 
 
 def test_a_model_no_better_than_the_mean_pose_is_refused_or_written_with_a_warning(files, capsys):
-    args = ["train", str(files / "walk.bvh"), str(files / "slow.bvh"), "--hidden", "20", "--regression-hidden", "20", "--max-iter", "2", "-q"]
+    args = [
+        "train",
+        str(files / "walk.bvh"),
+        str(files / "slow.bvh"),
+        "--hidden",
+        "20",
+        "--regression-hidden",
+        "20",
+        "--max-iter",
+        "2",
+        "-q",
+    ]
     out = files / "poor.npz"
     assert main([*args, "-o", str(out)]) == 1
     captured = capsys.readouterr()
     assert not out.exists()
-    assert captured.err.count("\n") == 1 and "no better than the mean training pose" in captured.err and "--allow-poor" in captured.err
+    assert (
+        captured.err.count("\n") == 1
+        and "no better than the mean training pose" in captured.err
+        and "--allow-poor" in captured.err
+    )
     assert captured.out.count("fine_tuned") == 1  # the report once, on stdout
     assert main([*args, "-o", str(out), "--allow-poor"]) == 0
     assert "warning:" in capsys.readouterr().err and out.exists()
@@ -133,8 +215,26 @@ def test_a_model_no_better_than_the_mean_pose_is_refused_or_written_with_a_warni
 
 
 def test_training_shows_progress_within_each_stage(files, capsys):
-    assert main(["train", str(files / "walk.bvh"), str(files / "slow.bvh"), str(files / "wave.bvh"), "--hidden", "6",
-                 "--regression-hidden", "6", "--max-iter", "8", "--allow-poor", "-o", str(files / "p.npz")]) == 0
+    assert (
+        main(
+            [
+                "train",
+                str(files / "walk.bvh"),
+                str(files / "slow.bvh"),
+                str(files / "wave.bvh"),
+                "--hidden",
+                "6",
+                "--regression-hidden",
+                "6",
+                "--max-iter",
+                "8",
+                "--allow-poor",
+                "-o",
+                str(files / "p.npz"),
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     for stage in ("autoencoder H=6 round 1/4", "regression", "fine-tuning"):
         assert any(line.startswith(f"{stage}: ") and "iterations, loss" in line for line in err.splitlines()), err
@@ -150,13 +250,29 @@ def test_a_clip_of_another_skeleton_is_named_with_what_to_do(command, files, mix
     }[command]
     assert main(args) == 1
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith(f"expressive-mocap: error: {mixed_path}: this body model was trained on")
+    assert err.count("\n") == 1 and err.startswith(
+        f"expressive-mocap: error: {mixed_path}: this body model was trained on"
+    )
     assert "`expressive-mocap train`" in err and "`calibrate`" in err
 
 
 def test_a_model_file_given_to_calibrate_says_which_option_takes_it(files, capsys):
     assert main(["calibrate", str(files / "walk.bvh"), "-o", str(files / "cal2.npz")]) == 0
     capsys.readouterr()
-    assert main(["modulate", str(files / "wave.bvh"), "--scale", "2", "--calibrate", str(files / "cal2.npz"), "-o", str(files / "m.bvh")]) == 1
+    assert (
+        main(
+            [
+                "modulate",
+                str(files / "wave.bvh"),
+                "--scale",
+                "2",
+                "--calibrate",
+                str(files / "cal2.npz"),
+                "-o",
+                str(files / "m.bvh"),
+            ]
+        )
+        == 1
+    )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "a model file" in err and "goes to --model" in err

@@ -49,16 +49,49 @@ def command(name, i, out):
         "mix": (["mix", "--body", i["walk"], "--expressive", i["wave"], "-o", out / "x.bvh"], ["x.bvh"]),
         "blend": (["blend", i["walk"], i["wave"], "--body-window", "10:20", "-o", out / "b.bvh"], ["b.bvh"]),
         "calibrate": (["calibrate", i["walk"], "-o", out / "cal.npz"], ["cal.npz"]),
-        "train": (["train", i["walk"], i["fast"], "--hidden", "3", "--regression-hidden", "3", "--max-iter", "2", "-o", out / "t.npz"], ["t.npz"]),
+        "train": (
+            [
+                "train",
+                i["walk"],
+                i["fast"],
+                "--hidden",
+                "3",
+                "--regression-hidden",
+                "3",
+                "--max-iter",
+                "2",
+                "-o",
+                out / "t.npz",
+            ],
+            ["t.npz"],
+        ),
         "rank": (["rank", *levels(i), "-o", out / "rank.npz", "-o", out / "rank.png"], ["rank.npz", "rank.png"]),
-        "exaggerate": (["exaggerate", "--model", i["exaggeration"], "--input", i["level1_0"], "--to", "2", "-o", out / "e.bvh"], ["e.bvh"]),
+        "exaggerate": (
+            ["exaggerate", "--model", i["exaggeration"], "--input", i["level1_0"], "--to", "2", "-o", out / "e.bvh"],
+            ["e.bvh"],
+        ),
         "footsteps": (["footsteps", i["walk"], "--plot", out / "f.png"], ["f.png"]),
         "demo": (["demo", "--seconds", "1", "-o", out / "demo"], ["demo"]),
         "preprocess": (["preprocess", i["folder"], "-q", "-o", out / "ds"], ["ds"]),
     }[name]
 
 
-WRITERS = ["convert", "positions", "render", "decouple", "modulate", "mix", "blend", "calibrate", "train", "rank", "exaggerate", "footsteps", "demo", "preprocess"]
+WRITERS = [
+    "convert",
+    "positions",
+    "render",
+    "decouple",
+    "modulate",
+    "mix",
+    "blend",
+    "calibrate",
+    "train",
+    "rank",
+    "exaggerate",
+    "footsteps",
+    "demo",
+    "preprocess",
+]
 
 
 def test_the_list_covers_every_command_that_writes():
@@ -125,10 +158,18 @@ class _FailingFile:
 def test_an_interrupted_write_leaves_no_partial_file(name, inputs, tmp_path, capsys, monkeypatch):
     real_fdopen = em_io.os.fdopen
     # Inputs are opened with os.fdopen too (files.open_input): only files opened to write fail.
-    monkeypatch.setattr(em_io.os, "fdopen", lambda fd, mode: _FailingFile(real_fdopen(fd, mode)) if "w" in mode else real_fdopen(fd, mode))
+    monkeypatch.setattr(
+        em_io.os,
+        "fdopen",
+        lambda fd, mode: _FailingFile(real_fdopen(fd, mode)) if "w" in mode else real_fdopen(fd, mode),
+    )
     status, err, _ = run(name, inputs, tmp_path, capsys)
     # Progress lines (train) may come first; the error is the last line, and one line.
-    assert status == 1 and err.splitlines()[-1].startswith("expressive-mocap: error:") and "No space left" in err.splitlines()[-1], err
+    assert (
+        status == 1
+        and err.splitlines()[-1].startswith("expressive-mocap: error:")
+        and "No space left" in err.splitlines()[-1]
+    ), err
     # ... and names the file it was writing (preprocess's own journal writes are not in io.py).
     assert name == "preprocess" or f"cannot write {tmp_path}{os.sep}" in err.splitlines()[-1], err
     files = [p for p in tmp_path.rglob("*") if p.is_file()]
@@ -149,7 +190,9 @@ def test_decouple_writes_its_three_files_together_or_not_at_all(inputs, tmp_path
     monkeypatch.setattr(em_io.os, "fdopen", third_write_fails)
     status, err, _ = run("decouple", inputs, tmp_path, capsys)
     assert status == 1 and "No space left" in err, err
-    assert len(opened) == 3 and list(tmp_path.iterdir()) == [], "the two files written before the failure must not appear"
+    assert len(opened) == 3 and list(tmp_path.iterdir()) == [], (
+        "the two files written before the failure must not appear"
+    )
 
 
 @pytest.mark.parametrize("name", WRITERS)
@@ -158,7 +201,9 @@ def test_an_unwritable_output_folder_is_a_one_line_error(name, inputs, tmp_path,
     import expressive_mocap.cli as cli
 
     real_access = os.access
-    monkeypatch.setattr(cli.os, "access", lambda path, mode: False if Path(path) == tmp_path else real_access(path, mode))
+    monkeypatch.setattr(
+        cli.os, "access", lambda path, mode: False if Path(path) == tmp_path else real_access(path, mode)
+    )
     status, err, _ = run(name, inputs, tmp_path, capsys)
     assert status == 1 and err.count("\n") == 1 and "is not writable" in err, err
     assert list(tmp_path.iterdir()) == []
@@ -168,28 +213,49 @@ def _no_work(*args, **kwargs):
     raise AssertionError("the command started working before refusing its output")
 
 
-@pytest.mark.parametrize(("name", "kind"), [(name, kind) for name in WRITERS for kind in ("FIFO", "folder", "character device")
-                                             if not (kind == "folder" and name in ("demo", "preprocess"))])  # their OUT is a folder
-def test_an_output_that_is_not_a_regular_file_is_refused_before_any_work(name, kind, inputs, tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [
+        (name, kind)
+        for name in WRITERS
+        for kind in ("FIFO", "folder", "character device")
+        if not (kind == "folder" and name in ("demo", "preprocess"))
+    ],
+)  # their OUT is a folder
+def test_an_output_that_is_not_a_regular_file_is_refused_before_any_work(
+    name, kind, inputs, tmp_path, capsys, monkeypatch
+):
     import stat
 
-    import expressive_mocap.demo as demo
     import expressive_mocap.dataset as preprocess
+    import expressive_mocap.demo as demo
     from expressive_mocap.cli import common, data, decoupling, exaggeration, files
     from expressive_mocap.cli import demo as cli_demo
 
     if kind == "character device" and os.geteuid() != 0:
         pytest.skip("mknod needs root")
     special = tmp_path / command(name, inputs, tmp_path)[1][0]  # decouple: PREFIX_body.bvh
-    {"FIFO": os.mkfifo, "folder": os.mkdir, "character device": lambda p: os.mknod(p, stat.S_IFCHR | 0o666, os.makedev(1, 3))}[kind](special)
+    {
+        "FIFO": os.mkfifo,
+        "folder": os.mkdir,
+        "character device": lambda p: os.mknod(p, stat.S_IFCHR | 0o666, os.makedev(1, 3)),
+    }[kind](special)
     before = os.lstat(special)
-    commands = [(module, "read_bvh") for module in (common, data, decoupling, exaggeration, files, cli_demo) if hasattr(module, "read_bvh")]
+    commands = [
+        (module, "read_bvh")
+        for module in (common, data, decoupling, exaggeration, files, cli_demo)
+        if hasattr(module, "read_bvh")
+    ]
     for module, function in (*commands, (demo, "walk_and_wave"), (preprocess, "preprocess")):
         monkeypatch.setattr(module, function, _no_work)
     status, err, _ = run(name, inputs, tmp_path, capsys)
     assert status == 1 and err.count("\n") == 1 and f"cannot write {special}: it is a {kind}, not a " in err, err
     after = os.lstat(special)
-    assert (stat.S_IFMT(after.st_mode), after.st_ino, after.st_rdev) == (stat.S_IFMT(before.st_mode), before.st_ino, before.st_rdev)
+    assert (stat.S_IFMT(after.st_mode), after.st_ino, after.st_rdev) == (
+        stat.S_IFMT(before.st_mode),
+        before.st_ino,
+        before.st_rdev,
+    )
     assert [p.name for p in tmp_path.iterdir()] == [special.name]
 
 

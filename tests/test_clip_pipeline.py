@@ -7,13 +7,12 @@ import errno
 import os
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-import pytest
 
 import expressive_mocap as em
-from expressive_mocap import bvh, reference
-from expressive_mocap import ops
+from expressive_mocap import bvh, ops, reference
 from expressive_mocap.bvh import header as bvh_header
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
@@ -36,7 +35,10 @@ def walks(tmp_path_factory):
     """Two procedural walks (one waving) as files: (path, bytes) each."""
     folder = tmp_path_factory.mktemp("walks")
     out = []
-    for name, motion in (("plain", procedural_walk(seconds=1.5)), ("wave", procedural_walk(seconds=1.2, speed=1.2, wave="left"))):
+    for name, motion in (
+        ("plain", procedural_walk(seconds=1.5)),
+        ("wave", procedural_walk(seconds=1.2, speed=1.2, wave="left")),
+    ):
         path = folder / f"{name}.bvh"
         em.write_bvh(motion, path)
         out.append((path, path.read_bytes()))
@@ -81,9 +83,13 @@ def test_rust_matches_its_twin_and_the_kernels_one_by_one(walks, by_path, float3
         np.testing.assert_array_equal(got[3], expected[3])
         if not float32:  # the same Rust kernels called one by one: the same numbers, bit for bit
             clip, parents, joints = pipeline_input(data, data)
-            ((local, translations),) = core.read_motion_blocks([ops.MotionBlock(data, clip.start, clip.frames, clip.layout)])
+            ((local, translations),) = core.read_motion_blocks(
+                [ops.MotionBlock(data, clip.start, clip.frames, clip.layout)]
+            )
             ((_, world),) = core.forward_kinematics_many([(local, translations, parents)])
-            gait = core.clip_gait_many([(world, local, clip.frame_time, clip.height, clip.hips_rest_height)], joints, *GAIT, True, True, 0.0)
+            gait = core.clip_gait_many(
+                [(world, local, clip.frame_time, clip.height, clip.hips_rest_height)], joints, *GAIT, True, True, 0.0
+            )
             np.testing.assert_array_equal(got[0], world)
             np.testing.assert_array_equal(got[1], local)
             np.testing.assert_array_equal(got[2][0], gait[0][0])
@@ -93,7 +99,7 @@ def test_rust_matches_its_twin_and_the_kernels_one_by_one(walks, by_path, float3
 def test_a_bad_block_and_a_missing_file_are_that_clips_result(walks, tmp_path, backend):
     path, data = walks[0]
     clip, parents, joints = pipeline_input(data, data)
-    block = data[clip.start:].split(b"\n")
+    block = data[clip.start :].split(b"\n")
     block[2] = block[2].replace(b" ", b" x ", 1)  # the third frame line: not a number
     broken = dataclasses.replace(clip, source=data[: clip.start] + b"\n".join(block))
     missing = dataclasses.replace(clip, source=str(tmp_path / "gone.bvh"))
@@ -118,7 +124,14 @@ def test_the_body_scale_and_roles_must_fit_the_skeleton(walks, backend):
 
 
 def header_fields(header):
-    return (header.skeleton.names, header.skeleton.offsets.tolist(), header.frames, header.frame_time, header.block_start, header.block_line)
+    return (
+        header.skeleton.names,
+        header.skeleton.offsets.tolist(),
+        header.frames,
+        header.frame_time,
+        header.block_start,
+        header.block_line,
+    )
 
 
 def padded_clip(pad: int) -> bytes:
@@ -163,8 +176,13 @@ def test_read_header_errors_are_read_bvh_errors(tmp_path):
     frames = f"Frames: {header.frames}".encode()
     claims = long.replace(frames, b"Frames: 99999999", 1)
     short = padded_clip(0)
-    short = short.replace(short[short.index(b"Frames:"):].split(b"\n", 1)[0], b"Frames: 9999", 1)
-    cases = (("claims.bvh", claims), ("short.bvh", short), ("empty.bvh", b" " * (bvh.HEADER_PREFIX + 10)), ("late.bvh", b"\n" * bvh.HEADER_PREFIX + short))
+    short = short.replace(short[short.index(b"Frames:") :].split(b"\n", 1)[0], b"Frames: 9999", 1)
+    cases = (
+        ("claims.bvh", claims),
+        ("short.bvh", short),
+        ("empty.bvh", b" " * (bvh.HEADER_PREFIX + 10)),
+        ("late.bvh", b"\n" * bvh.HEADER_PREFIX + short),
+    )
     for name, data in cases:
         path = tmp_path / name
         path.write_bytes(data)
@@ -178,8 +196,15 @@ def test_read_header_errors_are_read_bvh_errors(tmp_path):
 
 
 @settings(max_examples=3000, deadline=None, derandomize=True)
-@given(st.lists(st.sampled_from([b"MOTION", b"motion", b"MoTiOn", b"MOTIONS", b" ", b"\t", b"\n", b"\r", b"\r\n", b"x", b"Mot", b"ion"]), max_size=16),
-       st.integers(0, 5000))
+@given(
+    st.lists(
+        st.sampled_from(
+            [b"MOTION", b"motion", b"MoTiOn", b"MOTIONS", b" ", b"\t", b"\n", b"\r", b"\r\n", b"x", b"Mot", b"ion"]
+        ),
+        max_size=16,
+    ),
+    st.integers(0, 5000),
+)
 def test_the_motion_line_is_found_as_the_regex_finds_it(pieces, padding):
     # Padding moves the candidates across the first 4 KB window when there is no upper-case MOTION.
     for data in (b"".join(pieces), b"x" * padding + b"".join(pieces), b"\n" * padding + b"".join(pieces)):

@@ -19,8 +19,8 @@ import pytest
 import expressive_mocap as em
 import expressive_mocap.dataset.finish as finish_module
 import expressive_mocap.dataset.npy as npy_module
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.dataset import load_dataset, preprocess
+from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import ArgumentError, DatasetError
 
 # Child processes import the package the tests import: the installed one in CI, not the sources.
@@ -62,13 +62,23 @@ def same_dataset(a: Path, b: Path) -> None:
 
 def snapshot(folder: Path) -> dict:
     """Every file's bytes and mtime below ``folder``."""
-    return {p.relative_to(folder).as_posix(): (p.read_bytes(), p.stat().st_mtime_ns) for p in sorted(folder.rglob("*")) if p.is_file()}
+    return {
+        p.relative_to(folder).as_posix(): (p.read_bytes(), p.stat().st_mtime_ns)
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
 
 
 def cli(*args: str, **kw) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": PACKAGE_ROOT}
-    return subprocess.Popen([sys.executable, "-m", "expressive_mocap.cli", "preprocess", *args, "-q"], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
+    return subprocess.Popen(
+        [sys.executable, "-m", "expressive_mocap.cli", "preprocess", *args, "-q"],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kw,
+    )
 
 
 # ----------------------------------------------------------------------------- concurrent runs
@@ -78,9 +88,17 @@ def test_a_second_run_on_a_locked_folder_fails_naming_the_holder(clips, referenc
     out = tmp_path / "ds"
     out.mkdir()
     holder = subprocess.Popen(
-        [sys.executable, "-c", "import sys, time; from pathlib import Path; from expressive_mocap.dataset import FolderLock\n"
-         "with FolderLock(Path(sys.argv[1])):\n    print('locked', flush=True); time.sleep(60)", str(out)],
-        env={**os.environ, "PYTHONPATH": PACKAGE_ROOT}, stdout=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            "-c",
+            "import sys, time; from pathlib import Path; from expressive_mocap.dataset import FolderLock\n"
+            "with FolderLock(Path(sys.argv[1])):\n    print('locked', flush=True); time.sleep(60)",
+            str(out),
+        ],
+        env={**os.environ, "PYTHONPATH": PACKAGE_ROOT},
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert holder.stdout.readline().strip() == "locked"
         second = cli(str(clips), "-o", str(out))

@@ -7,10 +7,10 @@ from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap import decoupling as dc
-from expressive_mocap.decoupling import edits
-from expressive_mocap.errors import ArgumentError
 from expressive_mocap import quat, reference
+from expressive_mocap.decoupling import edits
 from expressive_mocap.demo import procedural_walk
+from expressive_mocap.errors import ArgumentError
 from expressive_mocap.ops import compose_rotations, decouple_rotations
 
 
@@ -20,7 +20,9 @@ class SmoothingModel:
 
     def predict(self, motion):
         # Each joint on the hemisphere of its first frame, so the rotations can be averaged.
-        rotations = motion.rotations * np.where(np.sum(motion.rotations * motion.rotations[:1], axis=-1, keepdims=True) < 0, -1.0, 1.0)
+        rotations = motion.rotations * np.where(
+            np.sum(motion.rotations * motion.rotations[:1], axis=-1, keepdims=True) < 0, -1.0, 1.0
+        )
         kernel = np.ones(11) / 11
         padded = np.pad(rotations, ((5, 5), (0, 0), (0, 0)), mode="edge")
         smooth = np.apply_along_axis(lambda x: np.convolve(x, kernel, mode="valid"), 0, padded)
@@ -107,9 +109,13 @@ def test_rust_matches_numpy_twin():
     original = Rotation.random(3000, random_state=3).as_quat().reshape(150, 20, 4)
     noise = Rotation.from_rotvec(np.random.default_rng(4).normal(scale=0.4, size=(3000, 3)))
     body = (Rotation.from_quat(original.reshape(-1, 4)) * noise).as_quat().reshape(150, 20, 4)
-    for rust, twin in zip(_core.decouple_rotations(original, body, 2.0, 4.0), reference.decouple_rotations(original, body, 2.0, 4.0)):
+    for rust, twin in zip(
+        _core.decouple_rotations(original, body, 2.0, 4.0), reference.decouple_rotations(original, body, 2.0, 4.0)
+    ):
         np.testing.assert_allclose(rust, twin, atol=1e-12)
-    np.testing.assert_allclose(_core.compose_rotations(original, body, 0.7), reference.compose_rotations(original, body, 0.7), atol=1e-12)
+    np.testing.assert_allclose(
+        _core.compose_rotations(original, body, 0.7), reference.compose_rotations(original, body, 0.7), atol=1e-12
+    )
 
 
 def test_activity_index_formula(backend):

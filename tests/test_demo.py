@@ -7,7 +7,14 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap import quat
-from expressive_mocap.demo import BANDAI_CHANNELS, WAVE_RAISE, bandai_like_skeleton, procedural_walk, strides_per_second, walk_and_wave
+from expressive_mocap.demo import (
+    BANDAI_CHANNELS,
+    WAVE_RAISE,
+    bandai_like_skeleton,
+    procedural_walk,
+    strides_per_second,
+    walk_and_wave,
+)
 from expressive_mocap.features import cadence, contact_intervals, foot_contacts, footstrikes
 from expressive_mocap.quat import mean_rotation
 from expressive_mocap.roles import JointRoles
@@ -56,7 +63,11 @@ def test_skeleton_equals_the_real_files(bandai2_dir):
     ours = bandai_like_skeleton()
     for name in [REAL_CLIP, "dataset-2_walk_active_001.bvh", "dataset-2_walk_feminine_002.bvh"]:
         real = em.read_bvh(bandai2_dir / name).skeleton
-        assert real.names == ours.names and real.parents.tolist() == ours.parents.tolist() and real.channels == ours.channels
+        assert (
+            real.names == ours.names
+            and real.parents.tolist() == ours.parents.tolist()
+            and real.channels == ours.channels
+        )
         assert [(j, off) for j, off in real.end_sites] == [(j, off) for j, off in ours.end_sites]
         others = np.arange(22) != 1
         np.testing.assert_allclose(ours.offsets[others], real.offsets[others], atol=1e-6)
@@ -132,7 +143,9 @@ def test_wave_changes_the_waving_arm_and_nothing_else(side):
     others = [j for j in range(22) if j not in ARM[side]]
     np.testing.assert_array_equal(waving.rotations[:, others], walk.rotations[:, others])
     np.testing.assert_array_equal(waving.translations, walk.translations)
-    changed = np.degrees(quat.angle(quat.mul(waving.rotations[:, ARM[side]], quat.conjugate(walk.rotations[:, ARM[side]]))))
+    changed = np.degrees(
+        quat.angle(quat.mul(waving.rotations[:, ARM[side]], quat.conjugate(walk.rotations[:, ARM[side]])))
+    )
     assert (changed.max(axis=0) > 5.0).all()
     # The same walks come from procedural_walk.
     np.testing.assert_array_equal(procedural_walk(seconds=3.0, speed=1.2).rotations, walk.rotations)

@@ -85,11 +85,24 @@ def test_the_folder_beside_the_checkout_is_named_only_where_the_docs_say_where_t
 
 
 def test_the_patterns_catch_what_they_are_for():
-    for text in ("see METHODS.md part 2", "METHODS' single cycle", "in ../shared/PEERS.md", "Fuzzing (issue 6)",
-                 "Targets (from the issue)", "after this issue's first commit", "issue #3", "Against the issue's targets"):
+    for text in (
+        "see METHODS.md part 2",
+        "METHODS' single cycle",
+        "in ../shared/PEERS.md",
+        "Fuzzing (issue 6)",
+        "Targets (from the issue)",
+        "after this issue's first commit",
+        "issue #3",
+        "Against the issue's targets",
+    ):
         assert PRIVATE.search(text), text
-    for text in ("PyUntypedArrayMethods", "the methods leave open", "a known issue with pybvh", "no issues found",
-                 "[docs/methods.md](docs/methods.md)"):
+    for text in (
+        "PyUntypedArrayMethods",
+        "the methods leave open",
+        "a known issue with pybvh",
+        "no issues found",
+        "[docs/methods.md](docs/methods.md)",
+    ):
         assert not PRIVATE.search(text), text
     assert SHARED.search("`../shared/data/unpack`") and not SHARED.search("its cost is shared")
     assert section_of("# A\n## Data\ntext", 12) == "## Data"

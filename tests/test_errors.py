@@ -4,7 +4,6 @@ expected, with both kernel backends (the Rust parser must never panic)."""
 import pytest
 
 import expressive_mocap as em
-
 from conftest import DATA
 
 GOOD = (DATA / "mixed_orders.bvh").read_bytes()
@@ -26,9 +25,17 @@ CASES = {
     # name: (file bytes, expected line or None, words the message must contain)
     "truncated block": (b"\n".join(LINES[: frame_line(2) - 1]) + b"\n", frame_line(1), "truncated"),
     "truncated mid-line": (GOOD[: GOOD.rindex(b"-81.0")], frame_line(3), "expected 27 values"),
-    "too few values": (replace_line(frame_line(1), LINES[frame_line(1) - 1].rsplit(b" ", 1)[0]), frame_line(1), "expected 27 values"),
+    "too few values": (
+        replace_line(frame_line(1), LINES[frame_line(1) - 1].rsplit(b" ", 1)[0]),
+        frame_line(1),
+        "expected 27 values",
+    ),
     "too many values": (replace_line(frame_line(2), LINES[frame_line(2) - 1] + b" 1.0"), frame_line(2), "found 28"),
-    "non-numeric token": (replace_line(frame_line(2), LINES[frame_line(2) - 1].replace(b"93.0", b"9x3")), frame_line(2), "not a number"),
+    "non-numeric token": (
+        replace_line(frame_line(2), LINES[frame_line(2) - 1].replace(b"93.0", b"9x3")),
+        frame_line(2),
+        "not a number",
+    ),
     "nan": (replace_line(frame_line(0), LINES[frame_line(0) - 1].replace(b"91.0", b"nan")), frame_line(0), "finite"),
     "inf": (replace_line(frame_line(3), LINES[frame_line(3) - 1].replace(b"94.0", b"-inf")), frame_line(3), "finite"),
     "more frames than declared": (GOOD.replace(b"Frames: 4", b"Frames: 3"), frame_line(3), "more frame lines"),
@@ -38,9 +45,21 @@ CASES = {
     "zero frame time": (GOOD.replace(b"Frame Time: 0.0333333", b"Frame Time: 0"), FIRST_FRAME_LINE - 1, "positive"),
     "missing closing brace": (GOOD.replace(b"\t}\n}\nMOTION", b"\t}\nMOTION"), None, "never closed"),
     "extra closing brace": (GOOD.replace(b"}\nMOTION", b"}\n}\nMOTION"), LINES.index(b"MOTION") + 1, "closes nothing"),
-    "several roots": (GOOD.replace(b"}\nMOTION", b"}\nROOT Other\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\nMOTION"), LINES.index(b"MOTION") + 1, "several ROOT"),
-    "unknown channel": (GOOD.replace(b"Yrotation Zrotation Xrotation", b"Yrotation Zrot Xrotation"), 13, "unknown channel"),
-    "channel count too large": (GOOD.replace(b"CHANNELS 2 Yposition", b"CHANNELS 3 Yposition"), None, "unknown channel 'JOINT'"),
+    "several roots": (
+        GOOD.replace(b"}\nMOTION", b"}\nROOT Other\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\nMOTION"),
+        LINES.index(b"MOTION") + 1,
+        "several ROOT",
+    ),
+    "unknown channel": (
+        GOOD.replace(b"Yrotation Zrotation Xrotation", b"Yrotation Zrot Xrotation"),
+        13,
+        "unknown channel",
+    ),
+    "channel count too large": (
+        GOOD.replace(b"CHANNELS 2 Yposition", b"CHANNELS 3 Yposition"),
+        None,
+        "unknown channel 'JOINT'",
+    ),
     "missing OFFSET": (GOOD.replace(b"\t\tOFFSET 0.0 12.0 0.0\n", b""), None, "no OFFSET"),
     "non-numeric OFFSET": (GOOD.replace(b"OFFSET 0.0 12.0 0.0", b"OFFSET 0.0 twelve 0.0"), 12, "OFFSET value"),
     "header ends early": (GOOD[: GOOD.index(b"JOINT Leg_R")], None, "never closed"),
@@ -52,7 +71,11 @@ CASES = {
     "binary file": (bytes(range(256)) * 4, None, "binary"),
     "gzip file": (b"\x1f\x8b\x08\x00" + bytes(100), None, "binary"),
     # Found by benches/fuzz_bvh.py: the same channel in two spellings escaped as a MocapError.
-    "channel twice in two cases": (GOOD.replace(b"Yrotation Zrotation Xrotation", b"Yrotation Zrotation ZROTATION"), 13, "lists a channel twice"),
+    "channel twice in two cases": (
+        GOOD.replace(b"Yrotation Zrotation Xrotation", b"Yrotation Zrotation ZROTATION"),
+        13,
+        "lists a channel twice",
+    ),
     "Latin-1 header": (GOOD.replace(b"Spine Lower", b"Spine \xe9"), 6, "not UTF-8"),
 }
 
@@ -97,7 +120,12 @@ def test_a_deep_hierarchy_is_read_without_recursion(tmp_path):
     depth = 5000  # far beyond Python's recursion limit
     lines = ["HIERARCHY"]
     for j in range(depth):
-        lines += [("ROOT" if j == 0 else "JOINT") + f" j{j}", "{", "OFFSET 0 1 0", "CHANNELS 3 Zrotation Xrotation Yrotation"]
+        lines += [
+            ("ROOT" if j == 0 else "JOINT") + f" j{j}",
+            "{",
+            "OFFSET 0 1 0",
+            "CHANNELS 3 Zrotation Xrotation Yrotation",
+        ]
     lines += ["}"] * depth + ["MOTION", "Frames: 1", "Frame Time: 0.04", " ".join(["1.0"] * 3 * depth)]
     motion = em.read_bvh("\n".join(lines).encode())
     assert motion.skeleton.n_joints == depth

@@ -17,8 +17,8 @@ from expressive_mocap.exaggeration import (
     lock_stance_feet,
     normalise_cycle,
     stance_foot_speed,
-    swap_test,
     subtree_weights,
+    swap_test,
     to_cycle_timing,
     train,
 )
@@ -151,14 +151,18 @@ def test_leave_one_out_fits_on_the_other_peoples_cycles():
     """Person p's warp uses exactly what training on the other people (every one of their cycles) gives."""
     from expressive_mocap.exaggeration import leave_one_out
 
-    people = [[loaded_walk(k, seconds=3.5 + p, wobble=0.3, seed=10 * p + i) for i, k in enumerate(LEVELS)] for p in range(3)]
+    people = [
+        [loaded_walk(k, seconds=3.5 + p, wobble=0.3, seed=10 * p + i) for i, k in enumerate(LEVELS)] for p in range(3)
+    ]
     model = train(people, LEVELS)
     counts = np.bincount(model.cycle_performance[:, 0])
     assert len(set(counts)) == 3 and counts.min() >= 6  # several cycles a clip, a different number for each person
     warps = leave_one_out(model)
     for p in (0, 1, 2):
         others = train([people[q] for q in range(3) if q != p], LEVELS)
-        change = (others.predict_coefficients(LEVELS[-1]) - others.predict_coefficients(LEVELS[0])) * others.key[:, None]
+        change = (others.predict_coefficients(LEVELS[-1]) - others.predict_coefficients(LEVELS[0])) * others.key[
+            :, None
+        ]
         light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
         warped = light + others.basis @ change.T
         assert warps[p].key == int(others.key.sum())
@@ -224,7 +228,10 @@ def test_exaggeration_follows_the_training_series_and_extrapolates(clean_model, 
     cycles = find_cycles(walk)
     inside = slice(cycles[0].start + 5, cycles[-1].end - 5)  # the lead-in and -out keep their lean
     # A margin wide enough for k = 0.5 and 3.5 (the default 0.1 x the trained range would clamp them).
-    leans = [lean(exaggerate(clean_model, walk, k, current=2.0, margin=0.5)[0], walk, inside) for k in (0.5, 1.0, 2.0, 3.0, 3.5)]
+    leans = [
+        lean(exaggerate(clean_model, walk, k, current=2.0, margin=0.5)[0], walk, inside)
+        for k in (0.5, 1.0, 2.0, 3.0, 3.5)
+    ]
     assert np.all(np.diff(leans) > 0)
     # As much as the real k = 3 walk leans more (4 degrees).
     assert leans[3] == pytest.approx(lean(loaded_walk(3.0, 5.0), walk, inside), abs=0.3)
@@ -282,10 +289,14 @@ def test_foot_locking_pins_the_stance_foot(walk):
     locked, correction, residual, lowered = lock_stance_feet(walk, edited, contacts, roles, blend_frames=3)
     assert correction > 5.0 and residual < 1e-6 and lowered == 0.0  # the thighs' swing keeps the feet within reach
     assert stance_foot_speed(edited, contacts, roles) > 2 * stance_foot_speed(walk, contacts, roles)
-    assert stance_foot_speed(locked, contacts, roles) == pytest.approx(stance_foot_speed(walk, contacts, roles), abs=1e-6)
+    assert stance_foot_speed(locked, contacts, roles) == pytest.approx(
+        stance_foot_speed(walk, contacts, roles), abs=1e-6
+    )
     for s in (0, 1):
         for joint in (roles.feet[s], roles.toes[s]):
-            gap = np.linalg.norm(locked.positions()[contacts[:, s], joint] - walk.positions()[contacts[:, s], joint], axis=1)
+            gap = np.linalg.norm(
+                locked.positions()[contacts[:, s], joint] - walk.positions()[contacts[:, s], joint], axis=1
+            )
             assert gap.max() < 1e-6
     for s in (0, 1):
         far = ~np.convolve(contacts[:, s], np.ones(7), mode="same").astype(bool)  # > 3 frames from the foot's contacts
@@ -415,7 +426,12 @@ def test_bad_inputs_give_clear_errors(clean_model, walk):
 def _renamed(motion):
     s = motion.skeleton
     names = ("Root",) + s.names[1:]
-    return em.Motion(em.Skeleton(names, s.parents, s.offsets, s.channels, s.end_sites), motion.rotations, motion.translations, motion.frame_time)
+    return em.Motion(
+        em.Skeleton(names, s.parents, s.offsets, s.channels, s.end_sites),
+        motion.rotations,
+        motion.translations,
+        motion.frame_time,
+    )
 
 
 # ----------------------------------------------------------------- commands
@@ -438,7 +454,10 @@ def test_rank_exaggerate_validate_commands(tmp_path, capsys):
     walk = tmp_path / "walk.bvh"
     em.write_bvh(loaded_walk(2.0, 4.0), walk)
     result = tmp_path / "out.bvh"
-    assert main(["exaggerate", "--model", str(saved), "--input", str(walk), "--from", "2", "--to", "3", "-o", str(result)]) == 0
+    assert (
+        main(["exaggerate", "--model", str(saved), "--input", str(walk), "--from", "2", "--to", "3", "-o", str(result)])
+        == 0
+    )
     out = capsys.readouterr().out
     assert "largest change per joint" in out and em.read_bvh(result).n_frames == em.read_bvh(walk).n_frames
     assert main(["validate", "--model", str(saved), "--draws", "20"]) == 0
@@ -460,7 +479,22 @@ def test_commands_fail_in_one_line(tmp_path, capsys):
     assert main(["rank", "--level", "1", str(walk), "--level", "2", str(walk), "--cycle", "best"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "cycle must be one of all, middle" in err
-    assert main(["exaggerate", "--model", str(tmp_path / "none.npz"), "--input", str(walk), "--to", "2", "-o", str(tmp_path / "o.bvh")]) == 1
+    assert (
+        main(
+            [
+                "exaggerate",
+                "--model",
+                str(tmp_path / "none.npz"),
+                "--input",
+                str(walk),
+                "--to",
+                "2",
+                "-o",
+                str(tmp_path / "o.bvh"),
+            ]
+        )
+        == 1
+    )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "cannot read" in err
 
@@ -475,20 +509,48 @@ def test_rank_names_the_clip_it_cannot_use_and_the_option_to_use(tmp_path, mixed
             em.write_bvh(loaded_walk(k, wobble=0.3, seed=10 * p + i), files[p, k])
     short = tmp_path / "short.bvh"
     em.write_bvh(em.read_bvh(files[1, LEVELS[1]])[:31], short)  # 31 frames: no foot strikes twice
-    levels = [a for k in LEVELS for a in ("--level", f"{k:g}", str(files[0, k]), str(short if k == LEVELS[1] else files[1, k]))]
+    levels = [
+        a
+        for k in LEVELS
+        for a in ("--level", f"{k:g}", str(files[0, k]), str(short if k == LEVELS[1] else files[1, k]))
+    ]
     assert main(["rank", *levels]) == 1
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith(f"expressive-mocap: error: {short}: no gait cycle found in its 31 frames")
+    assert err.count("\n") == 1 and err.startswith(
+        f"expressive-mocap: error: {short}: no gait cycle found in its 31 frames"
+    )
     assert "--cycle whole" in err
-    levels = [a for k in LEVELS for a in ("--level", f"{k:g}", str(files[0, k]), str(mixed_path if k == LEVELS[2] else files[1, k]))]
+    levels = [
+        a
+        for k in LEVELS
+        for a in ("--level", f"{k:g}", str(files[0, k]), str(mixed_path if k == LEVELS[2] else files[1, k]))
+    ]
     assert main(["rank", *levels]) == 1
     err = capsys.readouterr().err
     assert err.startswith(f"expressive-mocap: error: {mixed_path}: another skeleton") and err.count("\n") == 1
     assert main(["rank", *levels[:-4], "-o", str(tmp_path / "m.npz")]) == 0  # two levels, both people fine
     capsys.readouterr()
-    assert main(["exaggerate", "--model", str(tmp_path / "m.npz"), "--input", str(mixed_path), "--to", "3", "-o", str(tmp_path / "x.bvh")]) == 1
+    assert (
+        main(
+            [
+                "exaggerate",
+                "--model",
+                str(tmp_path / "m.npz"),
+                "--input",
+                str(mixed_path),
+                "--to",
+                "3",
+                "-o",
+                str(tmp_path / "x.bvh"),
+            ]
+        )
+        == 1
+    )
     err = capsys.readouterr().err
-    assert err.startswith(f"expressive-mocap: error: {mixed_path}: the model was trained on") and "`expressive-mocap rank" in err
+    assert (
+        err.startswith(f"expressive-mocap: error: {mixed_path}: the model was trained on")
+        and "`expressive-mocap rank" in err
+    )
 
 
 def test_foot_locking_lowers_the_hips_where_a_leg_cannot_reach(walk):
@@ -503,7 +565,9 @@ def test_foot_locking_lowers_the_hips_where_a_leg_cannot_reach(walk):
     locked, _, residual, lowered = lock_stance_feet(walk, edited, contacts, roles, blend_frames=3)
     assert residual < 1e-3 * height and 0.0 < lowered <= 0.05 * height + 1e-9
     for s in (0, 1):
-        gap = np.abs(locked.positions()[contacts[:, s], roles.feet[s], 1] - walk.positions()[contacts[:, s], roles.feet[s], 1])
+        gap = np.abs(
+            locked.positions()[contacts[:, s], roles.feet[s], 1] - walk.positions()[contacts[:, s], roles.feet[s], 1]
+        )
         assert gap.max() < 1e-3 * height  # before: the stance feet hung up to 5% of the height above the floor
     hips = locked.positions()[:, roles.hips]
     assert np.abs(np.diff(hips[:, 1])).max() < np.abs(np.diff(walk.positions()[:, roles.hips, 1])).max() + 0.01 * height

@@ -44,8 +44,13 @@ def blender_positions(path, motion, scale=0.01):
     bpy = need("bpy")
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.import_anim.bvh(
-        filepath=str(path), axis_forward="-Z", axis_up="Y", global_scale=scale,
-        rotate_mode="NATIVE", update_scene_fps=True, frame_start=1,
+        filepath=str(path),
+        axis_forward="-Z",
+        axis_up="Y",
+        global_scale=scale,
+        rotate_mode="NATIVE",
+        update_scene_fps=True,
+        frame_start=1,
     )
     scene, armature, n_frames = bpy.context.scene, bpy.context.object, motion.n_frames
     assert armature.animation_data.action.frame_range[:] == pytest.approx((1, n_frames))

@@ -6,14 +6,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from expressive_mocap import quat, reference
-from expressive_mocap import ops
+from conftest import stick_walker
+from expressive_mocap import ops, quat, reference
 from expressive_mocap.demo import bandai_like_skeleton, procedural_walk
 from expressive_mocap.features import FEATURE_NAMES, default_floor, dynamic_features
 from expressive_mocap.quat import mean_rotation
 from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
-
-from conftest import stick_walker
 
 ATOL = 1e-9  # Rust vs NumPy and invariances, on features of order 1 (measured ~1e-15)
 V, V_MEAN, CONTACT, AIR, H, THIGHS = slice(0, 3), slice(3, 6), slice(6, 8), slice(8, 10), 10, slice(11, 19)
@@ -56,7 +54,14 @@ def test_roles_of_bandai_cmu_and_mixamo_names():
     for prefix in ["", "mixamorig:"]:
         skeleton = stick_walker(*(walker.positions()[:, j] for j in (0, 4, 7)), prefix=prefix).skeleton
         roles = JointRoles.find(skeleton)
-        assert (roles.hips, roles.head, roles.spine, roles.upper_legs, roles.feet, roles.toes) == (0, 2, (0, 1, 2), (3, 6), (4, 7), (5, 8))
+        assert (roles.hips, roles.head, roles.spine, roles.upper_legs, roles.feet, roles.toes) == (
+            0,
+            2,
+            (0, 1, 2),
+            (3, 6),
+            (4, 7),
+            (5, 8),
+        )
 
 
 def test_roles_can_be_given_and_missing_ones_are_named(mixed_path):
@@ -70,7 +75,10 @@ def test_roles_can_be_given_and_missing_ones_are_named(mixed_path):
     with pytest.raises(em.MocapError, match="out of range"):
         JointRoles.find(skeleton, hips=99)
     hand_written = em.read_bvh(mixed_path).skeleton
-    with pytest.raises(em.MocapError, match="cannot tell which joint is the left_upper_leg; right_upper_leg; left_foot; left_toe: pass it by name") as error:
+    with pytest.raises(
+        em.MocapError,
+        match="cannot tell which joint is the left_upper_leg; right_upper_leg; left_foot; left_toe: pass it by name",
+    ) as error:
         JointRoles.find(hand_written)
     assert "joints are: mixamorig:Hips, Spine Lower" in str(error.value)
 
@@ -137,7 +145,9 @@ def test_turning_the_motion_changes_nothing(backend, degrees):
     walk = procedural_walk(seconds=2.0)
     for causal in (True, False):
         original = dynamic_features(walk, causal=causal)
-        np.testing.assert_allclose(dynamic_features(turned(walk, degrees, shift=(300.0, 0.0, -50.0)), causal=causal), original, atol=ATOL)
+        np.testing.assert_allclose(
+            dynamic_features(turned(walk, degrees, shift=(300.0, 0.0, -50.0)), causal=causal), original, atol=ATOL
+        )
     # The heading frame's +Z is forward, +X left.
     assert original[1:, 5].mean() > 0.5 and abs(original[1:, 3].mean()) < 0.05
 
@@ -172,7 +182,9 @@ def test_causal_features_do_not_look_ahead(backend, bandai2_dir):
             np.concatenate([walk.translations[:k], other.translations[k:]]),
             walk.frame_time,
         )
-        np.testing.assert_allclose(dynamic_features(spliced)[:k], full[:k], atol=1e-12, err_msg=f"changed after frame {k}")
+        np.testing.assert_allclose(
+            dynamic_features(spliced)[:k], full[:k], atol=1e-12, err_msg=f"changed after frame {k}"
+        )
 
 
 # -- Rust vs NumPy ------------------------------------------------------------------------
@@ -259,10 +271,22 @@ def test_argument_errors_name_the_argument(backend, options, name):
         dynamic_features(straight_walker(frames=3), **options)
 
 
-@pytest.mark.parametrize("name", ["points", "thighs", "contacts", "reference", "frame_time", "height", "hips_rest_height", "window"])
+@pytest.mark.parametrize(
+    "name", ["points", "thighs", "contacts", "reference", "frame_time", "height", "hips_rest_height", "window"]
+)
 def test_kernel_errors_name_the_argument(backend, name):
     points, thighs, contacts, ref = random_feature_inputs(np.random.default_rng(0), 5)
-    arguments = dict(points=points, thighs=thighs, contacts=contacts, reference=ref, frame_time=0.1, height=1.0, hips_rest_height=1.0, floor=0.0, window=3)
+    arguments = dict(
+        points=points,
+        thighs=thighs,
+        contacts=contacts,
+        reference=ref,
+        frame_time=0.1,
+        height=1.0,
+        hips_rest_height=1.0,
+        floor=0.0,
+        window=3,
+    )
     arguments[name] = {
         "points": points[:, :2],
         "thighs": thighs[:4],
@@ -283,8 +307,11 @@ def test_kernel_errors_name_the_argument(backend, name):
 def _gait_one_by_one(motions, floor=0.0, thigh_reference=None):
     out = []
     for m in motions:
-        f = dynamic_features(m, floor=default_floor(m.positions(), JointRoles.find(m.skeleton)) if floor is None else floor,
-                             thigh_reference=thigh_reference)
+        f = dynamic_features(
+            m,
+            floor=default_floor(m.positions(), JointRoles.find(m.skeleton)) if floor is None else floor,
+            thigh_reference=thigh_reference,
+        )
         out.append((f, em.foot_contacts(m)))
     return out
 
@@ -293,8 +320,12 @@ def _gait_clips():
     """Walks of different lengths, speeds and frame rates, one a single frame, one of another actor size."""
     small = procedural_walk(seconds=2.0, speed=0.8)
     small = em.Motion(small.skeleton.scaled(0.8), small.rotations, small.translations * 0.8, small.frame_time)
-    return [procedural_walk(seconds=3.0, speed=1.2), procedural_walk(seconds=1.5, fps=60.0, speed=1.6),
-            procedural_walk(seconds=2.0)[:1], small]
+    return [
+        procedural_walk(seconds=3.0, speed=1.2),
+        procedural_walk(seconds=1.5, fps=60.0, speed=1.6),
+        procedural_walk(seconds=2.0)[:1],
+        small,
+    ]
 
 
 @pytest.mark.parametrize("floor, reference", [(0.0, None), (None, "given")])
@@ -328,9 +359,9 @@ def test_gait_many_rust_matches_numpy_twin():
 
 def test_gait_many_asks_only_for_what_is_wanted_and_names_bad_input(backend):
     walk = procedural_walk(seconds=1.0)
-    (features, contacts), = em.gait_many([walk], features=False)
+    ((features, contacts),) = em.gait_many([walk], features=False)
     assert features is None and contacts.shape == (walk.n_frames, 2)
-    (features, contacts), = em.gait_many([walk], contacts=False)
+    ((features, contacts),) = em.gait_many([walk], contacts=False)
     assert contacts is None and features.shape == (walk.n_frames, 19)
     assert em.gait_many([]) == []
     with pytest.raises(em.MocapError, match="`motions`"):
@@ -343,9 +374,27 @@ def test_gait_many_asks_only_for_what_is_wanted_and_names_bad_input(backend):
         ops.clip_gait_many([], [0, 1], ops.GaitSettings(0.05, 0.5, 0.1, 5.0), features=True, contacts=True)
     positions = walk.positions()
     with pytest.raises(em.errors.ArgumentError, match="clip 0"):
-        ops.clip_gait_many([(positions, walk.rotations[:, :3], walk.frame_time, 140.0, 90.0)], [0] * 7, ops.GaitSettings(0.05, 0.5, 0.1, 5.0), features=True, contacts=True)
+        ops.clip_gait_many(
+            [(positions, walk.rotations[:, :3], walk.frame_time, 140.0, 90.0)],
+            [0] * 7,
+            ops.GaitSettings(0.05, 0.5, 0.1, 5.0),
+            features=True,
+            contacts=True,
+        )
     if em.get_backend() == "rust":  # a strided array is named, as by every Rust kernel (the twin takes it)
         with pytest.raises(TypeError, match="`clips`"):
-            ops.clip_gait_many([(np.asfortranarray(positions), walk.rotations, walk.frame_time, 140.0, 90.0)], [0] * 7, ops.GaitSettings(0.05, 0.5, 0.1, 5.0), features=True, contacts=True)
+            ops.clip_gait_many(
+                [(np.asfortranarray(positions), walk.rotations, walk.frame_time, 140.0, 90.0)],
+                [0] * 7,
+                ops.GaitSettings(0.05, 0.5, 0.1, 5.0),
+                features=True,
+                contacts=True,
+            )
     with pytest.raises(em.errors.ArgumentError, match="clip 0.*`toes`"):
-        ops.clip_gait_many([(positions, walk.rotations, walk.frame_time, 140.0, 90.0)], [0, 1, 2, 3, 4, 5, 99], ops.GaitSettings(0.05, 0.5, 0.1, 5.0), features=True, contacts=True)
+        ops.clip_gait_many(
+            [(positions, walk.rotations, walk.frame_time, 140.0, 90.0)],
+            [0, 1, 2, 3, 4, 5, 99],
+            ops.GaitSettings(0.05, 0.5, 0.1, 5.0),
+            features=True,
+            contacts=True,
+        )

@@ -5,9 +5,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from expressive_mocap import reference
-
 from conftest import bvh_values, scipy_positions
+from expressive_mocap import reference
 
 RTOL = 1e-5  # the bar; measured agreement is ~1e-13 relative in float64
 

@@ -8,13 +8,11 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import features, reference
-from expressive_mocap import ops
+from conftest import stick_walker
+from expressive_mocap import features, ops, reference
 from expressive_mocap.cli import main
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.features import ContactInterval, air_time, cadence, contact_intervals, foot_contacts, footstrikes
-
-from conftest import stick_walker
 
 STYLES = ["normal", "active", "exhausted", "elderly", "feminine", "masculine", "youthful"]
 
@@ -104,7 +102,10 @@ def test_air_time_counts_seconds_since_the_foot_left(backend):
 def test_intervals_strikes_and_cadence_by_hand():
     contacts = np.zeros((30, 2), dtype=bool)
     contacts[0:5, 0] = contacts[20:25, 0] = contacts[10:15, 1] = contacts[29, 1] = True
-    assert contact_intervals(contacts[:, 0], 0.1) == [ContactInterval(0, 4, pytest.approx(0.5)), ContactInterval(20, 24, pytest.approx(0.5))]
+    assert contact_intervals(contacts[:, 0], 0.1) == [
+        ContactInterval(0, 4, pytest.approx(0.5)),
+        ContactInterval(20, 24, pytest.approx(0.5)),
+    ]
     assert contact_intervals(contacts, 0.1)[1][-1] == ContactInterval(29, 29, pytest.approx(0.1))
     # The contact at frame 0 began before the clip: not a footstrike.
     assert footstrikes(contacts).tolist() == [[10, 1], [20, 0], [29, 1]]
@@ -153,7 +154,15 @@ def test_argument_errors_name_the_argument(backend, call, name):
 
 @pytest.mark.parametrize("name, value", [("feet", np.zeros((4, 2, 2, 2))), ("frame_time", -1.0), ("min_frames", 0)])
 def test_kernel_errors_name_the_argument(backend, name, value):
-    arguments = dict(feet=np.zeros((4, 2, 2, 3)), frame_time=0.1, floor=0.0, height_threshold=1.0, speed_threshold=1.0, min_frames=3, causal=False)
+    arguments = dict(
+        feet=np.zeros((4, 2, 2, 3)),
+        frame_time=0.1,
+        floor=0.0,
+        height_threshold=1.0,
+        speed_threshold=1.0,
+        min_frames=3,
+        causal=False,
+    )
     arguments[name] = value
     with pytest.raises(em.errors.ArgumentError, match=f"`{name}`"):
         ops.foot_contacts(*arguments.values())
@@ -174,7 +183,9 @@ def test_real_walks_step_left_right_at_a_walking_cadence(backend, bandai2_dir, s
         contacts = foot_contacts(walk, causal=causal)
         strikes = footstrikes(contacts)
         rate = cadence(contacts, walk.frame_time)
-        message = f"{style} walk ({'causal' if causal else 'offline'}): {rate:.2f} steps/s, feet {strikes[:, 1].tolist()}"
+        message = (
+            f"{style} walk ({'causal' if causal else 'offline'}): {rate:.2f} steps/s, feet {strikes[:, 1].tolist()}"
+        )
         assert len(strikes) >= 6, message
         assert (np.diff(strikes[:, 1]) != 0).all(), message  # left, right, left, ...
         assert 1.2 < rate < 2.6, message  # people walk at 1.5-2.3 steps a second
@@ -221,7 +232,9 @@ def test_footsteps_command_prints_intervals_and_writes_a_plot(tmp_path, capsys):
 def test_footsteps_command_errors_are_one_line(tmp_path, mixed_path, args, words):
     em.write_bvh(resting_walker(), tmp_path / "walk.bvh")
     args = [{"WALK": "walk.bvh", "NOROLES": str(mixed_path)}.get(a, a) for a in args]
-    result = subprocess.run([sys.executable, "-m", "expressive_mocap.cli", *args], capture_output=True, text=True, cwd=tmp_path)
+    result = subprocess.run(
+        [sys.executable, "-m", "expressive_mocap.cli", *args], capture_output=True, text=True, cwd=tmp_path
+    )
     assert result.returncode != 0
     assert "Traceback" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1, result.stderr
@@ -237,4 +250,10 @@ def test_footsteps_help_reads_well(capsys):
 
 
 def test_features_module_exports():
-    assert set(features.__all__) >= {"dynamic_features", "foot_contacts", "air_time", "contact_intervals", "FEATURE_NAMES"}
+    assert set(features.__all__) >= {
+        "dynamic_features",
+        "foot_contacts",
+        "air_time",
+        "contact_intervals",
+        "FEATURE_NAMES",
+    }

@@ -9,9 +9,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import expressive_mocap as em
-from expressive_mocap.bvh.channels import decode
-
 from conftest import DATA
+from expressive_mocap.bvh.channels import decode
 
 GOOD = (DATA / "mixed_orders.bvh").read_bytes()
 # Derandomized: CI runs the same examples every time (a long randomised run is the hardening issue's).

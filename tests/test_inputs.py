@@ -14,8 +14,8 @@ import expressive_mocap as em
 from expressive_mocap import files as em_io
 from expressive_mocap.bvh import read_header
 from expressive_mocap.cli import main
-from expressive_mocap.errors import MocapError
 from expressive_mocap.decoupling.body_model import BodyModel
+from expressive_mocap.errors import MocapError
 
 
 def _returns_within(seconds: float, call):
@@ -83,7 +83,9 @@ def test_model_loaders_refuse_fifo_and_devices(fifo, zero_link):
 
 
 def test_cli_model_fifo_is_one_line_error(fifo, mixed_path, tmp_path, capsys):
-    code = _returns_within(20, lambda: main(["decouple", str(mixed_path), "--model", str(fifo), "-o", str(tmp_path / "out")]))
+    code = _returns_within(
+        20, lambda: main(["decouple", str(mixed_path), "--model", str(fifo), "-o", str(tmp_path / "out")])
+    )
     assert code == 1
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "a FIFO, not a regular file" in err and str(fifo) in err

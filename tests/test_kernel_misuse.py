@@ -7,10 +7,9 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from conftest import BACKENDS
 from expressive_mocap import ops as k
 from expressive_mocap import reference
-
-from conftest import BACKENDS
 from kernel_cases import CORE, RNG, contacts_args, features_args, layout, mlp_args, quats
 
 # Each public wrapper: a function of (frames, joints) giving its arguments, and the arrays'
@@ -18,10 +17,26 @@ from kernel_cases import CORE, RNG, contacts_args, features_args, layout, mlp_ar
 WRAPPERS = {
     "euler_to_quat": (k.euler_to_quat, lambda f, j: (RNG.uniform(-180, 180, (f, j, 3)), "ZXY"), ["angles"]),
     "quat_to_euler": (k.quat_to_euler, lambda f, j: (quats(f, j), "YXZ"), ["quats"]),
-    "forward_kinematics": (k.forward_kinematics, lambda f, j: (quats(f, j), RNG.normal(size=(f, j, 3)), np.arange(-1, j - 1)), ["rotations", "translations", "parents"]),
-    "decode_channels": (k.decode_channels, lambda f, j: (RNG.uniform(-90, 90, (f, 3 + 3 * j)), *layout(j)), ["values", "rotation_columns", "orders", "position_columns", "offsets"]),
-    "decouple_rotations": (k.decouple_rotations, lambda f, j: (quats(f, j), quats(j, f).transpose(1, 0, 2), 2.0, 4.0), ["original", "body"]),
-    "compose_rotations": (k.compose_rotations, lambda f, j: (quats(f, j), quats(j, f).transpose(1, 0, 2), 1.5), ["expressive", "body"]),
+    "forward_kinematics": (
+        k.forward_kinematics,
+        lambda f, j: (quats(f, j), RNG.normal(size=(f, j, 3)), np.arange(-1, j - 1)),
+        ["rotations", "translations", "parents"],
+    ),
+    "decode_channels": (
+        k.decode_channels,
+        lambda f, j: (RNG.uniform(-90, 90, (f, 3 + 3 * j)), *layout(j)),
+        ["values", "rotation_columns", "orders", "position_columns", "offsets"],
+    ),
+    "decouple_rotations": (
+        k.decouple_rotations,
+        lambda f, j: (quats(f, j), quats(j, f).transpose(1, 0, 2), 2.0, 4.0),
+        ["original", "body"],
+    ),
+    "compose_rotations": (
+        k.compose_rotations,
+        lambda f, j: (quats(f, j), quats(j, f).transpose(1, 0, 2), 1.5),
+        ["expressive", "body"],
+    ),
     "mlp_forward": (k.mlp_forward, lambda f, j: mlp_args(f), ["x"]),
 }
 
@@ -70,10 +85,19 @@ def test_non_contiguous_inputs_give_the_contiguous_result(name, backend):
 
 
 # Integer quaternions are not unit quaternions: the wrappers that take rotations are left out.
-@pytest.mark.parametrize("name", [n for n in WRAPPERS if n not in ("quat_to_euler", "decouple_rotations", "compose_rotations", "forward_kinematics")])
+@pytest.mark.parametrize(
+    "name",
+    [
+        n
+        for n in WRAPPERS
+        if n not in ("quat_to_euler", "decouple_rotations", "compose_rotations", "forward_kinematics")
+    ],
+)
 def test_integer_arrays_are_converted_like_floats(name, backend):
     args = WRAPPERS[name][1](3, 2)
-    rounded = tuple(np.round(a).astype(np.int32) if isinstance(a, np.ndarray) and a.dtype.kind == "f" else a for a in args)
+    rounded = tuple(
+        np.round(a).astype(np.int32) if isinstance(a, np.ndarray) and a.dtype.kind == "f" else a for a in args
+    )
     as_float = tuple(a.astype(np.float64) if isinstance(a, np.ndarray) and a.dtype == np.int32 else a for a in rounded)
     for a, b in zip(outputs(call(name, rounded)), outputs(call(name, as_float))):
         np.testing.assert_array_equal(a, b)
@@ -143,7 +167,9 @@ def test_every_rust_function_is_covered():
 
 
 @rust_only
-@pytest.mark.parametrize("name, index, argument", [(n, i, a) for n, (_, names) in CORE.items() for i, a in enumerate(names) if a])
+@pytest.mark.parametrize(
+    "name, index, argument", [(n, i, a) for n, (_, names) in CORE.items() for i, a in enumerate(names) if a]
+)
 @pytest.mark.parametrize("how", ["dtype", "strided", "ndim"])
 def test_rust_functions_name_a_broken_array_argument(name, index, argument, how):
     args = list(CORE[name][0](6))
@@ -201,10 +227,18 @@ def test_rust_functions_take_zero_frames_like_their_twins(name):
         ("compose_rotations", lambda: CORE["compose_rotations"][0](3)[:2] + (np.inf,), "scale"),
         ("parse_motion_block", lambda: (b"1 2 3\n", 10, 1, 3), "start"),
         ("parse_motion_block", lambda: (b"1 2 3\n", 0, 1, 2**62), "frames"),
-        ("decode_channels", lambda: (np.zeros((2**40, 0)), np.full((1, 3), -1), layout(1)[1], np.full((1, 3), -1), np.zeros((1, 3))), "values"),
+        (
+            "decode_channels",
+            lambda: (np.zeros((2**40, 0)), np.full((1, 3), -1), layout(1)[1], np.full((1, 3), -1), np.zeros((1, 3))),
+            "values",
+        ),
         ("air_time", lambda: (np.zeros((0, 2**40), bool), 0.1), None),
         ("foot_contacts", lambda: (np.zeros((0, 2**20, 2**20, 3)), 0.1, 0.0, 1.0, 1.0, 3, False), None),
-        ("mlp_forward", lambda: (np.zeros((2**21, 1)), [np.zeros((1, 2**21))], [np.zeros(2**21)], ["linear"]), "weights"),
+        (
+            "mlp_forward",
+            lambda: (np.zeros((2**21, 1)), [np.zeros((1, 2**21))], [np.zeros(2**21)], ["linear"]),
+            "weights",
+        ),
     ],
 )
 def test_rust_functions_refuse_bad_scalars_and_absurd_shapes(name, args, argument):

@@ -11,7 +11,6 @@ from pathlib import Path
 import pytest
 
 import expressive_mocap as em
-
 from conftest import BACKENDS
 from hostile_files import cases
 
@@ -22,7 +21,9 @@ CASES = cases()
 @pytest.fixture(scope="module", params=BACKENDS)
 def report(request):
     env = {**os.environ, "PYTHONPATH": str(Path(em.__file__).parent.parent)}
-    done = subprocess.run([sys.executable, str(SCRIPT), request.param], capture_output=True, text=True, env=env, timeout=600)
+    done = subprocess.run(
+        [sys.executable, str(SCRIPT), request.param], capture_output=True, text=True, env=env, timeout=600
+    )
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
 
@@ -45,9 +46,9 @@ def test_the_cases_are_small_files_except_the_huge_hierarchies():
 def test_the_largest_skeleton_we_write_reads_back():
     # A chain of MAX_JOINTS joints: the writer's indentation stops growing, so the header stays
     # under MAX_HEADER_BYTES and what we write at the limits we read.
-    from expressive_mocap.bvh import MAX_HEADER_BYTES, MAX_JOINTS
-
     import numpy as np
+
+    from expressive_mocap.bvh import MAX_HEADER_BYTES, MAX_JOINTS
 
     joints = MAX_JOINTS
     skeleton = em.Skeleton(

@@ -82,7 +82,9 @@ def test_errors_name_the_argument(backend):
         em.mlp_forward(x, [w1, w2], [b1, b2], ["tanh", "linear"])
     with pytest.raises(em.errors.ArgumentError, match="`biases`: layer 0"):
         em.mlp_forward(x, [w1], [np.zeros(5)], ["tanh"])
-    with pytest.raises(em.errors.ArgumentError, match="`activations`: layer 0.*'relu'|`activations`: layer 0.*\"relu\""):
+    with pytest.raises(
+        em.errors.ArgumentError, match="`activations`: layer 0.*'relu'|`activations`: layer 0.*\"relu\""
+    ):
         em.mlp_forward(x, [w1], [b1], ["relu"])
     with pytest.raises(em.errors.ArgumentError, match="`biases`: expected one for each"):
         em.mlp_forward(x, [w1], [], ["tanh"])
@@ -126,7 +128,9 @@ def test_concurrent_calls_match_serial_calls():
     from concurrent.futures import ThreadPoolExecutor
 
     net = random_net(np.random.default_rng(7), (19, 64, 64, 80))
-    batches = [np.random.default_rng(s).normal(size=(3000, 19)).astype(dt) for s in range(4) for dt in (np.float32, np.float64)]
+    batches = [
+        np.random.default_rng(s).normal(size=(3000, 19)).astype(dt) for s in range(4) for dt in (np.float32, np.float64)
+    ]
     serial = [net(x) for x in batches]
     with ThreadPoolExecutor(4) as pool:
         concurrent = list(pool.map(net, batches))

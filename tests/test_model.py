@@ -10,10 +10,10 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap import quat
 from expressive_mocap.decoupling.algebra import decompose
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.streaming import StreamingDecoupler
 from expressive_mocap.decoupling.training import train_body_model
+from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import ModelError
 
 
@@ -98,7 +98,9 @@ def test_calibration_absorbs_a_constant_offset(model, walks):
 
     base, other = model.calibrated(walks), model.calibrated([shifted(m) for m in walks])
     # Left multiplication is linear, so the session's correction is the offset times the base one.
-    np.testing.assert_allclose(np.abs(np.sum(other.calibration[arm] * quat.mul(offset, base.calibration[arm]))), 1.0, atol=1e-12)
+    np.testing.assert_allclose(
+        np.abs(np.sum(other.calibration[arm] * quat.mul(offset, base.calibration[arm]))), 1.0, atol=1e-12
+    )
     before = decompose(shifted(walks[1]), model).activity[:, arm].mean()
     after = decompose(shifted(walks[1]), other).activity[:, arm].mean()
     reference = decompose(walks[1], base).activity[:, arm].mean()

@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.exaggeration import ExaggerationModel
 from expressive_mocap.files import MAX_MODEL_BYTES
-from expressive_mocap.decoupling.body_model import BodyModel
-
 from model_files import npz, small_models
 
 MODELS = small_models()
@@ -62,7 +61,13 @@ def test_an_extra_array_is_refused(kind):
 @pytest.mark.parametrize("kind", LOAD)
 @pytest.mark.parametrize(
     "meta, words",
-    [("{", "not a readable"), ("[1, 2]", "not an object"), ('"text"', "not an object"), ("null", "not an object"), ("{}", "version")],
+    [
+        ("{", "not a readable"),
+        ("[1, 2]", "not an object"),
+        ('"text"', "not an object"),
+        ("null", "not an object"),
+        ("{}", "version"),
+    ],
 )
 def test_unreadable_or_foreign_metadata_is_refused(kind, meta, words):
     refused(kind, npz(MODELS[kind][0], meta), words)
@@ -73,7 +78,14 @@ def test_unreadable_or_foreign_metadata_is_refused(kind, meta, words):
     [
         (kind, field, value)
         for kind in LOAD
-        for field, value in [("joint_names", 3), ("joint_names", ["a", 1]), ("settings", [1]), ("height", "tall"), ("hips", 9), ("representation", [])]
+        for field, value in [
+            ("joint_names", 3),
+            ("joint_names", ["a", 1]),
+            ("settings", [1]),
+            ("height", "tall"),
+            ("hips", 9),
+            ("representation", []),
+        ]
         if field in MODELS[kind][1]  # the fields each kind of model has
     ],
 )
@@ -92,8 +104,12 @@ def test_inconsistent_skeleton_or_indices_are_refused(kind):
         refused(kind, npz({**arrays, "parents": np.array([0, -1])}, meta), "inconsistent")
         refused(kind, npz({**arrays, "orders": np.array([[0, 0, 1], [2, 0, 1]], np.uint8)}, meta), "inconsistent")
         owners = arrays["cycle_performance"]
-        refused(kind, npz({**arrays, "cycle_performance": owners + [[2, 0]]}, meta), "cycle_performance")  # no such person
-        refused(kind, npz({**arrays, "cycle_performance": owners[[0, 1, 2, 2, 2]]}, meta), "cycle_performance")  # a performance without cycles
+        refused(
+            kind, npz({**arrays, "cycle_performance": owners + [[2, 0]]}, meta), "cycle_performance"
+        )  # no such person
+        refused(
+            kind, npz({**arrays, "cycle_performance": owners[[0, 1, 2, 2, 2]]}, meta), "cycle_performance"
+        )  # a performance without cycles
         refused(kind, npz({**arrays, "cycle_performance": owners - 1}, meta), "cycle_performance")
         refused(kind, npz({**arrays, "cycle_performance": owners.astype(float)}, meta), "cycle_performance")
 

@@ -53,7 +53,13 @@ def make(kind: str, path: Path) -> tuple[int, int]:
     return stat.S_IFMT(info.st_mode), info.st_rdev
 
 
-KINDS = [pytest.param("character device", marks=needs_root), "FIFO", "socket", "folder", pytest.param("symlink to a character device", marks=needs_root)]
+KINDS = [
+    pytest.param("character device", marks=needs_root),
+    "FIFO",
+    "socket",
+    "folder",
+    pytest.param("symlink to a character device", marks=needs_root),
+]
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -64,21 +70,36 @@ def test_write_bvh_refuses_a_destination_that_is_not_a_regular_file_and_leaves_i
     with pytest.raises(MocapError) as error:
         em.write_bvh(em.read_bvh(walk), destination)
     message = str(error.value)
-    assert message.startswith(f"cannot write {destination}: it is a") and kind.split()[-1] in message and "\n" not in message
+    assert (
+        message.startswith(f"cannot write {destination}: it is a")
+        and kind.split()[-1] in message
+        and "\n" not in message
+    )
     info = os.stat(destination)
     assert (stat.S_IFMT(info.st_mode), info.st_rdev) == before, "the destination was replaced"
     assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
 
 
 @needs_root
-@pytest.mark.parametrize("argv", [["convert", "{walk}", "-o", "{out}"], ["positions", "{walk}", "-o", "{out}"], ["convert", "{walk}", "--fps", "60", "-o", "{out}"]])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["convert", "{walk}", "-o", "{out}"],
+        ["positions", "{walk}", "-o", "{out}"],
+        ["convert", "{walk}", "--fps", "60", "-o", "{out}"],
+    ],
+)
 def test_the_cli_never_replaces_a_device_node(argv, walk, tmp_path, capsys):
     device = tmp_path / "null"
     before = make("character device", device)
     status = main([a.format(walk=walk, out=device) for a in argv])
     err = capsys.readouterr().err
-    assert status == 1 and err == f"expressive-mocap: error: cannot write {device}: it is a character device, not a regular file " \
+    assert (
+        status == 1
+        and err
+        == f"expressive-mocap: error: cannot write {device}: it is a character device, not a regular file "
         "(outputs replace regular files only; '-' writes to standard output)\n"
+    )
     info = os.stat(device)
     assert (stat.S_IFMT(info.st_mode), info.st_rdev) == before
 
@@ -131,8 +152,16 @@ def test_calibrate_streams_the_model_and_reports_on_stderr(walk, tmp_path, capfd
     assert BodyModel.load(out).calibration_angles() and b"largest corrections" in err and list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("argv", [["render", "{walk}", "-o", "-"], ["decouple", "{walk}", "-o", "-"], ["footsteps", "{walk}", "--plot", "-"],
-                                  ["demo", "-o", "-"], ["render", "{walk}", "-o", "/dev/stdout"]])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["render", "{walk}", "-o", "-"],
+        ["decouple", "{walk}", "-o", "-"],
+        ["footsteps", "{walk}", "--plot", "-"],
+        ["demo", "-o", "-"],
+        ["render", "{walk}", "-o", "/dev/stdout"],
+    ],
+)
 def test_commands_that_cannot_stream_refuse_standard_output(argv, walk, tmp_path, capfd, monkeypatch):
     monkeypatch.chdir(tmp_path)
     status = main([a.format(walk=walk) for a in argv])
@@ -202,18 +231,24 @@ def test_a_failed_rename_names_the_file_and_leaves_no_temporary(tmp_path, monkey
 
 
 def test_a_full_standard_output_is_named(monkeypatch):
-    monkeypatch.setattr(em_io.os, "write", lambda fd, data: (_ for _ in ()).throw(OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))))
+    monkeypatch.setattr(
+        em_io.os, "write", lambda fd, data: (_ for _ in ()).throw(OSError(errno.ENOSPC, os.strerror(errno.ENOSPC)))
+    )
     with pytest.raises(MocapError, match="^cannot write to standard output: No space left on device$"):
         em_io.atomic_write("-", b"data")
 
 
 # --- resampling is bounded before it allocates ----------------------------------------------
 
-TWO_JOINTS = (b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\nJOINT b\n{\nOFFSET 0 %s 0\n"
-              b"CHANNELS 3 Zrotation Xrotation Yrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\n}\nMOTION\nFrames: 2\nFrame Time: %s\n%s\n%s\n")
+TWO_JOINTS = (
+    b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\nJOINT b\n{\nOFFSET 0 %s 0\n"
+    b"CHANNELS 3 Zrotation Xrotation Yrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\n}\nMOTION\nFrames: 2\nFrame Time: %s\n%s\n%s\n"
+)
 
 
-def tiny(tmp_path, frame_time=b"0.1", offset=b"1", first=b"0 0 0 0 0 0", second=b"1 1 1 10 10 10", name="tiny.bvh") -> Path:
+def tiny(
+    tmp_path, frame_time=b"0.1", offset=b"1", first=b"0 0 0 0 0 0", second=b"1 1 1 10 10 10", name="tiny.bvh"
+) -> Path:
     path = tmp_path / name
     path.write_bytes(TWO_JOINTS % (offset, frame_time, first, second))
     return path
@@ -224,7 +259,12 @@ def test_convert_fps_on_a_huge_frame_time_is_a_one_line_error(frame_time, tmp_pa
     path = tiny(tmp_path, frame_time=frame_time)  # a 230-byte file; at 120 fps 10^6 s would be 7 GiB of frames
     status = main(["convert", str(path), "--fps", "120", "-o", str(tmp_path / "out.bvh")])
     err = capsys.readouterr().err
-    assert status == 1 and err.count("\n") == 1 and err.startswith(f"expressive-mocap: error: {path}: --fps 120: ") and "joint-frames" in err, err
+    assert (
+        status == 1
+        and err.count("\n") == 1
+        and err.startswith(f"expressive-mocap: error: {path}: --fps 120: ")
+        and "joint-frames" in err
+    ), err
     assert not (tmp_path / "out.bvh").exists()
 
 
@@ -272,16 +312,26 @@ def test_resampling_in_blocks_gives_the_same_frames(walk, monkeypatch):
     whole = motion.resample(fps=97.0)
     monkeypatch.setattr(em_motion, "_RESAMPLE_BLOCK", 22 * 7)  # blocks of 7 frames
     blocks = motion.resample(fps=97.0)
-    assert whole.n_frames > 7 * 3 and np.array_equal(whole.rotations, blocks.rotations) and np.array_equal(whole.translations, blocks.translations)
+    assert (
+        whole.n_frames > 7 * 3
+        and np.array_equal(whole.rotations, blocks.rotations)
+        and np.array_equal(whole.translations, blocks.translations)
+    )
 
 
 # --- nothing non-finite is written; numeric options say what they expect ---------------------
+
 
 def test_convert_scale_past_float64_is_refused_naming_the_file_and_option(tmp_path, capsys):
     path = tiny(tmp_path, offset=b"1e308")
     status = main(["convert", str(path), "--scale", "10", "-o", str(tmp_path / "out.bvh")])
     err = capsys.readouterr().err
-    assert status == 1 and err.count("\n") == 1 and err.startswith(f"expressive-mocap: error: {path}: --scale 10: ") and "finite" in err, err
+    assert (
+        status == 1
+        and err.count("\n") == 1
+        and err.startswith(f"expressive-mocap: error: {path}: --scale 10: ")
+        and "finite" in err
+    ), err
     assert not (tmp_path / "out.bvh").exists()
 
 
@@ -291,8 +341,10 @@ def test_scaled_refuses_lengths_that_overflow(where, tmp_path):
         path = tiny(tmp_path, first=b"0 1e308 0 0 0 0")
     else:
         path = tmp_path / "site.bvh"
-        path.write_bytes(b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\nEnd Site\n{\nOFFSET 0 1e308 0\n}\n}\n"
-                         b"MOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0\n")
+        path.write_bytes(
+            b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\nEnd Site\n{\nOFFSET 0 1e308 0\n}\n}\n"
+            b"MOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0\n"
+        )
     motion = em.read_bvh(path)
     with pytest.raises(MocapError, match=r"^scaled: x 10 takes an? \w+ beyond float64 \(the largest is 1e\+308\)"):
         motion.scaled(10)
@@ -306,7 +358,10 @@ def test_write_bvh_refuses_non_finite_values_naming_the_path_frame_and_channel(b
     translations[3, 0, 1] = bad
     destination = tmp_path / "out.bvh"
     destination.write_bytes(b"the user's file")
-    with pytest.raises(MocapError, match=rf"^cannot write {destination}: frame 3, joint_Root Yposition is {bad}: a BVH file holds finite numbers only$"):
+    with pytest.raises(
+        MocapError,
+        match=rf"^cannot write {destination}: frame 3, joint_Root Yposition is {bad}: a BVH file holds finite numbers only$",
+    ):
         em.write_bvh(em.Motion(motion.skeleton, motion.rotations, translations, motion.frame_time), destination)
     assert destination.read_bytes() == b"the user's file"
 
@@ -314,7 +369,13 @@ def test_write_bvh_refuses_non_finite_values_naming_the_path_frame_and_channel(b
 def test_an_infinite_end_site_is_refused_when_the_skeleton_is_made(walk):
     skeleton = em.read_bvh(walk).skeleton
     with pytest.raises(MocapError, match="End Site offsets must be finite"):
-        em.Skeleton(skeleton.names, skeleton.parents, skeleton.offsets, skeleton.channels, [(skeleton.end_sites[0][0], (0.0, np.inf, 0.0))])
+        em.Skeleton(
+            skeleton.names,
+            skeleton.parents,
+            skeleton.offsets,
+            skeleton.channels,
+            [(skeleton.end_sites[0][0], (0.0, np.inf, 0.0))],
+        )
 
 
 def test_positions_past_float64_are_refused_not_written(tmp_path, capsys):
@@ -325,15 +386,23 @@ def test_positions_past_float64_are_refused_not_written(tmp_path, capsys):
     assert not (tmp_path / "p.npz").exists()
 
 
-@pytest.mark.parametrize("argv", [
-    ["convert", "{walk}", "-o", "{out}", "--fps", "nan"], ["convert", "{walk}", "-o", "{out}", "--fps", "inf"],
-    ["convert", "{walk}", "-o", "{out}", "--scale", "0"], ["convert", "{walk}", "-o", "{out}", "--scale", "nan"],
-    ["convert", "{walk}", "-o", "{out}", "--scale", "inf"], ["convert", "{walk}", "-o", "{out}", "--scale", "-2"],
-    ["modulate", "{walk}", "--scale", "nan", "-o", "{out}"], ["modulate", "{walk}", "--scale", "inf", "-o", "{out}"],
-    ["exaggerate", "--model", "m.npz", "--input", "{walk}", "--to", "nan", "-o", "{out}"],
-    ["exaggerate", "--model", "m.npz", "--input", "{walk}", "--to", "2", "--fade", "inf", "-o", "{out}"],
-    ["footsteps", "{walk}", "--floor", "nan"], ["render", "{walk}", "--poses", "0", "-o", "{out}"],
-])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["convert", "{walk}", "-o", "{out}", "--fps", "nan"],
+        ["convert", "{walk}", "-o", "{out}", "--fps", "inf"],
+        ["convert", "{walk}", "-o", "{out}", "--scale", "0"],
+        ["convert", "{walk}", "-o", "{out}", "--scale", "nan"],
+        ["convert", "{walk}", "-o", "{out}", "--scale", "inf"],
+        ["convert", "{walk}", "-o", "{out}", "--scale", "-2"],
+        ["modulate", "{walk}", "--scale", "nan", "-o", "{out}"],
+        ["modulate", "{walk}", "--scale", "inf", "-o", "{out}"],
+        ["exaggerate", "--model", "m.npz", "--input", "{walk}", "--to", "nan", "-o", "{out}"],
+        ["exaggerate", "--model", "m.npz", "--input", "{walk}", "--to", "2", "--fade", "inf", "-o", "{out}"],
+        ["footsteps", "{walk}", "--floor", "nan"],
+        ["render", "{walk}", "--poses", "0", "-o", "{out}"],
+    ],
+)
 def test_numeric_options_are_finite_or_a_one_line_usage_error(argv, walk, tmp_path, capsys):
     out = tmp_path / "out.bvh"
     with pytest.raises(SystemExit) as exit_:

@@ -6,9 +6,9 @@ import importlib
 import json
 import os
 import subprocess
-from pathlib import Path
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,9 +16,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import expressive_mocap as em
-from expressive_mocap import bvh, reference
-
 from conftest import REPO
+from expressive_mocap import bvh, reference
 
 needs_rust = pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
 
@@ -120,7 +119,12 @@ def test_index_arrays_written_by_another_thread_never_reach_a_kernel():
     # Found by review: the bindings read `parents` from NumPy's memory after releasing the GIL,
     # so a parent checked in range could be out of range when used: a PanicException (a
     # BaseException) and tens of MB of panic messages on stderr.
-    env = dict(os.environ, PYTHONPATH=str(Path(em.__file__).resolve().parent.parent), EXPRESSIVE_MOCAP_BACKEND="rust", RUST_BACKTRACE="0")
+    env = dict(
+        os.environ,
+        PYTHONPATH=str(Path(em.__file__).resolve().parent.parent),
+        EXPRESSIVE_MOCAP_BACKEND="rust",
+        RUST_BACKTRACE="0",
+    )
     done = subprocess.run([sys.executable, "-c", HAMMER], capture_output=True, text=True, env=env, timeout=600)
     assert "panicked" not in done.stderr, done.stderr[:2000]
     assert done.returncode == 0, done.stderr[-2000:]
@@ -128,7 +132,9 @@ def test_index_arrays_written_by_another_thread_never_reach_a_kernel():
     assert set(report) == {"forward_kinematics", "forward_kinematics_many", "clip_pipeline_many"}
     for name, counts in report.items():
         assert counts["other"] == [] and counts["wrong"] == 0, (name, counts)
-        assert counts["calls"] >= 20 and counts["refused"] + counts["valid"] == counts["calls"] and counts["writes"] > 0, (name, counts)
+        assert (
+            counts["calls"] >= 20 and counts["refused"] + counts["valid"] == counts["calls"] and counts["writes"] > 0
+        ), (name, counts)
 
 
 @needs_rust
@@ -159,7 +165,7 @@ def one_joint_file(offset: str, frame_time: str = "0.04", frame: str = "0") -> b
     return (
         f"HIERARCHY\nROOT Hips\n{{\n\tOFFSET {offset} 0 0\n\tCHANNELS 1 Xrotation\n}}\n"
         f"MOTION\nFrames: 1\nFrame Time: {frame_time}\n{frame}\n"
-    ).encode("utf-8")
+    ).encode()
 
 
 def header_number(token: str) -> float | None:
@@ -188,7 +194,25 @@ LENIENT = ["1_000", "0.0_3", "\u0661\u0662", "\uff11", "\u0967.5", "1e1_0", "١"
 TOKENS = st.one_of(
     st.text(alphabet="0123456789+-.eE", min_size=1, max_size=10),
     st.text(alphabet="0123456789+-.eE_xnaifINFAty\u0661\uff11\u00a0\x0b\u2003", min_size=1, max_size=10),
-    st.sampled_from(LENIENT + ["nan", "-NaN", "+inf", "Infinity", "infinit", "1e999", "-1e-999", "5.", ".5", "+.5e-3", ".", "+", "1e", "1e+"]),
+    st.sampled_from(
+        LENIENT
+        + [
+            "nan",
+            "-NaN",
+            "+inf",
+            "Infinity",
+            "infinit",
+            "1e999",
+            "-1e-999",
+            "5.",
+            ".5",
+            "+.5e-3",
+            ".",
+            "+",
+            "1e",
+            "1e+",
+        ]
+    ),
 )
 
 
@@ -246,7 +270,10 @@ def test_a_huge_token_is_echoed_cut_with_its_length(case, backend):
         em.read_bvh(ECHOES[case])
     message = str(caught.value)
     assert len(message) < 300 and "\n" not in message, message[:500]
-    assert "'7777777777777777777777777777777777777777'... (10485" in message or "'X777777777777777777777777777777777777777'... (10485" in message, message
+    assert (
+        "'7777777777777777777777777777777777777777'... (10485" in message
+        or "'X777777777777777777777777777777777777777'... (10485" in message
+    ), message
 
 
 def test_control_characters_in_an_echoed_token_are_escaped_the_same_in_both_backends():

@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap.cli import main
-from expressive_mocap.decoupling.algebra import decompose
-from expressive_mocap.demo import procedural_walk
-from expressive_mocap.decoupling.body_model import BodyModel
 import expressive_mocap.dataset.work as work_module
+from expressive_mocap.cli import main
 from expressive_mocap.dataset import load_dataset, preprocess
+from expressive_mocap.decoupling.algebra import decompose
+from expressive_mocap.decoupling.body_model import BodyModel
+from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import DatasetError
 
 BROKEN = b"HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 2 Xposition\n}\n"
@@ -233,7 +233,12 @@ def test_resume_refuses_other_options_and_finished_output_needs_overwrite(archiv
 
 
 def test_cli(archive, tmp_path, capsys):
-    assert main(["preprocess", str(archive / "clips.zip"), "-o", str(tmp_path / "ds"), "--keep", "positions,contacts", "-q"]) == 0
+    assert (
+        main(
+            ["preprocess", str(archive / "clips.zip"), "-o", str(tmp_path / "ds"), "--keep", "positions,contacts", "-q"]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "3 clips ok, 1 failed" in out and "headers" in out and "failed: " in out
     assert main(["preprocess", str(archive / "nothing"), "-o", str(tmp_path / "x")]) == 1
@@ -260,9 +265,13 @@ def test_twenty_bandai_clips(bandai2_dir, tmp_path):
         motion = em.read_bvh(paths[k])
         clip = ds.clip(paths[k].stem)
         np.testing.assert_allclose(clip["positions"], motion.positions().astype(np.float32), rtol=2e-7, atol=2e-5)
-        np.testing.assert_allclose(clip["features"], em.dynamic_features(motion).astype(np.float32), rtol=2e-7, atol=1e-6)
+        np.testing.assert_allclose(
+            clip["features"], em.dynamic_features(motion).astype(np.float32), rtol=2e-7, atol=1e-6
+        )
         np.testing.assert_array_equal(clip["contacts"], em.foot_contacts(motion))
-        np.testing.assert_allclose(clip["activity"], decompose(motion, model).activity.astype(np.float32), rtol=2e-7, atol=1e-6)
+        np.testing.assert_allclose(
+            clip["activity"], decompose(motion, model).activity.astype(np.float32), rtol=2e-7, atol=1e-6
+        )
 
 
 def test_model_in_float32_stays_close_to_float64(archive, tmp_path):
@@ -277,7 +286,9 @@ def test_model_in_float32_stays_close_to_float64(archive, tmp_path):
 def test_a_dask_cluster_writes_the_single_machine_dataset(archive, tmp_path):
     distributed = pytest.importorskip("distributed", reason="the [distributed] extra (Dask) is not installed")
     run(archive / "clips.zip", tmp_path / "single", model="", batch_mb=1e-6)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
         with distributed.Client(cluster) as client:
             summary = run(archive / "clips.zip", tmp_path / "dask", model="", batch_mb=1e-6, cluster=client)
     assert summary.finished and summary.clips_ok == 3 and summary.clips_failed == 1

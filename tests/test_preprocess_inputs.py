@@ -26,9 +26,8 @@ import expressive_mocap.dataset.work as work_module
 from expressive_mocap import files as em_io
 from expressive_mocap import ops
 from expressive_mocap.cli import main
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.dataset import load_dataset, preprocess
-
+from expressive_mocap.demo import procedural_walk
 from test_clip_pipeline import GAIT, pipeline_input
 from test_inputs import _returns_within
 
@@ -76,15 +75,28 @@ def test_the_kernel_reads_only_regular_files_within_its_bound(walk, tmp_path, ba
     zero.symlink_to("/dev/zero")
     paths = [good, fifo, zero, tmp_path]
     try:
-        results = _returns_within(10, lambda: ops.clip_pipeline_many(
-            [dataclasses.replace(clip, source=str(p)) for p in paths], parents, joints, GAIT, POSITIONS, max_bytes=len(walk)))
+        results = _returns_within(
+            10,
+            lambda: ops.clip_pipeline_many(
+                [dataclasses.replace(clip, source=str(p)) for p in paths],
+                parents,
+                joints,
+                GAIT,
+                POSITIONS,
+                max_bytes=len(walk),
+            ),
+        )
     finally:
         release(fifo)
     assert isinstance(results[0], tuple)
-    for result, kind, code in zip(results[1:], ("a FIFO", "a character device", "a folder"), (errno.EINVAL, errno.EINVAL, errno.EISDIR)):
+    for result, kind, code in zip(
+        results[1:], ("a FIFO", "a character device", "a folder"), (errno.EINVAL, errno.EINVAL, errno.EISDIR)
+    ):
         assert isinstance(result, OSError) and (result.errno, result.strerror) == (code, f"{kind}, {NOT_REGULAR}")
     # One byte under the file's size: refused before reading, with io.open_input's words.
-    (small,) = ops.clip_pipeline_many([dataclasses.replace(clip, source=str(good))], parents, joints, GAIT, POSITIONS, max_bytes=len(walk) - 1)
+    (small,) = ops.clip_pipeline_many(
+        [dataclasses.replace(clip, source=str(good))], parents, joints, GAIT, POSITIONS, max_bytes=len(walk) - 1
+    )
     assert isinstance(small, OSError) and small.errno == errno.EFBIG
     assert small.strerror == f"{len(walk):,} bytes, more than the {len(walk) - 1:,} bytes read at most"
     # Without max_bytes, the package's bound.
@@ -161,13 +173,15 @@ def _central_entry(data: bytes, name: str) -> int:
     """Where the zip's central directory entry of ``name`` starts."""
     at = data.index(b"PK\x01\x02")
     while True:
-        length = int.from_bytes(data[at + 28:at + 30], "little")
-        if data[at + 46:at + 46 + length] == name.encode():
+        length = int.from_bytes(data[at + 28 : at + 30], "little")
+        if data[at + 46 : at + 46 + length] == name.encode():
             return at
         at = data.index(b"PK\x01\x02", at + 46)
 
 
-def patch_zip(path: Path, name: str, flags: int = 0, method: int | None = None, size: int | None = None, flip: bool = False) -> None:
+def patch_zip(
+    path: Path, name: str, flags: int = 0, method: int | None = None, size: int | None = None, flip: bool = False
+) -> None:
     """Damage member ``name`` in place: set flag bits, the compression method or the declared
     size (in both its local and central headers), or flip its first data byte."""
     data = bytearray(path.read_bytes())
@@ -177,11 +191,16 @@ def patch_zip(path: Path, name: str, flags: int = 0, method: int | None = None, 
     for at, flag_at, method_at, size_at in ((local, 6, 8, 22), (central, 8, 10, 24)):
         data[at + flag_at] |= flags
         if method is not None:
-            data[at + method_at:at + method_at + 2] = method.to_bytes(2, "little")
+            data[at + method_at : at + method_at + 2] = method.to_bytes(2, "little")
         if size is not None:
-            data[at + size_at:at + size_at + 4] = size.to_bytes(4, "little")
+            data[at + size_at : at + size_at + 4] = size.to_bytes(4, "little")
     if flip:
-        start = local + 30 + int.from_bytes(data[local + 26:local + 28], "little") + int.from_bytes(data[local + 28:local + 30], "little")
+        start = (
+            local
+            + 30
+            + int.from_bytes(data[local + 26 : local + 28], "little")
+            + int.from_bytes(data[local + 28 : local + 30], "little")
+        )
         data[start] ^= 0xFF
     path.write_bytes(bytes(data))
 
@@ -207,7 +226,9 @@ def test_a_damaged_or_encrypted_zip_member_fails_alone(walk, tmp_path, backend):
     stored = tmp_path / "stored.zip"
     patch_zip(stored, "crc.bvh", flip=True)
     run(stored, tmp_path / "crc")
-    assert failures(tmp_path / "crc") == {"crc": f"{stored}:crc.bvh: cannot read the archive member: Bad CRC-32 for file 'crc.bvh'"}
+    assert failures(tmp_path / "crc") == {
+        "crc": f"{stored}:crc.bvh: cannot read the archive member: Bad CRC-32 for file 'crc.bvh'"
+    }
 
 
 def test_a_zip_member_declared_over_the_real_bound_is_refused_unread(walk, tmp_path):
@@ -217,7 +238,8 @@ def test_a_zip_member_declared_over_the_real_bound_is_refused_unread(walk, tmp_p
     summary = run(path, tmp_path / "ds")
     assert summary.finished and load_dataset(tmp_path / "ds").names == ["good"]
     assert failures(tmp_path / "ds") == {
-        "claims": f"{path}:claims.bvh: cannot read the archive member: 536,870,913 bytes, more than the 536,870,912 bytes read at most"}
+        "claims": f"{path}:claims.bvh: cannot read the archive member: 536,870,913 bytes, more than the 536,870,912 bytes read at most"
+    }
     assert summary.bytes_read == len(walk)  # not the 537 MB claimed: what was read
 
 
@@ -249,7 +271,11 @@ def test_zip_members_over_the_bound_are_not_decompressed(walk, tmp_path, small_b
     finally:
         tracemalloc.stop()
     found = failures(tmp_path / "ds")
-    assert summary.finished and load_dataset(tmp_path / "ds").names == ["good"] and sorted(found) == ["huge", "lies", "over"]
+    assert (
+        summary.finished
+        and load_dataset(tmp_path / "ds").names == ["good"]
+        and sorted(found) == ["huge", "lies", "over"]
+    )
     assert found["over"].endswith(f"{small_bound + 1:,} bytes, more than the {small_bound:,} bytes read at most")
     assert found["huge"].endswith(f"{64 << 20:,} bytes, more than the {small_bound:,} bytes read at most")
     assert found["lies"] == f"{path}:lies.bvh: cannot read the archive member: Bad CRC-32 for file 'lies.bvh'"
@@ -288,9 +314,13 @@ def test_an_unreadable_zip_directory_or_a_fifo_source_is_a_one_line_error(walk, 
     path.write_bytes(bytes(data))
     fifo = make_fifo(tmp_path / "pipe.bvh")
     try:
-        for src, message in ((path, f"{path}: cannot read the zip archive (BadZipFile: Bad magic number for central directory)"),
-                             (fifo, f"{fifo}: a FIFO, not a folder, .zip or .tar(.gz/.xz) archive of BVH files")):
-            code = _returns_within(20, lambda: main(["preprocess", str(src), "-o", str(tmp_path / f"{src.name}.out"), "-q"]))
+        for src, message in (
+            (path, f"{path}: cannot read the zip archive (BadZipFile: Bad magic number for central directory)"),
+            (fifo, f"{fifo}: a FIFO, not a folder, .zip or .tar(.gz/.xz) archive of BVH files"),
+        ):
+            code = _returns_within(
+                20, lambda: main(["preprocess", str(src), "-o", str(tmp_path / f"{src.name}.out"), "-q"])
+            )
             assert (code, capsys.readouterr().err) == (1, f"expressive-mocap: error: {message}\n")
     finally:
         release(fifo)
@@ -303,8 +333,14 @@ def _start(args: list[str], cwd: Path) -> subprocess.Popen:
     """A child Python taking SIGINT as a terminal's Ctrl-C (default handling restored: a shell's
     background job would inherit it ignored)."""
     env = dict(os.environ, PYTHONPATH=str(Path(em.__file__).parent.parent))
-    return subprocess.Popen([sys.executable, *args], cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    return subprocess.Popen(
+        [sys.executable, *args],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
 
 
 def _wait_for(condition, seconds: float, what: str) -> None:
@@ -324,7 +360,9 @@ def _interrupt(process: subprocess.Popen, seconds: float = 5.0) -> str:
         process.communicate()
         pytest.fail(f"still running {seconds} s after Ctrl-C")
     err = err.decode()
-    assert process.returncode == 130 and "Traceback" not in err and err.strip().endswith("expressive-mocap: interrupted"), err
+    assert (
+        process.returncode == 130 and "Traceback" not in err and err.strip().endswith("expressive-mocap: interrupted")
+    ), err
     return err
 
 

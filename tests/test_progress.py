@@ -17,7 +17,11 @@ def test_a_terminal_gets_one_line_redrawn_with_counts_rate_and_time_left():
     bar.update(4)
     bar.close()
     text = out.getvalue()
-    assert text.startswith("\rreading [########............] 4 files/10 files (40%)") and "files/s" in text and "left" in text
+    assert (
+        text.startswith("\rreading [########............] 4 files/10 files (40%)")
+        and "files/s" in text
+        and "left" in text
+    )
     assert text.count("\n") == 1 and text.endswith("\n") and text.count("\r") == 2
 
 

@@ -17,8 +17,11 @@ def test_resample_hits_the_frames_and_interpolates_between():
     half = quat.resample(q, [2.5])[0]
     np.testing.assert_allclose(half, quat.slerp(q[2], q[3], np.full(3, 0.5)), atol=1e-15)
     values = rng.normal(size=(6, 3, 2))
-    np.testing.assert_allclose(quat.resample(values, [0.0, 2.25, 5.0], rotations=False),
-                               [values[0], 0.75 * values[2] + 0.25 * values[3], values[5]], atol=1e-15)
+    np.testing.assert_allclose(
+        quat.resample(values, [0.0, 2.25, 5.0], rotations=False),
+        [values[0], 0.75 * values[2] + 0.25 * values[3], values[5]],
+        atol=1e-15,
+    )
 
 
 def test_spanning_positions_stretch_first_to_first_and_last_to_last():

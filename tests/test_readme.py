@@ -16,7 +16,11 @@ def test_readme_opens_with_two_commands_and_ci_runs_the_test_one():
     demo, tests = readme_commands()
     assert "expressive-mocap demo" in demo
     assert "pytest" in tests
-    ci = [line for line in (REPO / ".ci" / "run").read_text().splitlines() if line and not line.startswith(("#", "set ", "cd "))]
+    ci = [
+        line
+        for line in (REPO / ".ci" / "run").read_text().splitlines()
+        if line and not line.startswith(("#", "set ", "cd "))
+    ]
     assert ci == [tests]
 
 

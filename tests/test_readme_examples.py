@@ -31,8 +31,18 @@ PLACEHOLDERS = {
 NOT_RUN = {"info broken.bvh": "shows an error message for a file the pages do not give"}
 # The pages whose examples run, in this order: the README's tour, then the manual. A page's commands
 # may use an earlier one's outputs (exaggerate --model walks.npz after rank ... -o walks.npz).
-PAGES = ["README.md", "docs/demo.md", "docs/bvh.md", "docs/decoupling.md", "docs/exaggeration.md",
-         "docs/preprocessing.md", "docs/speed.md", "docs/safety.md", "docs/methods.md", "docs/data.md"]
+PAGES = [
+    "README.md",
+    "docs/demo.md",
+    "docs/bvh.md",
+    "docs/decoupling.md",
+    "docs/exaggeration.md",
+    "docs/preprocessing.md",
+    "docs/speed.md",
+    "docs/safety.md",
+    "docs/methods.md",
+    "docs/data.md",
+]
 
 
 def page_commands(page: str) -> list[str]:
@@ -58,7 +68,9 @@ def readme_commands() -> list[str]:
 
 def test_every_page_of_the_manual_is_run():
     pages = {"README.md"} | {f"docs/{p.name}" for p in (REPO / "docs").glob("*.md")}
-    assert pages == set(PAGES), f"add the new pages to PAGES, in an order their commands run in: {sorted(pages ^ set(PAGES))}"
+    assert pages == set(PAGES), (
+        f"add the new pages to PAGES, in an order their commands run in: {sorted(pages ^ set(PAGES))}"
+    )
 
 
 def real_arguments(command: str, dataset1: Path, dataset2: Path) -> tuple[list[str], str | None]:
@@ -72,7 +84,10 @@ def real_arguments(command: str, dataset1: Path, dataset2: Path) -> tuple[list[s
         token = PLACEHOLDERS.get(token, token)
         ranged = re.fullmatch(r"\.\.\.(\w+)_00\{(\d)\.\.(\d)\}\.bvh", token)  # ...exhausted_00{1..8}.bvh
         if ranged:
-            args += [str(dataset2 / f"dataset-2_walk_{ranged[1]}_00{k}.bvh") for k in range(int(ranged[2]), int(ranged[3]) + 1)]
+            args += [
+                str(dataset2 / f"dataset-2_walk_{ranged[1]}_00{k}.bvh")
+                for k in range(int(ranged[2]), int(ranged[3]) + 1)
+            ]
         elif token.startswith("dataset-2_"):
             args.append(str(dataset2 / token))
         elif token.startswith("dataset-1_"):
@@ -92,7 +107,9 @@ def longest_hips_step(motion: em.Motion) -> float:
     return float(steps.max()) * BANDAI_ACTOR_CM / actor_height(motion.skeleton, roles)
 
 
-def test_the_readme_examples_run_and_their_outputs_are_plausible(bandai1_dir, bandai2_dir, tmp_path, monkeypatch, capsys):
+def test_the_readme_examples_run_and_their_outputs_are_plausible(
+    bandai1_dir, bandai2_dir, tmp_path, monkeypatch, capsys
+):
     monkeypatch.chdir(tmp_path)
     commands = readme_commands()
     assert any(c.startswith("expressive-mocap blend ") for c in commands) and len(commands) >= 15
@@ -116,7 +133,9 @@ def test_the_readme_examples_run_and_their_outputs_are_plausible(bandai1_dir, ba
         for path in outputs:
             step = longest_hips_step(em.read_bvh(path))
             allowed = max([5.0] + [1.05 * longest_input_step[p] for p in inputs])
-            assert step <= allowed, f"{command}: {path.name} moves its hips {step:.1f} cm in a frame (allowed {allowed:.1f})"
+            assert step <= allowed, (
+                f"{command}: {path.name} moves its hips {step:.1f} cm in a frame (allowed {allowed:.1f})"
+            )
     # The exaggerated walk keeps its stance feet down (foot locking): never above the input's.
     walk = em.read_bvh(bandai2_dir / PLACEHOLDERS["walk.bvh"])
     heavier = em.read_bvh(tmp_path / "heavier.bvh")

@@ -46,8 +46,13 @@ def drawn(monkeypatch):
 
 def lines_of(ax) -> np.ndarray:
     """The stick figures' line ends ``[L, 2, 2]`` of one panel (the floor line left out)."""
-    return np.array([line.get_xydata() for line in ax.lines if len(line.get_xydata()) == 2 and line.get_linestyle() == "-"
-                     and line.get_color() != "0.7"])
+    return np.array(
+        [
+            line.get_xydata()
+            for line in ax.lines
+            if len(line.get_xydata()) == 2 and line.get_linestyle() == "-" and line.get_color() != "0.7"
+        ]
+    )
 
 
 def gif_seconds(path: Path) -> tuple[float, list[int]]:
@@ -83,7 +88,9 @@ def test_a_file_in_metres_draws_the_same_picture_as_in_centimetres(tmp_path, dra
     np.testing.assert_allclose(np.array(ax_m.get_xlim()) * 100, ax_cm.get_xlim(), rtol=1e-9)
     np.testing.assert_allclose(np.array(ax_m.get_ylim()) * 100, ax_cm.get_ylim(), rtol=1e-9)
     np.testing.assert_allclose(lines_of(ax_m) * 100, lines_of(ax_cm), rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose([line.get_linewidth() for line in ax_m.lines], [line.get_linewidth() for line in ax_cm.lines], rtol=1e-9)
+    np.testing.assert_allclose(
+        [line.get_linewidth() for line in ax_m.lines], [line.get_linewidth() for line in ax_cm.lines], rtol=1e-9
+    )
 
 
 @pytest.mark.parametrize("fps", [120.0, 30.0])

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
+from expressive_mocap.demo import procedural_walk
 
 PYTHON = Path(em.__file__).resolve().parent.parent  # the package the tests import (installed in CI)
 
@@ -26,7 +26,9 @@ PYTHON = Path(em.__file__).resolve().parent.parent  # the package the tests impo
 def test_the_main_entry_points_are_importable_from_the_top_level():
     # Failed before with ImportError: none of these were exported.
     from expressive_mocap import BodyModel as body_model
-    from expressive_mocap import ExaggerationModel, decompose as top_decompose, load_dataset as top_load_dataset
+    from expressive_mocap import ExaggerationModel
+    from expressive_mocap import decompose as top_decompose
+    from expressive_mocap import load_dataset as top_load_dataset
     from expressive_mocap.exaggeration import ExaggerationModel as exaggeration_itself
 
     assert top_decompose is decompose and body_model is BodyModel and top_load_dataset is load_dataset
@@ -38,9 +40,15 @@ def test_the_main_entry_points_are_importable_from_the_top_level():
 
 def test_importing_the_package_does_not_load_the_models_or_the_dataset_reader():
     code = "import sys, expressive_mocap; print(' '.join(sorted(sys.modules)))"
-    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                            env={"PYTHONPATH": str(PYTHON)}).stdout.split()
-    for heavy in ("expressive_mocap.exaggeration", "expressive_mocap.decoupling.body_model", "expressive_mocap.decoupling.algebra", "expressive_mocap.dataset"):
+    loaded = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env={"PYTHONPATH": str(PYTHON)}
+    ).stdout.split()
+    for heavy in (
+        "expressive_mocap.exaggeration",
+        "expressive_mocap.decoupling.body_model",
+        "expressive_mocap.decoupling.algebra",
+        "expressive_mocap.dataset",
+    ):
         assert heavy not in loaded
 
 
@@ -60,7 +68,9 @@ def test_write_bvh_of_a_decompositions_array_names_the_call_to_make(tmp_path):
         em.write_bvh(parts, tmp_path / "body.bvh")
     assert not (tmp_path / "body.bvh").exists()
     em.write_bvh(parts.body_motion(), tmp_path / "body.bvh")  # the call the message names works
-    np.testing.assert_allclose(em.read_bvh(tmp_path / "body.bvh").positions(), parts.body_motion().positions(), atol=1e-6)
+    np.testing.assert_allclose(
+        em.read_bvh(tmp_path / "body.bvh").positions(), parts.body_motion().positions(), atol=1e-6
+    )
 
 
 # ----------------------------------------------------------------------------- reprs

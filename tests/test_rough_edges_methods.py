@@ -62,7 +62,9 @@ def test_blend_hips_never_jump(walk_and_wave, body_model, decoupled, body_window
 
 
 @pytest.mark.parametrize("decoupled, body_window, expressive_window", CASES)
-def test_blend_turns_the_second_motion_to_face_the_first(walk_and_wave, body_model, decoupled, body_window, expressive_window):
+def test_blend_turns_the_second_motion_to_face_the_first(
+    walk_and_wave, body_model, decoupled, body_window, expressive_window
+):
     """Where the second motion stands and which way it faces in its file does not matter: turned
     90 degrees and moved 3 m (through a root that is not the identity), it blends into the same
     world motion. Before: it kept its own heading (the blend turned the body by 90 degrees) and
@@ -73,7 +75,9 @@ def test_blend_turns_the_second_motion_to_face_the_first(walk_and_wave, body_mod
     turned = blend(walk, turned_and_moved(wave, 90.0, [300.0, 0.0, -150.0]), model, body_window, expressive_window)
     np.testing.assert_allclose(turned.positions()[:, 1], plain.positions()[:, 1], atol=1e-6)  # the hips, everywhere
     after = slice(body_window[1], None)  # within the window the root's own turn is being slerped in
-    np.testing.assert_allclose(turned.positions()[after, 1:], plain.positions()[after, 1:], atol=1e-4)  # the body (the root was moved)
+    np.testing.assert_allclose(
+        turned.positions()[after, 1:], plain.positions()[after, 1:], atol=1e-4
+    )  # the body (the root was moved)
 
 
 def test_blend_heading_is_continuous_at_the_anchor(bandai2_dir, body_model):
@@ -113,7 +117,10 @@ def clips_cm_and_m(bandai2_dir):
 
 def real_walk_people(data, takes):
     """dataset-2's walks, take ``p`` of each style as person ``p``, styles in intensity order 1, 2, 3."""
-    return [[em.read_bvh(data / f"dataset-2_walk_{style}_{p:03d}.bvh") for style in ("exhausted", "normal", "active")] for p in takes]
+    return [
+        [em.read_bvh(data / f"dataset-2_walk_{style}_{p:03d}.bvh") for style in ("exhausted", "normal", "active")]
+        for p in takes
+    ]
 
 
 def test_exaggeration_is_unit_free(bandai2_dir, clips_cm_and_m):
@@ -146,15 +153,25 @@ def test_decoupling_and_features_are_unit_free(clips_cm_and_m, body_model):
     from expressive_mocap.features import dynamic_features, foot_contacts
 
     (walk, wave), (walk_m, wave_m) = clips_cm_and_m
-    assert_same_up_to_scale(dc.decompose(walk, body_model).body_motion(), dc.decompose(walk_m, body_model).body_motion(), "decompose")
+    assert_same_up_to_scale(
+        dc.decompose(walk, body_model).body_motion(), dc.decompose(walk_m, body_model).body_motion(), "decompose"
+    )
     assert_same_up_to_scale(dc.modulate(wave, 1.5, body_model), dc.modulate(wave_m, 1.5, body_model), "modulate")
     assert_same_up_to_scale(dc.mix(walk, wave, body_model), dc.mix(walk_m, wave_m, body_model), "mix")
-    assert_same_up_to_scale(dc.blend(walk, wave, body_model, (30, 60), (60, 75)), dc.blend(walk_m, wave_m, body_model, (30, 60), (60, 75)), "blend")
-    assert_same_up_to_scale(dc.blend(walk, wave, None, (30, 60)), dc.blend(walk_m, wave_m, None, (30, 60)), "naive blend")
+    assert_same_up_to_scale(
+        dc.blend(walk, wave, body_model, (30, 60), (60, 75)),
+        dc.blend(walk_m, wave_m, body_model, (30, 60), (60, 75)),
+        "blend",
+    )
+    assert_same_up_to_scale(
+        dc.blend(walk, wave, None, (30, 60)), dc.blend(walk_m, wave_m, None, (30, 60)), "naive blend"
+    )
     np.testing.assert_array_equal(foot_contacts(walk_m), foot_contacts(walk))
     np.testing.assert_allclose(dynamic_features(walk_m), dynamic_features(walk), atol=1e-12)
     np.testing.assert_allclose(dynamic_features(walk_m, causal=False), dynamic_features(walk, causal=False), atol=1e-12)
-    np.testing.assert_allclose(body_model.calibrated([walk_m]).calibration, body_model.calibrated([walk]).calibration, atol=1e-12)
+    np.testing.assert_allclose(
+        body_model.calibrated([walk_m]).calibration, body_model.calibrated([walk]).calibration, atol=1e-12
+    )
     streams = [dc.StreamingDecoupler(body_model, m.skeleton, m.frame_time) for m in (walk, walk_m)]
     for t in range(45):
         cm, m = (s.push(x.rotations[t], x.translations[t]) for s, x in zip(streams, (walk, walk_m)))
@@ -195,7 +212,9 @@ def test_training_walks_are_estimated_near_their_own_intensity(walks_model):
     from expressive_mocap.exaggeration import exaggerate
 
     model, people = walks_model
-    estimates = np.array([[exaggerate(model, clip, 2.0, lock_feet=False)[1].estimate for clip in person] for person in people])
+    estimates = np.array(
+        [[exaggerate(model, clip, 2.0, lock_feet=False)[1].estimate for clip in person] for person in people]
+    )
     k = np.vectorize(lambda e: e.k)(estimates)
     for level, column in zip([1, 2, 3], k.T):
         assert abs(column.mean() - level) < 0.15, (level, column)
@@ -246,7 +265,16 @@ def test_blend_command_says_how_the_second_motion_was_placed(bandai2_dir, tmp_pa
     from expressive_mocap.cli import main
 
     out = tmp_path / "blend.bvh"
-    args = [str(bandai2_dir / WALK), str(bandai2_dir / WAVE), "--body-window", "30:60", "--expressive-window", "60:75", "-o", str(out)]
+    args = [
+        str(bandai2_dir / WALK),
+        str(bandai2_dir / WAVE),
+        "--body-window",
+        "30:60",
+        "--expressive-window",
+        "60:75",
+        "-o",
+        str(out),
+    ]
     assert main(["blend", *args]) == 0
     assert "continues the path of Hips from frame 30: turned" in capsys.readouterr().out
     assert hips_steps(em.read_bvh(out)).max() < 5.0

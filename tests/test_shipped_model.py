@@ -7,8 +7,8 @@ import pytest
 
 from expressive_mocap import quat
 from expressive_mocap.decoupling.algebra import decompose
-from expressive_mocap.demo import walk_and_wave
 from expressive_mocap.decoupling.body_model import BodyModel
+from expressive_mocap.demo import walk_and_wave
 
 ARM = ["UpperArm_R", "LowerArm_R", "Hand_R"]
 

@@ -11,7 +11,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-
 from kernel_cases import CORE
 
 pytestmark = pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")

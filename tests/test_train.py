@@ -6,8 +6,8 @@ import pytest
 
 from expressive_mocap.decoupling import lbfgs
 from expressive_mocap.decoupling import training as train
-from expressive_mocap.errors import ArgumentError
 from expressive_mocap.decoupling.network import Mlp
+from expressive_mocap.errors import ArgumentError
 
 pytest.importorskip("scipy")
 
@@ -38,9 +38,14 @@ def test_gradient_matches_finite_differences():
         up, down = flat.copy(), flat.copy()
         up[i] += h
         down[i] -= h
-        numeric[i] = (lbfgs.loss_and_grad(lbfgs._unpack(up, params), acts, x, y, 0.01)[0] - lbfgs.loss_and_grad(lbfgs._unpack(down, params), acts, x, y, 0.01)[0]) / (2 * h)
+        numeric[i] = (
+            lbfgs.loss_and_grad(lbfgs._unpack(up, params), acts, x, y, 0.01)[0]
+            - lbfgs.loss_and_grad(lbfgs._unpack(down, params), acts, x, y, 0.01)[0]
+        ) / (2 * h)
     np.testing.assert_allclose(analytic, numeric, rtol=1e-6, atol=1e-9)
-    assert loss == pytest.approx(np.mean((Mlp(zip(*zip(*params), acts))(x) - y) ** 2) + 0.01 * sum(np.sum(w**2) for w, _ in params))
+    assert loss == pytest.approx(
+        np.mean((Mlp(zip(*zip(*params), acts))(x) - y) ** 2) + 0.01 * sum(np.sum(w**2) for w, _ in params)
+    )
 
 
 def test_split_by_group_keeps_groups_whole():

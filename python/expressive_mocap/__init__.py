@@ -6,11 +6,11 @@ lengths are in the file's units. See the README for the conventions table.
 
 from .backend import get_backend, rust_available, set_backend, use_backend
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
+from .decoupling.network import Mlp
 from .errors import BVHError, MocapError
 from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts, gait_many
-from .ops import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
-from .decoupling.network import Mlp
 from .motion import Motion, Skeleton
+from .ops import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
 from .roles import JointRoles, actor_height
 
 __version__ = "0.1.0"
@@ -38,6 +38,7 @@ def __getattr__(name: str):
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "BVHError",

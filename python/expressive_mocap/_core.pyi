@@ -7,7 +7,7 @@ Every function releases the GIL. Index and bool arrays are copied first (a write
 another thread during a call has no effect on it); float arrays are read in place, so a write to
 one during a call gives results from a mix of old and new values (see ``expressive_mocap.ops``)."""
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -43,7 +43,13 @@ num_threads: int
 def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> _F64:
     """Parse ``frames`` lines of ``channels`` finite numbers from ``data[start:]`` -> ``[frames, channels]``."""
 
-def decode_channels(values: _F64, rotation_columns: npt.NDArray[np.int64], orders: npt.NDArray[np.uint8], position_columns: npt.NDArray[np.int64], offsets: _F64) -> tuple[_F64, _F64]:
+def decode_channels(
+    values: _F64,
+    rotation_columns: npt.NDArray[np.int64],
+    orders: npt.NDArray[np.uint8],
+    position_columns: npt.NDArray[np.int64],
+    offsets: _F64,
+) -> tuple[_F64, _F64]:
     """Channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``."""
 
 def read_motion_blocks(blocks: Sequence[MotionBlock]) -> list[tuple[_F64, _F64] | ParseError]:
@@ -65,7 +71,15 @@ def forward_kinematics_many(clips: list[tuple[_F64, _F64, npt.NDArray[np.int64]]
 def format_motion_block(values: _F64, decimals: int | None = None) -> bytes:
     """Text of the MOTION block for ``values [F, C]``; ``decimals=None`` is the shortest exact text."""
 
-def foot_contacts(feet: _F64, frame_time: float, floor: float, height_threshold: float, speed_threshold: float, min_frames: int, causal: bool) -> npt.NDArray[np.bool_]:
+def foot_contacts(
+    feet: _F64,
+    frame_time: float,
+    floor: float,
+    height_threshold: float,
+    speed_threshold: float,
+    min_frames: int,
+    causal: bool,
+) -> npt.NDArray[np.bool_]:
     """Contacts ``bool [F, S]`` from world positions ``feet [F, S, P, 3]`` (P points a foot: ankle, toe);
     thresholds in file units (speed per second); runs shorter than ``min_frames`` filtered (offline or causal hold)."""
 
@@ -73,11 +87,18 @@ def air_time(contacts: npt.NDArray[np.bool_], frame_time: float) -> _F64:
     """Seconds since each foot last left contact ``[F, S]`` from ``contacts bool [F, S]``."""
 
 def dynamic_features(
-    points: _F64, thighs: _F64, contacts: npt.NDArray[np.bool_], reference: _F64, frame_time: float, height: float, hips_rest_height: float, floor: float, window: int
+    points: _F64,
+    thighs: _F64,
+    contacts: npt.NDArray[np.bool_],
+    reference: _F64,
+    frame_time: float,
+    height: float,
+    hips_rest_height: float,
+    floor: float,
+    window: int,
 ) -> _F64:
     """The 19 features ``[F, 19]`` from ``points [F, 3, 3]`` (hips, left and right upper leg, world), ``thighs [F, 2, 4]``
     (local), ``contacts bool [F, 2]`` and the thighs' hemisphere ``reference [2, 4]``."""
-
 
 def mlp_forward(x: _Float, weights: list[_Float], biases: list[_Float], activations: list[str]) -> _Float:
     """Dense network on ``x [N, in]`` (float32 or float64, kept): per layer ``act(h @ W [in, out] + b [out])``,
@@ -99,7 +120,12 @@ def clip_gait_many(
     per clip ``(features [F, 19] or None, contacts bool [F, 2] or None)``."""
 
 def clip_pipeline_many(
-    clips: Sequence[ClipInput], parents: npt.NDArray[np.int64], roles: list[int], gait: GaitSettings, outputs: PipelineOutputs, max_bytes: int | None = None
+    clips: Sequence[ClipInput],
+    parents: npt.NDArray[np.int64],
+    roles: list[int],
+    gait: GaitSettings,
+    outputs: PipelineOutputs,
+    max_bytes: int | None = None,
 ) -> list[tuple[_Float | None, _Float | None, list[_Float], npt.NDArray[np.bool_] | None] | ParseError | OSError]:
     """The whole per-clip work of many clips of one skeleton (file, MOTION block, FK, features, contacts), in parallel;
     arguments read by attribute (see ``expressive_mocap.ops``). A ``ParseError`` or ``OSError`` in the place of a

@@ -182,7 +182,9 @@ def _upright_world(t: np.ndarray, speed: float, amplitude: float = 1.0) -> np.nd
         # Arms hang down (about Z) and swing against the leg of their side (about X, outermost);
         # the elbow bends more on the forward swing.
         swing = amplitude * (8.0 + 12.0 * speed) * cycle
-        local[:, _J[f"UpperArm_{side}"]] = quat.mul(quat.about("X", swing), quat.about("Z", np.full(len(t), -sign * 78.0)))
+        local[:, _J[f"UpperArm_{side}"]] = quat.mul(
+            quat.about("X", swing), quat.about("Z", np.full(len(t), -sign * 78.0))
+        )
         local[:, _J[f"LowerArm_{side}"]] = quat.about("Y", -sign * (15.0 + amplitude * 12.0 * np.clip(-cycle, 0, None)))
     return _world(local)
 
@@ -244,7 +246,9 @@ def _footsteps(t: np.ndarray, speed: float) -> tuple[np.ndarray, np.ndarray]:
         p = u - n
 
         def footprint(k):  # the flat ankle of stride k: under the hips at mid-stance
-            return np.stack([np.full_like(k, lateral), np.full_like(k, ankle_height), stride * (k + _MID_STANCE - shift)], axis=1)
+            return np.stack(
+                [np.full_like(k, lateral), np.full_like(k, ankle_height), stride * (k + _MID_STANCE - shift)], axis=1
+            )
 
         def rolled(k, pitch, pivot):  # the ankle when the foot turns about a point of its sole
             turn = quat.about("X", -pitch)
@@ -259,7 +263,11 @@ def _footsteps(t: np.ndarray, speed: float) -> tuple[np.ndarray, np.ndarray]:
         in_swing = (p >= _TOE_OFF)[:, None]
         stance = np.where((p < _TOE_ROCKER_START)[:, None], rolled(n, heel_pitch, heel), rolled(n, toe_pitch, ball))
         ankle = np.where(in_swing, take_off + swing[:, None] * (landing - take_off) + np.outer(lift, [0, 1, 0]), stance)
-        pitch = np.where(p < _TOE_ROCKER_START, heel_pitch, np.where(p < _TOE_OFF, toe_pitch, -_TOE_OFF_PITCH + swing * (_HEEL_STRIKE_PITCH + _TOE_OFF_PITCH)))
+        pitch = np.where(
+            p < _TOE_ROCKER_START,
+            heel_pitch,
+            np.where(p < _TOE_OFF, toe_pitch, -_TOE_OFF_PITCH + swing * (_HEEL_STRIKE_PITCH + _TOE_OFF_PITCH)),
+        )
         # The toes bend (stay flatter than the foot) while the heel is up, and catch up in the swing.
         toes = np.where(p < _TOE_ROCKER_START, pitch, np.where(p < _TOE_OFF, 0.4 * pitch, (0.4 + 0.6 * swing) * pitch))
         ankles.append(ankle)
@@ -270,7 +278,9 @@ def _footsteps(t: np.ndarray, speed: float) -> tuple[np.ndarray, np.ndarray]:
 # -- steps 2 and 3: retarget onto the Bandai skeleton, then plant the feet ---------------------
 
 
-def _on_bandai(upright: np.ndarray, standing: np.ndarray, hips: np.ndarray, ankles: np.ndarray, frame_time: float) -> Motion:
+def _on_bandai(
+    upright: np.ndarray, standing: np.ndarray, hips: np.ndarray, ankles: np.ndarray, frame_time: float
+) -> Motion:
     skeleton = bandai_like_skeleton()
     world = quat.mul(quat.mul(upright, quat.conjugate(standing)), _STANDING)  # R U^-1 W
     world[:, 0] = [0.0, 0.0, 0.0, 1.0]  # joint_Root stays on the floor, unturned, as in the files
@@ -280,7 +290,9 @@ def _on_bandai(upright: np.ndarray, standing: np.ndarray, hips: np.ndarray, ankl
         hip, knee, ankle = (_J[f"{n}_{side}"] for n in ("UpperLeg", "LowerLeg", "Foot"))
         root = hips + quat.rotate(world[:, 1], offsets[hip])
         # The foot's world rotation is kept: only the thigh and shin swing.
-        world[:, hip], world[:, knee] = two_bone_ik(root, world[:, hip], world[:, knee], offsets[knee], offsets[ankle], target)
+        world[:, hip], world[:, knee] = two_bone_ik(
+            root, world[:, hip], world[:, knee], offsets[knee], offsets[ankle], target
+        )
     rotations = world.copy()
     rotations[:, 1:] = quat.mul(quat.conjugate(world[:, _PARENTS[1:]]), world[:, 1:])
     translations = np.broadcast_to(skeleton.offsets, world.shape[:2] + (3,)).copy()
@@ -301,13 +313,30 @@ def _within_reach(world: np.ndarray, hips: np.ndarray, ankles: np.ndarray, offse
     return hips
 
 
-__all__ = ["BANDAI_CHANNELS", "WAVE_BEND", "WAVE_RAISE", "WalkAndWave", "bandai_like_skeleton", "procedural_walk", "strides_per_second", "walk_and_wave"]
+__all__ = [
+    "BANDAI_CHANNELS",
+    "WAVE_BEND",
+    "WAVE_RAISE",
+    "WalkAndWave",
+    "bandai_like_skeleton",
+    "procedural_walk",
+    "strides_per_second",
+    "walk_and_wave",
+]
 
 
 LOADED_JOINTS = ("Spine", "Chest", "UpperArm_L", "UpperArm_R", "LowerArm_L", "LowerArm_R")
 
 
-def loaded_walk(intensity: float, seconds: float = 3.0, *, lean: float = 4.0, stiffness: float = 0.2, wobble: float = 0.0, seed: int = 0) -> Motion:
+def loaded_walk(
+    intensity: float,
+    seconds: float = 3.0,
+    *,
+    lean: float = 4.0,
+    stiffness: float = 0.2,
+    wobble: float = 0.0,
+    seed: int = 0,
+) -> Motion:
     """The procedural walk as if carrying a load of ``intensity`` (a synthetic intensity series
     whose changing joints are known, so a ranking can be checked against them): the
     spine and chest each lean ``lean`` x intensity degrees further forward, and the upper arms

@@ -90,7 +90,9 @@ def _floor(floor, positions: np.ndarray, roles: JointRoles, causal: bool) -> flo
     return value
 
 
-def _contacts(motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration) -> np.ndarray:
+def _contacts(
+    motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration
+) -> np.ndarray:
     feet = positions[:, [[roles.feet[0], roles.toes[0]], [roles.feet[1], roles.toes[1]]]]
     return ops.foot_contacts(
         np.ascontiguousarray(feet),
@@ -150,7 +152,9 @@ def air_time(contacts, frame_time: float) -> np.ndarray:
     contact; a clip that starts in flight counts from one frame before its start)."""
     contacts = np.asarray(contacts)
     if contacts.ndim != 2 or contacts.dtype.kind not in "biu":
-        raise MocapError(f"argument `contacts`: expected flags [F, S] (bool or 0/1), got {contacts.dtype} of shape {list(contacts.shape)}")
+        raise MocapError(
+            f"argument `contacts`: expected flags [F, S] (bool or 0/1), got {contacts.dtype} of shape {list(contacts.shape)}"
+        )
     return ops.air_time(np.ascontiguousarray(contacts, dtype=bool), _positive("frame_time", frame_time))
 
 
@@ -195,7 +199,9 @@ def _thigh_reference(thigh_reference, thighs: np.ndarray, causal: bool) -> np.nd
         return thighs[0].copy() if causal else mean_rotation(thighs)
     reference = np.asarray(thigh_reference, dtype=np.float64)
     if reference.shape != (2, 4) or not np.isfinite(reference).all():
-        raise MocapError(f"argument `thigh_reference`: expected finite quaternions [2, 4] (left, right; x, y, z, w), got shape {list(reference.shape)}")
+        raise MocapError(
+            f"argument `thigh_reference`: expected finite quaternions [2, 4] (left, right; x, y, z, w), got shape {list(reference.shape)}"
+        )
     return np.ascontiguousarray(reference)
 
 
@@ -226,13 +232,23 @@ def dynamic_features(
     motion, roles, height = _setup(motion, roles, height)
     positions = motion.positions()
     floor = _floor(floor, positions, roles, causal)
-    contacts = _contacts(motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration)
+    contacts = _contacts(
+        motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration
+    )
     points = np.ascontiguousarray(positions[:, [roles.hips, *roles.upper_legs]])
     thighs = np.ascontiguousarray(motion.rotations[:, list(roles.upper_legs)])
     reference = _thigh_reference(thigh_reference, thighs, causal)
     window = max(1, int(round(motion.fps / 3)))
     return ops.dynamic_features(
-        points, thighs, contacts, reference, motion.frame_time, height, hips_rest_height(motion.skeleton, roles), floor, window
+        points,
+        thighs,
+        contacts,
+        reference,
+        motion.frame_time,
+        height,
+        hips_rest_height(motion.skeleton, roles),
+        floor,
+        window,
     )
 
 
@@ -262,8 +278,10 @@ def gait_many(
     names = motions[0].skeleton.names
     other = next((m for m in motions if m.skeleton.names != names), None)
     if other is not None:
-        raise MocapError(f"argument `motions`: every motion needs the same joints; {len(other.skeleton.names)} joints "
-                         f"({', '.join(other.skeleton.names[:3])}, ...) differ from the first motion's")
+        raise MocapError(
+            f"argument `motions`: every motion needs the same joints; {len(other.skeleton.names)} joints "
+            f"({', '.join(other.skeleton.names[:3])}, ...) differ from the first motion's"
+        )
     roles = _roles(motions[0], roles)
     if floor is not None and not np.isfinite(float(floor)):
         raise MocapError(f"argument `floor`: must be a finite height or None, got {floor}")
@@ -276,10 +294,23 @@ def gait_many(
     clips = []
     for motion, (_, positions) in zip(motions, fk):
         skeleton = motion.skeleton
-        clips.append((positions, motion.rotations, motion.frame_time, actor_height(skeleton, roles), hips_rest_height(skeleton, roles)))
+        clips.append(
+            (
+                positions,
+                motion.rotations,
+                motion.frame_time,
+                actor_height(skeleton, roles),
+                hips_rest_height(skeleton, roles),
+            )
+        )
     return ops.clip_gait_many(
-        clips, roles.gait_joints, ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE), features=features,
-        contacts=contacts, feature_floor=None if floor is None else float(floor), thigh_reference=thigh_reference,
+        clips,
+        roles.gait_joints,
+        ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE),
+        features=features,
+        contacts=contacts,
+        feature_floor=None if floor is None else float(floor),
+        thigh_reference=thigh_reference,
     )
 
 

@@ -18,7 +18,6 @@ import numpy as np
 
 from .errors import MocapError
 
-
 # The largest BVH file or archive member read (README, "Limits"): 512 MiB of text is over half an
 # hour of a 60-joint skeleton at 120 fps, and decodes to about 1.2 GB of arrays. Checked before
 # reading, so a 1 GiB member of a 1 MB zip, or a link to /dev/zero, is refused without reading it.
@@ -27,8 +26,15 @@ MAX_INPUT_BYTES = 512 << 20
 
 def file_kind(mode: int) -> str:
     """What a file of this ``st_mode`` is, in words, for errors ("a FIFO", "a folder", ...)."""
-    for test, name in ((stat.S_ISREG, "a regular file"), (stat.S_ISLNK, "a symlink"), (stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+    for test, name in (
+        (stat.S_ISREG, "a regular file"),
+        (stat.S_ISLNK, "a symlink"),
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
         if test(mode):
             return name
     return "not a regular file"
@@ -126,7 +132,9 @@ def output_target(path: str | os.PathLike) -> Path:
             raise MocapError(f"cannot write {path}: a symlink that leads back to itself")
     if not stat.S_ISREG(info.st_mode):
         what = file_kind(info.st_mode) if target == path else f"a symlink to {file_kind(info.st_mode)}, {target}"
-        raise MocapError(f"cannot write {path}: it is {what}, not a regular file (outputs replace regular files only; '-' writes to standard output)")
+        raise MocapError(
+            f"cannot write {path}: it is {what}, not a regular file (outputs replace regular files only; '-' writes to standard output)"
+        )
     return target
 
 
@@ -178,7 +186,7 @@ def write_standard_output(data: bytes) -> None:
     view = memoryview(data)
     try:
         while view:
-            view = view[os.write(1, view):]
+            view = view[os.write(1, view) :]
     except BrokenPipeError:
         raise
     except OSError as error:
@@ -190,7 +198,9 @@ def _temporary(path: Path, target: Path, data: bytes) -> str:
     permissions a plain open() gives; errors name ``path``."""
     folder = target.parent
     if not folder.is_dir():
-        raise MocapError(f"cannot write {path}: the folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}")
+        raise MocapError(
+            f"cannot write {path}: the folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}"
+        )
     try:
         handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
     except OSError as error:
@@ -226,7 +236,11 @@ def read_model_file(source: str | os.PathLike | bytes, what: str) -> tuple[dict[
     it should be; checking the arrays against the model's schema is the caller's part."""
     name = "<bytes>" if isinstance(source, (bytes, bytearray)) else str(source)
     try:
-        data = bytes(source) if isinstance(source, (bytes, bytearray)) else read_input(source, MAX_MODEL_BYTES + MODEL_ZIP_SLACK)
+        data = (
+            bytes(source)
+            if isinstance(source, (bytes, bytearray))
+            else read_input(source, MAX_MODEL_BYTES + MODEL_ZIP_SLACK)
+        )
     except OSError as error:
         raise MocapError(f"{name}: cannot read the model file: {error.strerror or error}") from None
     try:
@@ -252,7 +266,9 @@ def _check_array_sizes(data: bytes) -> None:
                 version = np.lib.format.read_magic(member)
                 if version not in ((1, 0), (2, 0)):
                     raise ValueError(f"{info.filename}: .npy format version {version} is not read")
-                read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+                read_header = (
+                    np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+                )
                 shape, _, dtype = read_header(member)
             if dtype.hasobject:
                 raise ValueError(f"{info.filename} holds Python objects (pickles are never loaded)")
@@ -267,9 +283,15 @@ def finite_array(arrays: dict, key: str, name: str, shape: tuple | None = None, 
     if key not in arrays:
         raise MocapError(f"{name}: model file lacks {key!r}")
     value = arrays[key]
-    if value.dtype.kind not in kinds or (shape is not None and value.shape != tuple(shape)) or not np.isfinite(value.astype(np.float64)).all():
+    if (
+        value.dtype.kind not in kinds
+        or (shape is not None and value.shape != tuple(shape))
+        or not np.isfinite(value.astype(np.float64)).all()
+    ):
         expected = f"shape {list(shape)}" if shape is not None else "any shape"
-        raise MocapError(f"{name}: {key!r} has shape {list(value.shape)} / dtype {value.dtype}, expected finite numbers of {expected}")
+        raise MocapError(
+            f"{name}: {key!r} has shape {list(value.shape)} / dtype {value.dtype}, expected finite numbers of {expected}"
+        )
     return value
 
 

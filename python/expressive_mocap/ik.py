@@ -59,7 +59,9 @@ def two_bone_ik(
     c = b + quat.rotate(lower, lower_bone)
     thigh, shin = np.linalg.norm(upper_bone, axis=-1), np.linalg.norm(lower_bone, axis=-1)
     # Bounds relative to the chain's length: the same pose in centimetres or metres.
-    reach = np.clip(np.linalg.norm(target - a, axis=1), np.abs(thigh - shin) + 1e-5 * (thigh + shin), (thigh + shin) * REACH)
+    reach = np.clip(
+        np.linalg.norm(target - a, axis=1), np.abs(thigh - shin) + 1e-5 * (thigh + shin), (thigh + shin) * REACH
+    )
     # Angles at the hip (between hip-ankle and thigh) and at the knee, now and wanted.
     hip_now, knee_now = _angle_between(c - a, b - a), _angle_between(a - b, c - b)
     hip_wanted = np.arccos(np.clip((shin**2 - thigh**2 - reach**2) / (-2 * thigh * reach), -1, 1))

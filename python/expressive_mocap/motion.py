@@ -9,9 +9,9 @@ are in the file's units.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
-from typing import Sequence
 
 import numpy as np
 
@@ -209,7 +209,9 @@ class Skeleton:
         offsets = np.array(offsets, dtype=np.float64)
         site_offsets = np.array(end_site_offsets, dtype=np.float64).reshape(-1, 3)
         if offsets.shape != self.offsets.shape or len(site_offsets) != len(self.end_sites):
-            raise MocapError(f"with_offsets: expected {list(self.offsets.shape)} joint and {len(self.end_sites)} End Site offsets")
+            raise MocapError(
+                f"with_offsets: expected {list(self.offsets.shape)} joint and {len(self.end_sites)} End Site offsets"
+            )
         # The private constructor path: the hierarchy and channels are this skeleton's (immutable,
         # checked when it was made), the new offsets get the constructor's checks. Constructing
         # anew would check everything again, 10x the time, on every clip of a known hierarchy read.
@@ -255,11 +257,15 @@ class Skeleton:
         layouts: dict[tuple[str, ...], int] = {}
         for cs in self.channels:
             layouts[cs] = layouts.get(cs, 0) + 1
-        return "; ".join(f"{n} joint{'s' if n > 1 else ''} x {len(cs)} ({' '.join(cs) or 'none'})" for cs, n in layouts.items())
+        return "; ".join(
+            f"{n} joint{'s' if n > 1 else ''} x {len(cs)} ({' '.join(cs) or 'none'})" for cs, n in layouts.items()
+        )
 
 
 def _not_finite(factor, what: str, largest: float):
-    raise MocapError(f"scaled: x {factor:g} takes {what} beyond float64 (the largest is {largest:.6g}): lengths must stay finite")
+    raise MocapError(
+        f"scaled: x {factor:g} takes {what} beyond float64 (the largest is {largest:.6g}): lengths must stay finite"
+    )
 
 
 # The most frames x joints Motion.resample makes (README, "Limits"): 2^25, 1.9 GB of rotations and
@@ -284,7 +290,9 @@ class Motion:
         if rotations.ndim != 3 or rotations.shape[1:] != (joints, 4):
             raise MocapError(f"rotations: expected shape [F, {joints}, 4], got {list(rotations.shape)}")
         if translations.shape != rotations.shape[:2] + (3,):
-            raise MocapError(f"translations: expected shape [{len(rotations)}, {joints}, 3], got {list(translations.shape)}")
+            raise MocapError(
+                f"translations: expected shape [{len(rotations)}, {joints}, 3], got {list(translations.shape)}"
+            )
         if not (np.isfinite(frame_time) and frame_time > 0):
             raise MocapError(f"frame_time must be a positive number of seconds, got {frame_time}")
         self.skeleton = skeleton
@@ -317,7 +325,14 @@ class Motion:
         return Motion(self.skeleton, self.rotations[frames], self.translations[frames], self.frame_time)
 
     @classmethod
-    def from_euler(cls, skeleton: Skeleton, angles, translations=None, frame_time: float = 1 / 30, order: str | Sequence[str] | None = None) -> Motion:
+    def from_euler(
+        cls,
+        skeleton: Skeleton,
+        angles,
+        translations=None,
+        frame_time: float = 1 / 30,
+        order: str | Sequence[str] | None = None,
+    ) -> Motion:
         """A motion from Euler angles ``[F, J, 3]`` in degrees, in each joint's own rotation
         order (or ``order``); ``translations`` default to the rest offsets."""
         angles = np.asarray(angles, dtype=np.float64)
@@ -359,7 +374,11 @@ class Motion:
             raise MocapError("resample: a motion needs at least 2 frames")
         joints = self.skeleton.n_joints
         if fps is not None:
-            if isinstance(fps, bool) or not isinstance(fps, (int, float, np.integer, np.floating)) or not (np.isfinite(fps) and fps > 0):
+            if (
+                isinstance(fps, bool)
+                or not isinstance(fps, (int, float, np.integer, np.floating))
+                or not (np.isfinite(fps) and fps > 0)
+            ):
                 raise MocapError(f"resample: fps must be a positive finite number, got {fps!r}")
             new_time = 1.0 / float(fps)
             # Files round the frame time (0.0333333 for 1/30 s): allow a hundredth of a frame.
@@ -375,7 +394,9 @@ class Motion:
                 f"resample: {what} is {frames:.6g} frames x {joints} joints, more than the {MAX_RESAMPLED_JOINT_FRAMES:,} "
                 f"joint-frames (56 bytes each) a resampled motion may have"
             )
-        if not (np.isfinite(new_time) and new_time > 0):  # 1e-320 fps overflows, n_frames over a tiny duration underflows
+        if not (
+            np.isfinite(new_time) and new_time > 0
+        ):  # 1e-320 fps overflows, n_frames over a tiny duration underflows
             raise MocapError(f"resample: {what} gives a frame time of {new_time:g} s")
         n_frames = int(frames)
         rotations = np.empty((n_frames, joints, 4))

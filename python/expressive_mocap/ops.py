@@ -23,9 +23,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from . import motion  # its Euler order names (a module import: motion imports this module)
 from .backend import kernels
 from .errors import ArgumentError
-from . import motion  # its Euler order names (a module import: motion imports this module)
 
 ACTIVATIONS = ("tanh", "linear")  # of a dense layer (mlp_forward); the kernels implement these
 

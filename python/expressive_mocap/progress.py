@@ -10,7 +10,11 @@ from typing import TextIO
 
 def _duration(seconds: float) -> str:
     seconds = int(round(seconds))
-    return f"{seconds // 3600}:{seconds // 60 % 60:02d}:{seconds % 60:02d}" if seconds >= 3600 else f"{seconds // 60}:{seconds % 60:02d}"
+    return (
+        f"{seconds // 3600}:{seconds // 60 % 60:02d}:{seconds % 60:02d}"
+        if seconds >= 3600
+        else f"{seconds // 60}:{seconds % 60:02d}"
+    )
 
 
 def _amount(value: float, unit: str) -> str:
@@ -25,8 +29,16 @@ class Progress:
     ``total`` may be None (unknown: no bar, no time left). Use as a context manager or call
     :meth:`close`."""
 
-    def __init__(self, total: float | None, what: str, unit: str = "", *, enabled: bool = True,
-                 stream: TextIO | None = None, every: float = 10.0):
+    def __init__(
+        self,
+        total: float | None,
+        what: str,
+        unit: str = "",
+        *,
+        enabled: bool = True,
+        stream: TextIO | None = None,
+        every: float = 10.0,
+    ):
         self.total, self.what, self.unit, self.every = total, what, unit, every
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = enabled

@@ -13,7 +13,7 @@ from __future__ import annotations
 import io
 import math
 import os
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -161,13 +161,27 @@ def pose_figure(motions: Sequence[Motion], titles: Sequence[str] | None = None, 
     n = max(len(f) for f in frames)
     handles = [Line2D([], [], color=cmap(1 - _shade(k, n)), lw=2) for k in (0, n - 1)]
     under = blended_transform_factory(fig.transFigure, axes[-1].transAxes)  # centred, just below the last panel
-    fig.legend(handles, ["first frame", "last frame"], loc="upper center", bbox_to_anchor=(0.5, -0.02), bbox_transform=under, ncol=2,
-               fontsize=8, frameon=False, title=f"{n} poses evenly spaced in time, later ones darker", title_fontsize=8)
+    fig.legend(
+        handles,
+        ["first frame", "last frame"],
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.02),
+        bbox_transform=under,
+        ncol=2,
+        fontsize=8,
+        frameon=False,
+        title=f"{n} poses evenly spaced in time, later ones darker",
+        title_fontsize=8,
+    )
     return fig
 
 
 def render_poses(
-    motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, poses: int = 8, view: str = "side"
+    motions: Sequence[Motion],
+    path: str | os.PathLike,
+    titles: Sequence[str] | None = None,
+    poses: int = 8,
+    view: str = "side",
 ) -> None:
     """PNG of :func:`pose_figure`."""
     import matplotlib.pyplot as plt
@@ -195,7 +209,11 @@ def gif_timing(fps: Sequence[float], seconds: float, speed: float = 1.0) -> tupl
 
 
 def render_animation(
-    motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", speed: float = 1.0
+    motions: Sequence[Motion],
+    path: str | os.PathLike,
+    titles: Sequence[str] | None = None,
+    view: str = "side",
+    speed: float = 1.0,
 ) -> str:
     """Animated GIF, one panel per motion, the camera following each walker's hips horizontally.
     Motions play on one clock at ``speed`` x real time (each its own frame rate, see
@@ -224,7 +242,9 @@ def render_animation(
         ax.set_ylim(low - margin, top + margin)
         ax.axhline(0.0, color="0.7", lw=0.8)
         ax.set_title(title, fontsize=10)
-        lines.append([ax.plot([], [], color="tab:blue", lw=lw, solid_capstyle="round")[0] for _ in range(flat.shape[1])])
+        lines.append(
+            [ax.plot([], [], color="tab:blue", lw=lw, solid_capstyle="round")[0] for _ in range(flat.shape[1])]
+        )
     clock = fig.text(0.02, 0.02, "", fontsize=8, color="0.4")
     fig.tight_layout()
     images = []
@@ -234,7 +254,11 @@ def render_animation(
                 line.set_data([a[0], b[0]], [a[1], b[1]])
         clock.set_text(f"{t:.1f} s" + (f" (x{speed:g})" if speed != 1 else ""))
         fig.canvas.draw()
-        images.append(Image.frombuffer("RGBA", fig.canvas.get_width_height(), fig.canvas.buffer_rgba(), "raw", "RGBA", 0, 1).convert("RGB"))
+        images.append(
+            Image.frombuffer(
+                "RGBA", fig.canvas.get_width_height(), fig.canvas.buffer_rgba(), "raw", "RGBA", 0, 1
+            ).convert("RGB")
+        )
     plt.close(fig)
     buffer = io.BytesIO()
     images[0].save(buffer, format="GIF", save_all=True, append_images=images[1:], duration=delays.tolist(), loop=0)
@@ -242,11 +266,19 @@ def render_animation(
     played = delays.sum() / 1000
     rates = " and ".join(sorted({f"{m.fps:.4g}" for m in motions}, key=float))
     taken = "every frame" if step == 1 else f"every {step} frames"
-    return (f"{len(times)} frames ({taken} of {rates} fps) playing {played:.2f} s for {seconds:.2f} s of motion: "
-            f"{seconds / played:.3f} x real time" + (f" (asked {speed:g})" if speed != 1 else ""))
+    return (
+        f"{len(times)} frames ({taken} of {rates} fps) playing {played:.2f} s for {seconds:.2f} s of motion: "
+        f"{seconds / played:.3f} x real time" + (f" (asked {speed:g})" if speed != 1 else "")
+    )
 
 
-def render(motions: Sequence[Motion], path: str | os.PathLike, titles: Sequence[str] | None = None, view: str = "side", **options) -> str | None:
+def render(
+    motions: Sequence[Motion],
+    path: str | os.PathLike,
+    titles: Sequence[str] | None = None,
+    view: str = "side",
+    **options,
+) -> str | None:
     """Render to ``path``: a GIF animation if it ends in ``.gif`` (returns how it plays), otherwise
     a PNG of poses. ``path`` is checked before drawing (:func:`expressive_mocap.files.output_target`)."""
     output_target(path)
@@ -266,7 +298,11 @@ def _save(fig, plt, path: str | os.PathLike) -> None:
 
 
 def plot_contacts(
-    contacts: np.ndarray, frame_time: float, path: str | os.PathLike, title: str = "", labels: Sequence[str] = ("left foot", "right foot")
+    contacts: np.ndarray,
+    frame_time: float,
+    path: str | os.PathLike,
+    title: str = "",
+    labels: Sequence[str] = ("left foot", "right foot"),
 ) -> None:
     """A gait diagram PNG: one row per foot (``contacts bool [F, S]``, rows top to bottom in
     ``labels`` order), a bar for each contact, time in seconds along the bottom."""

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 
 from ..bvh import read_bvh
+from ..dataset import preprocess
 from ..errors import MocapError
 from ..features import HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
-from ..dataset import preprocess
 from .common import default, finite, positive
 
 __all__ = ["add_parsers", "cmd_footsteps", "cmd_preprocess"]

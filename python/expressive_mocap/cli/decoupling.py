@@ -12,9 +12,9 @@ import numpy as np
 from ..bvh import bvh_bytes, read_bvh, write_bvh
 from ..decoupling.algebra import EXPONENT, GAIN
 from ..decoupling.edits import mix
+from ..decoupling.training import train_body_model
 from ..errors import MocapError
 from ..files import atomic_write_all, open_input
-from ..decoupling.training import train_body_model
 from .common import PROG, default, finite, positive, read_all, read_for_model
 
 __all__ = [
@@ -285,8 +285,8 @@ def add_train(commands) -> None:
 
 def cmd_train(args) -> int:
     from ..decoupling.body_model import poor_fit
-    from ..progress import line_log
     from ..decoupling.training import format_report
+    from ..progress import line_log
 
     neutral = read_all(args.neutral, "neutral clips", args.quiet)
     unlabelled = read_all(args.unlabelled or [], "unlabelled clips", args.quiet)

@@ -14,11 +14,11 @@ import numpy as np
 from .. import files as inputs
 from .. import ops
 from ..bvh import block_error, read_error
+from ..decoupling.algebra import decompose_many
 from ..errors import BVHError, MocapError
 from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from ..roles import JointRoles, actor_height, hips_rest_height
 from .format import MODEL_KINDS
-from ..decoupling.algebra import decompose_many
 from .sources import Item
 
 
@@ -151,7 +151,9 @@ def run_kernels(
             float32=not use_model,
         )
         gait = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
-        results = ops.clip_pipeline_many(group.clips, group.parents, group.gait_joints, gait, outputs, inputs.MAX_INPUT_BYTES)
+        results = ops.clip_pipeline_many(
+            group.clips, group.parents, group.gait_joints, gait, outputs, inputs.MAX_INPUT_BYTES
+        )
         for k, header, clip, result in zip(group.indices, group.headers, group.clips, results):
             if _finish_clip(batch[k], outcomes[k], header, clip, result, keep) and use_model:
                 kept.append((k, result[1], result[2][-1]))

@@ -23,8 +23,8 @@ import numpy as np
 
 from .. import quat
 from ..errors import ModelError
-from ..ops import compose_rotations, decouple_rotations
 from ..motion import Motion
+from ..ops import compose_rotations, decouple_rotations
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
 EXPONENT = 4.0  # b

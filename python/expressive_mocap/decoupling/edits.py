@@ -11,8 +11,8 @@ import numpy as np
 
 from .. import quat
 from ..errors import ArgumentError
-from ..ops import compose_rotations, forward_kinematics
 from ..motion import Motion
+from ..ops import compose_rotations, forward_kinematics
 from ..roles import JointRoles, facing_yaw, path_joint
 from .algebra import EXPONENT, GAIN, BodyMechanicsModel, decompose
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import quat
-from ..ops import euler_to_quat, quat_to_euler
 from ..motion import Skeleton
+from ..ops import euler_to_quat, quat_to_euler
 from ..roles import JointRoles
 from .cycles import SampledCycles
 from .settings import TRAINING

@@ -13,9 +13,9 @@ import numpy as np
 from .. import quat
 from ..errors import ArgumentError
 from ..features import foot_contacts
-from ..quat import mean_rotation
-from ..ops import forward_kinematics
 from ..motion import Motion
+from ..ops import forward_kinematics
+from ..quat import mean_rotation
 from ..roles import JointRoles, actor_height
 from .cycles import Cycle, find_cycles, frame_yaw, sample_cycles, to_cycle_timing, without_heading
 from .dofs import dofs_to_rotations, rotations_to_dofs, sampled_dofs

@@ -8,8 +8,8 @@ import numpy as np
 from .. import quat
 from ..errors import ArgumentError
 from ..ik import two_bone_ik
-from ..ops import forward_kinematics
 from ..motion import Motion
+from ..ops import forward_kinematics
 from ..roles import JointRoles, actor_height
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])

@@ -9,8 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError, ClipError, MocapError
-from ..quat import mean_rotation
 from ..motion import Motion, Skeleton
+from ..quat import mean_rotation
 from ..roles import JointRoles, actor_height
 from .cycles import check_cycle_choice, choose_cycles, sample_cycles
 from .dofs import dof_names, dof_weights, dofs_to_rotations, rotations_to_dofs, sampled_dofs, subtree_weights

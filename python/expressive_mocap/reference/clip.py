@@ -41,15 +41,26 @@ def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | No
                 continue
         if clip.start > len(source):
             raise ArgumentError("argument `start`: past the end of the clip's text")
-        (decoded,) = read_motion_blocks([SimpleNamespace(data=source, start=clip.start, frames=clip.frames, layout=clip.layout)])
+        (decoded,) = read_motion_blocks(
+            [SimpleNamespace(data=source, start=clip.start, frames=clip.frames, layout=clip.layout)]
+        )
         if isinstance(decoded, Exception):
             out.append(decoded)
             continue
         local, translations = decoded
         _, world = forward_kinematics(local, translations, parents)
         gait_clip = (world, local, clip.frame_time, clip.height, clip.hips_rest_height)
-        wanted = [clip_gait_many([gait_clip], roles, *thresholds, True, False, f.floor, f.thigh_reference)[0][0] for f in outputs.features]
+        wanted = [
+            clip_gait_many([gait_clip], roles, *thresholds, True, False, f.floor, f.thigh_reference)[0][0]
+            for f in outputs.features
+        ]
         found = clip_gait_many([gait_clip], roles, *thresholds, False, True)[0][1] if outputs.contacts else None
-        out.append((world.astype(dtype) if outputs.positions else None, local.astype(dtype) if outputs.rotations else None,
-                    [f.astype(dtype) for f in wanted], found))
+        out.append(
+            (
+                world.astype(dtype) if outputs.positions else None,
+                local.astype(dtype) if outputs.rotations else None,
+                [f.astype(dtype) for f in wanted],
+                found,
+            )
+        )
     return out

@@ -10,7 +10,9 @@ from ..errors import ArgumentError
 
 def _check(name: str, first: np.ndarray, second: np.ndarray) -> None:
     if first.ndim != 3 or first.shape[-1] != 4 or first.shape != second.shape:
-        raise ArgumentError(f"argument `{name}`: expected shape {list(first.shape)} (quaternions [F, J, 4]), got {list(second.shape)}")
+        raise ArgumentError(
+            f"argument `{name}`: expected shape {list(first.shape)} (quaternions [F, J, 4]), got {list(second.shape)}"
+        )
 
 
 def decouple_rotations(original: np.ndarray, body: np.ndarray, gain: float = 2.0, exponent: float = 4.0):

@@ -36,7 +36,9 @@ def heading_yaw(left: np.ndarray, right: np.ndarray) -> np.ndarray:
 def _check(points, thighs, contacts, reference, frame_time, height, hips_rest_height, window):
     frames = len(points)
     if points.ndim != 3 or points.shape[1:] != (3, 3):
-        raise ArgumentError(f"argument `points`: expected shape [F, 3, 3] (hips, left and right upper leg), got {list(points.shape)}")
+        raise ArgumentError(
+            f"argument `points`: expected shape [F, 3, 3] (hips, left and right upper leg), got {list(points.shape)}"
+        )
     if thighs.shape != (frames, 2, 4):
         raise ArgumentError(f"argument `thighs`: expected shape [{frames}, 2, 4], got {list(thighs.shape)}")
     if contacts.shape != (frames, 2):

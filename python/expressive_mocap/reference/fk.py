@@ -8,17 +8,23 @@ from .. import quat
 from ..errors import ArgumentError
 
 
-def forward_kinematics(rotations: np.ndarray, translations: np.ndarray, parents: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def forward_kinematics(
+    rotations: np.ndarray, translations: np.ndarray, parents: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """World rotations ``[F, J, 4]`` and positions ``[F, J, 3]`` from local ones and ``parents [J]``."""
     parents = np.asarray(parents)
     joints = len(parents)
     for j, p in enumerate(parents.tolist()):
         if not -1 <= p < j:
-            raise ArgumentError(f"argument `parents`: joint {j} has parent {p}: parents must be -1 (root) or an earlier joint")
+            raise ArgumentError(
+                f"argument `parents`: joint {j} has parent {p}: parents must be -1 (root) or an earlier joint"
+            )
     if rotations.ndim != 3 or rotations.shape[1:] != (joints, 4):
         raise ArgumentError(f"argument `rotations`: expected shape [F, {joints}, 4], got {list(rotations.shape)}")
     if translations.shape != rotations.shape[:2] + (3,):
-        raise ArgumentError(f"argument `translations`: expected shape [{rotations.shape[0]}, {joints}, 3], got {list(translations.shape)}")
+        raise ArgumentError(
+            f"argument `translations`: expected shape [{rotations.shape[0]}, {joints}, 3], got {list(translations.shape)}"
+        )
     world_rot = np.empty_like(rotations, dtype=np.float64)
     world_pos = np.empty_like(translations, dtype=np.float64)
     for j, p in enumerate(parents.tolist()):

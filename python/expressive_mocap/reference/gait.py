@@ -43,18 +43,50 @@ def clip_gait_many(
     for index, (positions, rotations, frame_time, height, hips_rest_height) in enumerate(clips):
         positions, rotations = np.asarray(positions, dtype=np.float64), np.asarray(rotations, dtype=np.float64)
         if positions.ndim != 3 or positions.shape[2] != 3 or rotations.shape != (*positions.shape[:2], 4):
-            raise ArgumentError(f"argument `clips`: clip {index} has positions {list(positions.shape)} and rotations "
-                             f"{list(rotations.shape)}, expected [F, J, 3] and [F, J, 4]")
+            raise ArgumentError(
+                f"argument `clips`: clip {index} has positions {list(positions.shape)} and rotations "
+                f"{list(rotations.shape)}, expected [F, J, 3] and [F, J, 4]"
+            )
         try:
-            out.append(_clip(positions, rotations, float(frame_time), roles, float(height), float(hips_rest_height), height_threshold,
-                             speed_threshold, min_duration, floor_percentile, features, contacts, feature_floor, thigh_reference))
+            out.append(
+                _clip(
+                    positions,
+                    rotations,
+                    float(frame_time),
+                    roles,
+                    float(height),
+                    float(hips_rest_height),
+                    height_threshold,
+                    speed_threshold,
+                    min_duration,
+                    floor_percentile,
+                    features,
+                    contacts,
+                    feature_floor,
+                    thigh_reference,
+                )
+            )
         except (ValueError, IndexError) as error:
             raise ArgumentError(f"clip {index}: {error}") from None
     return out
 
 
-def _clip(positions, rotations, frame_time, roles, height, hips_rest_height, height_threshold, speed_threshold,
-          min_duration, floor_percentile, want_features, want_contacts, feature_floor, thigh_reference):
+def _clip(
+    positions,
+    rotations,
+    frame_time,
+    roles,
+    height,
+    hips_rest_height,
+    height_threshold,
+    speed_threshold,
+    min_duration,
+    floor_percentile,
+    want_features,
+    want_contacts,
+    feature_floor,
+    thigh_reference,
+):
     frames, joints = positions.shape[:2]
     for name, index in zip(("hips", "upper_legs", "upper_legs", "feet", "feet", "toes", "toes"), roles):
         if not 0 <= index < joints:
@@ -69,7 +101,9 @@ def _clip(positions, rotations, frame_time, roles, height, hips_rest_height, hei
     min_frames = _at_least_one_frame(min_duration * (1.0 / frame_time))
 
     def contacts_on(floor, causal):
-        return foot_contacts(feet, frame_time, floor, height_threshold * height, speed_threshold * height, min_frames, causal)
+        return foot_contacts(
+            feet, frame_time, floor, height_threshold * height, speed_threshold * height, min_frames, causal
+        )
 
     features = None
     if want_features:
@@ -78,5 +112,7 @@ def _clip(positions, rotations, frame_time, roles, height, hips_rest_height, hei
         reference = thighs[0] if thigh_reference is None else np.asarray(thigh_reference, dtype=np.float64)
         points = np.ascontiguousarray(positions[:, [hips, left_leg, right_leg]])
         window = _at_least_one_frame(1.0 / frame_time / 3.0)
-        features = dynamic_features(points, thighs, contacts_on(floor, True), reference, frame_time, height, hips_rest_height, floor, window)
+        features = dynamic_features(
+            points, thighs, contacts_on(floor, True), reference, frame_time, height, hips_rest_height, floor, window
+        )
     return features, (contacts_on(toe_floor, False) if want_contacts else None)

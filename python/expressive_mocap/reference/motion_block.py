@@ -85,7 +85,9 @@ def read_motion_blocks(blocks: list) -> list:
         layout = block.layout
         try:
             values = parse_motion_block(block.data, block.start, block.frames, layout.channels)
-            results.append(decode_channels(values, layout.rotation_columns, layout.orders, layout.position_columns, layout.offsets))
+            results.append(
+                decode_channels(values, layout.rotation_columns, layout.orders, layout.position_columns, layout.offsets)
+            )
         except ParseError as error:
             results.append(error)
     return results
@@ -121,7 +123,9 @@ def _raise_truncated(block: bytes, frames: int, found: int) -> None:
     """Fewer frame lines than ``frames``: point at the last line of the block, where the missing
     frames should have been."""
     lines = block.count(b"\n") + (1 if block and not block.endswith(b"\n") else 0)
-    raise ParseError(f"truncated MOTION block: Frames says {frames}, but only {found} frame lines follow", max(lines - 1, 0))
+    raise ParseError(
+        f"truncated MOTION block: Frames says {frames}, but only {found} frame lines follow", max(lines - 1, 0)
+    )
 
 
 def format_motion_block(values: np.ndarray, decimals: int | None = None) -> bytes:
