@@ -97,8 +97,9 @@ def dynamic_features(
     floor: float,
     window: int,
 ) -> _F64:
-    """The 19 features ``[F, 19]`` from ``points [F, 3, 3]`` (hips, left and right upper leg, world), ``thighs [F, 2, 4]``
-    (local), ``contacts bool [F, 2]`` and the thighs' hemisphere ``reference [2, 4]``."""
+    """The 19 features ``[F, 19]`` from ``points [F, 3, 3]`` (hips, left and right upper leg,
+    world), ``thighs [F, 2, 4]`` (local), ``contacts bool [F, 2]`` and the thighs' hemisphere
+    ``reference [2, 4]``."""
 
 def mlp_forward(x: _Float, weights: list[_Float], biases: list[_Float], activations: list[str]) -> _Float:
     """Dense network on ``x [N, in]`` (float32 or float64, kept): per layer ``act(h @ W [in, out] + b [out])``,

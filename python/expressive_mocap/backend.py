@@ -16,6 +16,7 @@ from types import ModuleType
 from . import reference
 from .errors import MocapError
 
+_core: ModuleType | None
 try:
     from . import _core
 except ImportError:  # the extension was not built: NumPy twins only

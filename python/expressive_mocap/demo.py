@@ -93,7 +93,7 @@ def bandai_like_skeleton() -> Skeleton:
     return Skeleton(
         names=_NAMES,
         parents=_PARENTS,
-        offsets=[o for _, _, o, _ in _BANDAI],
+        offsets=np.array([o for _, _, o, _ in _BANDAI]),
         channels=(BANDAI_CHANNELS,) * len(_NAMES),
         end_sites=tuple((_J[n], (0.0, 0.0, 0.0)) for n in _END_SITES),
     )
@@ -245,7 +245,8 @@ def _footsteps(t: np.ndarray, speed: float) -> tuple[np.ndarray, np.ndarray]:
         n = np.floor(u)
         p = u - n
 
-        def footprint(k):  # the flat ankle of stride k: under the hips at mid-stance
+        # The flat ankle of stride k: under the hips at mid-stance (this side's values bound now).
+        def footprint(k, lateral=lateral, ankle_height=ankle_height, shift=shift):
             return np.stack(
                 [np.full_like(k, lateral), np.full_like(k, ankle_height), stride * (k + _MID_STANCE - shift)], axis=1
             )

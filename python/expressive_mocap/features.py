@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import ops
-from .errors import MocapError
+from .errors import ArgumentError
 from .motion import Motion
 from .quat import mean_rotation
 from .roles import JointRoles, actor_height, hips_rest_height
@@ -56,9 +56,9 @@ class ContactInterval(NamedTuple):
 
 def _motion(motion) -> Motion:
     if not isinstance(motion, Motion):
-        raise MocapError(f"argument `motion`: expected a Motion, got {type(motion).__name__}")
+        raise ArgumentError(f"argument `motion`: expected a Motion, got {type(motion).__name__}")
     if motion.n_frames == 0:
-        raise MocapError("argument `motion`: the motion has no frames")
+        raise ArgumentError("argument `motion`: the motion has no frames")
     return motion
 
 
@@ -66,9 +66,9 @@ def _positive(name: str, value) -> float:
     try:
         value = float(value)
     except (TypeError, ValueError):
-        raise MocapError(f"argument `{name}`: expected a number, got {value!r}") from None
+        raise ArgumentError(f"argument `{name}`: expected a number, got {value!r}") from None
     if not (np.isfinite(value) and value > 0):
-        raise MocapError(f"argument `{name}`: must be a positive number, got {value}")
+        raise ArgumentError(f"argument `{name}`: must be a positive number, got {value}")
     return value
 
 
@@ -86,7 +86,7 @@ def _floor(floor, positions: np.ndarray, roles: JointRoles, causal: bool) -> flo
         return 0.0 if causal else default_floor(positions, roles)
     value = float(floor)
     if not np.isfinite(value):
-        raise MocapError(f"argument `floor`: must be a finite height, got {floor}")
+        raise ArgumentError(f"argument `floor`: must be a finite height, got {floor}")
     return value
 
 
@@ -109,7 +109,7 @@ def _roles(motion: Motion, roles) -> JointRoles:
     if roles is None:
         return JointRoles.find(motion.skeleton)
     if not isinstance(roles, JointRoles):
-        raise MocapError(f"argument `roles`: expected JointRoles, got {type(roles).__name__}")
+        raise ArgumentError(f"argument `roles`: expected JointRoles, got {type(roles).__name__}")
     return roles
 
 
@@ -152,8 +152,9 @@ def air_time(contacts, frame_time: float) -> np.ndarray:
     contact; a clip that starts in flight counts from one frame before its start)."""
     contacts = np.asarray(contacts)
     if contacts.ndim != 2 or contacts.dtype.kind not in "biu":
-        raise MocapError(
-            f"argument `contacts`: expected flags [F, S] (bool or 0/1), got {contacts.dtype} of shape {list(contacts.shape)}"
+        raise ArgumentError(
+            f"argument `contacts`: expected flags [F, S] (bool or 0/1), got {contacts.dtype} of shape "
+            f"{list(contacts.shape)}"
         )
     return ops.air_time(np.ascontiguousarray(contacts, dtype=bool), _positive("frame_time", frame_time))
 
@@ -166,7 +167,7 @@ def contact_intervals(contacts, frame_time: float) -> list:
     if contacts.ndim == 2:
         return [contact_intervals(contacts[:, s], frame_time) for s in range(contacts.shape[1])]
     if contacts.ndim != 1:
-        raise MocapError(f"argument `contacts`: expected shape [F] or [F, S], got {list(contacts.shape)}")
+        raise ArgumentError(f"argument `contacts`: expected shape [F] or [F, S], got {list(contacts.shape)}")
     edges = np.diff(np.r_[0, contacts.astype(np.int8), 0])
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
     return [ContactInterval(int(a), int(b), float((b - a + 1) * frame_time)) for a, b in zip(starts, ends)]
@@ -177,7 +178,7 @@ def footstrikes(contacts) -> np.ndarray:
     begins, the first frame excluded (a contact there started before the clip)."""
     contacts = np.asarray(contacts, dtype=bool)
     if contacts.ndim != 2:
-        raise MocapError(f"argument `contacts`: expected shape [F, S], got {list(contacts.shape)}")
+        raise ArgumentError(f"argument `contacts`: expected shape [F, S], got {list(contacts.shape)}")
     frames, feet = np.nonzero(contacts[1:] & ~contacts[:-1])
     order = np.lexsort((feet, frames))
     return np.stack([frames[order] + 1, feet[order]], axis=1)
@@ -193,14 +194,17 @@ def cadence(contacts, frame_time: float) -> float:
     return (len(strikes) - 1) / ((strikes[-1] - strikes[0]) * frame_time)
 
 
-def _thigh_reference(thigh_reference, thighs: np.ndarray, causal: bool) -> np.ndarray:
+def _thigh_reference(thigh_reference, thighs: np.ndarray | None, causal: bool) -> np.ndarray:
     if thigh_reference is None:
+        if thighs is None:
+            raise ArgumentError("argument `thigh_reference`: needed where no thigh rotations are given")
         # Causal: the first frame (the only one every frame may look at); offline: the clip's mean.
         return thighs[0].copy() if causal else mean_rotation(thighs)
     reference = np.asarray(thigh_reference, dtype=np.float64)
     if reference.shape != (2, 4) or not np.isfinite(reference).all():
-        raise MocapError(
-            f"argument `thigh_reference`: expected finite quaternions [2, 4] (left, right; x, y, z, w), got shape {list(reference.shape)}"
+        raise ArgumentError(
+            "argument `thigh_reference`: expected finite quaternions [2, 4] "
+            f"(left, right; x, y, z, w), got shape {list(reference.shape)}"
         )
     return np.ascontiguousarray(reference)
 
@@ -278,19 +282,19 @@ def gait_many(
     names = motions[0].skeleton.names
     other = next((m for m in motions if m.skeleton.names != names), None)
     if other is not None:
-        raise MocapError(
+        raise ArgumentError(
             f"argument `motions`: every motion needs the same joints; {len(other.skeleton.names)} joints "
             f"({', '.join(other.skeleton.names[:3])}, ...) differ from the first motion's"
         )
     roles = _roles(motions[0], roles)
     if floor is not None and not np.isfinite(float(floor)):
-        raise MocapError(f"argument `floor`: must be a finite height or None, got {floor}")
+        raise ArgumentError(f"argument `floor`: must be a finite height or None, got {floor}")
     if thigh_reference is not None:
         thigh_reference = _thigh_reference(thigh_reference, None, True)
     if fk is None:
         fk = [m.fk() for m in motions]
     elif len(fk) != len(motions):
-        raise MocapError(f"argument `fk`: {len(fk)} results for {len(motions)} motions")
+        raise ArgumentError(f"argument `fk`: {len(fk)} results for {len(motions)} motions")
     clips = []
     for motion, (_, positions) in zip(motions, fk):
         skeleton = motion.skeleton

@@ -52,7 +52,7 @@ def open_input(path: str | os.PathLike, limit: int = MAX_INPUT_BYTES):
         mode = _stat_mode(path)
         if mode is None or stat.S_ISREG(mode) or stat.S_ISDIR(mode):
             raise
-        raise _not_regular(error.errno, mode, path) from None
+        raise _not_regular(error.errno or errno.EINVAL, mode, path) from None
     try:
         info = os.fstat(handle)
         if not stat.S_ISREG(info.st_mode):
@@ -133,7 +133,8 @@ def output_target(path: str | os.PathLike) -> Path:
     if not stat.S_ISREG(info.st_mode):
         what = file_kind(info.st_mode) if target == path else f"a symlink to {file_kind(info.st_mode)}, {target}"
         raise MocapError(
-            f"cannot write {path}: it is {what}, not a regular file (outputs replace regular files only; '-' writes to standard output)"
+            f"cannot write {path}: it is {what}, not a regular file (outputs replace regular files "
+            "only; '-' writes to standard output)"
         )
     return target
 
@@ -232,8 +233,9 @@ MODEL_ZIP_SLACK = 1 << 20  # a model file is its arrays plus the zip's own heade
 def read_model_file(source: str | os.PathLike | bytes, what: str) -> tuple[dict[str, np.ndarray], dict, str]:
     """The arrays, the JSON metadata (the array ``meta``, a JSON object) and a name for errors of
     an ``.npz`` model file, read with ``allow_pickle=False`` after checking from the ``.npy`` headers
-    that its arrays hold no objects and take at most :data:`MAX_MODEL_BYTES`. Any damage is a :class:`MocapError` naming the file and ``what``
-    it should be; checking the arrays against the model's schema is the caller's part."""
+    that its arrays hold no objects and take at most :data:`MAX_MODEL_BYTES`. Any damage is a
+    :class:`MocapError` naming the file and ``what`` it should be; checking the arrays against the
+    model's schema is the caller's part."""
     name = "<bytes>" if isinstance(source, (bytes, bytearray)) else str(source)
     try:
         data = (
@@ -290,7 +292,8 @@ def finite_array(arrays: dict, key: str, name: str, shape: tuple | None = None, 
     ):
         expected = f"shape {list(shape)}" if shape is not None else "any shape"
         raise MocapError(
-            f"{name}: {key!r} has shape {list(value.shape)} / dtype {value.dtype}, expected finite numbers of {expected}"
+            f"{name}: {key!r} has shape {list(value.shape)} / dtype {value.dtype}, expected finite "
+            f"numbers of {expected}"
         )
     return value
 

@@ -129,7 +129,8 @@ class Skeleton:
             raise MocapError("a skeleton needs at least one joint")
         if len(parents) != joints or offsets.shape != (joints, 3) or len(channels) != joints:
             raise MocapError(
-                f"skeleton parts disagree: {joints} names, {len(parents)} parents, offsets {list(offsets.shape)}, {len(channels)} channel lists"
+                f"skeleton parts disagree: {joints} names, {len(parents)} parents, offsets "
+                f"{list(offsets.shape)}, {len(channels)} channel lists"
             )
         if len(set(names)) != joints:
             duplicate = next(n for n in names if names.count(n) > 1)
@@ -391,7 +392,8 @@ class Motion:
             new_time = self.duration / (n_frames - 1)
         if not frames * joints <= MAX_RESAMPLED_JOINT_FRAMES:
             raise MocapError(
-                f"resample: {what} is {frames:.6g} frames x {joints} joints, more than the {MAX_RESAMPLED_JOINT_FRAMES:,} "
+                f"resample: {what} is {frames:.6g} frames x {joints} joints, more than the "
+                f"{MAX_RESAMPLED_JOINT_FRAMES:,} "
                 f"joint-frames (56 bytes each) a resampled motion may have"
             )
         if not (

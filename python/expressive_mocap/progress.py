@@ -110,7 +110,7 @@ def line_log(enabled: bool = True, stream: TextIO | None = None):
     """A ``log(line)`` callable for work that reports itself in lines (training): on a terminal,
     a line ending in ``\\r`` (a running count) is redrawn in place by the next; elsewhere only
     complete lines are written, ``\\r`` ones every ``10 s``."""
-    state = {"width": 0, "shown": 0.0}
+    state: dict[str, float] = {"width": 0, "shown": 0.0}
 
     def log(text: str) -> None:
         if not enabled:
@@ -120,7 +120,7 @@ def line_log(enabled: bool = True, stream: TextIO | None = None):
         running = text.endswith("\r")
         text = text.rstrip("\r")
         if terminal:
-            out.write("\r" + text.ljust(state["width"]) + ("" if running else "\n"))
+            out.write("\r" + text.ljust(int(state["width"])) + ("" if running else "\n"))
             state["width"] = len(text) if running else 0
         elif not running or time.perf_counter() - state["shown"] >= 10.0:
             state["shown"] = time.perf_counter()

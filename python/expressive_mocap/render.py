@@ -285,7 +285,8 @@ def render(
     if str(path).lower().endswith(".gif"):
         return render_animation(motions, path, titles, view, **options)
     if str(path).lower().endswith(".png"):
-        return render_poses(motions, path, titles, view=view, **options)
+        render_poses(motions, path, titles, view=view, **options)
+        return None
     raise MocapError(f"render: the output must end in .png or .gif, got {path}")
 
 

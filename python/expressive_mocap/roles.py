@@ -88,7 +88,8 @@ class JointRoles:
         if problems:
             raise MocapError(
                 f"cannot tell which joint is the {'; '.join(problems)}: pass it by name, e.g. "
-                f"JointRoles.find(skeleton, {problems[0].split()[0]}='JointName'); joints are: {', '.join(skeleton.names)}"
+                f"JointRoles.find(skeleton, {problems[0].split()[0]}='JointName'); joints are: "
+                f"{', '.join(skeleton.names)}"
             )
         spine = _chain(skeleton, found["hips"], found["head"])
         return cls(

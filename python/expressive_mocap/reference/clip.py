@@ -30,7 +30,7 @@ def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | No
     parents = np.asarray(parents)
     thresholds = (gait.height_threshold, gait.speed_threshold, gait.min_duration, gait.floor_percentile)
     dtype = np.float32 if outputs.float32 else np.float64
-    out = []
+    out: list[tuple | Exception] = []  # per clip its outputs, or the error that stopped it
     for clip in clips:
         source = clip.source
         if isinstance(source, (str, os.PathLike)):
@@ -50,10 +50,11 @@ def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | No
         local, translations = decoded
         _, world = forward_kinematics(local, translations, parents)
         gait_clip = (world, local, clip.frame_time, clip.height, clip.hips_rest_height)
-        wanted = [
-            clip_gait_many([gait_clip], roles, *thresholds, True, False, f.floor, f.thigh_reference)[0][0]
-            for f in outputs.features
-        ]
+        wanted = []  # features were asked for: the kernel gives them, never None
+        for f in outputs.features:
+            features, _ = clip_gait_many([gait_clip], roles, *thresholds, True, False, f.floor, f.thigh_reference)[0]
+            assert features is not None
+            wanted.append(features)
         found = clip_gait_many([gait_clip], roles, *thresholds, False, True)[0][1] if outputs.contacts else None
         out.append(
             (

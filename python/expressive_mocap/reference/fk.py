@@ -23,7 +23,8 @@ def forward_kinematics(
         raise ArgumentError(f"argument `rotations`: expected shape [F, {joints}, 4], got {list(rotations.shape)}")
     if translations.shape != rotations.shape[:2] + (3,):
         raise ArgumentError(
-            f"argument `translations`: expected shape [{rotations.shape[0]}, {joints}, 3], got {list(translations.shape)}"
+            f"argument `translations`: expected shape [{rotations.shape[0]}, {joints}, 3], got "
+            f"{list(translations.shape)}"
         )
     world_rot = np.empty_like(rotations, dtype=np.float64)
     world_pos = np.empty_like(translations, dtype=np.float64)

@@ -62,16 +62,16 @@ def absorb_short_runs(signal: np.ndarray, min_frames: int) -> np.ndarray:
     signal = np.array(signal, dtype=bool)
     starts, lengths = _runs(signal)
     values = list(signal[starts])
-    starts, lengths = list(starts), list(lengths)
-    while len(lengths) >= 3:
-        interior = np.array(lengths[1:-1])
+    start_list, length_list = list(starts), list(lengths)
+    while len(length_list) >= 3:
+        interior = np.array(length_list[1:-1])
         i = int(np.argmin(interior)) + 1
-        if lengths[i] >= min_frames:
+        if length_list[i] >= min_frames:
             break
         # Flipping run i merges it with both neighbours into one run.
-        lengths[i - 1 : i + 2] = [lengths[i - 1] + lengths[i] + lengths[i + 1]]
-        del values[i : i + 2], starts[i : i + 2]
-    return np.repeat(np.array(values, dtype=bool), lengths) if lengths else signal
+        length_list[i - 1 : i + 2] = [length_list[i - 1] + length_list[i] + length_list[i + 1]]
+        del values[i : i + 2], start_list[i : i + 2]
+    return np.repeat(np.array(values, dtype=bool), length_list) if length_list else signal
 
 
 def hold_filter(signal: np.ndarray, min_frames: int) -> np.ndarray:

@@ -15,7 +15,8 @@ def check_layers(x: np.ndarray, weights: list, biases: list, activations: list) 
     n = len(weights)
     if len(biases) != n or len(activations) != n:
         raise ArgumentError(
-            f"arguments `weights`, `biases`, `activations`: one of each a layer, got {n}, {len(biases)} and {len(activations)}"
+            f"arguments `weights`, `biases`, `activations`: one of each a layer, got {n}, "
+            f"{len(biases)} and {len(activations)}"
         )
     if n == 0:
         raise ArgumentError("argument `weights`: a network needs at least one layer")
@@ -31,7 +32,8 @@ def check_layers(x: np.ndarray, weights: list, biases: list, activations: list) 
             raise ArgumentError(f"argument `weights`: layer {i} must be 2-D [in, out], got shape {list(w.shape)}")
         if min(w.shape) == 0:
             raise ArgumentError(
-                f"argument `weights`: layer {i} has shape {list(w.shape)}: every layer needs at least one input and one output"
+                f"argument `weights`: layer {i} has shape {list(w.shape)}: every layer needs at least "
+                "one input and one output"
             )
         if w.shape[0] != previous:
             raise ArgumentError(

@@ -10,6 +10,7 @@ import io
 import math
 import re
 import warnings
+from typing import NoReturn
 
 import numpy as np
 
@@ -80,7 +81,7 @@ def decode_channels(values, rotation_columns, orders, position_columns, offsets)
 def read_motion_blocks(blocks: list) -> list:
     """Parse and decode many blocks: per block (``data``, ``start``, ``frames``, ``layout``: see
     ``expressive_mocap.ops.MotionBlock``) a ``(rotations, translations)`` pair or a ``ParseError``."""
-    results = []
+    results: list[tuple[np.ndarray, np.ndarray] | ParseError] = []
     for block in blocks:
         layout = block.layout
         try:
@@ -93,7 +94,7 @@ def read_motion_blocks(blocks: list) -> list:
     return results
 
 
-def _raise_first_problem(block: bytes, frames: int, channels: int) -> None:
+def _raise_first_problem(block: bytes, frames: int, channels: int) -> NoReturn:
     lines = block.split(b"\n")
     found = 0
     for index, line in enumerate(lines):

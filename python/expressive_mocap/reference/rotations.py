@@ -23,13 +23,14 @@ def euler_to_quat(angles: np.ndarray, orders: np.ndarray) -> np.ndarray:
     """``angles [F, J, 3]`` degrees, ``orders [J, 3]`` axis indices -> quaternions ``[F, J, 4]``."""
     orders = _check(angles, orders, "angles", 3)
     half = np.radians(angles) * 0.5
-    result = None
-    for k in range(3):
+    result = np.zeros(angles.shape[:2] + (4,))
+    result[..., 3] = 1.0
+    for k in range(3):  # the intrinsic rotations one after the other, first axis first
         q = np.zeros(angles.shape[:2] + (4,))
         axis_onehot = np.eye(3)[orders[:, k]]  # [J, 3]
         q[..., :3] = axis_onehot * np.sin(half[..., k : k + 1])
         q[..., 3] = np.cos(half[..., k])
-        result = q if result is None else quat.mul(result, q)
+        result = quat.mul(result, q)
     return result
 
 
