@@ -90,9 +90,10 @@ def find_data(folder: str | None) -> Path:
 
 def machine() -> dict:
     cpu = next(
-        (l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor()
+        (line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")),
+        platform.processor(),
     )
-    mem_kb = next(int(l.split()[1]) for l in open("/proc/meminfo") if l.startswith("MemTotal"))
+    mem_kb = next(int(line.split()[1]) for line in open("/proc/meminfo") if line.startswith("MemTotal"))
     try:
         commit = subprocess.run(
             ["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True
@@ -105,7 +106,10 @@ def machine() -> dict:
         "ram_gib": mem_kb / 2**20,
         "python": platform.python_version(),
         "numpy": np.__version__,
-        "package": f"expressive-mocap {em.__version__} ({commit}), Rust threads: {getattr(em.backend._core, 'num_threads', '?')}",
+        "package": (
+            f"expressive-mocap {em.__version__} ({commit}), Rust "
+            f"threads: {getattr(em.backend._core, 'num_threads', '?')}"
+        ),
     }
 
 
@@ -229,7 +233,8 @@ def reader_breakdown(paths) -> tuple[list, str]:
     else:
         rows.append(
             (
-                f"(the steps above overlap: threads run concurrently; their sum exceeds the call by {top - total:.3f} s)",
+                "(the steps above overlap: threads run concurrently; "
+                f"their sum exceeds the call by {top - total:.3f} s)",
                 top - total,
             )
         )
@@ -248,7 +253,8 @@ def reader_breakdown(paths) -> tuple[list, str]:
             size = sum(len(b[0]) - b[1] for b in blocks)
             rows.append(
                 (
-                    f"split of the Rust call on its first batch ({len(blocks)} files, {size / MB:.0f} MB, called again alone):",
+                    f"split of the Rust call on its first batch ({len(blocks)} "
+                    f"files, {size / MB:.0f} MB, called again alone):",
                     fused,
                 )
             )
@@ -545,7 +551,8 @@ def measure_end_to_end(paths_file: str, conv_file: str | None, peers) -> dict:
             return None
         runs.setdefault(key, []).append(result)
         log(
-            f"end-to-end: {key} read {result['read_s']:.2f}s + fk {result['fk_s']:.2f}s, peak RSS {result['peak_rss'] / MB:.0f} MB"
+            f"end-to-end: {key} read {result['read_s']:.2f}s + fk "
+            f"{result['fk_s']:.2f}s, peak RSS {result['peak_rss'] / MB:.0f} MB"
         )
         return result
 
@@ -611,19 +618,22 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
     command = " ".join(["python", os.path.relpath(sys.argv[0], REPO)] + sys.argv[1:])
     out = [
         f"- date: {started:%Y-%m-%d %H:%M} (the run took {elapsed / 60:.1f} min)",
-        f"- machine: {info['cpu']}, {info['cores']} cores, {info['ram_gib']:.1f} GiB RAM; Python {info['python']}, NumPy {info['numpy']}",
+        f"- machine: {info['cpu']}, {info['cores']} cores, {info['ram_gib']:.1f} "
+        f"GiB RAM; Python {info['python']}, NumPy {info['numpy']}",
         f"- package: {info['package']}",
         f"- command: `{command}`",
-        f"- data: {stats['clips']} clips, {n_bytes / MB:.1f} MB, {frames:,} frames, {joint_frames / 1e6:.2f} M joint-frames"
+        f"- data: {stats['clips']} clips, {n_bytes / MB:.1f} MB, "
+        f"{frames:,} frames, {joint_frames / 1e6:.2f} M joint-frames"
         + ("" if full else f" (first {args.limit} clips only: targets not judged)"),
         f"- method: {args.rounds} rounds of read / FK in one process, the order rotated each round (times: medians; "
-        "ratios: medians of same-round ratios); end-to-end runs each in a fresh child process, ours right before and after "
-        "every other implementation; page cache warm; peers single-threaded, ours on 2 threads",
+        "ratios: medians of same-round ratios); end-to-end runs each in a fresh child process, ours right before "
+        "and after every other implementation; page cache warm; peers single-threaded, ours on 2 threads",
         f"- {CITATION}\n",
     ]
     if info.get("changed"):
         out.append(
-            "**Warning: the package's files changed during this run (rebuilt or edited): the figures mix versions; run again.**\n"
+            "**Warning: the package's files changed during this run "
+            "(rebuilt or edited): the figures mix versions; run again.**\n"
         )
     if e2e and e2e["failed"]:
         out.append(f"**Child runs that failed (see stderr): {', '.join(e2e['failed'])}.**\n")
@@ -644,7 +654,10 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         rate_row("ours, NumPy twin backend: `read_bvh_many`", t["numpy_read"], vs="1.0x"),
     ]
     if "rust" in runs:
-        cpu = f"user {child_median('rust', 'read_user_s'):.1f} s + sys {child_median('rust', 'read_sys_s'):.1f} s CPU, {child_median('rust', 'read_minflt') / 1e3:.0f} k page faults"
+        cpu = (
+            f"user {child_median('rust', 'read_user_s'):.1f} s + sys {child_median('rust', 'read_sys_s'):.1f} "
+            f"s CPU, {child_median('rust', 'read_minflt') / 1e3:.0f} k page faults"
+        )
         rows.append(
             rate_row(
                 f"ours, Rust: `read_bvh_many`, first call in a fresh process ({len(runs['rust'])} runs)",
@@ -719,9 +732,10 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         out.append("### 3. End to end (read + FK), each run in a fresh process; peak memory\n")
         base = min(x["baseline_rss"] for results in runs.values() for x in results)
         out.append(
-            f"Decoded float64 arrays (rotations F*J*4*8 + translations F*J*3*8 bytes): **{decoded / MB:.0f} MB**. "
-            "Peak = the child's RSS high-water mark, `VmHWM` from /proc/self/status (`ru_maxrss` would report the "
-            f"parent's peak, which survives exec), interpreter and imports included (about {base / MB:.0f} MB before reading).\n"
+            "Decoded float64 arrays (rotations F*J*4*8 + translations F*J*3*8 bytes): "
+            f"**{decoded / MB:.0f} MB**. Peak = the child's RSS high-water mark, `VmHWM` from "
+            "/proc/self/status (`ru_maxrss` would report the parent's peak, which survives "
+            f"exec), interpreter and imports included (about {base / MB:.0f} MB before reading).\n"
         )
         labels = {
             "rust-read": "ours, Rust, read only (keeps the motions)",
@@ -764,10 +778,10 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         )
         if conv_stats:
             out.append(
-                "pybvh cannot read the Bandai files (it rejects position channels on non-root joints), so every clip was "
-                "converted once, with our writer, to a rotation-only file (non-root joints keep only their three rotation "
-                f"channels; 6 decimals): {conv_stats['bytes'] / MB:.1f} MB in {conv_stats['seconds']:.1f} s. pybvh and ours "
-                "were timed on those same converted files.\n"
+                "pybvh cannot read the Bandai files (it rejects position channels on non-root joints), so "
+                "every clip was converted once, with our writer, to a rotation-only file (non-root joints "
+                f"keep only their three rotation channels; 6 decimals): {conv_stats['bytes'] / MB:.1f} MB in "
+                f"{conv_stats['seconds']:.1f} s. pybvh and ours were timed on those same converted files.\n"
             )
 
     if checks:
@@ -785,18 +799,18 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
                 ["step", "s", "share of the call"],
                 [
                     [
-                        l.replace("  ", "&nbsp;&nbsp;&nbsp;"),
+                        label.replace("  ", "&nbsp;&nbsp;&nbsp;"),
                         f"{v:.3f}",
-                        "" if l.startswith(("split", "  parsing", "  the rest")) else f"{v / whole:.0%}",
+                        "" if label.startswith(("split", "  parsing", "  the rest")) else f"{v / whole:.0%}",
                     ]
-                    for l, v in breakdown
+                    for label, v in breakdown
                 ],
             )
             + "\n"
         )
         out.append(
             "cProfile of one more call (profiling inflates the Python parts):\n\n```\n"
-            + "\n".join(l.rstrip() for l in profile_text.strip().splitlines() if l.strip())[:4000]
+            + "\n".join(line.rstrip() for line in profile_text.strip().splitlines() if line.strip())[:4000]
             + "\n```\n"
         )
 
@@ -878,7 +892,7 @@ def main() -> None:
     parser.add_argument(
         "--out",
         default=str(Path(__file__).resolve().parent / "RESULTS.md"),
-        help="markdown file whose section %r this rewrites (the others are kept)" % TITLE,
+        help=f"markdown file whose section {TITLE!r} this rewrites (the others are kept)",
     )
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--paths-file", help=argparse.SUPPRESS)

@@ -34,10 +34,12 @@ def main() -> None:
     widths = (19, 300, 300, 80)
     flops = 2 * args.rows * sum(a * b for a, b in zip(widths[:-1], widths[1:]))
     print(
-        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cpus, rayon threads {_core.num_threads}, NumPy {np.__version__}"
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} "
+        f"cpus, rayon threads {_core.num_threads}, NumPy {np.__version__}"
     )
     print(
-        f"network {' -> '.join(map(str, widths))}, {args.rows} rows, {flops / 1e9:.1f} GFLOP a pass, best of {args.repeat}"
+        f"network {' -> '.join(map(str, widths))}, {args.rows} rows, "
+        f"{flops / 1e9:.1f} GFLOP a pass, best of {args.repeat}"
     )
     for dtype in (np.float32, np.float64):
         rng = np.random.default_rng(0)
@@ -52,8 +54,9 @@ def main() -> None:
             del out
         rust, numpy = best["rust"], best["numpy"]
         print(
-            f"{np.dtype(dtype).name:8s} rust {rust * 1e3:7.1f} ms ({args.rows / rust / 1e6:5.2f} M rows/s, {flops / rust / 1e9:5.1f} GFLOP/s)"
-            f"   numpy {numpy * 1e3:7.1f} ms ({args.rows / numpy / 1e6:5.2f} M rows/s)   numpy/rust {numpy / rust:4.2f}x"
+            f"{np.dtype(dtype).name:8s} rust {rust * 1e3:7.1f} ms ({args.rows / rust / 1e6:5.2f} "
+            f"M rows/s, {flops / rust / 1e9:5.1f} GFLOP/s)   numpy {numpy * 1e3:7.1f} ms "
+            f"({args.rows / numpy / 1e6:5.2f} M rows/s)   numpy/rust {numpy / rust:4.2f}x"
         )
 
 

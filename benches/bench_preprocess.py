@@ -139,15 +139,17 @@ def kernels_child(folder: str) -> None:
         timed("kernels", lambda: work.run_kernels(items, prepared, fmt.DEFAULT_KEEP, None, False))
         texts = timed("read", lambda: [Path(clip.source).read_bytes() for clip in group.clips])
         blocks = [ops.MotionBlock(text, clip.start, clip.frames, clip.layout) for text, clip in zip(texts, group.clips)]
-        decoded = timed("parse", lambda: core.read_motion_blocks(blocks))
-        posed = timed("fk", lambda: core.forward_kinematics_many([(r, t, group.parents) for r, t in decoded]))
+        decoded = timed("parse", lambda blocks=blocks: core.read_motion_blocks(blocks))
+        posed = timed(
+            "fk", lambda decoded=decoded: core.forward_kinematics_many([(r, t, group.parents) for r, t in decoded])
+        )
         gait = [
             (world, local, clip.frame_time, clip.height, clip.hips_rest_height)
             for (_, world), (local, _), clip in zip(posed, decoded, group.clips)
         ]
         timed(
             "gait",
-            lambda: core.clip_gait_many(
+            lambda gait=gait: core.clip_gait_many(
                 gait,
                 group.gait_joints,
                 HEIGHT_THRESHOLD,
@@ -193,16 +195,18 @@ def run_child(name: str, sources: dict, work: Path) -> dict:
     figures["out_bytes"] = sum(p.stat().st_size for p in out.iterdir())
     shutil.rmtree(out, ignore_errors=True)
     log(
-        f"{name}: {figures['wall']:.2f} s (headers {figures['headers']:.2f}, kernels {figures['kernels']:.2f}, write {figures['write']:.2f}), peak {figures['peak'] / MB:.0f} MB"
+        f"{name}: {figures['wall']:.2f} s (headers {figures['headers']:.2f}, kernels "
+        f"{figures['kernels']:.2f}, write {figures['write']:.2f}), peak {figures['peak'] / MB:.0f} MB"
     )
     return figures
 
 
 def machine() -> str:
     cpu = next(
-        (l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor()
+        (line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")),
+        platform.processor(),
     )
-    mem = next(int(l.split()[1]) for l in open("/proc/meminfo") if l.startswith("MemTotal")) / 2**20
+    mem = next(int(line.split()[1]) for line in open("/proc/meminfo") if line.startswith("MemTotal")) / 2**20
     load = os.getloadavg()
     commit = subprocess.run(
         ["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True
@@ -210,8 +214,8 @@ def machine() -> str:
     import numpy
 
     return (
-        f"{cpu}, {os.cpu_count()} cores, {mem:.1f} GiB RAM; Python {platform.python_version()}, NumPy {numpy.__version__}; "
-        f"commit {commit}; load average at the start {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}"
+        f"{cpu}, {os.cpu_count()} cores, {mem:.1f} GiB RAM; Python {platform.python_version()}, NumPy "
+        f"{numpy.__version__}; commit {commit}; load average at the start {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}"
     )
 
 
@@ -228,7 +232,7 @@ def main() -> None:
     parser.add_argument(
         "--out",
         default=str(REPO / "benches" / "RESULTS.md"),
-        help="markdown file whose section %r this rewrites (the others are kept)" % TITLE,
+        help=f"markdown file whose section {TITLE!r} this rewrites (the others are kept)",
     )
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--child-kernels", help=argparse.SUPPRESS)
@@ -290,11 +294,14 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
         f"- date: {started:%Y-%m-%d %H:%M} (the run took {seconds / 60:.1f} min)",
         f"- machine: {info}",
         f"- command: `python benches/bench_preprocess.py{' --limit ' + str(args.limit) if args.limit else ''}`; "
-        f"{args.rounds} rounds of the Rust configurations, order rotated each round, each run a fresh child process (times: medians)",
-        f"- load average at the end: {', '.join(f'{x:.1f}' for x in os.getloadavg())} (other jobs on the machine slow every figure alike)",
-        f"- data: {clips} clips, {size / MB:.1f} MB, {frames:,} frames; the zip: {zip_size / MB:.1f} MB deflated, made in {zip_seconds:.1f} s (not timed below)",
-        "- each run: parse + FK + dynamic features + foot contacts (+ the decomposition with --model) + writing the dataset "
-        "(positions, features, contacts[, activity]) to a local folder; page cache warm",
+        f"{args.rounds} rounds of the Rust configurations, order rotated each round, each run a fresh child "
+        "process (times: medians)",
+        f"- load average at the end: {', '.join(f'{x:.1f}' for x in os.getloadavg())} "
+        "(other jobs on the machine slow every figure alike)",
+        f"- data: {clips} clips, {size / MB:.1f} MB, {frames:,} frames; the zip: "
+        f"{zip_size / MB:.1f} MB deflated, made in {zip_seconds:.1f} s (not timed below)",
+        "- each run: parse + FK + dynamic features + foot contacts (+ the decomposition with --model) + "
+        "writing the dataset (positions, features, contacts[, activity]) to a local folder; page cache warm",
         f"- {CITATION}",
         "",
         "| configuration | runs | wall s | MB/s | frames/s | headers s | kernels s | writing s | peak RSS | output |",
@@ -305,8 +312,9 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
             continue
         wall = med(name, "wall")
         lines.append(
-            f"| {name} | {len(rs)} | {wall:.2f} | {size / MB / wall:.0f} | {frames / wall / 1e3:.0f} k | {med(name, 'headers'):.2f} | "
-            f"{med(name, 'kernels'):.2f} | {med(name, 'write'):.2f} | {max(r['peak'] for r in rs) / MB:.0f} MB | {rs[0]['out_bytes'] / MB:.0f} MB |"
+            f"| {name} | {len(rs)} | {wall:.2f} | {size / MB / wall:.0f} | {frames / wall / 1e3:.0f} "
+            f"k | {med(name, 'headers'):.2f} | {med(name, 'kernels'):.2f} | {med(name, 'write'):.2f} "
+            f"| {max(r['peak'] for r in rs) / MB:.0f} MB | {rs[0]['out_bytes'] / MB:.0f} MB |"
         )
     folder = med("folder, Rust, 2 cores", "wall")
     targets = [
@@ -358,10 +366,11 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
     )
     lines += [
         "",
-        "The scaling ceiling on this machine, same run: the pipeline's kernel step alone (`clip_pipeline_many` on every clip, "
-        f"headers read beforehand; best of 3), 1 core -> 2 cores: {one_core['kernels']:.2f} s -> {all_cores['kernels']:.2f} s "
-        f"({one_core['kernels'] / all_cores['kernels']:.2f}x). Where its time goes (the kernels it fuses, each called on its own on every "
-        f"clip, their intermediates kept between calls; 1 core -> 2 cores): {parts}.",
+        "The scaling ceiling on this machine, same run: the pipeline's kernel step alone "
+        "(`clip_pipeline_many` on every clip, headers read beforehand; best of 3), 1 core -> 2 cores: "
+        f"{one_core['kernels']:.2f} s -> {all_cores['kernels']:.2f} s "
+        f"({one_core['kernels'] / all_cores['kernels']:.2f}x). Where its time goes (the kernels it fuses, each "
+        f"called on its own on every clip, their intermediates kept between calls; 1 core -> 2 cores): {parts}.",
     ]
     return "\n".join(lines) + "\n"
 

@@ -30,7 +30,8 @@ def main() -> None:
     motion = walk_and_wave(seconds=10.0).waving
     model = BodyModel.load()
     print(
-        f"streaming decoupler, {motion.n_frames} frames at {motion.fps:g} fps (budget {1000 * motion.frame_time:.1f} ms a frame)"
+        f"streaming decoupler, {motion.n_frames} frames at {motion.fps:g} "
+        f"fps (budget {1000 * motion.frame_time:.1f} ms a frame)"
     )
     print("| kernels | median ms | 95th percentile ms | max ms |\n|---|---|---|---|")
     for backend in ("rust", "numpy"):

@@ -25,7 +25,8 @@ def main() -> None:
     args = parser.parse_args()
     X, P, groups = synthetic_data(args.clips, args.frames)
     print(
-        f"{len(X)} rows, {X.shape[1]} features, D = {P.shape[1]}, H = {args.hidden}, max_iter {args.max_iter} a stage, {os.cpu_count()} cpus"
+        f"{len(X)} rows, {X.shape[1]} features, D = {P.shape[1]}, H = "
+        f"{args.hidden}, max_iter {args.max_iter} a stage, {os.cpu_count()} cpus"
     )
     start = time.perf_counter()
     train_stacked_network(

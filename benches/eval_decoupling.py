@@ -171,8 +171,10 @@ def main() -> None:
     report = [
         "# Decoupling on real data",
         "",
-        f"- date: {time.strftime('%Y-%m-%d %H:%M')}; model: {args.model or 'the shipped model'}; command: `python benches/eval_decoupling.py`",
-        "- data: Bandai-Namco-Research-Motiondataset 1 and 2 (Bandai Namco Research Inc., 2022; Kobayashi et al., arXiv:2306.08861), CC BY-NC 4.0.",
+        f"- date: {time.strftime('%Y-%m-%d %H:%M')}; model: "
+        f"{args.model or 'the shipped model'}; command: `python benches/eval_decoupling.py`",
+        "- data: Bandai-Namco-Research-Motiondataset 1 and 2 (Bandai Namco "
+        "Research Inc., 2022; Kobayashi et al., arXiv:2306.08861), CC BY-NC 4.0.",
         "- mean activity index per joint (0: body mechanics only, 1: fully expressive); bold from 0.3 up.",
         "",
         "## Dataset-2 (the model's session): neutral test clips vs gestures",
@@ -183,7 +185,8 @@ def main() -> None:
         "",
         table(rows1, names, counts),
         "",
-        f"## Dataset-1 with calibration on its neutral clips `{', '.join(p.stem for p in calibration_clips)}` (not evaluated)",
+        "## Dataset-1 with calibration on its neutral clips "
+        f"`{', '.join(p.stem for p in calibration_clips)}` (not evaluated)",
         "",
         table(rows1c, names, counts),
         "",

@@ -49,7 +49,9 @@ HELD_OUT = "walk_normal_012"
 PROTOTYPE_UNION = 35  # DOFs in the throwaway prototype's union of 8 people (52% of 67)
 CYCLES = ("all", "middle")  # the default (every cycle of a clip) and the paper's single cycle
 CYCLE_MEANING = {
-    "all": "every cycle of a clip: their mean is the performance, predictability is measured over every one (the default)",
+    "all": (
+        "every cycle of a clip: their mean is the performance, predictability is measured over every one (the default)"
+    ),
     "middle": "one cycle per clip, the one nearest the clip's middle (the paper's single cycle)",
 }
 
@@ -104,13 +106,14 @@ def readings_checked(people, default) -> list[str]:
     lines = [
         "### Readings checked against the paper",
         "",
-        "Each row reads one step differently (`benches/exaggeration_variants.py` patches that one piece; the package "
-        "is unchanged) and reruns the whole validation. Per person: share of DOFs swapped and ratio (random / best "
-        "same-size in brackets); union: DOFs swapped, ratio over DOFs and over joint positions; warp: leave-one-person-out "
-        "mean over DOFs (positions). Each is measured with every cycle of each clip (`all`, the default) and with the paper's "
-        "single cycle (`middle`). Not listed because they cannot change the ranking: normalising predictability by "
-        "the sum of all singular values instead of the kept ones (a constant factor per person, removed when E is "
-        "normalised) and the column order of `A` (the SVD's `U` and `s` do not depend on it).",
+        "Each row reads one step differently (`benches/exaggeration_variants.py` patches that one "
+        "piece; the package is unchanged) and reruns the whole validation. Per person: share of DOFs "
+        "swapped and ratio (random / best same-size in brackets); union: DOFs swapped, ratio over DOFs "
+        "and over joint positions; warp: leave-one-person-out mean over DOFs (positions). Each is "
+        "measured with every cycle of each clip (`all`, the default) and with the paper's single cycle "
+        "(`middle`). Not listed because they cannot change the ranking: normalising predictability by "
+        "the sum of all singular values instead of the kept ones (a constant factor per person, removed "
+        "when E is normalised) and the column order of `A` (the SVD's `U` and `s` do not depend on it).",
         "",
         "| variant | read as | cycle | per person | union | ratio | positions | warp | Spearman |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -121,10 +124,11 @@ def readings_checked(people, default) -> list[str]:
             m = measured[name, cycle] = variants.measure(people, name, cycle)
             u = m["union"]
             lines.append(
-                f"| {name} | {what if cycle == CYCLES[0] else ''} | `{cycle}` | {variants.span([100 * v for v in m['share']], '{:.0f}')}%, "
-                f"{variants.span(m['ratio'])} ({variants.span(m['random'], '{:.2f}')} / {variants.span(m['best'], '{:.2f}')}) | "
-                f"{u.swapped} ({u.share:.0%}) | {u.ratio:.3f} ({u.random:.2f} / {u.best:.2f}) | {u.ratio_positions:.3f} | "
-                f"{m['warp']:.3f} ({m['warp_positions']:.3f}) | {m['spearman']:.3f} |"
+                f"| {name} | {what if cycle == CYCLES[0] else ''} | `{cycle}` | "
+                f"{variants.span([100 * v for v in m['share']], '{:.0f}')}%, {variants.span(m['ratio'])} "
+                f"({variants.span(m['random'], '{:.2f}')} / {variants.span(m['best'], '{:.2f}')}) | "
+                f"{u.swapped} ({u.share:.0%}) | {u.ratio:.3f} ({u.random:.2f} / {u.best:.2f}) | "
+                f"{u.ratio_positions:.3f} | {m['warp']:.3f} ({m['warp_positions']:.3f}) | {m['spearman']:.3f} |"
             )
     both = [
         f"{n} (`{c}`)"
@@ -141,8 +145,10 @@ def readings_checked(people, default) -> list[str]:
         "the deviation in the joint's own mean frame) is the usual reading and the one the edit uses, and the DOF that "
         "reaches the share is part of the set ('accumulate until ... reached'). None of these readings was adopted. "
         "The one change from our reading that was adopted is the first row against `P-over-performances` (every cycle "
-        f'averaged, predictability over the performances: the former `cycle="mean"` option; union {former.ratio:.3f} / {former.ratio_positions:.3f}): with one sample per '
-        "intensity the correlation behind predictability rests on three points, and for three points the correlation of "
+        f'averaged, predictability over the performances: the former `cycle="mean"` option; union {former.ratio:.3f} / '
+        f"{former.ratio_positions:.3f}): with one sample per "
+        "intensity the correlation behind predictability rests on three points, and for three points the correlation "
+        "of "
         "pure noise follows the arcsine law (median |rho| 0.71); measured over every cycle it also sees how much a DOF "
         "varies from one step to the next. Which single cycle of each clip is taken moves the figures as much as any "
         "reading (`train(..., cycle=i)`, cycle `i` of each clip's left-foot cycles):",
@@ -155,19 +161,21 @@ def readings_checked(people, default) -> list[str]:
         m = variants.measure(people, "default", cycle)
         u = by_cycle[cycle] = m["union"]
         lines.append(
-            f"| `{cycle}` | {variants.span([100 * v for v in m['share']], '{:.0f}')}%, {variants.span(m['ratio'])} | "
-            f"{u.swapped} ({u.share:.0%}) | {u.ratio:.3f} | {u.ratio_positions:.3f} | {m['warp']:.3f} ({m['warp_positions']:.3f}) | {m['spearman']:.3f} |"
+            f"| `{cycle}` | {variants.span([100 * v for v in m['share']], '{:.0f}')}%, "
+            f"{variants.span(m['ratio'])} | {u.swapped} ({u.share:.0%}) | {u.ratio:.3f} | "
+            f"{u.ratio_positions:.3f} | {m['warp']:.3f} ({m['warp_positions']:.3f}) | {m['spearman']:.3f} |"
         )
     single = {c: u for c, u in by_cycle.items() if c not in CYCLES}
     hits = [f"`{c}`" for c, u in single.items() if u.ratio <= 0.30 and u.ratio_positions <= 0.10]
     lines += [
         "",
-        f"With one cycle per clip the union ratios over DOFs range over {min(u.ratio for u in single.values()):.3f}-{max(u.ratio for u in single.values()):.3f}, "
-        f"over positions {min(u.ratio_positions for u in single.values()):.3f}-{max(u.ratio_positions for u in single.values()):.3f}"
+        "With one cycle per clip the union ratios over DOFs range over "
+        f"{min(u.ratio for u in single.values()):.3f}-{max(u.ratio for u in single.values()):.3f}, over positions "
+        f"{min(u.ratio_positions for u in single.values()):.3f}-{max(u.ratio_positions for u in single.values()):.3f}"
         + (f" ({', '.join(hits)} meet both targets)" if hits else "")
-        + ": the paper takes 'a single walk cycle' without saying which, and which one moves the result as much as the targets' "
-        "margins. Choosing one because it meets them would be tuning; the default takes every cycle instead, which "
-        "leaves no such choice and uses all the data.",
+        + ": the paper takes 'a single walk cycle' without saying which, and which one moves the "
+        "result as much as the targets' margins. Choosing one because it meets them would be tuning; "
+        "the default takes every cycle instead, which leaves no such choice and uses all the data.",
     ]
     # The union's tail: which single DOFs decide it (the default).
     P = default.trajectories.shape[0]
@@ -181,16 +189,16 @@ def readings_checked(people, default) -> list[str]:
         u = swap_test(default, union_key=key)[-1]
         moves.append((abs(u.ratio - base.ratio), abs(u.ratio_positions - base.ratio_positions)))
         rows.append(
-            f"| {'drop' if default.key[d] else 'add'} {default.dof_names[d]} | {default.overall[d]:.4f} | {int(default.person_key[:, d].sum())} of {P} | "
-            f"{u.swapped} | {u.ratio:.3f} | {u.ratio_positions:.3f} |"
+            f"| {'drop' if default.key[d] else 'add'} {default.dof_names[d]} | {default.overall[d]:.4f} | "
+            f"{int(default.person_key[:, d].sum())} of {P} | {u.swapped} | {u.ratio:.3f} | {u.ratio_positions:.3f} |"
         )
     moves = np.max(moves, axis=0)
     lines += [
         "",
-        f"Why the union's figures are fragile (`all`; {base.swapped} DOFs, {base.ratio:.3f} / {base.ratio_positions:.3f}): its last "
-        f"members are key for only one or two of the {P} people, and one DOF in or out moves the ratios by up to "
-        f"{moves[0]:.3f} over DOFs and {moves[1]:.3f} over positions. The union with one DOF toggled (its members key for at "
-        "most two people, and the most expressive DOFs outside it):",
+        f"Why the union's figures are fragile (`all`; {base.swapped} DOFs, {base.ratio:.3f} / "
+        f"{base.ratio_positions:.3f}): its last members are key for only one or two of the {P} people, and one DOF "
+        f"in or out moves the ratios by up to {moves[0]:.3f} over DOFs and {moves[1]:.3f} over positions. The union "
+        "with one DOF toggled (its members key for at most two people, and the most expressive DOFs outside it):",
         "",
         "| DOF | mean E | key for | union | ratio | positions |",
         "|---|---|---|---|---|---|",
@@ -209,11 +217,13 @@ def main() -> None:
     report += [
         "Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0), walks `exhausted` < `normal` < `active` as "
         f'intensities 1 < 2 < 3. No actor label: "person" p (p = 1..{PEOPLE}) is take p of every style '
-        f"(`walk_exhausted_00p`, `walk_normal_00p`, `walk_active_00p`); the held-out walk is `{HELD_OUT}` (in no person).",
-        "Defaults of our reading of the paper (T = 50, rotation vectors relative to each person's mean, heading removed, "
-        "hips height / actor height, 99% energy, share 0.9, lines), except where a row says otherwise, and except one "
-        "choice: every cycle of a clip is used (its mean is the performance, predictability is measured over every "
-        "cycle; `cycle = all`), where the paper takes one (`cycle = middle`, measured beside it throughout).",
+        f"(`walk_exhausted_00p`, `walk_normal_00p`, `walk_active_00p`); the held-out walk is `{HELD_OUT}` (in no "
+        "person).",
+        "Defaults of our reading of the paper (T = 50, rotation vectors relative to each person's "
+        "mean, heading removed, hips height / actor height, 99% energy, share 0.9, lines), except "
+        "where a row says otherwise, and except one choice: every cycle of a clip is used (its "
+        "mean is the performance, predictability is measured over every cycle; `cycle = all`), "
+        "where the paper takes one (`cycle = middle`, measured beside it throughout).",
         "Produced by `PYTHONPATH=python python benches/exaggeration_experiment.py`.",
         "",
     ]
@@ -222,9 +232,10 @@ def main() -> None:
         models[cycle] = train(people, LEVELS, cycle=cycle)
     report += ["## Swap test and leave-one-person-out warp", ""]
     report += [
-        "Ratios `||swap - heavy|| / ||light - heavy||` (lower is better) over DOF trajectories and over world joint "
-        "positions (pose and hips height, no path), with the random same-size set (mean of 200) and the best same-size set "
-        "(largest light-heavy differences) in the same run. `union`: every person, the union key set, ratios averaged.",
+        "Ratios `||swap - heavy|| / ||light - heavy||` (lower is better) over DOF trajectories "
+        "and over world joint positions (pose and hips height, no path), with the random "
+        "same-size set (mean of 200) and the best same-size set (largest light-heavy "
+        "differences) in the same run. `union`: every person, the union key set, ratios averaged.",
         "",
     ]
     tests = {}
@@ -251,15 +262,16 @@ def main() -> None:
     report += [
         "### The union's size",
         "",
-        f"The union ratio depends mostly on how many DOFs are swapped. Checked as causes of our smaller union ({union.share:.0%} "
-        "against the prototype's 52%) and ruled out, for `all`: pooling the people's norms instead of averaging their "
-        f"ratios ({pooled[0]:.3f} / {pooled[1]:.3f} against {union.ratio:.3f} / {union.ratio_positions:.3f}); a basis per "
-        f"person instead of the shared one (a union of {int(own_basis.sum())} DOFs instead of {union.swapped}); the position "
-        "ratio's frame (heading removed, hips at the origin, each person's rotations rebuilt from their own mean: the real "
-        "poses, no path on the floor, which no DOF swap could carry). What differs is the ranking itself: our per-person key "
-        "sets are a little smaller than the prototype's (36-41%) and overlap more. Cut at the prototype's union size "
-        f"instead (the {PROTOTYPE_UNION} most expressive DOFs by the people's mean E; not the method's key set, for "
-        "comparison only):",
+        "The union ratio depends mostly on how many DOFs are swapped. Checked as causes of our smaller "
+        f"union ({union.share:.0%} against the prototype's 52%) and ruled out, for `all`: pooling the "
+        f"people's norms instead of averaging their ratios ({pooled[0]:.3f} / {pooled[1]:.3f} against "
+        f"{union.ratio:.3f} / {union.ratio_positions:.3f}); a basis per person instead of the shared "
+        f"one (a union of {int(own_basis.sum())} DOFs instead of {union.swapped}); the position ratio's "
+        "frame (heading removed, hips at the origin, each person's rotations rebuilt from their own "
+        "mean: the real poses, no path on the floor, which no DOF swap could carry). What differs is "
+        "the ranking itself: our per-person key sets are a little smaller than the prototype's "
+        f"(36-41%) and overlap more. Cut at the prototype's union size instead (the {PROTOTYPE_UNION} "
+        "most expressive DOFs by the people's mean E; not the method's key set, for comparison only):",
         "",
         "| cycle | DOFs swapped | ratio | random | best | positions | random | best |",
         "|---|---|---|---|---|---|---|---|",
@@ -269,8 +281,8 @@ def main() -> None:
         top[np.argsort(-model.overall)[:PROTOTYPE_UNION]] = True
         u = swap_test(model, union_key=top)[-1]
         report.append(
-            f"| `{cycle}` | {u.swapped} ({u.share:.0%}) | {u.ratio:.3f} | {u.random:.3f} | {u.best:.3f} | {u.ratio_positions:.3f} | "
-            f"{u.random_positions:.3f} | {u.best_positions:.3f} |"
+            f"| `{cycle}` | {u.swapped} ({u.share:.0%}) | {u.ratio:.3f} | {u.random:.3f} | {u.best:.3f} "
+            f"| {u.ratio_positions:.3f} | {u.random_positions:.3f} | {u.best_positions:.3f} |"
         )
     report += ["| prototype | 35 (52%) | 0.27 | | | 0.075 | | |", ""]
     report += [
@@ -285,8 +297,8 @@ def main() -> None:
             swaps = tests[cycle][0] if foot == 0 else swap_test(train(people, LEVELS, cycle=cycle, foot=1))
             u, pp = swaps[-1], swaps[:-1]
             report.append(
-                f"| `{cycle}` | {'left' if foot == 0 else 'right'} | {u.swapped} ({u.share:.0%}) | {u.ratio:.3f} | {u.ratio_positions:.3f} | "
-                f"{min(r.ratio for r in pp):.3f}-{max(r.ratio for r in pp):.3f} |"
+                f"| `{cycle}` | {'left' if foot == 0 else 'right'} | {u.swapped} ({u.share:.0%}) | {u.ratio:.3f} "
+                f"| {u.ratio_positions:.3f} | {min(r.ratio for r in pp):.3f}-{max(r.ratio for r in pp):.3f} |"
             )
     report.append("")
     report += readings_checked(people, default)
@@ -314,8 +326,9 @@ def main() -> None:
             out, rep = exaggerate(model, walk, k1, lock_feet=lock)
             results[k1, lock] = (out, rep)
             rows.append(
-                f"| {rep.k0:.2f} (est.) | {k1:g} | {'yes' if lock else 'no'} | {rep.stance_speed_input:.1f} | {rep.stance_speed_output:.1f} "
-                f"| {rep.stance_speed_output / rep.stance_speed_input:.2f} | {rep.foot_correction:.1f} / {rep.foot_residual:.1f} | {len(rep.clamped)} | "
+                f"| {rep.k0:.2f} (est.) | {k1:g} | {'yes' if lock else 'no'} | {rep.stance_speed_input:.1f} "
+                f"| {rep.stance_speed_output:.1f} | {rep.stance_speed_output / rep.stance_speed_input:.2f} "
+                f"| {rep.foot_correction:.1f} / {rep.foot_residual:.1f} | {len(rep.clamped)} | "
                 + ", ".join(f"{n} {v:.0f}" for n, v in sorted(rep.largest_change.items(), key=lambda kv: -kv[1])[:4])
                 + " |"
             )
@@ -332,20 +345,23 @@ def main() -> None:
     report += [
         f"## Exaggerating the held-out `{HELD_OUT}`",
         "",
-        "`k0` estimated by least squares on the mappings, each key coefficient weighted by how well the mapping predicts it; every DOF clamped to the range seen in training (rotation-vector "
-        "components measured from the people's mean rotations, as the edit measures them) widened by 10% of its width "
-        "(the default margin); changes cross-faded over 0.15 s at cycle boundaries; foot locking: during the input's "
-        "contacts each ankle and foot are pinned to the input's with two-bone leg IK, eased in and out over 0.1 s. "
-        "Stance-foot speed: mean horizontal speed of ankle and toe over the input's contact frames (cm/s); ankle "
-        "correction: the largest distance (cm) the IK moved an ankle / the largest it could not close (out of reach).",
+        "`k0` estimated by least squares on the mappings, each key coefficient weighted by how well the mapping "
+        "predicts it; every DOF clamped to the range seen in training (rotation-vector components measured from "
+        "the people's mean rotations, as the edit measures them) widened by 10% of its width (the default margin); "
+        "changes cross-faded over 0.15 s at cycle boundaries; foot locking: during the input's contacts each ankle "
+        "and foot are pinned to the input's with two-bone leg IK, eased in and out over 0.1 s. Stance-foot speed: "
+        "mean horizontal speed of ankle and toe over the input's contact frames (cm/s); ankle correction: the "
+        "largest distance (cm) the IK moved an ankle / the largest it could not close (out of reach).",
         "",
-        "| k0 | k1 | foot lock | stance speed in | out | ratio | ankle correction / left (cm) | DOFs clamped | largest changes (deg) |",
+        "| k0 | k1 | foot lock | stance speed in | out | ratio | ankle "
+        "correction / left (cm) | DOFs clamped | largest changes (deg) |",
         "|---|---|---|---|---|---|---|---|---|",
         *rows,
         "",
-        "The margin and the elbows at k = 4 (elbow flexion: the angle between upper-arm and forearm bones, 0 = straight; "
-        f"over every frame of the {3 * PEOPLE} training clips it reaches {trained[:, 0].max():.0f} / {trained[:, 1].max():.0f} "
-        f"degrees left / right, the input {elbow_flexion(walk)[:, 0].max():.0f} / {elbow_flexion(walk)[:, 1].max():.0f}):",
+        "The margin and the elbows at k = 4 (elbow flexion: the angle between upper-arm and "
+        f"forearm bones, 0 = straight; over every frame of the {3 * PEOPLE} training clips it "
+        f"reaches {trained[:, 0].max():.0f} / {trained[:, 1].max():.0f} degrees left / right, the "
+        f"input {elbow_flexion(walk)[:, 0].max():.0f} / {elbow_flexion(walk)[:, 1].max():.0f}):",
         "",
         "| margin | largest elbow flexion L / R (deg) | DOFs clamped | largest changes (deg) |",
         "|---|---|---|---|",
@@ -371,8 +387,10 @@ def main() -> None:
     report += [
         "## Speed",
         "",
-        f"- ranking and mappings, one person, 3 intensities x 22 joints, after loading (cycles, FK, contacts included): **{rank_ms:.1f} ms** (best of 7; target < 50 ms)",
-        f"- exaggerating a {long_walk.n_frames}-frame walk (the procedural walk on the same skeleton; foot locking on): **{exaggerate_ms:.1f} ms** (best of 7; target < 100 ms)",
+        "- ranking and mappings, one person, 3 intensities x 22 joints, after loading "
+        f"(cycles, FK, contacts included): **{rank_ms:.1f} ms** (best of 7; target < 50 ms)",
+        f"- exaggerating a {long_walk.n_frames}-frame walk (the procedural walk on the same "
+        f"skeleton; foot locking on): **{exaggerate_ms:.1f} ms** (best of 7; target < 100 ms)",
         f"- kernels: {em.get_backend()}; BLAS threads: OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')} "
         "(with OpenBLAS's default threads on this busy 2-core machine the SVD alone took ~300 ms)",
         "",
@@ -386,10 +404,12 @@ def main() -> None:
         union = swaps[-1]
         return [
             f"{min(s.ratio for s in per_person):.3f}-{max(s.ratio for s in per_person):.3f}",
-            f"margins {min(s.random - s.ratio for s in per_person):.3f}-{max(s.random - s.ratio for s in per_person):.3f}",
+            "margins "
+            f"{min(s.random - s.ratio for s in per_person):.3f}-{max(s.random - s.ratio for s in per_person):.3f}",
             f"{union.ratio:.3f} ({union.share:.0%} of DOFs swapped)",
             f"{union.ratio_positions:.3f}",
-            f"mean {np.mean([w.ratio for w in warps]):.3f} (range {min(w.ratio for w in warps):.3f}-{max(w.ratio for w in warps):.3f})",
+            f"mean {np.mean([w.ratio for w in warps]):.3f} (range "
+            f"{min(w.ratio for w in warps):.3f}-{max(w.ratio for w in warps):.3f})",
             f"{agreement.mean:.3f} ({agreement.dofs} DOFs with E > 0); {agreement.mean_all:.3f} (all DOFs)",
         ]
 
@@ -407,7 +427,8 @@ def main() -> None:
         "| target | cycle = `all` (default) | cycle = `middle` |",
         "|---|---|---|",
         *(f"| {t} | {a} | {b} |" for t, a, b in zip(targets, reached("all"), reached("middle"))),
-        f"| exaggerated walk's stance-foot speed with foot locking <= 1.2x the input's (k = 4) | {ex.stance_speed_output / ex.stance_speed_input:.2f}x | |",
+        "| exaggerated walk's stance-foot speed with foot locking <= 1.2x the "
+        f"input's (k = 4) | {ex.stance_speed_output / ex.stance_speed_input:.2f}x | |",
         "",
     ]
     atomic_write(HERE / "EXAGGERATION.md", "\n".join(report).encode())

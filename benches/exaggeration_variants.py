@@ -137,7 +137,8 @@ VARIANTS = {
         {"representation": "euler"},
     ),
     "P-eigenvalues": (
-        "predictability weighted by `s_i^2` (the paper's 'eigenvalue-weighted', eigenvalues of `A A^T`) instead of `s_i`",
+        "predictability weighted by `s_i^2` (the paper's "
+        "'eigenvalue-weighted', eigenvalues of `A A^T`) instead of `s_i`",
         {"fit": make_fit("s2")},
         {},
     ),
@@ -158,7 +159,8 @@ VARIANTS = {
         {},
     ),
     "children-weights": (
-        "`w_j` = the joint's own bones only (the paper's literal 'bone lengths of the joint's children') instead of the whole subtree",
+        "`w_j` = the joint's own bones only (the paper's literal 'bone "
+        "lengths of the joint's children') instead of the whole subtree",
         {"subtree_weights": children_weights},
         {},
     ),
@@ -224,10 +226,10 @@ def summary(m: dict) -> str:
     u = m["union"]
     return (
         f"per person {span([100 * v for v in m['share']], '{:.0f}')}% ratio {span(m['ratio'])} "
-        f"(random {span(m['random'])}, best {span(m['best'])}) | "
-        f"union {u.swapped} ({u.share:.0%}) ratio {u.ratio:.3f} (random {u.random:.3f}, best {u.best:.3f}) "
-        f"pos. {u.ratio_positions:.3f} (random {u.random_positions:.3f}, best {u.best_positions:.3f}) | "
-        f"warp {m['warp']:.3f} pos. {m['warp_positions']:.3f} | Spearman {m['spearman']:.3f} | height key {m['height_key']}"
+        f"(random {span(m['random'])}, best {span(m['best'])}) | union {u.swapped} ({u.share:.0%}) "
+        f"ratio {u.ratio:.3f} (random {u.random:.3f}, best {u.best:.3f}) pos. {u.ratio_positions:.3f} "
+        f"(random {u.random_positions:.3f}, best {u.best_positions:.3f}) | warp {m['warp']:.3f} pos. "
+        f"{m['warp_positions']:.3f} | Spearman {m['spearman']:.3f} | height key {m['height_key']}"
     )
 
 

@@ -51,7 +51,10 @@ def main() -> None:
 
 def contacts_figure(walk: em.Motion, path: Path) -> None:
     contacts = foot_contacts(walk)
-    title = f"dataset-2_walk_normal_001: foot contacts, {cadence(contacts, walk.frame_time):.2f} steps/s (Bandai-Namco, CC BY-NC 4.0)"
+    title = (
+        "dataset-2_walk_normal_001: foot contacts, "
+        f"{cadence(contacts, walk.frame_time):.2f} steps/s (Bandai-Namco, CC BY-NC 4.0)"
+    )
     plot_contacts(contacts, walk.frame_time, path, title=title)
 
 

@@ -42,7 +42,8 @@ def main() -> None:
         ("plain", f"plain one-hidden-layer network, {s['hidden']} tanh units"),
     ]
     rows = "\n".join(
-        f"| {label} | {r[key]['train_mse']:.3g} | {r[key]['test_mse']:.3g} | {r[key]['test_variance_explained']:.3f} | {PAPER[key]} |"
+        f"| {label} | {r[key]['train_mse']:.3g} | {r[key]['test_mse']:.3g} "
+        f"| {r[key]['test_variance_explained']:.3f} | {PAPER[key]} |"
         for key, label in stages
         if key in r
     )
@@ -51,14 +52,15 @@ def main() -> None:
     if sweep_file.exists():
         results = json.loads(sweep_file.read_text())
         sweep = "\n".join(
-            f"| {h} | {v['train_mse']:.3g} | {v['test_mse']:.3g} | {v['test_variance_explained']:.4f} | {PAPER_SWEEP.get(h, '')} |"
+            f"| {h} | {v['train_mse']:.3g} | {v['test_mse']:.3g} | "
+            f"{v['test_variance_explained']:.4f} | {PAPER_SWEEP.get(h, '')} |"
             for h, v in results.items()
         )
         sweep = (
-            "\n## Autoencoder size\n\nThe same neutral clips and split, each autoencoder trained on the neutral training clips only "
-            "(`python benches/sweep_autoencoder.py`; the shipped one also learned 40,000 frames of every kind of clip, which costs "
-            "it some accuracy on neutral poses: 1.33e-4 against 0.94e-4):\n\n"
-            "| hidden units | train MSE | test MSE | test variance explained | paper (CMU) |\n|---|---|---|---|---|\n"
+            "\n## Autoencoder size\n\nThe same neutral clips and split, each autoencoder trained on the neutral "
+            "training clips only (`python benches/sweep_autoencoder.py`; the shipped one also learned 40,000 frames "
+            "of every kind of clip, which costs it some accuracy on neutral poses: 1.33e-4 against 0.94e-4):\n\n| "
+            "hidden units | train MSE | test MSE | test variance explained | paper (CMU) |\n|---|---|---|---|---|\n"
             + sweep
             + "\n"
         )
@@ -81,10 +83,14 @@ Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022
 al., "Motion Capture Dataset for Practical Use of AI-based Motion Editing and Stylization",
 arXiv:2306.08861), licensed **CC BY-NC 4.0**: this model is a derivative of that data and is for
 non-commercial use under the same licence.
-- neutral (supervised) set: `{{walk,walk-turn-left,walk-turn-right,run}}_normal_*`, {s["neutral_clips"]} clips, {s["neutral_frames"]} frames,
-  split 70/30 **by clip**: {split["train_groups"]} training clips ({split["train_rows"]} frames), {split["test_groups"]} test clips ({split["test_rows"]} frames);
-- autoencoder: also {s["unlabelled_frames"]} frames ({s["unlabelled_frames"] - split["train_rows"]} drawn at random from all
-  {s["unlabelled_clips"]} dataset-2 clips, gestures included, with the neutral test clips left out, plus the neutral training frames).
+- neutral (supervised) set: `{{walk,walk-turn-left,walk-turn-right,run}}_normal_*`, {s["neutral_clips"]} clips, \
+{s["neutral_frames"]} frames,
+  split 70/30 **by clip**: {split["train_groups"]} training clips ({split["train_rows"]} frames), \
+{split["test_groups"]} test clips ({split["test_rows"]} frames);
+- autoencoder: also {s["unlabelled_frames"]} frames ({s["unlabelled_frames"] - split["train_rows"]} drawn at random \
+from all
+  {s["unlabelled_clips"]} dataset-2 clips, gestures included, with the neutral test clips left out, \
+plus the neutral training frames).
 
 ## Settings
 {json.dumps(s, indent=1)}

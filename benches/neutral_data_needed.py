@@ -44,9 +44,10 @@ def neutral_clips() -> list[Path]:
 
 def held_out_mse(model, training, motions) -> tuple[float, float]:
     """Pose MSE on ``motions`` of the model's network and of the mean pose of its ``training`` clips."""
-    vectors = lambda clips, pick: np.concatenate(
-        [pose_vectors(pick(m), model.predicted, model.hemispheres) for m in clips]
-    )  # noqa: E731
+
+    def vectors(clips, pick):
+        return np.concatenate([pose_vectors(pick(m), model.predicted, model.hemispheres) for m in clips])
+
     actual = vectors(motions, lambda m: m.rotations)
     mean_pose = vectors(training, lambda m: m.rotations).mean(axis=0)
     return float(np.mean((vectors(motions, model.predict) - actual) ** 2)), float(np.mean((actual - mean_pose) ** 2))
@@ -73,7 +74,8 @@ def main() -> None:
         network, baseline = held_out_mse(model, chosen, test)
         rows.append((n, sum(m.n_frames for m in chosen), network, baseline, seconds))
         print(
-            f"{n} clips: held-out MSE {network:.3g} (mean pose {baseline:.3g}, ratio {network / baseline:.2f}) in {seconds:.0f} s",
+            f"{n} clips: held-out MSE {network:.3g} (mean pose {baseline:.3g}, "
+            f"ratio {network / baseline:.2f}) in {seconds:.0f} s",
             flush=True,
         )
     lines = [
@@ -81,7 +83,8 @@ def main() -> None:
         "",
         f"`python benches/neutral_data_needed.py --max-iter {args.max_iter} --sizes {args.sizes}`"
         f" ({time.strftime('%Y-%m-%d')}). Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0),",
-        f"its {len(paths)} neutral locomotion clips; {len(test)} held out (30% of the frames by clip, seed 0), models trained",
+        f"its {len(paths)} neutral locomotion clips; {len(test)} held "
+        "out (30% of the frames by clip, seed 0), models trained",
         "on the first n of the others (no unlabelled clips), every model scored on the same held-out clips.",
         "",
         "| training clips | frames | held-out MSE | mean-pose MSE | ratio | seconds |",

@@ -74,7 +74,7 @@ def test_rust_matches_its_twin_and_the_kernels_one_by_one(walks, by_path, float3
 
     rust, twin = run(core, walks, float32, by_path), run(reference, walks, float32, by_path)
     dtype = np.float32 if float32 else np.float64
-    for (path, data), got, expected in zip(walks, rust, twin):
+    for (_path, data), got, expected in zip(walks, rust, twin):
         assert got[0].dtype == got[1].dtype == got[2][0].dtype == dtype and got[3].dtype == bool
         np.testing.assert_allclose(got[0], expected[0], atol=2e-5 if float32 else 1e-9)  # float32 positions ~100 cm
         np.testing.assert_allclose(got[1], expected[1], atol=1e-7 if float32 else 1e-12)

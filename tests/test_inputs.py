@@ -61,7 +61,7 @@ def zero_link(tmp_path) -> Path:
 def test_bvh_reader_refuses_fifo_and_devices(reader, fifo, zero_link, tmp_path):
     for path, kind in ((fifo, "a FIFO"), (zero_link, "a character device"), (tmp_path, "a folder")):
         with pytest.raises(em.BVHError, match=f"{kind}, not a regular file"):
-            _returns_within(10, lambda: reader(path))
+            _returns_within(10, lambda path=path: reader(path))
 
 
 @pytest.mark.parametrize("reader", [em.read_bvh, read_header], ids=["read_bvh", "read_header"])
@@ -79,7 +79,7 @@ def test_model_loaders_refuse_fifo_and_devices(fifo, zero_link):
     for path in (fifo, zero_link):
         for load in (BodyModel.load, ExaggerationModel.load):
             with pytest.raises(MocapError, match="not a regular file"):
-                _returns_within(10, lambda: load(path))
+                _returns_within(10, lambda load=load, path=path: load(path))
 
 
 def test_cli_model_fifo_is_one_line_error(fifo, mixed_path, tmp_path, capsys):

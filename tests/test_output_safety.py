@@ -242,7 +242,8 @@ def test_a_full_standard_output_is_named(monkeypatch):
 
 TWO_JOINTS = (
     b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\nJOINT b\n{\nOFFSET 0 %s 0\n"
-    b"CHANNELS 3 Zrotation Xrotation Yrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\n}\nMOTION\nFrames: 2\nFrame Time: %s\n%s\n%s\n"
+    b"CHANNELS 3 Zrotation Xrotation Yrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\n}\n"
+    b"MOTION\nFrames: 2\nFrame Time: %s\n%s\n%s\n"
 )
 
 
@@ -342,7 +343,8 @@ def test_scaled_refuses_lengths_that_overflow(where, tmp_path):
     else:
         path = tmp_path / "site.bvh"
         path.write_bytes(
-            b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\nEnd Site\n{\nOFFSET 0 1e308 0\n}\n}\n"
+            b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\n"
+            b"End Site\n{\nOFFSET 0 1e308 0\n}\n}\n"
             b"MOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0\n"
         )
     motion = em.read_bvh(path)
@@ -360,7 +362,10 @@ def test_write_bvh_refuses_non_finite_values_naming_the_path_frame_and_channel(b
     destination.write_bytes(b"the user's file")
     with pytest.raises(
         MocapError,
-        match=rf"^cannot write {destination}: frame 3, joint_Root Yposition is {bad}: a BVH file holds finite numbers only$",
+        match=(
+            rf"^cannot write {destination}: frame 3, joint_Root Yposition is {bad}: "
+            r"a BVH file holds finite numbers only$"
+        ),
     ):
         em.write_bvh(em.Motion(motion.skeleton, motion.rotations, translations, motion.frame_time), destination)
     assert destination.read_bytes() == b"the user's file"

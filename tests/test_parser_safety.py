@@ -41,7 +41,13 @@ HAMMER = textwrap.dedent(
         t = rng.normal(size=(4000, 8, 3))
         parents = np.arange(-1, 7, dtype=np.int64)
         yield "forward_kinematics", parents, 5, [0, 2, 4], lambda: _core.forward_kinematics(q, t, parents)
-        yield "forward_kinematics_many", parents, 5, [0, 2, 4], lambda: _core.forward_kinematics_many([(q, t, parents)] * 3)
+        yield (
+            "forward_kinematics_many",
+            parents,
+            5,
+            [0, 2, 4],
+            lambda: _core.forward_kinematics_many([(q, t, parents)] * 3),
+        )
 
     def pipeline():
         data = bvh.bvh_bytes(demo.procedural_walk(seconds=4.0))

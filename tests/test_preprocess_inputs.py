@@ -238,7 +238,10 @@ def test_a_zip_member_declared_over_the_real_bound_is_refused_unread(walk, tmp_p
     summary = run(path, tmp_path / "ds")
     assert summary.finished and load_dataset(tmp_path / "ds").names == ["good"]
     assert failures(tmp_path / "ds") == {
-        "claims": f"{path}:claims.bvh: cannot read the archive member: 536,870,913 bytes, more than the 536,870,912 bytes read at most"
+        "claims": (
+            f"{path}:claims.bvh: cannot read the archive member: "
+            "536,870,913 bytes, more than the 536,870,912 bytes read at most"
+        )
     }
     assert summary.bytes_read == len(walk)  # not the 537 MB claimed: what was read
 
@@ -300,7 +303,9 @@ def test_tar_members_over_the_bound_or_not_regular_fail_alone(walk, tmp_path, sm
     assert summary.finished and load_dataset(tmp_path / "ds").names == ["good"]
     member = "cannot read the archive member"
     assert failures(tmp_path / "ds") == {
-        "over": f"{path}:over.bvh: {member}: {small_bound + 1:,} bytes, more than the {small_bound:,} bytes read at most",
+        "over": (
+            f"{path}:over.bvh: {member}: {small_bound + 1:,} bytes, more than the {small_bound:,} bytes read at most"
+        ),
         "link": f"{path}:link.bvh: {member}: a symbolic link, {NOT_REGULAR}",
         "pipe": f"{path}:pipe.bvh: {member}: a FIFO, {NOT_REGULAR}",
     }
@@ -319,7 +324,7 @@ def test_an_unreadable_zip_directory_or_a_fifo_source_is_a_one_line_error(walk, 
             (fifo, f"{fifo}: a FIFO, not a folder, .zip or .tar(.gz/.xz) archive of BVH files"),
         ):
             code = _returns_within(
-                20, lambda: main(["preprocess", str(src), "-o", str(tmp_path / f"{src.name}.out"), "-q"])
+                20, lambda src=src: main(["preprocess", str(src), "-o", str(tmp_path / f"{src.name}.out"), "-q"])
             )
             assert (code, capsys.readouterr().err) == (1, f"expressive-mocap: error: {message}\n")
     finally:
