@@ -1,7 +1,7 @@
 """expressive-mocap: find, measure and edit the expressive part of human motion capture.
 
 Quaternions are x, y, z, w; arrays are float64 ``[F, J, ...]`` (frames, joints); Y is up;
-lengths are in the file's units. See the README for the conventions table.
+lengths are in the file's units. See docs/bvh.md for the conventions table.
 """
 
 from .backend import get_backend, rust_available, set_backend, use_backend

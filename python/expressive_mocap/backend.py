@@ -80,3 +80,14 @@ def kernels() -> ModuleType:
             "expressive_mocap._core is not installed; reinstall with `pip install .` or use 'numpy'"
         )
     return _core
+
+
+__all__ = [
+    "BACKENDS",
+    "ENV_VAR",
+    "get_backend",
+    "kernels",
+    "rust_available",
+    "set_backend",
+    "use_backend",
+]

@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import MocapError
 
-# The largest BVH file or archive member read (README, "Limits"): 512 MiB of text is over half an
+# The largest BVH file or archive member read (docs/safety.md, "Limits"): 512 MiB of text is over half an
 # hour of a 60-joint skeleton at 120 fps, and decodes to about 1.2 GB of arrays. Checked before
 # reading, so a 1 GiB member of a 1 MB zip, or a link to /dev/zero, is refused without reading it.
 MAX_INPUT_BYTES = 512 << 20
@@ -303,3 +303,24 @@ def check_keys(arrays: dict, allowed, name: str) -> None:
     unknown = sorted(set(arrays) - set(allowed))
     if unknown:
         raise MocapError(f"{name}: unexpected arrays in the model file: {', '.join(map(repr, unknown[:5]))}")
+
+
+__all__ = [
+    "MAX_INPUT_BYTES",
+    "MAX_MODEL_BYTES",
+    "MODEL_ZIP_SLACK",
+    "STANDARD_OUTPUT",
+    "atomic_write",
+    "atomic_write_all",
+    "check_keys",
+    "file_kind",
+    "finite_array",
+    "is_standard_output",
+    "open_input",
+    "output_target",
+    "read_at_most",
+    "read_input",
+    "read_model_file",
+    "too_large",
+    "write_standard_output",
+]

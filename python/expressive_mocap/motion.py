@@ -269,7 +269,7 @@ def _not_finite(factor, what: str, largest: float):
     )
 
 
-# The most frames x joints Motion.resample makes (README, "Limits"): 2^25, 1.9 GB of rotations and
+# The most frames x joints Motion.resample makes (docs/safety.md, "Limits"): 2^25, 1.9 GB of rotations and
 # translations at 56 bytes a joint-frame. The largest file the reader takes at a realistic density
 # (512 MiB of text, ~13 million joint-frames: half an hour of 60 joints at 120 fps) fits at twice
 # its rate; a 300-byte file claiming a frame time of 10^6 s does not ask for 7 GiB.

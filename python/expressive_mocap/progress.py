@@ -128,3 +128,9 @@ def line_log(enabled: bool = True, stream: TextIO | None = None):
         out.flush()
 
     return log
+
+
+__all__ = [
+    "Progress",
+    "line_log",
+]

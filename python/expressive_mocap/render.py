@@ -218,6 +218,7 @@ def render_animation(
     """Animated GIF, one panel per motion, the camera following each walker's hips horizontally.
     Motions play on one clock at ``speed`` x real time (each its own frame rate, see
     :func:`gif_timing`); shorter ones hold their last pose. Returns a line saying how it plays."""
+    # Layout, timing, drawing and writing of one GIF in order: a little over 60 lines, kept whole.
     from PIL import Image
 
     titles = _check(motions, titles, view)
@@ -339,3 +340,18 @@ def plot_contacts(
         ax.spines[side].set_visible(False)
     ax.set_title(title, fontsize=10, loc="left")
     _save(fig, plt, path)
+
+
+__all__ = [
+    "MARGIN",
+    "MIN_GIF_DELAY",
+    "VIEWS",
+    "gif_timing",
+    "heading",
+    "plot_contacts",
+    "pose_figure",
+    "project",
+    "render",
+    "render_animation",
+    "render_poses",
+]

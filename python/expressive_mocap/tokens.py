@@ -44,3 +44,15 @@ def shown(token: str | bytes | bytearray | memoryview) -> str:
     text = bytes(raw[:SHOWN_BYTES]).decode("utf-8", "replace")
     text = _CONTROL.sub(lambda m: f"\\x{ord(m[0]):02x}" if ord(m[0]) < 0x100 else f"\\u{ord(m[0]):04x}", text)
     return f"'{text}'" if len(raw) <= SHOWN_BYTES else f"'{text}'... ({len(raw)} bytes)"
+
+
+__all__ = [
+    "BLANKS",
+    "NOT_FINITE_BYTES",
+    "NUMBER",
+    "NUMBER_BYTES",
+    "NUMBER_PATTERN",
+    "SHOWN_BYTES",
+    "finite_number",
+    "shown",
+]

@@ -25,7 +25,7 @@ _FRAMES = re.compile(rb"[ \t]*Frames[ \t]*:[ \t]*(\S*)[ \t]*\r*$", re.IGNORECASE
 _FRAME_TIME = re.compile(rb"[ \t]*Frame[ \t]+Time[ \t]*:[ \t]*(\S*)[ \t]*\r*$", re.IGNORECASE)
 _COUNT_BYTES = re.compile(COUNT_PATTERN.encode("ascii"))
 
-# Limits of the reader (README, "Limits"): within them, memory stays proportional to the file's
+# Limits of the reader (docs/safety.md, "Limits"): within them, memory stays proportional to the file's
 # size (a file under 1 MB never takes more than 100 MB); beyond them, a BVHError names the limit.
 MAX_HEADER_BYTES = 4 << 20  # the hierarchy, HIERARCHY to MOTION (a 300-joint skeleton takes ~30 KB)
 # Frames x joints (decoded, 56 bytes a joint-frame; the NumPy twin peaks near 180) at most one per
@@ -146,7 +146,7 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> Header:
         raise BVHError(
             name,
             None,
-            f"{where} is longer than {MAX_HEADER_BYTES} bytes: the reader's limit (see Limits in the README)",
+            f"{where} is longer than {MAX_HEADER_BYTES} bytes: the reader's limit (see docs/safety.md, Limits)",
         )
     try:
         text = data[text_start:hierarchy_end].decode("utf-8")  # without the byte-order mark: lines are the same
@@ -190,7 +190,7 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> Header:
             frames_line,
             f"Frames: {frames} x {skeleton.n_joints} joints is more than the {block_bytes}-byte MOTION block can hold "
             f"(the reader's limit: one joint-frame per {BLOCK_BYTES_PER_JOINT_FRAME} bytes of the block, "
-            f"or {MIN_JOINT_FRAMES}; see Limits in the README)",
+            f"or {MIN_JOINT_FRAMES}; see docs/safety.md, Limits)",
         )
     frame_time = finite_number(time_text.decode("utf-8", "replace"))
     if frame_time is None or frame_time <= 0:

@@ -19,7 +19,7 @@ _TOKEN = re.compile(r"[{}]|[^ \t\r\n\x0c{}]+")  # ASCII blanks, as in the MOTION
 _KEYWORDS = frozenset(["}", "OFFSET", "CHANNELS", "JOINT", "ROOT"])  # already in upper case
 _CHANNEL_NAMES = frozenset(c.lower() for c in POSITION_CHANNELS + ROTATION_CHANNELS)
 
-# Limits of the reader (README, "Limits"; the others are in header.py).
+# Limits of the reader (docs/safety.md, "Limits"; the others are in header.py).
 MAX_JOINTS = 10_000  # so also the depth of the hierarchy; read without recursion
 MAX_CHANNELS = 6  # per joint: 3 positions and 3 rotations
 COUNT_PATTERN = r"[0-9]{1,18}"  # ASCII digits only: str.isdigit() also takes '²'
@@ -106,7 +106,7 @@ def _parse_hierarchy(tokens: _Tokens) -> tuple[Skeleton, list[int]]:
     def open_joint(keyword_line: int, parent: int) -> None:
         if len(names) == MAX_JOINTS:
             raise tokens.error(
-                keyword_line, f"more than {MAX_JOINTS} joints: the reader's limit (see Limits in the README)"
+                keyword_line, f"more than {MAX_JOINTS} joints: the reader's limit (see docs/safety.md, Limits)"
             )
         name = tokens.name_on_line(keyword_line, "joint")
         if name in first_line:

@@ -65,3 +65,8 @@ def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | No
             )
         )
     return out
+
+
+__all__ = [
+    "clip_pipeline_many",
+]

@@ -34,3 +34,9 @@ def compose_rotations(expressive: np.ndarray, body: np.ndarray, scale: float = 1
     if not np.isfinite(scale):
         raise ArgumentError(f"argument `scale`: must be a finite number, got {scale}")
     return quat.mul(expressive if scale == 1.0 else quat.power(expressive, scale), body)
+
+
+__all__ = [
+    "compose_rotations",
+    "decouple_rotations",
+]

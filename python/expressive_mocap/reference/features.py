@@ -98,3 +98,10 @@ def dynamic_features(
     out[:, 10] = (hips[:, 1] - floor) / hips_rest_height
     out[:, 11:19] = (thighs * sign).reshape(frames, 8)
     return out
+
+
+__all__ = [
+    "N_FEATURES",
+    "dynamic_features",
+    "heading_yaw",
+]

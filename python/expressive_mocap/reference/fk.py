@@ -41,3 +41,9 @@ def forward_kinematics(
 def forward_kinematics_many(clips: list) -> list:
     """:func:`forward_kinematics` of each ``(rotations, translations, parents)`` triple."""
     return [forward_kinematics(*clip) for clip in clips]
+
+
+__all__ = [
+    "forward_kinematics",
+    "forward_kinematics_many",
+]

@@ -101,3 +101,11 @@ def air_time(contacts: np.ndarray, frame_time: float) -> np.ndarray:
     # Frame number (1-based) of the last contact at or before each frame, 0 if none yet.
     last = np.maximum.accumulate(np.where(contacts, frames, 0), axis=0)
     return (frames - last) * frame_time
+
+
+__all__ = [
+    "absorb_short_runs",
+    "air_time",
+    "foot_contacts",
+    "hold_filter",
+]

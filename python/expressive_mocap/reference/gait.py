@@ -116,3 +116,9 @@ def _clip(
             points, thighs, contacts_on(floor, True), reference, frame_time, height, hips_rest_height, floor, window
         )
     return features, (contacts_on(toe_floor, False) if want_contacts else None)
+
+
+__all__ = [
+    "GAIT_ROLES",
+    "clip_gait_many",
+]

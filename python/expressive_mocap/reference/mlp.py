@@ -62,3 +62,9 @@ def mlp_forward(x: np.ndarray, weights: list, biases: list, activations: list) -
     for w, b, act in zip(weights, biases, activations):
         h = _APPLY[act](h @ w + b)
     return h
+
+
+__all__ = [
+    "check_layers",
+    "mlp_forward",
+]

@@ -147,3 +147,11 @@ def format_motion_block(values: np.ndarray, decimals: int | None = None) -> byte
     else:
         np.savetxt(out, values, fmt=f"%.{int(decimals)}f", delimiter=" ")
     return out.getvalue().encode("ascii")
+
+
+__all__ = [
+    "decode_channels",
+    "format_motion_block",
+    "parse_motion_block",
+    "read_motion_blocks",
+]

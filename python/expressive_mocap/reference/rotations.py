@@ -55,3 +55,9 @@ def quat_to_euler(quats: np.ndarray, orders: np.ndarray) -> np.ndarray:
     b = np.where(locked, np.sign(sin_b) * np.pi / 2, np.arctan2(sin_b, cos_b))
     c = np.where(locked, 0.0, np.arctan2(-sign * r(i, j), r(i, i)))
     return np.degrees(np.stack([a, b, c], axis=-1))
+
+
+__all__ = [
+    "euler_to_quat",
+    "quat_to_euler",
+]
