@@ -84,9 +84,12 @@ def cli(*args: str, **kw) -> subprocess.Popen:
 # ----------------------------------------------------------------------------- concurrent runs
 
 
-def test_a_second_run_on_a_locked_folder_fails_naming_the_holder(clips, reference, tmp_path):
+@pytest.mark.parametrize("starting", [False, True], ids=["idle", "holder making .partial"])
+def test_a_second_run_on_a_locked_folder_fails_naming_the_holder(clips, reference, tmp_path, starting):
     out = tmp_path / "ds"
     out.mkdir()
+    if starting:  # the moment the holder has made .partial but not yet its run.json (a CI run hit it)
+        (out / ".partial").mkdir()
     holder = subprocess.Popen(
         [
             sys.executable,
@@ -105,7 +108,7 @@ def test_a_second_run_on_a_locked_folder_fails_naming_the_holder(clips, referenc
         _, err = second.communicate(timeout=60)
         assert second.returncode == 1
         assert err.count("\n") == 1 and f"process {holder.pid}" in err and "being written by another run" in err
-        assert sorted(os.listdir(out)) == [".lock"]  # it touched nothing
+        assert sorted(os.listdir(out)) == sorted([".lock"] + [".partial"] * starting)  # it touched nothing
     finally:
         holder.kill()
         holder.wait()
@@ -378,3 +381,17 @@ def test_clips_of_the_same_skeleton_in_other_units_are_failures(clips, tmp_path)
     assert "other units?" in errors["walk_2_metres"] and "0.01x as long" in errors["walk_2_metres"]
     assert "0.394x as long" in errors["walk_2_inches"]
     assert "walk_2_taller" in ds.names and "walk_2" in ds.names
+
+
+def test_a_partial_folder_without_its_run_file(clips, reference, tmp_path):
+    out = tmp_path / "ds"
+    (out / ".partial").mkdir(parents=True)
+    (out / ".partial" / ".run.json.abc.tmp").write_text("{")  # killed while writing run.json
+    run(clips, out)  # ours: the run starts there
+    same_dataset(reference, out)
+    other = tmp_path / "other"
+    (other / ".partial").mkdir(parents=True)
+    (other / ".partial" / "notes.txt").write_text("mine")
+    with pytest.raises(DatasetError, match="not an unfinished run of ours"):
+        run(clips, other)
+    assert (other / ".partial" / "notes.txt").read_text() == "mine"

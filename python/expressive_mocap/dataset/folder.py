@@ -25,7 +25,9 @@ def finished_manifest(out: Path) -> dict | None:
     if (out / MANIFEST).exists():
         return read_manifest(out / MANIFEST)
     if partial.exists():
-        if not (partial / RUN).is_file():
+        # Without run.json: a run of ours starting (another process making it right now) or
+        # killed as it started, if it holds only our names; anything else is not ours.
+        if not (partial / RUN).is_file() and not all(_ours(name) for name in os.listdir(partial)):
             raise DatasetError(f"{partial} is not an unfinished run of ours (no {RUN}); move it away")
         if not (partial / MANIFEST).exists():  # a run not yet moving its files into place
             clash = sorted(OWN_FILES & set(os.listdir(out)))
@@ -58,8 +60,7 @@ def remove_partial(out: Path) -> None:
     if not partial.is_dir() or partial.is_symlink():
         return
     for name in os.listdir(partial):
-        temporary = name.endswith(".tmp") and any(name.startswith(f".{own}.") for own in PARTIAL_FILES)
-        if name in PARTIAL_FILES or temporary:
+        if _ours(name):
             (partial / name).unlink(missing_ok=True)
     try:
         partial.rmdir()
@@ -68,6 +69,12 @@ def remove_partial(out: Path) -> None:
             f"{partial} holds files this package did not write ({', '.join(sorted(os.listdir(partial))[:5])}); "
             "left in place: move them away"
         ) from None
+
+
+def _ours(name: str) -> bool:
+    """Whether a file in ``.partial`` is one a run writes: a fixed name, or an atomic write's temporary."""
+    temporary = name.endswith(".tmp") and any(name.startswith(f".{own}.") for own in PARTIAL_FILES)
+    return name in PARTIAL_FILES or temporary
 
 
 __all__ = ["finished_manifest", "remove_dataset", "remove_partial"]
