@@ -63,11 +63,7 @@ def to_cycle_timing(trajectory: np.ndarray, n_frames: int) -> np.ndarray:
     """Map a normalised trajectory ``[T, ...]`` back to a cycle of ``n_frames`` frames (the
     inverse of the uniform time normalisation: linear interpolation at each frame's phase)."""
     trajectory = np.asarray(trajectory, dtype=np.float64)
-    samples = len(trajectory)
-    position = np.linspace(0.0, samples - 1, n_frames)
-    i0 = np.minimum(np.floor(position).astype(int), samples - 2)
-    t = (position - i0).reshape((-1,) + (1,) * (trajectory.ndim - 1))
-    return (1 - t) * trajectory[i0] + t * trajectory[i0 + 1]
+    return quat.resample(trajectory, quat.spanning_positions(len(trajectory), n_frames), rotations=False)
 
 
 def check_cycle_choice(cycle: CycleChoice) -> None:
