@@ -7,7 +7,7 @@ lengths are in the file's units. See docs/bvh.md for the conventions table.
 from .backend import get_backend, rust_available, set_backend, use_backend
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .decoupling.network import Mlp
-from .errors import BVHError, MocapError
+from .errors import ArgumentError, BVHError, ClipError, DatasetError, MocapError, ModelError, ParseError
 from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts, gait_many
 from .motion import Motion, Skeleton
 from .ops import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
@@ -21,8 +21,14 @@ _LAZY = {
     "Dataset": "dataset",
     "Decomposition": "decoupling",
     "ExaggerationModel": "exaggeration",
+    "StreamingDecoupler": "decoupling",
+    "blend": "decoupling",
     "decompose": "decoupling",
+    "exaggerate": "exaggeration",
     "load_dataset": "dataset",
+    "mix": "decoupling",
+    "modulate": "decoupling",
+    "preprocess": "dataset",
 }
 
 
@@ -41,6 +47,17 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "ArgumentError",
+    "ClipError",
+    "DatasetError",
+    "ModelError",
+    "ParseError",
+    "StreamingDecoupler",
+    "blend",
+    "exaggerate",
+    "mix",
+    "modulate",
+    "preprocess",
     "BVHError",
     "BodyModel",
     "Dataset",

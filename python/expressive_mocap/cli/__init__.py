@@ -122,7 +122,10 @@ def _run(args) -> int:
         # The reader went away (`| head`): stop quietly, and keep Python from complaining at exit.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1
-    except (MocapError, OSError) as error:
+    except MocapError as error:  # bad input or arguments, from Python or the Rust kernels
+        print(f"{PROG}: error: {error}", file=sys.stderr)
+        return 1
+    except OSError as error:  # the system's (a full disk, a permission): one line too, not a traceback
         print(f"{PROG}: error: {error}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
