@@ -196,8 +196,9 @@ def test_rust_functions_refuse_fortran_ordered_arrays(name, index, argument):
     args = list(CORE[name][0](6))
     args[index] = np.asfortranarray(args[index])
     assert not args[index].flags.c_contiguous
-    with pytest.raises(TypeError, match=f"`{argument}`"):
+    with pytest.raises(em.errors.ArgumentTypeError, match=f"`{argument}`") as caught:
         getattr(core, name)(*args)
+    assert isinstance(caught.value, em.MocapError) and isinstance(caught.value, TypeError)  # both
 
 
 def flatten(result):

@@ -3,6 +3,7 @@
 command line turns exactly these into its one-line messages. The subclasses say what was wrong:
 
 - :class:`ArgumentError`: an argument of a function or command (a shape, a dtype, a value);
+  :class:`ArgumentTypeError` when its kind is wrong (also a ``TypeError``);
 - :class:`BVHError`: a BVH file, naming the file and the line; :class:`ParseError`: a MOTION
   number block, before the file is known (turned into a BVHError by the reader);
 - :class:`ModelError`: a model file or a model that cannot be used as asked;
@@ -21,6 +22,11 @@ class MocapError(ValueError):
 
 class ArgumentError(MocapError):
     """A bad argument: its name, what was expected and what was given."""
+
+
+class ArgumentTypeError(ArgumentError, TypeError):
+    """An argument of the wrong kind (an array of another dtype or memory order): an
+    :class:`ArgumentError`, and a ``TypeError`` as Python's own type checks raise."""
 
 
 class ModelError(MocapError):
@@ -62,4 +68,13 @@ class ClipError(MocapError):
         self.level = level
 
 
-__all__ = ["ArgumentError", "BVHError", "ClipError", "DatasetError", "MocapError", "ModelError", "ParseError"]
+__all__ = [
+    "ArgumentError",
+    "ArgumentTypeError",
+    "BVHError",
+    "ClipError",
+    "DatasetError",
+    "MocapError",
+    "ModelError",
+    "ParseError",
+]

@@ -10,6 +10,7 @@ use pyo3::types::PyType;
 use crate::error::KernelError;
 
 static ARGUMENT_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+static ARGUMENT_TYPE_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static PARSE_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 
 /// `expressive_mocap.errors.<name>`, imported the first time it is needed.
@@ -25,6 +26,17 @@ fn error_class<'py>(
 pub(super) fn argument_error(message: String) -> PyErr {
     Python::attach(
         |py| match error_class(py, &ARGUMENT_ERROR, "ArgumentError") {
+            Ok(class) => PyErr::from_type(class.clone(), message),
+            Err(error) => error,
+        },
+    )
+}
+
+/// An `ArgumentTypeError(message)` (an `ArgumentError` and a `TypeError`): an argument of the
+/// wrong dtype or memory order, `message` naming it.
+pub(super) fn argument_type_error(message: String) -> PyErr {
+    Python::attach(
+        |py| match error_class(py, &ARGUMENT_TYPE_ERROR, "ArgumentTypeError") {
             Ok(class) => PyErr::from_type(class.clone(), message),
             Err(error) => error,
         },

@@ -3,10 +3,9 @@
 use numpy::{
     Element, IntoPyArray, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArray, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
-use super::errors::argument_error;
+use super::errors::{argument_error, argument_type_error};
 use super::{array, contiguous, shape_error};
 use crate::mlp::{mlp_forward as forward, Activation, Layer, Scalar};
 
@@ -15,7 +14,7 @@ fn dtype_error(name: &str, layer: usize, array: &Bound<'_, PyAny>, dtype: &str) 
         |_| array.get_type().to_string(),
         |a| format!("{} array of {} dimensions", a.dtype(), a.ndim()),
     );
-    PyTypeError::new_err(format!(
+    argument_type_error(format!(
         "argument `{name}`: layer {layer} must be a {dtype} array like `x`, got {got}"
     ))
 }
@@ -106,7 +105,7 @@ fn mlp_forward<'py>(
             |_| x.get_type().to_string(),
             |a| format!("{} array of {} dimensions", a.dtype(), a.ndim()),
         );
-        PyTypeError::new_err(format!(
+        argument_type_error(format!(
             "argument `x`: expected a 2-D float32 or float64 array, got {got}"
         ))
     })?;

@@ -3,7 +3,6 @@
 
 use numpy::ndarray::Dimension;
 use numpy::{Element, PyArrayMethods, PyReadonlyArray, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
 use crate::rotations::Order;
@@ -24,7 +23,7 @@ mod rotations;
 use errors::{array, shape_error};
 
 fn not_contiguous(name: &str) -> PyErr {
-    PyTypeError::new_err(format!(
+    errors::argument_type_error(format!(
         "argument `{name}`: expected a C-contiguous array (see numpy.ascontiguousarray)"
     ))
 }
