@@ -314,18 +314,6 @@ def _within_reach(world: np.ndarray, hips: np.ndarray, ankles: np.ndarray, offse
     return hips
 
 
-__all__ = [
-    "BANDAI_CHANNELS",
-    "WAVE_BEND",
-    "WAVE_RAISE",
-    "WalkAndWave",
-    "bandai_like_skeleton",
-    "procedural_walk",
-    "strides_per_second",
-    "walk_and_wave",
-]
-
-
 LOADED_JOINTS = ("Spine", "Chest", "UpperArm_L", "UpperArm_R", "LowerArm_L", "LowerArm_R")
 
 
@@ -369,3 +357,17 @@ def loaded_walk(
         axis = vectors / np.maximum(angle, 1e-15)
         rotations = quat.mul(rotations, np.concatenate([axis * np.sin(angle / 2), np.cos(angle / 2)], axis=-1))
     return Motion(motion.skeleton, rotations, motion.translations, motion.frame_time)
+
+
+__all__ = [
+    "BANDAI_CHANNELS",
+    "LOADED_JOINTS",
+    "WAVE_BEND",
+    "WAVE_RAISE",
+    "WalkAndWave",
+    "bandai_like_skeleton",
+    "loaded_walk",
+    "procedural_walk",
+    "strides_per_second",
+    "walk_and_wave",
+]
