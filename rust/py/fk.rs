@@ -7,6 +7,9 @@ use super::errors::argument_error;
 use super::{array, contiguous, motion_arrays, owned_indices, shape_error};
 use crate::error::KernelError;
 
+/// Joint-frames below which FK runs without releasing the GIL (microseconds of work).
+const SMALL_JOINT_FRAMES: usize = 4096;
+
 /// World rotations [F, J, 4] and positions [F, J, 3] from local ones and `parents` [J].
 #[pyfunction]
 #[allow(clippy::type_complexity)]
@@ -33,7 +36,14 @@ fn forward_kinematics<'py>(
         contiguous("translations", &translations)?,
         owned_indices("parents", &parents)?,
     );
-    let (world_rot, world_pos) = py.detach(|| crate::fk::forward_kinematics(r, t, &p))?;
+    // Small work (a rest pose: one frame) keeps the GIL: releasing it costs more than the work,
+    // and a daemon thread that must take it back while the interpreter exits (preprocessing's
+    // header threads compute rest poses) aborts the process from inside Rust.
+    let (world_rot, world_pos) = if rs[0] * joints <= SMALL_JOINT_FRAMES {
+        crate::fk::forward_kinematics(r, t, &p)
+    } else {
+        py.detach(|| crate::fk::forward_kinematics(r, t, &p))
+    }?;
     Ok((
         array(world_rot, (rs[0], joints, 4))?.into_pyarray(py),
         array(world_pos, (rs[0], joints, 3))?.into_pyarray(py),
