@@ -421,3 +421,27 @@ sys.exit(main(["preprocess", {str(clips)!r}, "-o", {str(tmp_path / "ds")!r}, "--
     process = _start(["-c", script], tmp_path)
     _wait_for(marker.exists, 60, "blocked header read")
     _interrupt(process)
+
+
+def test_a_stuck_background_flush_does_not_keep_an_interrupted_run_alive(walk, tmp_path):
+    # The thread that syncs finished rows to disk never returns (a Ctrl-C that lands while the
+    # main thread holds its task's lock left it so): the process must still end on Ctrl-C (a
+    # ThreadPoolExecutor's worker is joined at interpreter exit, for ever).
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    for number in range(12):
+        (clips / f"walk_{number:02d}.bvh").write_bytes(walk)
+    marker = tmp_path / "flushing"
+    script = f"""
+import sys, threading
+import expressive_mocap.dataset.run as run
+from expressive_mocap.cli import main
+def stuck(paths):
+    open({str(marker)!r}, "w").close()
+    threading.Event().wait()
+run.flush = stuck
+sys.exit(main(["preprocess", {str(clips)!r}, "-o", {str(tmp_path / "ds")!r}, "--batch-mb", "0.1", "-q"]))
+"""
+    process = _start(["-c", script], tmp_path)
+    _wait_for(marker.exists, 60, "background flush")
+    _interrupt(process)

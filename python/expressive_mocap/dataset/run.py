@@ -8,7 +8,7 @@ import json
 import os
 import time
 from collections import Counter
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,7 +24,7 @@ from .format import DEFAULT_KEEP, JOURNAL, KINDS, MANIFEST, MODEL_KINDS, PARTIAL
 from .journal import JournalRecord, append_record, not_done, read_journal
 from .lock import FolderLock
 from .npy import Kind, append_rows, cut_data_files, flush, kinds_for, raise_failed_flush
-from .pipeline import batched, local
+from .pipeline import Workers, batched, local
 from .sources import Item, Source, open_source
 from .summary import MB, Summary
 from .work import Outcome, load_model
@@ -200,7 +200,10 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
     state = _resume(partial, settings.options, settings.keep)
     summary = Summary(str(out), clips_resumed=sum(state.done.values()))
     client, close_client = client_for(settings.cluster) if settings.cluster is not None else (None, lambda: None)
-    syncer = ThreadPoolExecutor(max_workers=1)  # flushes each batch's rows to disk in the background
+    # Flushes each batch's rows to disk in the background. A daemon worker, never joined: a
+    # ThreadPoolExecutor's is joined at exit, and after a Ctrl-C that landed while the main thread
+    # held a flush's Future lock, that join waited for ever.
+    syncer = Workers(1, "flush")
     try:
         todo, total_bytes, total_files = _todo(source, state.done)
         bar = Progress(total_bytes, "preprocess", "B", enabled=settings.progress)
@@ -222,14 +225,13 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
             bar.update(nbytes, f"{files}{f'/{total_files}' if total_files else ''} files, {frames:,} frames")
         if not stopped:
             t0 = time.perf_counter()
-            syncer.shutdown()
             raise_failed_flush(flushes, wait=True)
             finish(out, state.kinds or [], state.clips, state.failures, state.skeleton, state.rows, settings.options)
             summary.write_s += time.perf_counter() - t0
             summary.finished = True
         bar.close()
     finally:
-        syncer.shutdown()
+        syncer.close()
         close_client()
     summary.clips_ok, summary.clips_failed = len(state.clips), len(state.failures)
     summary.failures = state.failures
@@ -249,7 +251,7 @@ def _todo(source: Source, done: Counter) -> tuple:
 
 
 def _write_batch(
-    state: _State, batch: list[Item], outcomes: list[Outcome], keep, syncer: ThreadPoolExecutor, flushes: list[Future]
+    state: _State, batch: list[Item], outcomes: list[Outcome], keep, syncer: Workers, flushes: list[Future]
 ) -> tuple[JournalRecord, int, float]:
     """One batch's rows appended to the data files (synced in the background), then its journal
     line. Returns its record, the bytes of BVH read and the seconds taken."""
