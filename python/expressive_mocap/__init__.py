@@ -9,6 +9,7 @@ from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .decoupling.network import Mlp
 from .errors import ArgumentError, BVHError, ClipError, DatasetError, MocapError, ModelError, ParseError
 from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts, gait_many
+from .lazy import lazy_exports
 from .motion import Motion, Skeleton
 from .ops import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
 from .roles import JointRoles, actor_height
@@ -32,18 +33,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-        globals()[name] = value  # later look-ups skip this function
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 
 __all__ = [

@@ -58,6 +58,7 @@ manifest checks, verification), :mod:`.lock`, :mod:`.folder` (whose folder it is
 :mod:`.reader` (:class:`Dataset`, :func:`load_dataset`).
 """
 
+from ..lazy import lazy_exports
 from .format import KINDS
 from .lock import FolderLock
 from .reader import Clip, Dataset, load_dataset
@@ -66,18 +67,7 @@ from .reader import Clip, Dataset, load_dataset
 _LAZY = {"Summary": "summary", "open_source": "sources", "preprocess": "run"}
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-        globals()[name] = value  # later look-ups skip this function
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 
 __all__ = ["KINDS", "Clip", "Dataset", "FolderLock", "Summary", "load_dataset", "open_source", "preprocess"]

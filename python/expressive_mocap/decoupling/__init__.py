@@ -16,6 +16,8 @@ exaggeration and preprocessing, which use its foot contacts).
 
 from __future__ import annotations
 
+from ..lazy import lazy_exports
+
 # Submodules load on first use: ``import expressive_mocap`` needs only the network.
 _LAZY = {
     "EXPONENT": "algebra",
@@ -40,18 +42,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-        globals()[name] = value  # later look-ups skip this function
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 
 __all__ = [
