@@ -192,7 +192,6 @@ def train_stacked_network(
         ``test_mse``, ``test_variance_explained`` and ``seconds``; plus ``split`` and
         ``test_variance`` (the mean per-column variance of the test poses).
     """
-    # The paper's stages in order, each reported as it ends: one function reads as the method does (>60 lines).
     X, P, groups = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64), np.asarray(groups)
     if X.ndim != 2 or P.ndim != 2 or len(X) != len(P):
         raise ArgumentError(

@@ -257,7 +257,6 @@ def exaggerate(
     (see :func:`lock_stance_feet`). Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
     Returns the new motion and an :class:`ExaggerationReport`.
     """
-    # The edit's steps in order (estimate, map, clamp, rebuild, lock feet, report): longer than 60 lines.
     _check_arguments(
         model, motion, to, current, {"reference": reference, "margin": margin, "fade": fade, "blend": blend}
     )
