@@ -243,11 +243,8 @@ def _todo(source: Source, done: Counter) -> tuple:
     """The items left to do, their listed bytes and the source's file count (None for a tar stream)."""
     if source.items is None:
         return not_done(source, done), None, None
-    return (
-        iter(list(not_done(source.items, done))),
-        sum(i.size for i in not_done(source.items, done)),
-        len(source.items),
-    )
+    left = list(not_done(source.items, done))
+    return iter(left), sum(i.size for i in left), len(source.items)
 
 
 def _write_batch(
