@@ -66,6 +66,18 @@ def bandai1_dir() -> Path:
     return _dataset_dir(1)
 
 
+@pytest.fixture(scope="session")
+def other_dir() -> Path:
+    """Real BVH files on other skeletons (CMU, Xia-style), beside the Bandai-Namco archives."""
+    other = SHARED_DATA / "other"
+    if not other.is_dir():
+        reason = f"the non-Bandai files are not at {other} (they come with the project's shared/ folder)"
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"CI=true but {reason}")
+        pytest.skip(reason)
+    return other
+
+
 def bvh_values(path: Path) -> np.ndarray:
     """The MOTION numbers of a file, read with plain NumPy (independent of the package)."""
     text = Path(path).read_text()

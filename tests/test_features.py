@@ -83,13 +83,14 @@ def test_roles_can_be_given_and_missing_ones_are_named(mixed_path):
     assert "joints are: mixamorig:Hips, Spine Lower" in str(error.value)
 
 
-def test_two_candidates_for_a_role_are_reported():
+def test_two_candidates_for_a_role_are_settled_by_the_topology():
     skeleton = bandai_like_skeleton()
     names = list(skeleton.names)
-    names[names.index("Shoulder_L")] = "LeftUpLeg"  # a second left upper leg
+    names[names.index("Shoulder_L")] = "LeftUpLeg"  # a second left upper leg, on the arm
     twin = em.Skeleton(tuple(names), skeleton.parents, skeleton.offsets, skeleton.channels)
+    assert twin.names[JointRoles.find(twin).upper_legs[0]] == "UpperLeg_L"
     with pytest.raises(em.MocapError, match="left_upper_leg \\(several candidates: LeftUpLeg, UpperLeg_L\\)"):
-        JointRoles.find(twin)
+        JointRoles.find(twin, head="Head")  # roles given: names only, so the clash is reported
 
 
 def test_actor_height_by_hand():

@@ -108,6 +108,71 @@ def exp(v: np.ndarray) -> np.ndarray:
     return np.concatenate([v * scale, np.cos(angle / 2)], axis=-1)
 
 
+def between(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The shortest-arc rotations ``[..., 4]`` taking directions ``u`` to ``v`` (``[..., 3]``, any
+    length); for opposite directions, a half turn about an axis perpendicular to ``u``."""
+    u = np.asarray(u, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    u = u / np.linalg.norm(u, axis=-1, keepdims=True)
+    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    axis = np.cross(u, v)
+    w = 1.0 + np.sum(u * v, axis=-1, keepdims=True)
+    # Opposite: any axis perpendicular to u (x or y, whichever u is further from).
+    other = np.where(np.abs(u[..., :1]) < 0.9, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    flip = np.cross(u, other)
+    opposite = w < 1e-12
+    q = np.where(opposite, np.concatenate([flip, np.zeros_like(w)], axis=-1), np.concatenate([axis, w], axis=-1))
+    return normalize(q)
+
+
+def from_matrix(m: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``[..., 4]`` of rotation matrices ``[..., 3, 3]`` (Shepperd's method: the
+    largest of w, x, y, z is found first, so no branch divides by a small number)."""
+    m = np.asarray(m, dtype=np.float64)
+    trace = m[..., 0, 0] + m[..., 1, 1] + m[..., 2, 2]
+    candidates = np.stack(
+        [
+            np.stack(
+                [
+                    1 + 2 * m[..., 0, 0] - trace,
+                    m[..., 0, 1] + m[..., 1, 0],
+                    m[..., 0, 2] + m[..., 2, 0],
+                    m[..., 2, 1] - m[..., 1, 2],
+                ],
+                -1,
+            ),
+            np.stack(
+                [
+                    m[..., 0, 1] + m[..., 1, 0],
+                    1 + 2 * m[..., 1, 1] - trace,
+                    m[..., 1, 2] + m[..., 2, 1],
+                    m[..., 0, 2] - m[..., 2, 0],
+                ],
+                -1,
+            ),
+            np.stack(
+                [
+                    m[..., 0, 2] + m[..., 2, 0],
+                    m[..., 1, 2] + m[..., 2, 1],
+                    1 + 2 * m[..., 2, 2] - trace,
+                    m[..., 1, 0] - m[..., 0, 1],
+                ],
+                -1,
+            ),
+            np.stack(
+                [m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], m[..., 1, 0] - m[..., 0, 1], 1 + trace], -1
+            ),
+        ],
+        axis=-2,
+    )  # row k is 4 x_k times the quaternion, with x_k the k-th component
+    diagonal = np.stack(
+        [1 + 2 * m[..., 0, 0] - trace, 1 + 2 * m[..., 1, 1] - trace, 1 + 2 * m[..., 2, 2] - trace, 1 + trace], -1
+    )
+    best = np.argmax(diagonal, axis=-1)
+    q = np.take_along_axis(candidates, best[..., None, None], axis=-2)[..., 0, :]
+    return normalize(q)
+
+
 # --------------------------------------------------------------------------- means and resampling
 
 

@@ -85,6 +85,15 @@ class JointRoles:
                 problems.append(f"{role} (several candidates: {', '.join(skeleton.names[j] for j in matches)})")
             else:
                 problems.append(role)
+        if problems and not overrides:
+            # Names missing or ambiguous (SMPL's "left_foot" is a toe, a rig named j0..jN): the
+            # full joint map, which reads the topology too.
+            from .skeletons.jointmap import find_joint_map
+
+            try:
+                return cls.from_map(skeleton, find_joint_map(skeleton))
+            except MocapError:
+                pass
         if problems:
             raise MocapError(
                 f"cannot tell which joint is the {'; '.join(problems)}: pass it by name, e.g. "
@@ -99,6 +108,20 @@ class JointRoles:
             upper_legs=(found["left_upper_leg"], found["right_upper_leg"]),
             feet=(found["left_foot"], found["right_foot"]),
             toes=(found["left_toe"], found["right_toe"]),
+        )
+
+    @classmethod
+    def from_map(cls, skeleton: Skeleton, jmap) -> JointRoles:
+        """The roles of a :class:`~expressive_mocap.skeletons.JointMap` (a foot's own joint
+        stands in for toes the map lacks)."""
+        toes = tuple(jmap.get(f"{s}_toes") if f"{s}_toes" in jmap else jmap[f"{s}_foot"] for s in ("left", "right"))
+        return cls(
+            hips=jmap["hips"],
+            head=jmap["head"],
+            spine=_chain(skeleton, jmap["hips"], jmap["head"]),
+            upper_legs=(jmap["left_upper_leg"], jmap["right_upper_leg"]),
+            feet=(jmap["left_foot"], jmap["right_foot"]),
+            toes=(toes[0], toes[1]),
         )
 
     def names(self, skeleton: Skeleton) -> dict[str, str]:

@@ -17,7 +17,7 @@ IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 REACH = 0.9999
 
 
-def _contact_weights(contacts: np.ndarray, frames: int) -> np.ndarray:
+def contact_weights(contacts: np.ndarray, frames: int) -> np.ndarray:
     """Locking weights ``[F, S]`` from ``contacts bool [F, S]``: 1 in contact, easing to 0 over
     ``frames`` frames before and after each contact (smoothstep of the distance in frames)."""
     F = len(contacts)
@@ -62,7 +62,7 @@ def lock_stance_feet(
     parents = original.skeleton.parents
     _check_legs(original.skeleton, roles)
     world_in, pos_in = forward_kinematics(original.rotations, original.translations, parents)
-    weights = _contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
+    weights = contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
     edited, lowered = _lowered_to_reach(edited, pos_in, weights, roles, blend_frames)
     world_out, pos_out = forward_kinematics(edited.rotations, edited.translations, parents)
     height = actor_height(original.skeleton, roles)  # tolerances in the motion's units
@@ -170,4 +170,4 @@ def _lowered_to_reach(
     return Motion(edited.skeleton, edited.rotations, translations, edited.frame_time), float(eased.max())
 
 
-__all__ = ["REACH", "lock_stance_feet"]
+__all__ = ["REACH", "contact_weights", "lock_stance_feet"]

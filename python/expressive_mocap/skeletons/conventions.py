@@ -1,0 +1,226 @@
+"""The conventions a file was captured in, read from its data: up axis, facing direction, unit
+and actor height, rest pose kind, frame rate; and the change of axes and unit that brings a
+motion to the package's canonical frame (Y up, facing +Z, metres) and back.
+
+- **Up**: the mean direction from the feet to the head over the frames (sampled), snapped to the
+  nearest axis; how sure: the cosine between the two.
+- **Facing**: the rest pose's forward (left x up, left from the right hip joint to the left;
+  up along the spine), turned so that the rest's spine stands along the up axis (Bandai-Namco's
+  rest pose lies along X); snapped to the nearest horizontal axis.
+- **Actor height**: from the leg bones, which no pose changes: thigh plus shank are 0.491 of
+  the stature (Drillis & Contini's segment proportions). The unit is the one in which that height
+  is a human's (1.0-2.4 m); how sure falls off with the distance from 1.70 m.
+- **Rest pose**: T (upper arms within 25 degrees of horizontal and out to the side), A (25-70
+  degrees down), else other; "crouch" when the knees are bent over 25 degrees in the rest.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import quat
+from ..errors import MocapError
+from ..motion import Motion, Skeleton
+from .jointmap import JointMap
+
+LEG_SHARE_OF_STATURE = 0.491  # thigh + shank (Drillis & Contini 1966)
+TYPICAL_HEIGHT_M = 1.70
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+AXES = {"+X": (1, 0, 0), "-X": (-1, 0, 0), "+Y": (0, 1, 0), "-Y": (0, -1, 0), "+Z": (0, 0, 1), "-Z": (0, 0, -1)}
+_SAMPLED_FRAMES = 240
+
+
+@dataclass(frozen=True)
+class Conventions:
+    """What :func:`read_conventions` found. ``up`` and ``facing`` are axis names (``"+Y"``);
+    ``unit`` is ``"m"``, ``"cm"``, ``"mm"``, ``"in"`` or ``"unknown"``; ``metres_per_unit``
+    converts lengths (for an unknown unit: the scale that makes the actor 1.70 m tall);
+    ``height`` is the actor's height in file units; ``sure`` holds how sure each guess is (0-1)."""
+
+    up: str
+    facing: str
+    unit: str
+    metres_per_unit: float
+    height: float
+    rest_pose: str
+    fps: float
+    sure: dict
+
+    def rotation(self) -> np.ndarray:
+        """The rotation (quaternion) from the file's axes to the canonical ones (Y up, facing +Z)."""
+        return _frame_rotation(np.array(AXES[self.up], float), np.array(AXES[self.facing], float))
+
+    def with_overrides(self, up: str | None = None, facing: str | None = None, unit: str | None = None) -> Conventions:
+        """These conventions with any of up, facing or unit given by the user (sure = 1)."""
+        sure = dict(self.sure)
+        out = {"up": self.up, "facing": self.facing, "unit": self.unit, "metres_per_unit": self.metres_per_unit}
+        for name, value in (("up", up), ("facing", facing)):
+            if value is not None:
+                value = _axis_name(value, name)
+                out[name], sure[name] = value, 1.0
+        if unit is not None:
+            if unit not in UNITS:
+                raise MocapError(f"unit: expected one of {', '.join(UNITS)}, got {unit!r}")
+            out["unit"], out["metres_per_unit"], sure["unit"] = unit, UNITS[unit], 1.0
+        if np.dot(AXES[str(out["up"])], AXES[str(out["facing"])]) != 0:
+            raise MocapError(f"facing {out['facing']} must be horizontal, at right angles to up {out['up']}")
+        return Conventions(
+            str(out["up"]),
+            str(out["facing"]),
+            str(out["unit"]),
+            float(out["metres_per_unit"]),  # type: ignore[arg-type]
+            self.height,
+            self.rest_pose,
+            self.fps,
+            sure,
+        )
+
+
+def _axis_name(value: str, what: str) -> str:
+    name = value.upper() if value[:1] in "+-" else "+" + value.upper()
+    if name not in AXES:
+        raise MocapError(f"{what}: expected an axis such as Y, +Z or -X, got {value!r}")
+    return name
+
+
+def _frame_rotation(up: np.ndarray, facing: np.ndarray) -> np.ndarray:
+    """The rotation taking ``up`` to +Y and ``facing`` to +Z (both unit, at right angles)."""
+    left = np.cross(up, facing)
+    return quat.from_matrix(np.stack([left, up, facing]))  # rows: where X, Y, Z come from
+
+
+def _nearest_axis(v: np.ndarray, exclude: str | None = None) -> tuple[str, float]:
+    v = v / max(float(np.linalg.norm(v)), 1e-30)
+    best = max(
+        (name for name in AXES if exclude is None or name[1] != exclude[1]), key=lambda n: float(np.dot(AXES[n], v))
+    )
+    return best, float(np.dot(AXES[best], v))
+
+
+def body_axes(positions: np.ndarray, jmap: JointMap) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per pose ``[..., J, 3]``: unit up (hips to chest), left (right to left hip joint, made
+    perpendicular to up) and forward (left x up), each ``[..., 3]``."""
+    up = positions[..., jmap["chest"], :] - positions[..., jmap["hips"], :]
+    up = up / np.linalg.norm(up, axis=-1, keepdims=True)
+    left = positions[..., jmap["left_upper_leg"], :] - positions[..., jmap["right_upper_leg"], :]
+    left = left - up * np.sum(left * up, axis=-1, keepdims=True)
+    left = left / np.linalg.norm(left, axis=-1, keepdims=True)
+    return up, left, np.cross(left, up)
+
+
+def stature(skeleton: Skeleton, jmap: JointMap) -> float:
+    """The actor's height in file units, from the leg bones (see the module's notes)."""
+    legs = []
+    positions = skeleton.rest_positions()[0]
+    for side in ("left", "right"):
+        hip, knee, ankle = (positions[jmap[f"{side}_{r}"]] for r in ("upper_leg", "lower_leg", "foot"))
+        legs.append(np.linalg.norm(knee - hip) + np.linalg.norm(ankle - knee))
+    return float(np.mean(legs)) / LEG_SHARE_OF_STATURE
+
+
+def rest_pose_kind(skeleton: Skeleton, jmap: JointMap) -> tuple[str, float]:
+    """``("T" | "A" | "crouch" | "other", how sure)`` of the skeleton's rest pose."""
+    rest = skeleton.rest_positions()[0]
+    up, left, _ = body_axes(rest, jmap)
+    knees = []
+    for side in ("left", "right"):
+        hip, knee, ankle = (rest[jmap[f"{side}_{r}"]] for r in ("upper_leg", "lower_leg", "foot"))
+        knees.append(_angle(knee - hip, ankle - knee))
+    knee = max(knees)
+    if knee > 25:
+        return "crouch", float(min(1.0, (knee - 25) / 20))
+    if "left_upper_arm" not in jmap:
+        return "other", 0.5
+    drops, outward = [], []
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        arm = rest[jmap[f"{side}_forearm"]] - rest[jmap[f"{side}_upper_arm"]]
+        arm = arm / np.linalg.norm(arm)
+        drops.append(-np.degrees(np.arcsin(np.clip(arm @ up, -1, 1))))
+        outward.append(sign * float(arm @ left))
+    drop = float(np.mean(drops))
+    if min(outward) < 0.3:
+        return "other", 0.5
+    if abs(drop) <= 25:
+        return "T", float(1 - abs(drop) / 50)
+    if 25 < drop <= 70:
+        return "A", float(1 - abs(drop - 47.5) / 45)
+    return "other", 0.5
+
+
+def _angle(a: np.ndarray, b: np.ndarray) -> float:
+    cos = float(a @ b) / max(float(np.linalg.norm(a) * np.linalg.norm(b)), 1e-30)
+    return float(np.degrees(np.arccos(np.clip(cos, -1, 1))))
+
+
+def guess_unit(height: float) -> tuple[str, float, float]:
+    """``(unit, metres per unit, how sure)`` for an actor ``height`` file units tall."""
+    best = ("unknown", TYPICAL_HEIGHT_M / height if height > 0 else 1.0, 0.0)
+    for unit, metres in UNITS.items():
+        tall = height * metres
+        if 1.0 <= tall <= 2.4:
+            sure = float(np.exp(-((np.log(tall / TYPICAL_HEIGHT_M) / 0.25) ** 2)))
+            if sure > best[2]:
+                best = (unit, metres, sure)
+    return best
+
+
+def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
+    """The conventions of ``motion`` (see the module's notes)."""
+    skeleton = motion.skeleton
+    frames = np.unique(np.linspace(0, motion.n_frames - 1, min(motion.n_frames, _SAMPLED_FRAMES)).astype(int))
+    positions = motion[frames].positions()
+    feet = 0.5 * (positions[:, jmap["left_foot"]] + positions[:, jmap["right_foot"]])
+    head_up = np.mean(positions[:, jmap["head"]] - feet, axis=0)
+    up, up_sure = _nearest_axis(head_up)
+    rest = skeleton.rest_positions()[0]
+    rest_up, _, rest_forward = body_axes(rest, jmap)
+    upright = quat.between(rest_up, np.array(AXES[up], float))
+    forward = quat.rotate(upright, rest_forward)
+    facing, facing_sure = _nearest_axis(forward - np.dot(forward, AXES[up]) * np.array(AXES[up]), exclude=up)
+    height = stature(skeleton, jmap)
+    unit, metres, unit_sure = guess_unit(height)
+    kind, kind_sure = rest_pose_kind(skeleton, jmap)
+    sure = {
+        "up": round(up_sure, 3),
+        "facing": round(facing_sure, 3),
+        "unit": round(unit_sure, 3),
+        "rest_pose": round(kind_sure, 3),
+    }
+    return Conventions(up, facing, unit, metres, height, kind, motion.fps, sure)
+
+
+def to_canonical(motion: Motion, conventions: Conventions) -> Motion:
+    """``motion`` in the canonical frame: Y up, facing +Z, metres (every local rotation turned
+    with the axes, offsets and translations turned and scaled)."""
+    return _changed(motion, conventions.rotation(), conventions.metres_per_unit)
+
+
+def from_canonical(motion: Motion, conventions: Conventions) -> Motion:
+    """The inverse of :func:`to_canonical`: back to the file's own axes and unit."""
+    return _changed(motion, quat.conjugate(conventions.rotation()), 1.0 / conventions.metres_per_unit)
+
+
+def _changed(motion: Motion, turn: np.ndarray, scale: float) -> Motion:
+    skeleton = motion.skeleton
+    offsets = quat.rotate(turn, skeleton.offsets) * scale
+    sites = quat.rotate(turn, np.array([o for _, o in skeleton.end_sites]).reshape(-1, 3)) * scale
+    turned = skeleton.with_offsets(offsets, sites)
+    rotations = quat.mul(quat.mul(turn, motion.rotations), quat.conjugate(turn))
+    translations = quat.rotate(turn, motion.translations) * scale
+    return Motion(turned, rotations, translations, motion.frame_time)
+
+
+__all__ = [
+    "AXES",
+    "UNITS",
+    "Conventions",
+    "body_axes",
+    "from_canonical",
+    "guess_unit",
+    "read_conventions",
+    "rest_pose_kind",
+    "stature",
+    "to_canonical",
+]

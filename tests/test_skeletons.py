@@ -1,0 +1,274 @@
+"""Any humanoid skeleton, on ground truth: the demo's walk written on synthetic skeletons built
+after six conventions (Bandai, CMU, Mixamo, SMPL, a game rig, LAFAN1), each with the map and
+conventions it was built with. The package must find those on its own, and retargeting between
+every pair must put each mapped bone where the other skeleton's truth has it."""
+
+from __future__ import annotations
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import expressive_mocap as em
+from expressive_mocap import quat
+from expressive_mocap.features import foot_contacts
+from expressive_mocap.roles import JointRoles
+from expressive_mocap.skeletons import conventions as conv
+from expressive_mocap.skeletons.jointmap import find_joint_map, read_joint_map
+from expressive_mocap.skeletons.names import label
+from expressive_mocap.skeletons.retarget import Rig, _leg, retarget
+from expressive_mocap.skeletons.synthetic import RIGS, synthetic_walk
+
+# The bones whose world direction a retarget must carry: each from a mapped joint to the next
+# one out (with joints the map leaves out held still between them), and the line across the hips.
+_LIMB = [("upper_leg", "lower_leg"), ("lower_leg", "foot"), ("foot", "toes")]
+_LIMB += [("clavicle", "upper_arm"), ("upper_arm", "forearm"), ("forearm", "hand")]
+BONES = [(f"{s}_{a}", f"{s}_{b}") for s in ("left", "right") for a, b in _LIMB]
+BONES += [("neck", "head"), ("right_upper_leg", "left_upper_leg")]
+TOLERANCE_DEG = 1.0
+
+
+@pytest.fixture(scope="module")
+def walks() -> dict[str, em.Motion]:
+    return {rig: synthetic_walk(rig, wave="right").motion for rig in RIGS}
+
+
+def bone_directions(motion: em.Motion) -> np.ndarray:
+    """Unit directions ``[F, B, 3]`` of :data:`BONES` in the canonical axes, at 30 fps, from the
+    map and conventions the package reads."""
+    if abs(motion.fps - 30) > 1e-6:
+        motion = motion.resample(fps=30)
+    jmap = find_joint_map(motion.skeleton)
+    positions = conv.to_canonical(motion, conv.read_conventions(motion, jmap)).positions()
+    v = np.stack([positions[:, jmap[b]] - positions[:, jmap[a]] for a, b in BONES], axis=1)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def worst_angle(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1, 1))).max())
+
+
+# -- names --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("name", "side", "roles"),
+    [
+        ("mixamorig:LeftUpLeg", "left", ("upper_leg",)),
+        ("UpperLeg_L", "left", ("upper_leg",)),
+        ("thigh_r", "right", ("upper_leg",)),
+        ("Bip01 L Thigh", "left", ("upper_leg",)),
+        ("left_shoulder", "left", ("clavicle", "upper_arm")),  # SMPL's upper arm, CMU's clavicle
+        ("right_foot", "right", ("foot", "toes")),  # SMPL's toes
+        ("LHipJoint", "left", ()),  # CMU's zero-length joint
+        ("upperarm_twist_01_l", "left", ()),
+        ("LeftHandIndex1", "left", ()),
+        ("mixamorig:HeadTop_End", "", ()),
+        ("Spine1", "", ("spine",)),
+        ("pelvis", "", ("hips",)),
+        ("lefthand", "left", ("hand",)),
+    ],
+)
+def test_names_say_side_and_part(name, side, roles):
+    found = label(name)
+    assert (found.side, found.roles) == (side, roles)
+
+
+# -- joint maps ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("rig", RIGS)
+def test_map_is_found_by_names(walks, rig):
+    truth = synthetic_walk(rig).truth
+    jmap = find_joint_map(walks[rig].skeleton)
+    found = {role: name for role, name in jmap.as_names().items() if role != "spine"}
+    assert found == truth
+    names = walks[rig].skeleton.names
+    unmapped = {names[j] for j in jmap.unmapped}
+    assert unmapped.isdisjoint(truth.values())
+    if rig == "game":  # twist bones are reported, never an error
+        assert {"upperarm_twist_01_l", "thigh_twist_01_r"} <= unmapped
+
+
+@pytest.mark.parametrize("rig", RIGS)
+def test_map_is_found_by_topology_where_names_say_nothing(walks, rig):
+    motion = walks[rig]
+    skeleton = motion.skeleton
+    anonymous = em.Skeleton(
+        tuple(f"j{j}" for j in range(skeleton.n_joints)),
+        skeleton.parents,
+        skeleton.offsets,
+        skeleton.channels,
+        skeleton.end_sites,
+    )
+    jmap = find_joint_map(anonymous, pose=motion.positions()[0])  # the pose tells left from right
+    truth = synthetic_walk(rig).truth
+    found = {role: skeleton.names[j] for role, j in jmap.joints.items()}
+    if rig == "mixamo":  # a head-top joint with rotation channels reads as the head without its name
+        assert found.pop("head") == "mixamorig:HeadTop_End"
+        truth = {k: v for k, v in truth.items() if k != "head"}
+    assert found == truth
+    assert all(how == "topology" for how in jmap.how.values())
+
+
+@pytest.mark.parametrize("suffix", [".json", ".toml"])
+def test_a_map_file_gives_what_names_cannot(tmp_path, suffix):
+    motion = synthetic_walk("game").motion
+    names = list(motion.skeleton.names)
+    renamed = {"thigh_l": "bone_17", "calf_l": "bone_18", "spine_03": "torso_top"}
+    skeleton = em.Skeleton(
+        tuple(renamed.get(n, n) for n in names),
+        motion.skeleton.parents,
+        motion.skeleton.offsets,
+        motion.skeleton.channels,
+        motion.skeleton.end_sites,
+    )
+    path = tmp_path / f"map{suffix}"
+    entries = {"left_upper_leg": "bone_17", "left_lower_leg": "bone_18", "chest": "torso_top"}
+    if suffix == ".json":
+        path.write_text(json.dumps(entries))
+    else:
+        path.write_text("".join(f'{k} = "{v}"\n' for k, v in entries.items()))
+    jmap = find_joint_map(skeleton, read_joint_map(path))
+    assert {r: skeleton.names[jmap[r]] for r in entries} == entries
+    assert all(jmap.how[r] == "map" for r in entries)
+    assert skeleton.names[jmap["left_foot"]] == "foot_l"
+
+
+def test_bad_map_files_are_named(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"left_elbow": "x"}')
+    with pytest.raises(em.MocapError, match=r"bad.json: unknown role 'left_elbow'"):
+        read_joint_map(bad)
+    bad.write_text("{not json")
+    with pytest.raises(em.MocapError, match=r"bad.json: not a valid joint map"):
+        read_joint_map(bad)
+    bad.write_text('{"hips": "Nope"}')
+    with pytest.raises(em.MocapError, match="no joint named 'Nope'"):
+        find_joint_map(synthetic_walk("lafan").motion.skeleton, read_joint_map(bad))
+
+
+def test_a_skeleton_without_legs_is_refused_with_the_joints_listed():
+    skeleton = em.Skeleton(("a", "b", "c"), [-1, 0, 1], np.eye(3), (("Xrotation",),) * 3)
+    with pytest.raises(em.MocapError, match="cannot tell which joint is the hips.*joints are: a, b, c"):
+        find_joint_map(skeleton)
+
+
+def test_feature_roles_come_from_the_map_where_names_fail(walks):
+    roles = JointRoles.find(walks["smpl"].skeleton)  # SMPL's "left_foot" is a toe
+    names = walks["smpl"].skeleton.names
+    assert [names[j] for j in roles.feet + roles.toes] == ["left_ankle", "right_ankle", "left_foot", "right_foot"]
+
+
+# -- conventions --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("rig", RIGS)
+def test_conventions_are_read_from_the_data(walks, rig):
+    built = synthetic_walk(rig).conventions
+    read = conv.read_conventions(walks[rig], find_joint_map(walks[rig].skeleton))
+    assert (read.up, read.facing, read.unit, read.rest_pose) == (built.up, built.facing, built.unit, built.rest_pose)
+    assert read.fps == pytest.approx(built.fps)
+    assert read.height * read.metres_per_unit == pytest.approx(1.63, abs=0.05)  # the Bandai actor's legs
+    assert min(read.sure.values()) > 0.4
+
+
+def test_unknown_units_scale_to_a_typical_actor_and_overrides_win(walks):
+    motion = walks["lafan"].scaled(1 / 5.64)  # CMU's own unit: about 5.6 cm
+    jmap = find_joint_map(motion.skeleton)
+    read = conv.read_conventions(motion, jmap)
+    assert read.unit == "unknown" and read.metres_per_unit * read.height == pytest.approx(1.70)
+    given = read.with_overrides(up="z", facing="-y", unit="in")
+    assert (given.up, given.facing, given.unit, given.metres_per_unit) == ("+Z", "-Y", "in", 0.0254)
+    with pytest.raises(em.MocapError, match="must be horizontal"):
+        read.with_overrides(up="Y", facing="-Y")
+
+
+@pytest.mark.parametrize("rig", ["smpl", "game", "cmu"])
+def test_to_canonical_and_back_is_the_identity(walks, rig):
+    motion = walks[rig]
+    read = conv.read_conventions(motion, find_joint_map(motion.skeleton))
+    canonical = conv.to_canonical(motion, read)
+    hips = canonical.positions()[:, find_joint_map(motion.skeleton)["hips"]]
+    assert np.median(hips[:, 1]) == pytest.approx(0.90, abs=0.03)  # Y up, metres
+    assert hips[-1, 2] - hips[0, 2] > 3.0  # walking towards +Z (1.2 m/s for 4 s, carried over)
+    back = conv.from_canonical(canonical, read)
+    np.testing.assert_allclose(back.positions(), motion.positions(), atol=1e-9 / read.metres_per_unit)
+
+
+def test_rotation_helpers_agree_with_scipy():
+    rng = np.random.default_rng(3)
+    rotations = Rotation.random(200, random_state=4)
+    q = quat.from_matrix(rotations.as_matrix())
+    np.testing.assert_allclose(np.abs(np.sum(q * rotations.as_quat(), axis=-1)), 1.0, atol=1e-12)
+    u, v = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
+    turned = quat.rotate(quat.between(u, v), u)
+    np.testing.assert_allclose(
+        turned / np.linalg.norm(turned, axis=1)[:, None], v / np.linalg.norm(v, axis=1)[:, None], atol=1e-12
+    )
+    half = quat.between(np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0]))
+    assert quat.angle(half) == pytest.approx(np.pi)
+
+
+# -- harmonised directions and retargeting ------------------------------------------------------
+
+
+def test_harmonised_bone_directions_agree_across_skeletons(walks):
+    reference = bone_directions(walks["bandai"])
+    for rig in RIGS:
+        assert worst_angle(bone_directions(walks[rig]), reference) < 0.01, rig
+
+
+def test_retargeting_between_every_pair_and_back(walks):
+    directions = {rig: bone_directions(walks[rig]) for rig in RIGS}
+    for a, b in itertools.permutations(RIGS, 2):
+        there = retarget(walks[a], walks[b], plant_feet=False)
+        assert there.skeleton is walks[b].skeleton and there.fps == pytest.approx(walks[a].fps)
+        assert worst_angle(bone_directions(there), directions[b]) < TOLERANCE_DEG, (a, b)
+        back = retarget(there, walks[a], plant_feet=False)
+        assert worst_angle(bone_directions(back), directions[a]) < TOLERANCE_DEG, (a, b)
+
+
+def test_the_hips_path_scales_with_the_legs_into_the_targets_unit(walks):
+    there = retarget(walks["bandai"], walks["smpl"], plant_feet=False)  # cm, Y up -> m, Z up
+    jmap = find_joint_map(there.skeleton)
+    hips = there.positions()[:, jmap["hips"]]
+    assert np.median(hips[:, 2]) == pytest.approx(0.90, abs=0.03)  # metres, up is Z
+    assert hips[-1, 1] - hips[0, 1] < -3.0  # the SMPL rig faces -Y, so it walks along -Y
+
+
+def stance_speed(motion: em.Motion, contacts: np.ndarray) -> float:
+    """Mean ankle speed over the frames both ends of which are in contact, in leg lengths a second."""
+    jmap = find_joint_map(motion.skeleton)
+    positions = motion.positions()
+    speeds = []
+    for s, side in enumerate(("left", "right")):
+        v = np.linalg.norm(np.diff(positions[:, jmap[f"{side}_foot"]], axis=0), axis=1) * motion.fps
+        speeds.append(v[contacts[1:, s] & contacts[:-1, s]])
+    rig = Rig.of(motion)
+    return float(np.concatenate(speeds).mean() / _leg(rig))
+
+
+def test_planted_feet_move_no_faster_than_the_sources(walks):
+    """Retargeting onto legs of other proportions: the game rig's thighs made 20% longer and its
+    shanks 20% shorter, so the carried hips path no longer fits and feet would slide."""
+    game = walks["game"]
+    skeleton = game.skeleton
+    offsets = skeleton.offsets.copy()
+    for side in "lr":
+        knee, ankle = skeleton.index(f"calf_{side}"), skeleton.index(f"foot_{side}")
+        offsets[knee] *= 1.2
+        offsets[skeleton.index(f"calf_twist_01_{side}")] *= 0.8
+        offsets[ankle] *= 0.8
+    other = skeleton.with_offsets(offsets, [o for _, o in skeleton.end_sites])
+    target = em.Motion(other, game.rotations[:1], np.broadcast_to(offsets, (1,) + offsets.shape), game.frame_time)
+    source = walks["bandai"]
+    contacts = foot_contacts(source)
+    source_speed = stance_speed(source, contacts)
+    sliding = stance_speed(retarget(source, target, plant_feet=False), contacts)
+    planted = stance_speed(retarget(source, target), contacts)
+    assert sliding > 1.5 * source_speed  # the test would catch feet left to slide
+    assert planted <= 1.2 * source_speed  # the margin: heel strikes a straight leg cannot quite reach

@@ -1,0 +1,89 @@
+"""Joint maps, conventions and retargeting on real files: the CMU and Xia-style files beside the
+archives and Bandai-Namco clips of both datasets, with no mapping file."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap.skeletons.conventions import read_conventions
+from expressive_mocap.skeletons.jointmap import REQUIRED, find_joint_map
+from expressive_mocap.skeletons.retarget import retarget
+
+pytestmark = pytest.mark.real_data
+
+_LIMB = [("upper_leg", "lower_leg"), ("lower_leg", "foot"), ("foot", "toes")]
+_LIMB += [("clavicle", "upper_arm"), ("upper_arm", "forearm"), ("forearm", "hand")]
+BONES = [(f"{s}_{a}", f"{s}_{b}") for s in ("left", "right") for a, b in _LIMB] + [("neck", "head")]
+ROUND_TRIP_DEG = 2.0
+
+
+def directions(motion: em.Motion) -> np.ndarray:
+    jmap = find_joint_map(motion.skeleton)
+    p = motion.positions()
+    v = np.stack([p[:, jmap[b]] - p[:, jmap[a]] for a, b in BONES], axis=1)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def worst_angle(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1, 1))).max())
+
+
+@pytest.fixture(scope="module")
+def others(other_dir) -> dict[str, em.Motion]:
+    return {path.name: em.read_bvh(path) for path in sorted(other_dir.glob("*.bvh"))}
+
+
+def test_other_skeletons_are_mapped_without_a_map_file(others):
+    assert len(others) == 6
+    for name, motion in others.items():
+        jmap = find_joint_map(motion.skeleton)
+        assert set(REQUIRED) <= set(jmap.joints), name
+        assert all(f"{s}_{r}" in jmap for s in ("left", "right") for r in ("clavicle", "upper_arm", "forearm", "hand"))
+        unmapped = {motion.skeleton.names[j] for j in jmap.unmapped}
+        assert {"LHipJoint", "RHipJoint"} <= unmapped, name  # zero-length joints: reported, not roles
+        read = read_conventions(motion, jmap)
+        assert (read.up, read.facing) == ("+Y", "+Z"), name
+    cmu = read_conventions(others["cmu_scaled_131_03.bvh"], find_joint_map(others["cmu_scaled_131_03.bvh"].skeleton))
+    assert cmu.unit == "m" and cmu.fps == pytest.approx(120, rel=1e-3)
+
+
+def test_bandai_clips_of_both_datasets_are_mapped(bandai1_dir, bandai2_dir):
+    paths = sorted(bandai1_dir.glob("*.bvh"))[::20] + sorted(bandai2_dir.glob("*.bvh"))[::100]
+    for path in paths:
+        skeleton = em.read_bvh(path).skeleton
+        jmap = find_joint_map(skeleton)
+        assert jmap.as_names()["left_upper_leg"] == "UpperLeg_L" and jmap.as_names()["spine"] == ["Spine", "Chest"]
+        assert jmap.confidence() == 1.0  # every role found by its name and the topology alike
+
+
+def test_round_trips_between_real_skeletons_hold(others, bandai1_dir, bandai2_dir):
+    motions = {
+        "bandai2 walk": em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh"),
+        "bandai1 bye": em.read_bvh(bandai1_dir / "dataset-1_bye_normal_001.bvh"),
+        **{k: v for k, v in others.items() if v.n_frames > 1},
+    }
+    for (a, source), (b, target) in itertools.permutations(motions.items(), 2):
+        there = retarget(source, target, plant_feet=False)
+        back = retarget(there, source, plant_feet=False)
+        assert worst_angle(directions(back), directions(source)) < ROUND_TRIP_DEG, (a, b)
+        assert worst_angle(directions(there), directions(source)) < 1e-6 or a != b
+
+
+def test_a_bandai_walk_on_the_cmu_skeleton_keeps_its_feet_and_its_unit(others, bandai2_dir):
+    walk = em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh")
+    cmu = others["cmu_scaled_131_03.bvh"]
+    there = retarget(walk, cmu)
+    jmap = find_joint_map(cmu.skeleton)
+    hips = there.positions()[:, jmap["hips"]]
+    walk_hips = walk.positions()[:, find_joint_map(walk.skeleton)["hips"]]
+    # Metres now, on legs of another length: the hips as high, for their legs, as the walk's.
+    ratio = np.median(hips[:, 1]) / np.median(walk_hips[:, 1])
+    assert 0.005 < ratio < 0.015
+    travelled = np.linalg.norm(hips[-1, [0, 2]] - hips[0, [0, 2]]) / np.linalg.norm(
+        walk_hips[-1, [0, 2]] - walk_hips[0, [0, 2]]
+    )
+    assert travelled == pytest.approx(ratio, rel=0.1)
