@@ -42,6 +42,7 @@ def command(name, i, out):
     """argv of command ``name`` writing into folder ``out``, and the outputs it must write."""
     return {
         "convert": (["convert", i["walk"], "-o", out / "c.bvh"], ["c.bvh"]),
+        "retarget": (["retarget", i["walk"], "--to", i["wave"], "-o", out / "rt.bvh"], ["rt.bvh"]),
         "positions": (["positions", i["walk"], "-o", out / "p.npz"], ["p.npz"]),
         "render": (["render", i["walk"], "--poses", "2", "-o", out / "r.png"], ["r.png"]),
         "decouple": (["decouple", i["wave"], "-o", out / "d"], ["d_body.bvh", "d_expressive.bvh", "d_activity.csv"]),
@@ -78,6 +79,7 @@ def command(name, i, out):
 
 WRITERS = [
     "convert",
+    "retarget",
     "positions",
     "render",
     "decouple",

@@ -19,7 +19,7 @@ from expressive_mocap.roles import JointRoles
 from expressive_mocap.skeletons import conventions as conv
 from expressive_mocap.skeletons.jointmap import find_joint_map, read_joint_map
 from expressive_mocap.skeletons.names import label
-from expressive_mocap.skeletons.retarget import Rig, _leg, retarget
+from expressive_mocap.skeletons.retargeting import Rig, _leg, retarget
 from expressive_mocap.skeletons.synthetic import RIGS, synthetic_walk
 
 # The bones whose world direction a retarget must carry: each from a mapped joint to the next

@@ -11,7 +11,7 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap.skeletons.conventions import read_conventions
 from expressive_mocap.skeletons.jointmap import REQUIRED, find_joint_map
-from expressive_mocap.skeletons.retarget import retarget
+from expressive_mocap.skeletons.retargeting import retarget
 
 pytestmark = pytest.mark.real_data
 

@@ -1,7 +1,7 @@
 """The ``expressive-mocap`` command: a thin layer over the package's functions.
 
 Each group of commands is a module that adds its subparsers next to its command functions
-(:mod:`.files`, :mod:`.decoupling`, :mod:`.exaggeration`, :mod:`.data`, :mod:`.demo`); this one
+(:mod:`.files`, :mod:`.skeletons`, :mod:`.decoupling`, :mod:`.exaggeration`, :mod:`.data`, :mod:`.demo`); this one
 builds the parser and runs a command: outputs are checked before any work, and bad input ends the
 command with a one-line message on stderr and a non-zero exit, never a traceback.
 """
@@ -18,7 +18,7 @@ from pathlib import Path
 from .. import __version__, backend
 from ..errors import MocapError
 from ..files import file_kind, is_standard_output, output_target
-from . import data, decoupling, demo, exaggeration, files
+from . import data, decoupling, demo, exaggeration, files, skeletons
 from .common import PROG, Parser
 from .decoupling import DECOUPLE_SUFFIXES
 from .demo import DEMO_FILES
@@ -35,7 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"kernels to use (default: ${backend.ENV_VAR} or auto = Rust when built)",
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser, required=True)
-    for group in (files, decoupling, exaggeration, data, demo):
+    for group in (files, skeletons, decoupling, exaggeration, data, demo):
         group.add_parsers(commands)
     # --backend is also taken after the command (`info FILE --backend numpy`); SUPPRESS keeps a
     # command without it from overwriting the value given before the command.
@@ -52,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
 # Commands whose one output may be standard output (`-o -` or `-o /dev/stdout`): a BVH or .npz
 # streamed as it is; their report lines then go to stderr. Pictures pick their format from the
 # name, decouple writes three files and demo/preprocess a folder, so they take none.
-_STREAMING = ("convert", "positions", "modulate", "mix", "blend", "exaggerate", "calibrate", "train")
+_STREAMING = ("convert", "positions", "retarget", "modulate", "mix", "blend", "exaggerate", "calibrate", "train")
 _MAKE_FOLDERS = ("demo", "preprocess")  # their OUT is a folder, made if new
 
 

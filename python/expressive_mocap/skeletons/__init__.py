@@ -4,7 +4,7 @@
   a user's map file, :func:`read_joint_map`);
 - :mod:`.conventions`: the axes, unit, actor height and rest pose a file was captured in
   (:func:`read_conventions`), and the change to the canonical frame and back;
-- :mod:`.retarget`: a motion moved onto another skeleton (:func:`retarget`);
+- :mod:`.retargeting`: a motion moved onto another skeleton (:func:`retarget`);
 - :mod:`.synthetic`: the demo's walk on six synthetic skeletons, with their ground truth.
 """
 
@@ -21,8 +21,8 @@ _LAZY = {
     "read_conventions": "conventions",
     "to_canonical": "conventions",
     "from_canonical": "conventions",
-    "Rig": "retarget",
-    "retarget": "retarget",
+    "Rig": "retargeting",
+    "retarget": "retargeting",
     "RIGS": "synthetic",
     "synthetic_skeleton": "synthetic",
     "synthetic_walk": "synthetic",

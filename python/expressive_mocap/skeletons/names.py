@@ -23,7 +23,7 @@ ARM_ROLES = ("clavicle", "upper_arm", "forearm", "hand")
 PARTS: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("hips", "pelvis"), ("hips",)),
     **dict.fromkeys(("spine", "chest", "upperchest", "torso", "lowerback", "back", "abdomen", "waist"), ("spine",)),
-    "neck": ("neck",),
+    **dict.fromkeys(("neck", "lowerneck", "upperneck"), ("neck",)),
     "head": ("head",),
     **dict.fromkeys(("clavicle", "collar", "collarbone"), ("clavicle",)),
     "shoulder": ("clavicle", "upper_arm"),

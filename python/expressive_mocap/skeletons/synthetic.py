@@ -16,7 +16,7 @@ rig          names and structure                                           rest 
 
 Every rig but ``bandai`` is built from one canonical T-pose (metres, Y up, facing +Z) whose legs
 have the Bandai skeleton's proportions, so the walk keeps its feet planted on all of them; the
-motion on each is the Bandai walk carried over by :func:`~.retarget.retarget_rigs` with the
+motion on each is the Bandai walk carried over by :func:`~.retargeting.retarget_rigs` with the
 rig's known map and conventions (not the ones the package would read).
 """
 
@@ -31,7 +31,7 @@ from ..demo import procedural_walk
 from ..motion import Motion, Skeleton
 from .conventions import AXES, UNITS, Conventions, _frame_rotation
 from .jointmap import find_joint_map
-from .retarget import Rig, retarget_rigs
+from .retargeting import Rig, retarget_rigs
 
 RIGS = ("bandai", "cmu", "mixamo", "smpl", "game", "lafan")
 

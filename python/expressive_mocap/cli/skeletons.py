@@ -1,0 +1,155 @@
+"""Commands on skeletons: ``skeleton`` (what the package reads from a file: joint map and
+conventions) and ``retarget`` (a motion onto another skeleton)."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from ..bvh import read_bvh, write_bvh
+from ..errors import MocapError
+from .common import PROG
+
+__all__ = ["add_parsers", "cmd_retarget", "cmd_skeleton"]
+
+_AXES_HELP = "an axis: X, Y, Z, with a sign for facing (e.g. -Y)"
+
+
+def _add_convention_options(p, whose: str = "") -> None:
+    p.add_argument("--up", metavar="AXIS", help=f"{whose}up axis, instead of reading it from the data ({_AXES_HELP})")
+    p.add_argument("--facing", metavar="AXIS", help=f"{whose}facing direction at rest, instead of reading it")
+    p.add_argument("--unit", choices=("m", "cm", "mm", "in"), help=f"{whose}length unit, instead of guessing it")
+
+
+def _map_file(path: str | None) -> dict | None:
+    from ..skeletons import read_joint_map
+
+    return read_joint_map(path) if path else None
+
+
+def add_skeleton(commands) -> None:
+    p = commands.add_parser(
+        "skeleton",
+        help="joint map (role -> joint), up axis, facing, unit, actor height and rest pose of BVH files",
+        description="What the package reads from each file: the joint playing each role (by names, the "
+        "topology, or --map), the joints with no role, and the conventions, each with how sure the guess is.",
+    )
+    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files")
+    p.add_argument("--map", metavar="MAP.json|MAP.toml", help="roles the names and topology do not find: role -> joint")
+    p.add_argument("--json", action="store_true", help="print one JSON object per file instead of text")
+    _add_convention_options(p)
+    p.set_defaults(run=cmd_skeleton)
+
+
+def describe(path: str, user_map: dict | None, args) -> dict:
+    """What ``skeleton`` reports for one file."""
+    from ..skeletons import find_joint_map, read_conventions
+
+    motion = read_bvh(path)
+    jmap = find_joint_map(motion.skeleton, user_map)
+    conventions = read_conventions(motion, jmap).with_overrides(args.up, args.facing, args.unit)
+    names = motion.skeleton.names
+    return {
+        "file": str(path),
+        "joints": motion.skeleton.n_joints,
+        "frames": motion.n_frames,
+        "fps": round(motion.fps, 6),
+        "map": jmap.as_names(),
+        "how": {role: jmap.how.get(role, "") for role in jmap.joints},
+        "unmapped": [names[j] for j in jmap.unmapped],
+        "up": conventions.up,
+        "facing": conventions.facing,
+        "unit": conventions.unit,
+        "metres_per_unit": conventions.metres_per_unit,
+        "actor_height": round(conventions.height, 6),
+        "actor_height_m": round(conventions.height * conventions.metres_per_unit, 3),
+        "rest_pose": conventions.rest_pose,
+        "sure": conventions.sure,
+    }
+
+
+def cmd_skeleton(args) -> int:
+    user_map = _map_file(args.map)
+    failures = 0
+    for path in args.files:
+        try:
+            report = describe(path, user_map, args)
+        except MocapError as error:
+            print(f"{PROG}: error: {error}", file=sys.stderr)
+            failures += 1
+            continue
+        if args.json:
+            print(json.dumps(report))
+            continue
+        sure = report["sure"]
+        print(f"{path}: {report['joints']} joints, {report['frames']} frames at {report['fps']:.6g} fps")
+        print(
+            f"  up {report['up']} (sure {sure['up']:.2f}), facing {report['facing']} ({sure['facing']:.2f}), "
+            f"unit {report['unit']} ({sure['unit']:.2f}): actor {report['actor_height']:.4g} units "
+            f"= {report['actor_height_m']:.2f} m tall; rest pose {report['rest_pose']} ({sure['rest_pose']:.2f})"
+        )
+        print("  role             joint                      found by")
+        for role, joint in report["map"].items():
+            shown = ", ".join(joint) if isinstance(joint, list) else joint
+            print(f"  {role:<16} {shown:<26} {report['how'].get(role, 'the chain from the hips to the chest')}")
+        unmapped = report["unmapped"]
+        print(f"  unmapped ({len(unmapped)}): {', '.join(unmapped) if unmapped else 'none'}")
+    return 1 if failures else 0
+
+
+def add_retarget(commands) -> None:
+    p = commands.add_parser(
+        "retarget",
+        help="move a motion onto another skeleton (TARGET's joints, rest pose, axes and unit)",
+        description="Each mapped bone of TARGET points where IN's does, through the two rest poses (T, A, "
+        "crouched alike); the hips' path is scaled by the legs' lengths; joints TARGET has and IN's map does not "
+        "keep their rest rotation (extra spine joints share the spine's turn); feet stay planted through IN's "
+        "contacts unless --no-plant-feet. TARGET's own motion is ignored (its frames only tell its up axis and floor).",
+    )
+    p.add_argument("file", metavar="IN", help="BVH file to move")
+    p.add_argument("--to", required=True, metavar="TARGET.bvh", help="BVH file giving the skeleton and rest pose")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write the retargeted motion")
+    p.add_argument("--map", metavar="MAP", help="joint map file (JSON or TOML) for IN")
+    p.add_argument("--to-map", metavar="MAP", help="joint map file for TARGET")
+    p.add_argument(
+        "--no-plant-feet", dest="plant_feet", action="store_false", help="leave the feet where the bones put them"
+    )
+    _add_convention_options(p, "IN's ")
+    p.set_defaults(run=cmd_retarget)
+
+
+def cmd_retarget(args) -> int:
+    from ..skeletons import find_joint_map, read_conventions, retarget
+
+    source_map, target_map = _map_file(args.map), _map_file(args.to_map)
+    motion = read_bvh(args.file)
+    target = read_bvh(args.to)
+    conventions = None
+    if args.up or args.facing or args.unit:
+        conventions = read_conventions(motion, find_joint_map(motion.skeleton, source_map))
+        conventions = conventions.with_overrides(args.up, args.facing, args.unit)
+    out = retarget(
+        motion,
+        target,
+        source_map=source_map,
+        target_map=target_map,
+        plant_feet=args.plant_feet,
+        source_conventions=conventions,
+    )
+    write_bvh(out, args.output)
+    source = find_joint_map(motion.skeleton, source_map)
+    goal = find_joint_map(target.skeleton, target_map)
+    carried = [role for role in goal.joints if role in source.joints]
+    held = [target.skeleton.names[j] for j in goal.unmapped]
+    print(
+        f"{args.output}: {out.n_frames} frames at {out.fps:.6g} fps on {args.to}'s skeleton "
+        f"({target.skeleton.n_joints} joints); {len(carried)} roles carried"
+        + (f", held at rest: {', '.join(held)}" if held else "")
+        + ("; feet planted" if args.plant_feet else "")
+    )
+    return 0
+
+
+def add_parsers(commands) -> None:
+    add_skeleton(commands)
+    add_retarget(commands)

@@ -1,0 +1,86 @@
+"""``skeleton`` and ``retarget`` as a user runs them, on synthetic rigs written to BVH files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap.cli import main
+from expressive_mocap.skeletons import find_joint_map, synthetic_walk
+
+
+@pytest.fixture(scope="module")
+def rig_files(tmp_path_factory) -> dict:
+    folder = tmp_path_factory.mktemp("rigs")
+    files = {}
+    for rig in ("bandai", "smpl", "game", "cmu"):
+        path = folder / f"{rig}.bvh"
+        em.write_bvh(synthetic_walk(rig, wave="left").motion, path)
+        files[rig] = path
+    return files
+
+
+def test_skeleton_reports_the_map_and_conventions_of_each_file(rig_files, capsys):
+    assert main(["skeleton", "--json", *map(str, rig_files.values())]) == 0
+    reports = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [r["file"] for r in reports] == [str(p) for p in rig_files.values()]
+    for rig, report in zip(rig_files, reports):
+        truth = synthetic_walk(rig).truth
+        assert {k: v for k, v in report["map"].items() if k in truth} == truth
+        built = synthetic_walk(rig).conventions
+        assert (report["up"], report["facing"], report["unit"]) == (built.up, built.facing, built.unit)
+        assert report["actor_height_m"] == pytest.approx(1.63, abs=0.05)
+    game = reports[2]
+    assert "upperarm_twist_01_l" in game["unmapped"] and game["rest_pose"] == "A"
+
+
+def test_skeleton_text_and_overrides(rig_files, capsys):
+    assert main(["skeleton", str(rig_files["smpl"]), "--up", "y", "--facing", "z", "--unit", "cm"]) == 0
+    out = capsys.readouterr().out
+    assert "up +Y (sure 1.00)" in out and "unit cm (1.00)" in out
+    assert "left_foot        left_ankle" in out and "left_toes        left_foot" in out  # SMPL's naming
+
+
+def test_skeleton_takes_a_map_file_and_names_a_bad_one(rig_files, tmp_path, capsys):
+    good = tmp_path / "map.toml"
+    good.write_text('chest = "spine_02"\n')
+    assert main(["skeleton", "--json", "--map", str(good), str(rig_files["game"])]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["map"]["chest"] == "spine_02" and report["how"]["chest"] == "map"
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"elbow_l": "lowerarm_l"}')
+    assert main(["skeleton", "--map", str(bad), str(rig_files["game"])]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.json: unknown role 'elbow_l'" in err
+
+
+def test_retarget_writes_the_motion_on_the_target_skeleton(rig_files, tmp_path, capsys):
+    out = tmp_path / "walk_on_smpl.bvh"
+    assert main(["retarget", str(rig_files["bandai"]), "--to", str(rig_files["smpl"]), "-o", str(out)]) == 0
+    assert "roles carried" in capsys.readouterr().out
+    moved = em.read_bvh(out)
+    smpl = em.read_bvh(rig_files["smpl"])
+    assert moved.skeleton.names == smpl.skeleton.names
+    np.testing.assert_allclose(moved.skeleton.offsets, smpl.skeleton.offsets, atol=1e-5)
+    assert moved.fps == pytest.approx(30.0) and moved.n_frames == 121
+    # The wave is on the left arm of the result: the left hand well above the right one.
+    jmap = find_joint_map(moved.skeleton)
+    hands = moved.positions()[:, [jmap["left_hand"], jmap["right_hand"]], 2]  # Z is up on this rig
+    assert np.median(hands[:, 0] - hands[:, 1]) > 0.3
+
+
+def test_retarget_refuses_a_target_it_cannot_map(rig_files, tmp_path, capsys):
+    stick = tmp_path / "stick.bvh"
+    stick.write_text(
+        "HIERARCHY\nROOT a\n{\n OFFSET 0 0 0\n CHANNELS 3 Xposition Yposition Zposition\n JOINT b\n {\n"
+        "  OFFSET 0 1 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n  End Site\n  {\n   OFFSET 0 1 0\n  }\n }\n}\n"
+        "MOTION\nFrames: 1\nFrame Time: 0.0333333\n0 0 0 0 0 0\n"
+    )
+    out = tmp_path / "never.bvh"
+    assert main(["retarget", str(rig_files["bandai"]), "--to", str(stick), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot tell which joint is the hips" in err
+    assert not out.exists()
