@@ -145,6 +145,13 @@ def add_preprocess(commands) -> None:
         help=f"MB of BVH text read per batch (default {batch_mb:g})",
     )
     p.add_argument("--max-batches", type=positive(int), metavar="N", help="stop after N batches (rerun to resume)")
+    p.add_argument(
+        "--canonical",
+        action="store_true",
+        help="take clips of any humanoid skeleton, each retargeted onto the canonical body (the Bandai-Namco "
+        "22-joint skeleton, cm), its own skeleton and joint map kept in the manifest; without it one dataset "
+        "holds one skeleton",
+    )
     p.add_argument("--overwrite", action="store_true", help="redo OUT if it already holds a finished dataset")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(run=cmd_preprocess)
@@ -164,6 +171,7 @@ def cmd_preprocess(args) -> int:
         cluster=args.dask,
         overwrite=args.overwrite,
         progress=not args.quiet,
+        canonical=args.canonical,
     )
     print("\n".join(summary.lines()))
     if summary.finished and summary.clips_ok == 0:  # a dataset of nothing is not a success

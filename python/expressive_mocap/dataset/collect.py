@@ -63,6 +63,8 @@ def collect(
             arrays[kind].append(outcome.values[kind])
         record.clips.append({"name": item.name, "source": item.source, "frames": outcome.frames,
                              "fps": outcome.fps, "frame_time": outcome.frame_time, "start": rows})  # fmt: skip
+        if outcome.source_skeleton is not None:
+            record.clips[-1]["source_skeleton"] = outcome.source_skeleton
         rows += outcome.frames
     return Collected(arrays, rows, skeleton)
 
@@ -73,11 +75,23 @@ def _skeleton_error(item: Item, shape: tuple, length: float, skeleton: dict, err
     names, parents = list(shape[0]), list(shape[1])
     if names != skeleton["names"] or parents != skeleton["parents"]:
         return (
-            f"{item.source}: another skeleton ({len(names)} joints) than the dataset's "
-            f"({len(skeleton['names'])} joints, {', '.join(skeleton['names'][:3])}, ...): "
-            "one dataset holds one skeleton"
+            f"{item.source}: another skeleton than the dataset's: {_difference(names, parents, skeleton)}; "
+            "one dataset holds one skeleton: --canonical (canonical=True) retargets every clip onto one body"
         )
     return _units_error(item, length, skeleton) if error is None else error
+
+
+def _difference(names: list, parents: list, skeleton: dict) -> str:
+    """How a hierarchy differs from the dataset's, in a few words: joint counts, the first joint
+    that differs (its name or its parent)."""
+    theirs, their_parents = skeleton["names"], skeleton["parents"]
+    counts = f"{len(names)} joints against {len(theirs)}"
+    for j, (a, b) in enumerate(zip(names, theirs)):
+        if a != b:
+            return f"{counts}; joint {j} is {a!r} where the dataset has {b!r}"
+        if parents[j] != their_parents[j]:
+            return f"{counts}; joint {j} ({a!r}) hangs from joint {parents[j]}, the dataset's from {their_parents[j]}"
+    return f"{counts}; the first {min(len(names), len(theirs))} joints agree"
 
 
 def _units_error(item: Item, length: float, skeleton: dict) -> str | None:

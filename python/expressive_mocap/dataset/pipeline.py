@@ -31,7 +31,7 @@ def batched(items: Iterator[Item], batch_bytes: float) -> Iterator[list[Item]]:
         yield batch
 
 
-def local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tuple]:
+def local(batches, limit, stopped, keep, model, model_float32, canonical: bool = False) -> Iterator[tuple]:
     """``(batch, outcomes, seconds reading headers, seconds in the kernels)`` of each batch in
     order, on this machine, up to ``limit`` batches (``stopped`` gets an entry if more were left).
 
@@ -65,7 +65,10 @@ def local(batches, limit, stopped, keep, model, model_float32) -> Iterator[tuple
         batch = next(batches, None)  # taken here, in order (a tar stream is read here)
         if batch is not None:
             running.append(
-                (batch, kernel_pool.submit(compute, batch, header_pool.submit(work.prepare, batch, keep, model)))
+                (
+                    batch,
+                    kernel_pool.submit(compute, batch, header_pool.submit(work.prepare, batch, keep, model, canonical)),
+                )
             )
 
     try:

@@ -42,6 +42,7 @@ def preprocess(
     cluster=None,
     overwrite: bool = False,
     progress: bool = True,
+    canonical: bool = False,
 ) -> Summary:
     """Preprocess every clip of ``src`` (folder, glob, .zip or tar) into the dataset folder ``out``.
 
@@ -57,6 +58,9 @@ def preprocess(
     processes on 127.0.0.1); needs the ``[distributed]`` extra. The batches are written in order
     as they come back, so the dataset is the one a single-machine run writes.
     ``overwrite``: redo a folder that already holds a finished dataset.
+    ``canonical``: take clips of any humanoid skeleton, each retargeted onto the canonical body
+    (:mod:`expressive_mocap.skeletons.canonical`), its own skeleton and joint map recorded in its
+    manifest record (``source_skeleton``); without it, one dataset holds one skeleton.
     Returns a :class:`Summary`.
     """
     started = time.perf_counter()
@@ -69,9 +73,9 @@ def preprocess(
         raise ArgumentError(f"batch_mb must be positive, got {batch_mb}")
     body_model = load_model(model) if model is not None else None
     # The source in one canonical form (a resumed run may spell it otherwise: relative, through a link).
-    canonical = os.path.realpath(src) if Path(src).exists() else os.path.abspath(src)
+    source_path = os.path.realpath(src) if Path(src).exists() else os.path.abspath(src)
     options = {"keep": list(kept), "model": _model_label(model), "model_float32": bool(model_float32),
-               "source": canonical, "backend": get_backend()}  # fmt: skip
+               "source": source_path, "backend": get_backend(), "canonical": bool(canonical)}  # fmt: skip
     settings = _Settings(kept, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress)
 
     finished_manifest(out)  # refuse a folder that is not ours before putting a lock file in it
@@ -212,9 +216,9 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
         batches = batched(todo, settings.batch_mb * MB)
         if client is None:
             results = local(batches, settings.max_batches, stopped, settings.keep, settings.body_model,
-                            settings.model_float32)  # fmt: skip
+                            settings.model_float32, settings.options["canonical"])  # fmt: skip
         else:
-            work = (settings.keep, settings.model, settings.model_float32, get_backend())
+            work = (settings.keep, settings.model, settings.model_float32, get_backend(), settings.options["canonical"])
             results = on_cluster(batches, settings.max_batches, stopped, client, work)
         for batch, outcomes, headers_s, kernels_s in results:
             record, nbytes, write_s = _write_batch(state, batch, outcomes, settings.keep, syncer, flushes)

@@ -37,6 +37,7 @@ class Outcome:
     fps: float = 0.0
     frame_time: float = 0.0
     values: dict[str, np.ndarray] = field(default_factory=dict)
+    source_skeleton: dict | None = None  # with canonical: the clip's own skeleton and map, if retargeted
 
 
 @dataclass
@@ -74,17 +75,20 @@ def bone_length(skeleton) -> float:
     return float(np.linalg.norm(skeleton.offsets, axis=1).sum()) + sites
 
 
-def compute(batch: list[Item], keep: tuple[str, ...], model, model_float32: bool) -> tuple[list[Outcome], float, float]:
+def compute(
+    batch: list[Item], keep: tuple[str, ...], model, model_float32: bool, canonical: bool = False
+) -> tuple[list[Outcome], float, float]:
     """The work on one batch, one outcome per item, as a cluster's worker does it. Returns the
     outcomes and the seconds spent preparing (headers) and in the kernels."""
-    return run_kernels(batch, prepare(batch, keep, model), keep, model, model_float32)
+    return run_kernels(batch, prepare(batch, keep, model, canonical), keep, model, model_float32)
 
 
-def prepare(batch: list[Item], keep: tuple[str, ...], model) -> Prepared:
+def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: bool = False) -> Prepared:
     """The Python work before a batch's kernels: the clips' headers, from the files' first bytes
     (:func:`~expressive_mocap.bvh.read_header`; zip members are decompressed here, a tar's
     members come already read), each hierarchy's joint roles and each clip's body scale and
-    channel layout."""
+    channel layout. ``canonical``: clips of any other skeleton than the canonical body are read
+    whole and retargeted onto it here (:func:`onto_canonical`)."""
     start = time.perf_counter()
     outcomes = [Outcome() for _ in batch]
     by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
@@ -98,6 +102,8 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model) -> Prepared:
         outcomes[k].skeleton = shape
         outcomes[k].bone_length = bone_length(header.skeleton)
         by_hierarchy.setdefault(shape, []).append((k, header, text))
+    if canonical:
+        by_hierarchy = onto_canonical(batch, outcomes, by_hierarchy)
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
     groups = []
@@ -109,6 +115,40 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model) -> Prepared:
             continue
         groups.append(group)
     return Prepared(outcomes, groups, time.perf_counter() - start)
+
+
+def onto_canonical(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict) -> dict:
+    """``by_hierarchy`` with every clip of another skeleton than the canonical body retargeted
+    onto it: its BVH text rewritten on the canonical skeleton, its own skeleton and joint map
+    kept in its outcome for the manifest."""
+    from ..bvh import bvh_bytes, parse_header, read_bvh
+    from ..skeletons.canonical import canonical_shape
+    from ..skeletons.canonical import onto_canonical as retarget_onto
+
+    target = canonical_shape()
+    out: dict[tuple, list] = {target: by_hierarchy.pop(target, [])}
+    for members in by_hierarchy.values():
+        for k, _, text in members:
+            try:
+                motion = read_bvh(text if text is not None else batch[k].source)
+                moved, jmap = retarget_onto(motion)
+                data = bvh_bytes(moved)
+                moved_header = parse_header(data, batch[k].source)
+            except MocapError as error:
+                outcomes[k].error = f"{batch[k].source}: {error}"
+                continue
+            skeleton = motion.skeleton
+            outcomes[k].source_skeleton = {
+                "joints": skeleton.n_joints,
+                "root": skeleton.names[0],
+                "fps": motion.fps,
+                "map": jmap.as_names(),
+            }
+            outcomes[k].skeleton = target
+            outcomes[k].bytes = outcomes[k].bytes or batch[k].size
+            outcomes[k].bone_length = bone_length(moved_header.skeleton)
+            out[target].append((k, moved_header, data))
+    return out
 
 
 def _group(members: list, needs_roles: bool, use_model: bool, model) -> Group | MocapError:

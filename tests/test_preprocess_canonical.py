@@ -1,0 +1,84 @@
+"""``preprocess --canonical``: an archive mixing skeletons into one dataset on the canonical body."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap.cli import main
+from expressive_mocap.dataset import load_dataset, preprocess
+from expressive_mocap.skeletons import synthetic_walk
+from expressive_mocap.skeletons.canonical import canonical_skeleton
+
+RIGS = ("bandai", "smpl", "game", "mixamo")
+
+
+@pytest.fixture(scope="module")
+def mixed(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("mixed")
+    for rig in RIGS:
+        em.write_bvh(synthetic_walk(rig).motion, folder / f"walk_{rig}.bvh")
+    return folder
+
+
+def test_without_canonical_one_skeleton_and_a_message_that_says_why(mixed, tmp_path, capsys):
+    summary = preprocess(mixed, tmp_path / "one", progress=False)
+    assert summary.clips_ok == 1 and summary.clips_failed == 3
+    errors = [f["error"] for f in json.loads((tmp_path / "one" / "manifest.json").read_text())["failures"]]
+    assert all("another skeleton than the dataset's" in e and "--canonical" in e for e in errors)
+    assert any("24 joints against 22; joint 0 is 'pelvis' where the dataset has 'joint_Root'" in e for e in errors)
+
+
+def test_canonical_puts_every_skeleton_on_one_body(mixed, tmp_path):
+    summary = preprocess(mixed, tmp_path / "all", canonical=True, progress=False)
+    assert summary.clips_ok == len(RIGS) and summary.clips_failed == 0
+    ds = load_dataset(tmp_path / "all")
+    assert ds.skeleton["names"] == list(canonical_skeleton().names)
+    records = {c["name"]: c for c in ds.manifest["clips"]}
+    assert "source_skeleton" not in records["walk_bandai"]  # already on the canonical body
+    smpl = records["walk_smpl"]["source_skeleton"]
+    assert smpl["joints"] == 24 and smpl["map"]["left_toes"] == "left_foot" and smpl["fps"] == pytest.approx(60)
+    assert ds.manifest["options"]["canonical"] is True
+    # The same walk on four skeletons: comparable positions (cm, Y up) and contacts at the same times.
+    frames = {c["name"]: (c["start"], c["frames"], c["fps"]) for c in ds.manifest["clips"]}
+
+    def at_30fps(name, kind):
+        start, count, fps = frames[name]
+        step = int(round(fps / 30))
+        return ds.arrays[kind][start : start + count][::step][:121]
+
+    hips = canonical_skeleton().names.index("Hips")
+    reference = at_30fps("walk_bandai", "positions")
+    for rig in RIGS[1:]:
+        positions = at_30fps(f"walk_{rig}", "positions")
+        assert np.abs(positions[:, hips] - reference[:, hips]).max() < 1.0, rig  # cm
+        contacts = at_30fps(f"walk_{rig}", "contacts")
+        agree = np.mean(contacts == at_30fps("walk_bandai", "contacts"))
+        assert agree > 0.95, rig
+
+
+def test_canonical_from_the_command_line_with_the_model(mixed, tmp_path, capsys):
+    assert main(["preprocess", str(mixed), "-o", str(tmp_path / "m"), "--canonical", "--model", "-q"]) == 0
+    ds = load_dataset(tmp_path / "m")
+    assert len(ds.manifest["clips"]) == len(RIGS) and "activity" in ds.arrays
+
+
+@pytest.mark.real_data
+def test_canonical_takes_real_files_of_other_sources_beside_bandai(other_dir, bandai2_dir, tmp_path):
+    folder = tmp_path / "src"
+    folder.mkdir()
+    for path in other_dir.glob("*.bvh"):
+        (folder / path.name).symlink_to(path)
+    for path in sorted(bandai2_dir.glob("dataset-2_walk_normal_*.bvh"))[:3]:
+        (folder / path.name).symlink_to(path)
+    summary = preprocess(folder, tmp_path / "out", canonical=True, progress=False)
+    assert summary.clips_failed == 0 and summary.clips_ok == 9
+    ds = load_dataset(tmp_path / "out")
+    cmu = next(c for c in ds.manifest["clips"] if c["name"] == "cmu_scaled_131_03")
+    assert cmu["source_skeleton"]["joints"] == 31 and cmu["fps"] == pytest.approx(120, rel=1e-3)
+    # Real CMU walking, now in the canonical body's centimetres: the hips about a metre up.
+    hips = ds.arrays["positions"][cmu["start"] : cmu["start"] + cmu["frames"], 1]
+    assert 70 < np.median(hips[:, 1]) < 110
