@@ -272,3 +272,24 @@ def test_planted_feet_move_no_faster_than_the_sources(walks):
     planted = stance_speed(retarget(source, target), contacts)
     assert sliding > 1.5 * source_speed  # the test would catch feet left to slide
     assert planted <= 1.2 * source_speed  # the margin: heel strikes a straight leg cannot quite reach
+
+
+def test_z_up_files_are_drawn_upright(walks):
+    from expressive_mocap.render import project
+
+    flat, _ = project(walks["smpl"])  # metres, Z up
+    assert np.ptp(flat[..., 1]) == pytest.approx(1.6, abs=0.15)  # the figure stands, it does not lie flat
+    assert np.ptp(project(walks["bandai"])[0][..., 1]) == pytest.approx(160, abs=15)
+
+
+def test_contacts_of_a_z_up_file_from_its_upright_positions(walks):
+    smpl, bandai = walks["smpl"], walks["bandai"]
+    upright = conv.upright(smpl)
+    roles = JointRoles.find(smpl.skeleton)
+    from_positions = foot_contacts(smpl, roles, positions=upright.positions())
+    # The same but for the actor height of the thresholds, read from the Z-up rest pose.
+    assert np.mean(from_positions == foot_contacts(upright, roles)) > 0.99
+    same_times = from_positions[::2][: bandai.n_frames]  # 60 fps against 30
+    assert np.mean(same_times == foot_contacts(bandai)) > 0.95
+    with pytest.raises(em.MocapError, match="argument `positions`: expected shape"):
+        foot_contacts(smpl, roles, positions=upright.positions()[1:])

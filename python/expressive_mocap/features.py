@@ -130,6 +130,7 @@ def foot_contacts(
     speed_threshold: float = SPEED_THRESHOLD,
     min_duration: float = MIN_DURATION,
     height: float | None = None,
+    positions: np.ndarray | None = None,
 ) -> np.ndarray:
     """Contacts ``bool [F, 2]`` (left, right foot) after Lee et al. 2002.
 
@@ -140,9 +141,16 @@ def foot_contacts(
     (a change counts once it has lasted that long; frame ``t`` uses frames ``<= t``).
     ``floor`` defaults to the 5th percentile of toe heights (0 when causal); ``height`` (file
     units) to :func:`~expressive_mocap.roles.actor_height`; ``roles`` to ``JointRoles.find``.
+    ``positions``: the motion's world positions ``[F, J, 3]`` when already at hand (Y up; e.g.
+    turned from a Z-up file), instead of computing them.
     """
     motion, roles, height = _setup(motion, roles, height)
-    positions = motion.positions()
+    positions = motion.positions() if positions is None else np.asarray(positions, dtype=np.float64)
+    if positions.shape != (motion.n_frames, motion.skeleton.n_joints, 3):
+        raise ArgumentError(
+            f"argument `positions`: expected shape {[motion.n_frames, motion.skeleton.n_joints, 3]}, "
+            f"got {list(positions.shape)}"
+        )
     floor = _floor(floor, positions, roles, causal)
     return _contacts(motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration)
 

@@ -71,7 +71,11 @@ def _segments(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
 
 def project(motion: Motion, view: str = "side") -> tuple[np.ndarray, np.ndarray]:
     """The motion as drawn: bone ends ``[F, B, 2, 2]`` (picture x to the right, y up, file
-    units) and the horizontal picture position of the hips ``[F]`` (the GIF's camera follows them)."""
+    units) and the horizontal picture position of the hips ``[F]`` (the GIF's camera follows them).
+    A file whose data stand along another axis than Y (Z-up SMPL or game rigs) is drawn upright."""
+    from .skeletons.conventions import upright
+
+    motion = upright(motion)
     bones, positions = _segments(motion)
     axis = _horizontal_axis(heading(motion, positions), view)
     from .roles import JointRoles

@@ -17,6 +17,7 @@ motion to the package's canonical frame (Y up, facing +Z, metres) and back.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -50,7 +51,7 @@ class Conventions:
 
     def rotation(self) -> np.ndarray:
         """The rotation (quaternion) from the file's axes to the canonical ones (Y up, facing +Z)."""
-        return _frame_rotation(np.array(AXES[self.up], float), np.array(AXES[self.facing], float))
+        return _frame_rotation(self.up, self.facing)
 
     def with_overrides(self, up: str | None = None, facing: str | None = None, unit: str | None = None) -> Conventions:
         """These conventions with any of up, facing or unit given by the user (sure = 1)."""
@@ -85,10 +86,13 @@ def _axis_name(value: str, what: str) -> str:
     return name
 
 
-def _frame_rotation(up: np.ndarray, facing: np.ndarray) -> np.ndarray:
-    """The rotation taking ``up`` to +Y and ``facing`` to +Z (both unit, at right angles)."""
-    left = np.cross(up, facing)
-    return quat.from_matrix(np.stack([left, up, facing]))  # rows: where X, Y, Z come from
+@lru_cache(maxsize=64)
+def _frame_rotation(up: str, facing: str) -> np.ndarray:
+    """The rotation taking axis ``up`` to +Y and ``facing`` to +Z (names such as ``"+Z"``)."""
+    u, f = np.array(AXES[up], float), np.array(AXES[facing], float)
+    turn = quat.from_matrix(np.stack([np.cross(u, f), u, f]))  # rows: where X, Y, Z come from
+    turn.setflags(write=False)
+    return turn
 
 
 def _nearest_axis(v: np.ndarray, exclude: str | None = None) -> tuple[str, float]:
@@ -202,6 +206,20 @@ def from_canonical(motion: Motion, conventions: Conventions) -> Motion:
     return _changed(motion, quat.conjugate(conventions.rotation()), 1.0 / conventions.metres_per_unit)
 
 
+def upright(motion: Motion) -> Motion:
+    """``motion`` turned so that its up axis (read from its data) is +Y, lengths as they are:
+    what pictures and Y-up code need. Returned as it is when already Y-up or not mappable."""
+    from .jointmap import find_joint_map
+
+    try:
+        up = read_conventions(motion, find_joint_map(motion.skeleton)).up
+    except MocapError:
+        return motion
+    if up == "+Y":
+        return motion
+    return _changed(motion, quat.between(np.array(AXES[up], float), np.array([0.0, 1.0, 0.0])), 1.0)
+
+
 def _changed(motion: Motion, turn: np.ndarray, scale: float) -> Motion:
     skeleton = motion.skeleton
     offsets = quat.rotate(turn, skeleton.offsets) * scale
@@ -223,4 +241,5 @@ __all__ = [
     "rest_pose_kind",
     "stature",
     "to_canonical",
+    "upright",
 ]

@@ -66,9 +66,10 @@ def _run_offsets(ankle: np.ndarray, contact: np.ndarray) -> np.ndarray:
     return np.where((run >= 0)[:, None], means[np.maximum(run, 0)], means[nearest])
 
 
-def source_contacts(canonical_source: Motion, jmap: JointMap) -> np.ndarray:
-    """Contacts ``bool [F, 2]`` of a source already in the canonical axes (Y up)."""
-    return foot_contacts(canonical_source, JointRoles.from_map(canonical_source.skeleton, jmap))
+def source_contacts(motion: Motion, rig, upright_positions: np.ndarray) -> np.ndarray:
+    """Contacts ``bool [F, 2]`` of ``motion`` (of the rig ``rig``) from its world positions turned
+    to the canonical axes (Y up, file units)."""
+    return foot_contacts(motion, JointRoles.from_map(motion.skeleton, rig.jmap), positions=upright_positions)
 
 
 __all__ = ["BLEND_FRAMES", "plant_feet", "source_contacts"]

@@ -26,7 +26,7 @@ import numpy as np
 from .. import quat
 from ..errors import MocapError
 from ..motion import Motion, Skeleton
-from .conventions import AXES, Conventions, read_conventions, to_canonical
+from .conventions import AXES, Conventions, read_conventions
 from .jointmap import JointMap, find_joint_map
 
 # The joint whose rest bone direction aligns each role (the next mapped joint out); leaf roles
@@ -120,21 +120,18 @@ def alignments(source: Rig, target: Rig) -> dict[str, np.ndarray]:
     """Role -> ``A_r``, the rotation (canonical axes) taking the target's rest bone onto the source's."""
     rest_s = quat.rotate(source.conventions.rotation(), source.skeleton.rest_positions()[0])
     rest_t = quat.rotate(target.conventions.rotation(), target.skeleton.rest_positions()[0])
+    roles = [role for role in source.jmap.joints if role in target.jmap.joints]
     out = {}
-    for role in source.jmap.joints:
-        if role not in target.jmap.joints:
-            continue
-        if role in ("hips", "chest"):
-            frame_s = _orthonormal(*_frame_vectors(rest_s, source.jmap, role, target.jmap))
-            frame_t = _orthonormal(*_frame_vectors(rest_t, target.jmap, role, source.jmap))
-            out[role] = quat.from_matrix(frame_s @ frame_t.T)
-        else:
-            start, end, _ = _bone(source.jmap, role, target.jmap)
-            out[role] = quat.between(
-                rest_t[target.jmap[end]] - rest_t[target.jmap[start]],
-                rest_s[source.jmap[end]] - rest_s[source.jmap[start]],
-            )
-    return out
+    for role in ("hips", "chest"):
+        frame_s = _orthonormal(*_frame_vectors(rest_s, source.jmap, role, target.jmap))
+        frame_t = _orthonormal(*_frame_vectors(rest_t, target.jmap, role, source.jmap))
+        out[role] = quat.from_matrix(frame_s @ frame_t.T)
+    bones = [r for r in roles if r not in out]
+    ends = [_bone(source.jmap, role, target.jmap)[:2] for role in bones]
+    lines_t = np.array([rest_t[target.jmap[e]] - rest_t[target.jmap[s]] for s, e in ends]).reshape(-1, 3)
+    lines_s = np.array([rest_s[source.jmap[e]] - rest_s[source.jmap[s]] for s, e in ends]).reshape(-1, 3)
+    out.update(zip(bones, quat.between(lines_t, lines_s)))  # one call for every bone
+    return {role: out[role] for role in roles}
 
 
 def retarget(
@@ -164,13 +161,14 @@ def retarget(
 
 def retarget_rigs(motion: Motion, source: Rig, goal: Rig, *, plant_feet: bool = True) -> Motion:
     """:func:`retarget` with both rigs known (``source`` must be ``motion``'s skeleton's)."""
-    out = _transfer(motion, source, goal)
+    kinematics = motion.fk()
+    out = _transfer(motion, source, goal, kinematics)
     if plant_feet:
         from .planting import plant_feet as plant
         from .planting import source_contacts
 
-        contacts = source_contacts(to_canonical(motion, source.conventions), source.jmap)
-        positions = motion.positions()
+        positions = kinematics[1]
+        contacts = source_contacts(motion, source, quat.rotate(source.conventions.rotation(), positions))
         feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
         out = plant(out, goal.jmap, contacts, carried(positions[:, feet], source, goal))
     return out
@@ -183,33 +181,123 @@ def rest_motion(skeleton: Skeleton) -> Motion:
     return Motion(skeleton, rotations, skeleton.offsets[None], 1 / 30)
 
 
-def _transfer(motion: Motion, source: Rig, target: Rig) -> Motion:
-    turn_s, turn_t = source.conventions.rotation(), target.conventions.rotation()
-    world_s, positions_s = motion.fk()
-    world_s = quat.mul(quat.mul(turn_s, world_s), quat.conjugate(turn_s))  # canonical axes
-    frames = motion.n_frames
-    skeleton = target.skeleton
-    parents = skeleton.parents
-    world = np.empty((frames, skeleton.n_joints, 4))
+class _Plan(NamedTuple):
+    """Index arrays of one source-target pair, so a transfer is a few array operations: the
+    roles' source and target joints and alignments; the roles swung onto the source's bones (their
+    bone's end joints and rest line); the spine joints sharing a turn; the joints held at rest and
+    the joint whose world rotation each copies (-1: none, the identity)."""
+
+    source: np.ndarray
+    target: np.ndarray
+    aligns: np.ndarray
+    swung: np.ndarray
+    starts: np.ndarray
+    ends: np.ndarray
+    rest_lines: np.ndarray
+    shared: np.ndarray
+    tops: np.ndarray
+    bottoms: np.ndarray
+    shares: np.ndarray
+    held: np.ndarray
+    copied: np.ndarray
+
+
+_PLANS: dict = {}
+_PLANS_KEPT = 64
+
+
+def _rig_key(rig: Rig) -> tuple:
+    skeleton, jmap = rig.skeleton, rig.jmap
+    turn = rig.conventions.rotation().tobytes()
+    return (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), turn, tuple(jmap.joints.items()))
+
+
+def _plan(source: Rig, target: Rig) -> _Plan:
+    """The plan of a pair, kept for the pairs met last: an archive's clips share a few skeletons."""
+    key = (_rig_key(source), _rig_key(target))
+    plan = _PLANS.get(key)
+    if plan is None:
+        if len(_PLANS) >= _PLANS_KEPT:
+            _PLANS.pop(next(iter(_PLANS)))
+        plan = _PLANS[key] = _new_plan(source, target)
+    return plan
+
+
+def _new_plan(source: Rig, target: Rig) -> _Plan:
     aligns = alignments(source, target)
-    positions_c = quat.rotate(turn_s, positions_s)
-    rest_s = quat.rotate(turn_s, source.skeleton.rest_positions()[0])
-    for role, align in aligns.items():
-        world[:, target.jmap[role]] = quat.mul(_swing(role, world_s, positions_c, rest_s, source, target), align)
-    aligned = {target.jmap[r] for r in aligns}
-    shared = _shared_chains(target.jmap, aligned)
-    for j in range(skeleton.n_joints):
-        if j in aligned:
+    roles = list(aligns)
+    rest_s = quat.rotate(source.conventions.rotation(), source.skeleton.rest_positions()[0])
+    swung, starts, ends = [], [], []
+    for r, role in enumerate(roles):
+        # The hips by the line across the hip joints, other roles by their own bone (not the
+        # chest, whose bones are several, nor a hand, toe or head, aligned by the bone into them).
+        if role == "hips":
+            start, end = "right_upper_leg", "left_upper_leg"
+        elif role == "chest":
             continue
-        if j in shared:
-            top, bottom, share = shared[j]
-            turn = quat.mul(quat.conjugate(world[:, top]), world[:, bottom])
-            world[:, j] = quat.mul(world[:, top], quat.power(turn, share))
-        elif parents[j] < 0:
-            world[:, j] = _IDENTITY
         else:
-            world[:, j] = world[:, parents[j]]  # held at its rest rotation
+            start, end, own = _bone(source.jmap, role, target.jmap)
+            if not own:
+                continue
+        swung.append(r)
+        starts.append(source.jmap[start])
+        ends.append(source.jmap[end])
+    aligned = {target.jmap[r] for r in roles}
+    shared = _shared_chains(target.jmap, aligned)
+    parents = target.skeleton.parents
+    held, copied = [], []
+    computed = aligned | set(shared)
+    for j in range(target.skeleton.n_joints):
+        if j in computed:
+            continue
+        ancestor = int(parents[j])
+        while ancestor >= 0 and ancestor not in computed:
+            ancestor = int(parents[ancestor])
+        held.append(j)
+        copied.append(ancestor)
+    return _Plan(
+        np.array([source.jmap[r] for r in roles], dtype=np.int64),
+        np.array([target.jmap[r] for r in roles], dtype=np.int64),
+        np.array([aligns[r] for r in roles]).reshape(-1, 4),
+        np.array(swung, dtype=np.int64),
+        np.array(starts, dtype=np.int64),
+        np.array(ends, dtype=np.int64),
+        (rest_s[ends] - rest_s[starts]).reshape(-1, 3),
+        np.array(list(shared), dtype=np.int64),
+        np.array([t for t, _, _ in shared.values()], dtype=np.int64),
+        np.array([b for _, b, _ in shared.values()], dtype=np.int64),
+        np.array([x for _, _, x in shared.values()]),
+        np.array(held, dtype=np.int64),
+        np.array(copied, dtype=np.int64),
+    )
+
+
+def _transfer(motion: Motion, source: Rig, target: Rig, kinematics: tuple[np.ndarray, np.ndarray]) -> Motion:
+    """The target's motion (see the module's notes) from the source's world rotations and
+    positions, ``kinematics``."""
+    plan = _plan(source, target)
+    turn_s, turn_t = source.conventions.rotation(), target.conventions.rotation()
+    world_s, positions_s = kinematics
+    roles = quat.mul(quat.mul(turn_s, world_s[:, plan.source]), quat.conjugate(turn_s))  # canonical axes
+    if len(plan.swung):
+        # Joints the map leaves out between two mapped ones (CMU's LHipJoint, a Neck1) may turn in
+        # the source while the target holds them at rest: each role is swung so that its bone lies
+        # where the source's positions put it.
+        lines = quat.rotate(turn_s, positions_s[:, plan.ends] - positions_s[:, plan.starts])
+        predicted = quat.rotate(roles[:, plan.swung], plan.rest_lines)
+        roles[:, plan.swung] = quat.mul(quat.between(predicted, lines), roles[:, plan.swung])
+    frames, skeleton = motion.n_frames, target.skeleton
+    world = np.empty((frames, skeleton.n_joints, 4))
+    world[:, plan.target] = quat.mul(roles, plan.aligns)
+    if len(plan.shared):
+        turn = quat.mul(quat.conjugate(world[:, plan.tops]), world[:, plan.bottoms])
+        world[:, plan.shared] = quat.mul(world[:, plan.tops], quat.power(turn, plan.shares))
+    if len(plan.held):
+        world[:, plan.held] = np.where(
+            (plan.copied >= 0)[:, None], world[:, np.maximum(plan.copied, 0)], _IDENTITY
+        )  # held at their rest rotation: their parent's world rotation, or none at the root
     world = quat.mul(quat.mul(quat.conjugate(turn_t), world), turn_t)  # the target's axes
+    parents = skeleton.parents
     rotations = world.copy()
     rotations[:, 1:] = quat.mul(quat.conjugate(world[:, parents[1:]]), world[:, 1:])
     translations = np.broadcast_to(skeleton.offsets, (frames, skeleton.n_joints, 3)).copy()
@@ -217,37 +305,14 @@ def _transfer(motion: Motion, source: Rig, target: Rig) -> Motion:
     return Motion(skeleton, rotations, translations, motion.frame_time)
 
 
-def _swing(
-    role: str, world_s: np.ndarray, positions_s: np.ndarray, rest_s: np.ndarray, source: Rig, target: Rig
-) -> np.ndarray:
-    """The source joint's world rotation ``[F, 4]`` for ``role``, swung so that its own bone (or
-    for the hips, the line across the hip joints) lies where the source's positions put it: joints
-    the map leaves out between two mapped ones (CMU's ``LHipJoint``, a ``Neck1``) may turn in the
-    source, and the target holds them at rest."""
-    world = world_s[:, source.jmap[role]]
-    if role == "hips":
-        start, end = "right_upper_leg", "left_upper_leg"
-    elif role == "chest":
-        return world
-    else:
-        start, end, own = _bone(source.jmap, role, target.jmap)
-        if not own:
-            return world
-    jmap = source.jmap
-    predicted = quat.rotate(world, rest_s[jmap[end]] - rest_s[jmap[start]])
-    actual = positions_s[:, jmap[end]] - positions_s[:, jmap[start]]
-    return quat.mul(quat.between(predicted, actual), world)
-
-
 def _shared_chains(jmap: JointMap, aligned: set[int]) -> dict[int, tuple[int, int, float]]:
     """Spine joints between the hips and the chest -> (hips, chest, share of the turn)."""
-    chains = [(jmap["hips"], list(jmap.spine))]
     out: dict[int, tuple[int, int, float]] = {}
-    for top, chain in chains:
-        if top in aligned and chain[-1] in aligned:
-            for i, j in enumerate(chain[:-1]):
-                if j not in aligned:
-                    out[j] = (top, chain[-1], (i + 1) / len(chain))
+    chain = list(jmap.spine)
+    if jmap["hips"] in aligned and chain[-1] in aligned:
+        for i, j in enumerate(chain[:-1]):
+            if j not in aligned:
+                out[j] = (jmap["hips"], chain[-1], (i + 1) / len(chain))
     return out
 
 

@@ -29,7 +29,7 @@ import numpy as np
 from .. import quat
 from ..demo import procedural_walk
 from ..motion import Motion, Skeleton
-from .conventions import AXES, UNITS, Conventions, _frame_rotation
+from .conventions import UNITS, Conventions, _frame_rotation
 from .jointmap import find_joint_map
 from .retargeting import Rig, retarget_rigs
 
@@ -260,7 +260,7 @@ def synthetic_skeleton(rig: str) -> tuple[Skeleton, Conventions, dict]:
     canonical = np.array([_landmark(where, spec.rest_pose == "A") for _, _, where in spec.joints])
     if spec.hanging:
         canonical -= canonical[0]
-    turn = _frame_rotation(np.array(AXES[spec.up], float), np.array(AXES[spec.facing], float))
+    turn = _frame_rotation(spec.up, spec.facing)
     metres = UNITS[spec.unit]
     positions = quat.rotate(quat.conjugate(turn), canonical) / metres
     parents = [-1 if parent is None else names.index(parent) for _, parent, _ in spec.joints]
