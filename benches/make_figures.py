@@ -46,7 +46,26 @@ def main() -> None:
     render([demo.walk, demo.waving, walks[0][30:151]], out / "demo_walk.png", titles=titles)
     render(walks, out / "bandai_walks.png", titles=["walk, normal", "walk, exhausted"], poses=6)
     contacts_figure(walks[0], out / "bandai_walk_contacts.png")
+    skeletons_figure(data, out / "retargeted.png")
     print(f"wrote {out}")
+
+
+def skeletons_figure(data: Path, path: Path) -> None:
+    """A dataset-2 wave on the CMU and Xia-style skeletons, and the CMU walk on the Bandai one,
+    each drawn in metres (the files' units differ)."""
+    from expressive_mocap.skeletons import find_joint_map, read_conventions, retarget, to_canonical
+
+    other = HERE.parent.parent / "shared" / "data" / "other"
+    wave = em.read_bvh(data / "dataset-2_wave-left-hand_normal_001.bvh")
+    cmu, xia = em.read_bvh(other / "cmu_scaled_131_03.bvh"), em.read_bvh(other / "dme_demo_3d_1.bvh")
+    panels = [
+        ("Bandai wave (22 joints, cm)", wave),
+        ("on CMU's skeleton (31, m)", retarget(wave, cmu)),
+        ("on a Xia-style skeleton", retarget(wave, xia)),
+        ("CMU 131_03 on Bandai's", retarget(cmu[:600], wave)),
+    ]
+    in_metres = [to_canonical(m, read_conventions(m, find_joint_map(m.skeleton))) for _, m in panels]
+    render(in_metres, path, titles=[t for t, _ in panels], poses=5, view="front")
 
 
 def contacts_figure(walk: em.Motion, path: Path) -> None:

@@ -35,6 +35,7 @@ PAGES = [
     "README.md",
     "docs/demo.md",
     "docs/bvh.md",
+    "docs/skeletons.md",
     "docs/decoupling.md",
     "docs/exaggeration.md",
     "docs/preprocessing.md",
@@ -73,7 +74,9 @@ def test_every_page_of_the_manual_is_run():
     )
 
 
-def real_arguments(command: str, dataset1: Path, dataset2: Path) -> tuple[list[str], str | None]:
+def real_arguments(
+    command: str, dataset1: Path, dataset2: Path, other: Path | None = None
+) -> tuple[list[str], str | None]:
     """The command's arguments with the README's clip names made paths, and the backend it sets."""
     backend = None
     if command.startswith("EXPRESSIVE_MOCAP_BACKEND="):
@@ -94,6 +97,10 @@ def real_arguments(command: str, dataset1: Path, dataset2: Path) -> tuple[list[s
             args.append(str(dataset1 / token))
         elif token == "Bandai-Namco-Research-Motiondataset-2/data":
             args.append(str(dataset2))
+        elif other is not None and (other / token).is_file():  # the non-Bandai files (CMU, Xia-style)
+            args.append(str(other / token))
+        elif token == "mocap/":  # an archive mixing skeletons: the non-Bandai files beside Bandai walks
+            args.append(str(_mixed_archive(dataset2, other)))
         else:
             args.append(token)
     return args, backend
@@ -107,8 +114,17 @@ def longest_hips_step(motion: em.Motion) -> float:
     return float(steps.max()) * BANDAI_ACTOR_CM / actor_height(motion.skeleton, roles)
 
 
+def _mixed_archive(dataset2: Path, other: Path | None) -> Path:
+    folder = Path("mocap")
+    if not folder.exists():
+        folder.mkdir()
+        for path in [*(other.glob("*.bvh") if other else []), *sorted(dataset2.glob("dataset-2_walk_normal_*"))[:3]]:
+            (folder / path.name).symlink_to(path)
+    return folder
+
+
 def test_the_readme_examples_run_and_their_outputs_are_plausible(
-    bandai1_dir, bandai2_dir, tmp_path, monkeypatch, capsys
+    bandai1_dir, bandai2_dir, other_dir, tmp_path, monkeypatch, capsys
 ):
     monkeypatch.chdir(tmp_path)
     commands = readme_commands()
@@ -116,7 +132,7 @@ def test_the_readme_examples_run_and_their_outputs_are_plausible(
     longest_input_step = {}
     done = set()
     for command in commands:
-        args, backend = real_arguments(command, bandai1_dir, bandai2_dir)
+        args, backend = real_arguments(command, bandai1_dir, bandai2_dir, other_dir)
         if (backend, *args) in done:  # the README's tour repeats a few of the manual's examples
             continue
         done.add((backend, *args))
