@@ -293,3 +293,16 @@ def test_contacts_of_a_z_up_file_from_its_upright_positions(walks):
     assert np.mean(same_times == foot_contacts(bandai)) > 0.95
     with pytest.raises(em.MocapError, match="argument `positions`: expected shape"):
         foot_contacts(smpl, roles, positions=upright.positions()[1:])
+
+
+def test_clips_retargeted_together_are_those_retargeted_one_by_one(walks):
+    from expressive_mocap.skeletons.canonical import canonical_rig, many_onto_canonical, onto_canonical
+
+    smpl = walks["smpl"]
+    clips = [smpl[:90], smpl[90:200], walks["game"], smpl[200:]]  # two skeletons, interleaved
+    together = many_onto_canonical(clips)
+    for clip, (moved, jmap) in zip(clips, together):
+        alone, alone_map = onto_canonical(clip)
+        assert moved.skeleton is canonical_rig().skeleton and jmap.joints == alone_map.joints
+        assert moved.fps == pytest.approx(clip.fps) and moved.n_frames == clip.n_frames
+        np.testing.assert_allclose(moved.positions(), alone.positions(), atol=1e-6)

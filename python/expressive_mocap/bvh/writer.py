@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import os
+from functools import lru_cache
 
 import numpy as np
 
 from .. import ops
 from ..errors import MocapError
 from ..files import atomic_write
-from ..motion import Motion
+from ..motion import Motion, Skeleton
 from .channels import encode
 
 __all__ = ["bvh_bytes", "write_bvh"]
@@ -24,13 +25,10 @@ def _number(value: float, decimals: int | None) -> str:
 _MAX_INDENT = 16  # tabs: deeper joints are not indented further, so a deep chain's header stays linear
 
 
-def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
-    """The text of a BVH file for ``motion``, in its skeleton's channel layout.
-
-    ``decimals=None`` writes the shortest text that reads back to the same float64 values;
-    an integer writes that many digits after the point (6 is common in exported files).
-    """
-    skeleton = motion.skeleton
+@lru_cache(maxsize=64)
+def _hierarchy(skeleton: Skeleton, decimals: int | None) -> str:
+    """The HIERARCHY part of a file. Cached: skeletons are immutable (hashed by identity), and
+    retargeting onto one body writes it once per clip."""
     sites: dict[int, list] = {}
     for joint, offset in skeleton.end_sites:
         sites.setdefault(joint, []).append(offset)
@@ -59,6 +57,17 @@ def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
         open_joints.append(j)
     while open_joints:
         close(open_joints.pop(), len(open_joints))
+    return "\n".join(lines)
+
+
+def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
+    """The text of a BVH file for ``motion``, in its skeleton's channel layout.
+
+    ``decimals=None`` writes the shortest text that reads back to the same float64 values;
+    an integer writes that many digits after the point (6 is common in exported files).
+    """
+    skeleton = motion.skeleton
+    lines = [_hierarchy(skeleton, decimals)]
     lines += ["MOTION", f"Frames: {motion.n_frames}", f"Frame Time: {_number(motion.frame_time, None)}", ""]
     header = "\n".join(lines).encode("utf-8")
     if skeleton.n_channels == 0 or motion.n_frames == 0:

@@ -119,36 +119,53 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: bool = F
 
 def onto_canonical(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict) -> dict:
     """``by_hierarchy`` with every clip of another skeleton than the canonical body retargeted
-    onto it: its BVH text rewritten on the canonical skeleton, its own skeleton and joint map
-    kept in its outcome for the manifest."""
+    onto it (all of a batch at once: :func:`~expressive_mocap.skeletons.canonical.many_onto_canonical`):
+    its BVH text rewritten on the canonical skeleton, its own skeleton and joint map kept in its
+    outcome for the manifest."""
     from ..bvh import bvh_bytes, parse_header, read_bvh
-    from ..skeletons.canonical import canonical_shape
-    from ..skeletons.canonical import onto_canonical as retarget_onto
+    from ..skeletons.canonical import canonical_shape, many_onto_canonical
 
     target = canonical_shape()
     out: dict[tuple, list] = {target: by_hierarchy.pop(target, [])}
+    read = []
     for members in by_hierarchy.values():
         for k, _, text in members:
             try:
-                motion = read_bvh(text if text is not None else batch[k].source)
-                moved, jmap = retarget_onto(motion)
-                data = bvh_bytes(moved)
-                moved_header = parse_header(data, batch[k].source)
+                read.append((k, read_bvh(text if text is not None else batch[k].source)))
             except MocapError as error:
                 outcomes[k].error = f"{batch[k].source}: {error}"
-                continue
-            skeleton = motion.skeleton
-            outcomes[k].source_skeleton = {
-                "joints": skeleton.n_joints,
-                "root": skeleton.names[0],
-                "fps": motion.fps,
-                "map": jmap.as_names(),
-            }
-            outcomes[k].skeleton = target
-            outcomes[k].bytes = outcomes[k].bytes or batch[k].size
-            outcomes[k].bone_length = bone_length(moved_header.skeleton)
-            out[target].append((k, moved_header, data))
+    try:
+        moved = many_onto_canonical([motion for _, motion in read])
+    except MocapError:  # one skeleton of the batch cannot be mapped: find which, clip by clip
+        moved = [_one_onto_canonical(motion) for _, motion in read]
+    for (k, motion), result in zip(read, moved):
+        if isinstance(result, MocapError):
+            outcomes[k].error = f"{batch[k].source}: {result}"
+            continue
+        clip, jmap = result
+        data = bvh_bytes(clip)
+        header = parse_header(data, batch[k].source)
+        skeleton = motion.skeleton
+        outcomes[k].source_skeleton = {
+            "joints": skeleton.n_joints,
+            "root": skeleton.names[0],
+            "fps": motion.fps,
+            "map": jmap.as_names(),
+        }
+        outcomes[k].skeleton = target
+        outcomes[k].bytes = outcomes[k].bytes or batch[k].size
+        outcomes[k].bone_length = bone_length(header.skeleton)
+        out[target].append((k, header, data))
     return out
+
+
+def _one_onto_canonical(motion):
+    from ..skeletons.canonical import onto_canonical as retarget_onto
+
+    try:
+        return retarget_onto(motion)
+    except MocapError as error:
+        return error
 
 
 def _group(members: list, needs_roles: bool, use_model: bool, model) -> Group | MocapError:

@@ -13,7 +13,7 @@ from functools import lru_cache
 from ..motion import Motion, Skeleton
 from .conventions import Conventions
 from .jointmap import JointMap, find_joint_map
-from .retargeting import Rig, retarget_rigs
+from .retargeting import Rig, retarget_clips, retarget_rigs
 
 # The toe joint sits 4.35 cm above the floor on a flat foot (measured on dataset-2's walks).
 _TOE_HEIGHT_CM = 4.35
@@ -49,4 +49,10 @@ def onto_canonical(motion: Motion, user_map: dict | None = None, *, plant_feet: 
     return retarget_rigs(motion, source, canonical_rig(), plant_feet=plant_feet), source.jmap
 
 
-__all__ = ["canonical_rig", "canonical_shape", "canonical_skeleton", "onto_canonical"]
+def many_onto_canonical(motions: list[Motion], user_map: dict | None = None) -> list[tuple[Motion, JointMap]]:
+    """:func:`onto_canonical` of many clips at once (feet planted; see
+    :func:`~expressive_mocap.skeletons.retargeting.retarget_clips`)."""
+    return retarget_clips(motions, canonical_rig(), user_map=user_map)
+
+
+__all__ = ["canonical_rig", "canonical_shape", "canonical_skeleton", "many_onto_canonical", "onto_canonical"]

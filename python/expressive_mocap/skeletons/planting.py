@@ -18,16 +18,25 @@ BLEND_FRAMES = 3
 
 
 def plant_feet(
-    motion: Motion, jmap: JointMap, contacts: np.ndarray, guide: np.ndarray, blend_frames: int = BLEND_FRAMES
+    motion: Motion,
+    jmap: JointMap,
+    contacts: np.ndarray,
+    guide: np.ndarray,
+    blend_frames: int = BLEND_FRAMES,
+    starts=None,
 ) -> Motion:
     """``motion`` with each ankle, through each contact run of ``contacts bool [F, 2]`` (left,
     right), moving as ``guide [F, 2, 3]`` (the source's ankles in this motion's world) does, from
     where this motion has it on average over the run. Legs whose knee is not the foot's parent
-    and the upper leg's child (a twist bone in the chain) are left as they are."""
+    and the upper leg's child (a twist bone in the chain) are left as they are. ``starts``: where
+    clips laid end to end begin and the last one ends (runs and easing stop there)."""
     skeleton = motion.skeleton
     parents = skeleton.parents
     world, positions = motion.fk()
-    weights = contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
+    contacts = np.asarray(contacts, dtype=bool)
+    bounds = [0, motion.n_frames] if starts is None else [int(b) for b in starts]
+    pieces = list(zip(bounds[:-1], bounds[1:]))
+    weights = np.concatenate([contact_weights(contacts[a:b], blend_frames) for a, b in pieces])
     rotations = motion.rotations.copy()
     for s, side in enumerate(("left", "right")):
         hip, knee, foot = (jmap[f"{side}_{r}"] for r in ("upper_leg", "lower_leg", "foot"))
@@ -36,7 +45,8 @@ def plant_feet(
         frames = np.flatnonzero(weights[:, s] > 0)
         if not len(frames):
             continue
-        offsets = _run_offsets(positions[:, foot] - guide[:, s], contacts[:, s])
+        gap = positions[:, foot] - guide[:, s]
+        offsets = np.concatenate([_run_offsets(gap[a:b], contacts[a:b, s]) for a, b in pieces])
         w = weights[frames, s, None]
         target = (1 - w) * positions[frames, foot] + w * (guide[frames, s] + offsets[frames])
         t = motion.translations[frames]
