@@ -84,3 +84,16 @@ def test_retarget_refuses_a_target_it_cannot_map(rig_files, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "cannot tell which joint is the hips" in err
     assert not out.exists()
+
+
+def test_footsteps_of_a_z_up_rig_with_a_map(rig_files, tmp_path, capsys):
+    map_file = tmp_path / "map.json"
+    map_file.write_text('{"left_foot": "left_ankle", "right_foot": "right_ankle"}')
+    assert main(["footsteps", str(rig_files["smpl"]), "--map", str(map_file)]) == 0
+    out = capsys.readouterr().out
+    # The demo's 4 s walk at 1.8 steps a second, Z up in metres: read upright, as on the Bandai rig.
+    assert main(["footsteps", str(rig_files["bandai"])]) == 0
+    bandai = capsys.readouterr().out
+    summary = [line for line in out.splitlines() if line.startswith("summary")]
+    assert summary == [line for line in bandai.splitlines() if line.startswith("summary")]
+    assert "7 steps" in summary[0] and "cadence 1.8" in summary[0], summary

@@ -82,3 +82,19 @@ def test_canonical_takes_real_files_of_other_sources_beside_bandai(other_dir, ba
     # Real CMU walking, now in the canonical body's centimetres: the hips about a metre up.
     hips = ds.arrays["positions"][cmu["start"] : cmu["start"] + cmu["frames"], 1]
     assert 70 < np.median(hips[:, 1]) < 110
+
+
+def test_a_map_file_reaches_every_clip_and_needs_canonical(mixed, tmp_path, capsys):
+    from expressive_mocap.errors import ArgumentError
+
+    game_only = tmp_path / "game"
+    game_only.mkdir()
+    (game_only / "walk_game.bvh").symlink_to(mixed / "walk_game.bvh")
+    map_file = tmp_path / "map.toml"
+    map_file.write_text('chest = "spine_02"\n')
+    argv = ["preprocess", str(game_only), "-o", str(tmp_path / "m"), "--canonical", "--map", str(map_file), "-q"]
+    assert main(argv) == 0
+    record = load_dataset(tmp_path / "m").manifest["clips"][0]
+    assert record["source_skeleton"]["map"]["chest"] == "spine_02"
+    with pytest.raises(ArgumentError, match="give canonical=True too"):
+        preprocess(game_only, tmp_path / "n", joint_map={"chest": "spine_02"}, progress=False)

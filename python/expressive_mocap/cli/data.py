@@ -23,7 +23,8 @@ def add_footsteps(commands) -> None:
         f"contacts and flights shorter than {MIN_DURATION:g} s are absorbed (offline) or held off (--causal). "
         "Prints each foot's contact intervals in frames and seconds, then the steps and the cadence.",
     )
-    p.add_argument("file", metavar="FILE", help="BVH file (joints found by name: Bandai-Namco, CMU or Mixamo)")
+    p.add_argument("file", metavar="FILE", help="BVH file of any humanoid skeleton (see `skeleton`)")
+    p.add_argument("--map", metavar="MAP.json|MAP.toml", help="joint map for roles the names and topology do not find")
     p.add_argument("--plot", metavar="OUT.png", help="also write a gait diagram: one row per foot, a bar per contact")
     p.add_argument(
         "--causal", action="store_true", help="streaming detector: frame t sees frames <= t only (hold filter, floor 0)"
@@ -55,8 +56,15 @@ def cmd_footsteps(args) -> int:
     from ..features import cadence, contact_intervals, default_floor, foot_contacts, footstrikes
     from ..roles import JointRoles, actor_height
 
-    motion = read_bvh(args.file)
-    roles = JointRoles.find(motion.skeleton)
+    from ..skeletons.conventions import upright
+
+    motion = upright(read_bvh(args.file))  # contacts are read along Y: a Z-up file is turned first
+    if args.map:
+        from ..skeletons import find_joint_map
+
+        roles = JointRoles.from_map(motion.skeleton, find_joint_map(motion.skeleton, _joint_map(args.map)))
+    else:
+        roles = JointRoles.find(motion.skeleton)
     names = roles.names(motion.skeleton)
     height = actor_height(motion.skeleton, roles)
     floor = args.floor if args.floor is not None else (0.0 if args.causal else default_floor(motion.positions(), roles))
@@ -152,6 +160,11 @@ def add_preprocess(commands) -> None:
         "22-joint skeleton, cm), its own skeleton and joint map kept in the manifest; without it one dataset "
         "holds one skeleton",
     )
+    p.add_argument(
+        "--map",
+        metavar="MAP.json|MAP.toml",
+        help="with --canonical: joint map (role -> joint name) for roles the names and topology do not find",
+    )
     p.add_argument("--overwrite", action="store_true", help="redo OUT if it already holds a finished dataset")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(run=cmd_preprocess)
@@ -172,6 +185,7 @@ def cmd_preprocess(args) -> int:
         overwrite=args.overwrite,
         progress=not args.quiet,
         canonical=args.canonical,
+        joint_map=_joint_map(args.map),
     )
     print("\n".join(summary.lines()))
     if summary.finished and summary.clips_ok == 0:  # a dataset of nothing is not a success
@@ -181,6 +195,12 @@ def cmd_preprocess(args) -> int:
             found = "it holds no .bvh clips"
         raise MocapError(f"{args.source}: {found}; {args.output} holds no data")
     return 0
+
+
+def _joint_map(path: str | None) -> dict | None:
+    from ..skeletons import read_joint_map
+
+    return read_joint_map(path) if path else None
 
 
 def add_parsers(commands) -> None:

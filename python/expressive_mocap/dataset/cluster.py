@@ -40,7 +40,7 @@ _MODELS: dict = {}
 
 
 def remote_batch(
-    batch: list[Item], keep, model, model_float32: bool, backend: str, canonical: bool = False
+    batch: list[Item], keep, model, model_float32: bool, backend: str, canonical: dict | None = None
 ) -> tuple[list[Outcome], float, float]:
     """What a cluster's worker does with one batch: :func:`~.work.compute`, with the model loaded
     once per worker process and the client's backend."""

@@ -31,7 +31,7 @@ def batched(items: Iterator[Item], batch_bytes: float) -> Iterator[list[Item]]:
         yield batch
 
 
-def local(batches, limit, stopped, keep, model, model_float32, canonical: bool = False) -> Iterator[tuple]:
+def local(batches, limit, stopped, keep, model, model_float32, canonical: dict | None = None) -> Iterator[tuple]:
     """``(batch, outcomes, seconds reading headers, seconds in the kernels)`` of each batch in
     order, on this machine, up to ``limit`` batches (``stopped`` gets an entry if more were left).
 

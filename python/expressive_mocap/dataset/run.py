@@ -43,6 +43,7 @@ def preprocess(
     overwrite: bool = False,
     progress: bool = True,
     canonical: bool = False,
+    joint_map: dict | None = None,
 ) -> Summary:
     """Preprocess every clip of ``src`` (folder, glob, .zip or tar) into the dataset folder ``out``.
 
@@ -61,6 +62,8 @@ def preprocess(
     ``canonical``: take clips of any humanoid skeleton, each retargeted onto the canonical body
     (:mod:`expressive_mocap.skeletons.canonical`), its own skeleton and joint map recorded in its
     manifest record (``source_skeleton``); without it, one dataset holds one skeleton.
+    ``joint_map``: with ``canonical``, role -> joint name for roles the names and topology do not
+    find (:func:`~expressive_mocap.skeletons.read_joint_map`), for every skeleton of the archive.
     Returns a :class:`Summary`.
     """
     started = time.perf_counter()
@@ -75,7 +78,10 @@ def preprocess(
     # The source in one canonical form (a resumed run may spell it otherwise: relative, through a link).
     source_path = os.path.realpath(src) if Path(src).exists() else os.path.abspath(src)
     options = {"keep": list(kept), "model": _model_label(model), "model_float32": bool(model_float32),
-               "source": source_path, "backend": get_backend(), "canonical": bool(canonical)}  # fmt: skip
+               "source": source_path, "backend": get_backend(), "canonical": bool(canonical),
+               "joint_map": joint_map or None}  # fmt: skip
+    if joint_map and not canonical:
+        raise ArgumentError("a joint map is for retargeting clips onto the canonical body: give canonical=True too")
     settings = _Settings(kept, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress)
 
     finished_manifest(out)  # refuse a folder that is not ours before putting a lock file in it
@@ -92,6 +98,12 @@ def preprocess(
             return _run(source, out, settings, started)
     finally:
         source.close()
+
+
+def _canonical(options: dict) -> dict | None:
+    """What the batches' work needs of the canonical options: the joint map (``{}``: none), or
+    None when clips stay on their own skeleton."""
+    return (options["joint_map"] or {}) if options["canonical"] else None
 
 
 @dataclass
@@ -216,9 +228,9 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
         batches = batched(todo, settings.batch_mb * MB)
         if client is None:
             results = local(batches, settings.max_batches, stopped, settings.keep, settings.body_model,
-                            settings.model_float32, settings.options["canonical"])  # fmt: skip
+                            settings.model_float32, _canonical(settings.options))  # fmt: skip
         else:
-            work = (settings.keep, settings.model, settings.model_float32, get_backend(), settings.options["canonical"])
+            work = (settings.keep, settings.model, settings.model_float32, get_backend(), _canonical(settings.options))
             results = on_cluster(batches, settings.max_batches, stopped, client, work)
         for batch, outcomes, headers_s, kernels_s in results:
             record, nbytes, write_s = _write_batch(state, batch, outcomes, settings.keep, syncer, flushes)

@@ -76,19 +76,20 @@ def bone_length(skeleton) -> float:
 
 
 def compute(
-    batch: list[Item], keep: tuple[str, ...], model, model_float32: bool, canonical: bool = False
+    batch: list[Item], keep: tuple[str, ...], model, model_float32: bool, canonical: dict | None = None
 ) -> tuple[list[Outcome], float, float]:
     """The work on one batch, one outcome per item, as a cluster's worker does it. Returns the
     outcomes and the seconds spent preparing (headers) and in the kernels."""
     return run_kernels(batch, prepare(batch, keep, model, canonical), keep, model, model_float32)
 
 
-def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: bool = False) -> Prepared:
+def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: dict | None = None) -> Prepared:
     """The Python work before a batch's kernels: the clips' headers, from the files' first bytes
     (:func:`~expressive_mocap.bvh.read_header`; zip members are decompressed here, a tar's
     members come already read), each hierarchy's joint roles and each clip's body scale and
-    channel layout. ``canonical``: clips of any other skeleton than the canonical body are read
-    whole and retargeted onto it here (:func:`onto_canonical`)."""
+    channel layout. ``canonical`` (a joint map, ``{}`` for none; None: off): clips of any other
+    skeleton than the canonical body are read whole and retargeted onto it here
+    (:func:`onto_canonical`)."""
     start = time.perf_counter()
     outcomes = [Outcome() for _ in batch]
     by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
@@ -102,8 +103,8 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: bool = F
         outcomes[k].skeleton = shape
         outcomes[k].bone_length = bone_length(header.skeleton)
         by_hierarchy.setdefault(shape, []).append((k, header, text))
-    if canonical:
-        by_hierarchy = onto_canonical(batch, outcomes, by_hierarchy)
+    if canonical is not None:
+        by_hierarchy = onto_canonical(batch, outcomes, by_hierarchy, canonical or None)
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
     groups = []
@@ -117,11 +118,13 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: bool = F
     return Prepared(outcomes, groups, time.perf_counter() - start)
 
 
-def onto_canonical(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict) -> dict:
+def onto_canonical(
+    batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, user_map: dict | None = None
+) -> dict:
     """``by_hierarchy`` with every clip of another skeleton than the canonical body retargeted
     onto it (all of a batch at once: :func:`~expressive_mocap.skeletons.canonical.many_onto_canonical`):
     its BVH text rewritten on the canonical skeleton, its own skeleton and joint map kept in its
-    outcome for the manifest."""
+    outcome for the manifest. ``user_map``: role -> joint name, for every skeleton of the archive."""
     from ..bvh import bvh_bytes, parse_header, read_bvh
     from ..skeletons.canonical import canonical_shape, many_onto_canonical
 
@@ -135,9 +138,9 @@ def onto_canonical(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dic
             except MocapError as error:
                 outcomes[k].error = f"{batch[k].source}: {error}"
     try:
-        moved = many_onto_canonical([motion for _, motion in read])
+        moved = many_onto_canonical([motion for _, motion in read], user_map)
     except MocapError:  # one skeleton of the batch cannot be mapped: find which, clip by clip
-        moved = [_one_onto_canonical(motion) for _, motion in read]
+        moved = [_one_onto_canonical(motion, user_map) for _, motion in read]
     for (k, motion), result in zip(read, moved):
         if isinstance(result, MocapError):
             outcomes[k].error = f"{batch[k].source}: {result}"
@@ -159,11 +162,11 @@ def onto_canonical(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dic
     return out
 
 
-def _one_onto_canonical(motion):
+def _one_onto_canonical(motion, user_map: dict | None):
     from ..skeletons.canonical import onto_canonical as retarget_onto
 
     try:
-        return retarget_onto(motion)
+        return retarget_onto(motion, user_map)
     except MocapError as error:
         return error
 
