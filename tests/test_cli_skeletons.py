@@ -97,3 +97,19 @@ def test_footsteps_of_a_z_up_rig_with_a_map(rig_files, tmp_path, capsys):
     summary = [line for line in out.splitlines() if line.startswith("summary")]
     assert summary == [line for line in bandai.splitlines() if line.startswith("summary")]
     assert "7 steps" in summary[0] and "cadence 1.8" in summary[0], summary
+
+
+def test_retarget_can_take_the_targets_frame_rate(rig_files, tmp_path):
+    out = tmp_path / "at_120.bvh"
+    assert (
+        main(["retarget", str(rig_files["bandai"]), "--to", str(rig_files["cmu"]), "--fps", "120", "-o", str(out)]) == 0
+    )
+    moved = em.read_bvh(out)
+    assert moved.fps == pytest.approx(120) and moved.n_frames == 481  # 4 s, every 1/120 s
+    jmap = find_joint_map(moved.skeleton)
+    same = em.read_bvh(rig_files["cmu"])  # the same walk written at 120 fps on that rig
+    np.testing.assert_allclose(
+        moved.positions()[::4, jmap["head"]],
+        same.positions()[::4, jmap["head"]],
+        atol=0.5,  # inches
+    )

@@ -55,7 +55,6 @@ def add_footsteps(commands) -> None:
 def cmd_footsteps(args) -> int:
     from ..features import cadence, contact_intervals, default_floor, foot_contacts, footstrikes
     from ..roles import JointRoles, actor_height
-
     from ..skeletons.conventions import upright
 
     motion = upright(read_bvh(args.file))  # contacts are read along Y: a Z-up file is turned first

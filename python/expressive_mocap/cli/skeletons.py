@@ -8,7 +8,7 @@ import sys
 
 from ..bvh import read_bvh, write_bvh
 from ..errors import MocapError
-from .common import PROG
+from .common import PROG, positive
 
 __all__ = ["add_parsers", "cmd_retarget", "cmd_skeleton"]
 
@@ -114,6 +114,9 @@ def add_retarget(commands) -> None:
     p.add_argument(
         "--no-plant-feet", dest="plant_feet", action="store_false", help="leave the feet where the bones put them"
     )
+    p.add_argument(
+        "--fps", type=positive(float), metavar="N", help="resample to N frames a second (default: IN's frame rate)"
+    )
     _add_convention_options(p, "IN's ")
     p.set_defaults(run=cmd_retarget)
 
@@ -135,6 +138,7 @@ def cmd_retarget(args) -> int:
         target_map=target_map,
         plant_feet=args.plant_feet,
         source_conventions=conventions,
+        fps=args.fps,
     )
     write_bvh(out, args.output)
     source = find_joint_map(motion.skeleton, source_map)

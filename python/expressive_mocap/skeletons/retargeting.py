@@ -146,6 +146,7 @@ def retarget(
     plant_feet: bool = True,
     source_conventions: Conventions | None = None,
     target_conventions: Conventions | None = None,
+    fps: float | None = None,
 ) -> Motion:
     """``motion`` moved onto ``target``'s skeleton (a :class:`Motion`, whose frames are used only
     to read its conventions and floor, or a bare :class:`Skeleton`, taken as Y up with its floor
@@ -153,13 +154,15 @@ def retarget(
 
     ``source_map``/``target_map``: role -> joint name for roles the names and topology do not
     find (:func:`~expressive_mocap.skeletons.read_joint_map`). ``plant_feet``: hold the feet still
-    through the source's contacts.
+    through the source's contacts. ``fps``: resample the result to this frame rate (the
+    target file's own, say) instead of keeping the source's.
     """
     if isinstance(target, Skeleton):
         target = rest_motion(target)
     source = Rig.of(motion, source_map, source_conventions)
     goal = Rig.of(target, target_map, target_conventions)
-    return retarget_rigs(motion, source, goal, plant_feet=plant_feet)
+    out = retarget_rigs(motion, source, goal, plant_feet=plant_feet)
+    return out if fps is None else out.resample(fps=fps)
 
 
 def retarget_rigs(motion: Motion, source: Rig, goal: Rig, *, plant_feet: bool = True) -> Motion:
