@@ -54,14 +54,30 @@ def default(function: Callable, name: str) -> Any:
 
 
 def read_for_model(path: str, model, fix: str) -> Motion:
-    """A BVH file that the model can take: another skeleton is an error naming the file and
-    what to do about it (``fix``)."""
+    """A BVH file that the model can take, on the model's skeleton: a motion of another humanoid
+    skeleton is put on the canonical body the shipped models know (see :func:`read_on_model`
+    for the way back); a skeleton that cannot be is an error naming the file and ``fix``."""
+    return read_on_model(path, model, fix)[0]
+
+
+def read_on_model(path: str, model, fix: str) -> tuple[Motion, Callable[[Motion], Motion]]:
+    """A BVH file on the model's skeleton, and how to carry an edit of it back to the file's own
+    skeleton (the identity when the file is on the model's skeleton already; otherwise
+    :class:`~expressive_mocap.skeletons.canonical.Carried`)."""
+    from ..skeletons.canonical import carried_for
+
     motion = read_bvh(path)
     try:
-        model.check_skeleton(motion)
+        carried = carried_for(motion, model.joint_names)
     except MocapError as error:
-        raise MocapError(f"{path}: {error}: {fix}") from None
-    return motion
+        try:
+            model.check_skeleton(motion)
+        except MocapError as refused:
+            raise MocapError(f"{path}: {refused}: {fix} ({error})") from None
+        raise
+    if carried is None:
+        return motion, lambda edited: edited
+    return carried.body, carried.back
 
 
 def read_all(paths: list[str], what: str, quiet: bool = False) -> list[Motion]:

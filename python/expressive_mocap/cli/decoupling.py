@@ -15,7 +15,7 @@ from ..decoupling.edits import mix
 from ..decoupling.training import train_body_model
 from ..errors import MocapError
 from ..files import atomic_write_all, open_input
-from .common import PROG, default, finite, positive, read_all, read_for_model
+from .common import PROG, default, finite, positive, read_all, read_for_model, read_on_model
 
 __all__ = [
     "BODY_MODEL_FIX",
@@ -110,16 +110,16 @@ def cmd_decouple(args) -> int:
     from ..decoupling.algebra import decompose
 
     model = body_model(args)
-    motion = read_for_model(args.input, model, BODY_MODEL_FIX)
+    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX)
     parts = decompose(motion, model, args.gain, args.exponent)
     prefix = str(args.output)
     if prefix.lower().endswith(".bvh"):  # -o out.bvh means the prefix out, not out.bvh_body.bvh
         prefix = prefix[:-4]
-    names = motion.skeleton.names
+    names = motion.skeleton.names  # the activity is the model's, per joint of its skeleton
     table = io.StringIO()
     np.savetxt(table, parts.activity, fmt="%.5f", delimiter=",", header=",".join(names), comments="")
     files = {}
-    for suffix, part in zip(DECOUPLE_SUFFIXES[:2], (parts.body_motion(), parts.expressive_motion())):
+    for suffix, part in zip(DECOUPLE_SUFFIXES[:2], (back(parts.body_motion()), back(parts.expressive_motion()))):
         try:
             files[prefix + suffix] = bvh_bytes(part)
         except MocapError as error:
@@ -148,7 +148,8 @@ def cmd_modulate(args) -> int:
     from ..decoupling.edits import modulate
 
     model = body_model(args)
-    out = modulate(read_for_model(args.input, model, BODY_MODEL_FIX), args.scale, model, args.gain, args.exponent)
+    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX)
+    out = back(modulate(motion, args.scale, model, args.gain, args.exponent))
     write_bvh(out, args.output)
     print(f"wrote {args.output}: expressiveness x {args.scale:g}")
     return 0
@@ -177,8 +178,9 @@ def cmd_mix(args) -> int:
     from ..decoupling.edits import mix
 
     model = body_model(args)
-    body, expressive = (read_for_model(path, model, BODY_MODEL_FIX) for path in (args.body, args.expressive))
-    out = mix(body, expressive, model, args.align, args.offset, args.gain, args.exponent)
+    body, back = read_on_model(args.body, model, BODY_MODEL_FIX)
+    expressive = read_for_model(args.expressive, model, BODY_MODEL_FIX)  # any skeleton: on the model's body
+    out = back(mix(body, expressive, model, args.align, args.offset, args.gain, args.exponent))
     write_bvh(out, args.output)
     print(f"wrote {args.output}: body mechanics of {args.body}, expressiveness of {args.expressive}")
     return 0
@@ -225,12 +227,15 @@ def add_blend(commands) -> None:
 def cmd_blend(args) -> int:
     from ..decoupling.edits import blend, blend_alignment
 
-    first, second = read_bvh(args.first), read_bvh(args.second)
     expressive_window = None if args.naive else args.expressive_window or args.body_window
     if args.naive:
+        first, second = read_bvh(args.first), read_bvh(args.second)
         out = blend(first, second, None, args.body_window)
     else:
-        out = blend(first, second, body_model(args), args.body_window, expressive_window, args.gain, args.exponent)
+        model = body_model(args)
+        first, back = read_on_model(args.first, model, BODY_MODEL_FIX)
+        second = read_for_model(args.second, model, BODY_MODEL_FIX)
+        out = back(blend(first, second, model, args.body_window, expressive_window, args.gain, args.exponent))
     write_bvh(out, args.output)
     a = blend_alignment(first, second, args.body_window, expressive_window)
     print(f"wrote {args.output}: {out.n_frames} frames")

@@ -10,7 +10,7 @@ from ..bvh import write_bvh
 from ..errors import ClipError, MocapError
 from ..exaggeration import exaggerate, swap_test, train
 from ..motion import Motion
-from .common import default, finite, positive, read_all, read_for_model
+from .common import default, finite, positive, read_all, read_on_model
 
 __all__ = ["EXAGGERATION_MODEL_FIX", "add_parsers", "cmd_exaggerate", "cmd_rank", "cmd_validate"]
 
@@ -219,7 +219,7 @@ def cmd_exaggerate(args) -> int:
     from ..exaggeration import ExaggerationModel, exaggerate
 
     model = ExaggerationModel.load(args.model)
-    motion = read_for_model(args.input, model, EXAGGERATION_MODEL_FIX)
+    motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX)
     out, report = exaggerate(
         model,
         motion,
@@ -231,7 +231,7 @@ def cmd_exaggerate(args) -> int:
         blend=args.blend,
         reference=args.reference,
     )
-    write_bvh(out, args.output)
+    write_bvh(back(out), args.output)
     print(report.text())
     print(f"wrote {args.output}")
     return 0

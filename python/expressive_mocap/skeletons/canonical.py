@@ -10,6 +10,9 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+import numpy as np
+
+from ..errors import MocapError
 from ..motion import Motion, Skeleton
 from .conventions import Conventions
 from .jointmap import JointMap, find_joint_map
@@ -55,4 +58,90 @@ def many_onto_canonical(motions: list[Motion], user_map: dict | None = None) -> 
     return retarget_clips(motions, canonical_rig(), user_map=user_map)
 
 
-__all__ = ["canonical_rig", "canonical_shape", "canonical_skeleton", "many_onto_canonical", "onto_canonical"]
+class Carried:
+    """A user's motion put on the canonical body for a model trained there, and the way back.
+
+    ``body`` is the motion retargeted onto the canonical body (feet as carried: with nothing
+    edited, :meth:`back` gives the user's motion back exactly). :meth:`back` carries an edit of
+    ``body`` onto the user's own motion as per-joint changes of world orientation: each mapped
+    joint turns by what its role turned on the body; joints the body lacks keep their local
+    rotations (they follow their parents), offsets stay the user's; the hips' change of place is
+    scaled back by the ratio of the leg lengths.
+    """
+
+    def __init__(self, motion: Motion, user_map: dict | None = None):
+        self.original = motion
+        self.source = Rig.of(motion, user_map)
+        self.target = canonical_rig()
+        self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False)
+
+    def back(self, edited: Motion) -> Motion:
+        """``edited`` (an edit of :attr:`body`) as a motion of the user's skeleton. An edit of
+        another length (a blend into a second motion) has no frame-by-frame counterpart to turn:
+        it is retargeted onto the user's skeleton instead, joints the body lacks at rest."""
+        from .. import quat
+
+        if edited.n_frames != self.body.n_frames:
+            return retarget_rigs(edited, self.target, self.source, plant_feet=False)
+        before, body_positions = self.body.fk()
+        after, edited_positions = edited.fk()
+        turn = self.source.conventions.rotation()  # the user's axes -> canonical; the body's are canonical
+        world, positions = self.original.fk()
+        skeleton = self.original.skeleton
+        parents = skeleton.parents
+        changed = {
+            self.source.jmap[role]: joint
+            for role, joint in self.target.jmap.joints.items()
+            if role in self.source.jmap.joints
+        }
+        new = np.empty_like(world)
+        local = self.original.rotations
+        for j in range(skeleton.n_joints):
+            if j in changed:
+                b = changed[j]
+                delta = quat.mul(after[:, b], quat.conjugate(before[:, b]))  # canonical axes
+                delta = quat.mul(quat.mul(quat.conjugate(turn), delta), turn)  # the user's
+                new[:, j] = quat.mul(delta, world[:, j])
+            elif parents[j] < 0:
+                new[:, j] = world[:, j]
+            else:
+                new[:, j] = quat.mul(new[:, parents[j]], local[:, j])
+        rotations = new.copy()
+        rotations[:, 1:] = quat.mul(quat.conjugate(new[:, parents[1:]]), new[:, 1:])
+        translations = self.original.translations.copy()
+        hips_t, hips_s = self.target.jmap["hips"], self.source.jmap["hips"]
+        moved = edited_positions[:, hips_t] - body_positions[:, hips_t]
+        if np.abs(moved).max(initial=0.0) > 0:
+            from .retargeting import _leg, _path_joint
+
+            shift = quat.rotate(quat.conjugate(turn), moved) * (_leg(self.source) / _leg(self.target))
+            mover = _path_joint(skeleton, hips_s)
+            parent = parents[mover]
+            frame = new[:, parent] if parent >= 0 else np.broadcast_to([0.0, 0.0, 0.0, 1.0], new[:, 0].shape)
+            translations[:, mover] += quat.rotate(quat.conjugate(frame), shift)
+        return Motion(skeleton, rotations, translations, self.original.frame_time)
+
+
+def carried_for(motion: Motion, joint_names: tuple[str, ...], user_map: dict | None = None) -> Carried | None:
+    """How ``motion`` reaches a model trained on a skeleton of ``joint_names``: None when it is
+    that skeleton already, a :class:`Carried` through the canonical body when the model's
+    skeleton is the canonical one; otherwise :class:`MocapError`."""
+    if tuple(motion.skeleton.names) == tuple(joint_names):
+        return None
+    if tuple(joint_names) != canonical_shape()[0]:
+        raise MocapError(
+            f"the model was trained on a {len(joint_names)}-joint skeleton ({', '.join(joint_names[:3])}, ...), "
+            "not the canonical body: only models of the canonical body take motions of other skeletons"
+        )
+    return Carried(motion, user_map)
+
+
+__all__ = [
+    "Carried",
+    "canonical_rig",
+    "canonical_shape",
+    "canonical_skeleton",
+    "carried_for",
+    "many_onto_canonical",
+    "onto_canonical",
+]

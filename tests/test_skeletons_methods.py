@@ -1,0 +1,121 @@
+"""The methods' models on any skeleton, through the canonical body: an edit computed on the body
+the models were trained on, carried back onto the user's own skeleton as per-joint changes of
+world orientation (:class:`~expressive_mocap.skeletons.canonical.Carried`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap.cli import main
+from expressive_mocap.decoupling import BodyModel, modulate
+from expressive_mocap.demo import loaded_walk
+from expressive_mocap.skeletons import find_joint_map, retarget, synthetic_walk
+from expressive_mocap.skeletons.canonical import Carried, canonical_rig
+from expressive_mocap.skeletons.retargeting import Rig, retarget_rigs
+
+_LIMB = [("upper_arm", "forearm"), ("forearm", "hand"), ("upper_leg", "lower_leg"), ("clavicle", "upper_arm")]
+BONES = [(f"{s}_{a}", f"{s}_{b}") for s in ("left", "right") for a, b in _LIMB]
+
+
+def directions(motion: em.Motion) -> np.ndarray:
+    jmap = find_joint_map(motion.skeleton)
+    p = motion.positions()
+    v = np.stack([p[:, jmap[b]] - p[:, jmap[a]] for a, b in BONES], axis=1)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def worst_angle(a, b) -> float:
+    return float(np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1, 1))).max())
+
+
+@pytest.mark.parametrize("rig", ["smpl", "cmu", "game", "mixamo"])
+def test_an_unedited_body_carries_back_to_the_motion_itself(rig):
+    motion = synthetic_walk(rig, wave="left").motion
+    carried = Carried(motion)
+    assert carried.body.skeleton is canonical_rig().skeleton
+    back = carried.back(carried.body)
+    np.testing.assert_allclose(back.positions(), motion.positions(), atol=1e-9 / 0.01)
+    np.testing.assert_allclose(back.translations, motion.translations, atol=1e-9)
+
+
+def test_an_edit_carried_back_is_the_edited_body_on_the_users_skeleton():
+    """Taking the wave out of the waving walk on the game rig (Z up, A pose, twist bones): the
+    edit made on the canonical body and carried back puts every mapped bone where retargeting the
+    edited body onto the game rig does, and the user's twist bones and offsets stay theirs."""
+    model = BodyModel.load()
+    game = synthetic_walk("game", wave="left").motion
+    carried = Carried(game)
+    edited = modulate(carried.body, 0.0, model)
+    ours = carried.back(edited)
+    theirs = retarget_rigs(edited, canonical_rig(), Rig.of(game), plant_feet=False)
+    assert worst_angle(directions(ours), directions(theirs)) < 1e-4
+    assert ours.skeleton is game.skeleton
+    twist = game.skeleton.index("upperarm_twist_01_l")
+    np.testing.assert_allclose(ours.rotations[:, twist], game.rotations[:, twist], atol=1e-12)  # follows its bone
+    # The edit did something: the raised left arm came down, as on the Bandai rig's own walk.
+    assert worst_angle(directions(ours), directions(game)) > 30
+    bandai = synthetic_walk("bandai", wave="left").motion
+    on_bandai = retarget_rigs(modulate(bandai, 0.0, model), Rig.of(bandai), Rig.of(game), plant_feet=False)
+    # Not to the degree: the game rig's three spine joints share the turn Bandai's two split unevenly.
+    assert worst_angle(directions(ours), directions(on_bandai)) < 10
+
+
+def test_decouple_modulate_and_mix_take_any_skeleton(tmp_path, capsys):
+    smpl, game = tmp_path / "smpl.bvh", tmp_path / "game.bvh"
+    em.write_bvh(synthetic_walk("smpl", wave="left").motion, smpl)
+    em.write_bvh(synthetic_walk("game").motion, game)
+    assert main(["decouple", str(smpl), "-o", str(tmp_path / "parts")]) == 0
+    body = em.read_bvh(tmp_path / "parts_body.bvh")
+    assert body.skeleton.names == em.read_bvh(smpl).skeleton.names  # written on the user's skeleton
+    assert main(["modulate", str(smpl), "--scale", "0", "-o", str(tmp_path / "calm.bvh")]) == 0
+    calm = em.read_bvh(tmp_path / "calm.bvh")
+    np.testing.assert_allclose(calm.skeleton.offsets, em.read_bvh(smpl).skeleton.offsets, atol=1e-6)
+    # The SMPL rig's wave laid onto the game rig's walk: written on the game rig, its left hand up.
+    assert main(["mix", "--body", str(game), "--expressive", str(smpl), "-o", str(tmp_path / "mixed.bvh")]) == 0
+    mixed, walk = em.read_bvh(tmp_path / "mixed.bvh"), em.read_bvh(game)
+    jmap = find_joint_map(mixed.skeleton)
+    up = 2  # the game rig is Z up
+    raised = mixed.positions()[:, jmap["left_hand"], up] - walk.positions()[:, jmap["left_hand"], up]
+    assert mixed.skeleton.names == walk.skeleton.names and np.median(raised) > 20  # cm
+
+
+def test_exaggerate_takes_another_skeleton_than_the_models(tmp_path):
+    levels = {k: [loaded_walk(k, seconds=3.0, wobble=0.3, seed=10 * p + k) for p in (0, 1)] for k in (1, 2, 3)}
+    paths = []
+    for k, walks in levels.items():
+        for p, walk in enumerate(walks):
+            paths += ["--level", str(k)] if p == 0 else []
+            path = tmp_path / f"level{k}_{p}.bvh"
+            em.write_bvh(walk, path)
+            paths.append(str(path))
+    model = tmp_path / "walks.npz"
+    assert main(["rank", *paths, "-o", str(model)]) == 0
+    game = synthetic_walk("game").motion
+    sources = {"bandai": levels[1][0], "game": retarget(levels[1][0], game, plant_feet=False)}
+    out = {}
+    for name, motion in sources.items():
+        em.write_bvh(motion, tmp_path / f"{name}_level1.bvh")
+        argv = ["exaggerate", "--model", str(model), "--input", str(tmp_path / f"{name}_level1.bvh"), "--to", "3"]
+        assert main([*argv, "--no-foot-lock", "-o", str(tmp_path / f"{name}_level3.bvh")]) == 0
+        out[name] = em.read_bvh(tmp_path / f"{name}_level3.bvh")
+    assert out["game"].skeleton.names == game.skeleton.names
+    # A real change, and nearly the exaggeration of the model's own skeleton, carried over (the
+    # spine's turn is shared over three joints on the game rig, two on the model's).
+    theirs = retarget(out["bandai"], game, plant_feet=False)
+    assert worst_angle(directions(out["game"]), directions(sources["game"])) > 2
+    assert worst_angle(directions(out["game"]), directions(theirs)) < 10
+
+
+def test_blend_from_a_game_rig_walk_into_a_bandai_wave(tmp_path):
+    game, wave = tmp_path / "game.bvh", tmp_path / "wave.bvh"
+    em.write_bvh(synthetic_walk("game").motion, game)
+    em.write_bvh(synthetic_walk("bandai", wave="left").motion, wave)
+    out = tmp_path / "blend.bvh"
+    assert main(["blend", str(game), str(wave), "--body-window", "30:60", "-o", str(out)]) == 0
+    blended = em.read_bvh(out)
+    assert blended.skeleton.names == em.read_bvh(game).skeleton.names
+    jmap = find_joint_map(blended.skeleton)
+    hand = blended.positions()[:, jmap["left_hand"], 2] - blended.positions()[:, jmap["hips"], 2]  # Z up, cm
+    assert hand[:20].max() < 10 < hand[-20:].min()  # walking arms down, then waving
