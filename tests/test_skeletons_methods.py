@@ -9,7 +9,7 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap.cli import main
-from expressive_mocap.decoupling import BodyModel, modulate
+from expressive_mocap.decoupling import BodyModel, decompose, modulate
 from expressive_mocap.demo import loaded_walk
 from expressive_mocap.skeletons import find_joint_map, retarget, synthetic_walk
 from expressive_mocap.skeletons.canonical import Carried, canonical_rig
@@ -119,3 +119,18 @@ def test_blend_from_a_game_rig_walk_into_a_bandai_wave(tmp_path):
     jmap = find_joint_map(blended.skeleton)
     hand = blended.positions()[:, jmap["left_hand"], 2] - blended.positions()[:, jmap["hips"], 2]  # Z up, cm
     assert hand[:20].max() < 10 < hand[-20:].min()  # walking arms down, then waving
+
+
+def test_the_shipped_models_activity_agrees_across_skeletons_and_finds_the_wave():
+    model = BodyModel.load()
+    names = canonical_rig().skeleton.names
+    activity = {}
+    for rig in ("bandai", "cmu", "mixamo", "smpl", "game", "lafan"):
+        motion = synthetic_walk(rig, wave="left").motion
+        if abs(motion.fps - 30) > 1e-6:
+            motion = motion.resample(fps=30)  # the model reads features at the rate it was trained at
+        activity[rig] = decompose(Carried(motion).body, model).activity.mean(axis=0)
+    for rig, values in activity.items():
+        assert np.abs(values - activity["bandai"]).max() < 0.05, rig
+        left, right = (values[names.index(f"UpperArm_{s}")] for s in "LR")
+        assert left > 0.5 > 0.1 > right, (rig, left, right)  # the waving arm, not the other
