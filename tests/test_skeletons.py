@@ -306,3 +306,30 @@ def test_clips_retargeted_together_are_those_retargeted_one_by_one(walks):
         assert moved.skeleton is canonical_rig().skeleton and jmap.joints == alone_map.joints
         assert moved.fps == pytest.approx(clip.fps) and moved.n_frames == clip.n_frames
         np.testing.assert_allclose(moved.positions(), alone.positions(), atol=1e-6)
+
+
+def test_a_skeleton_without_arms_is_mapped_and_retargeted(walks):
+    """The game rig with its arms cut off: arms are optional roles, the rest maps and moves."""
+    game = walks["game"]
+    skeleton = game.skeleton
+    arm_joints = {j for j, n in enumerate(skeleton.names) if n.split("_")[0] in
+                  ("clavicle", "upperarm", "lowerarm", "hand", "index", "thumb")}  # fmt: skip
+    keep = [j for j in range(skeleton.n_joints) if j not in arm_joints]
+    index = {j: k for k, j in enumerate(keep)}
+    legs_only = em.Skeleton(
+        tuple(skeleton.names[j] for j in keep),
+        [index[int(skeleton.parents[j])] if skeleton.parents[j] >= 0 else -1 for j in keep],
+        skeleton.offsets[keep],
+        tuple(skeleton.channels[j] for j in keep),
+        tuple((index[j], o) for j, o in skeleton.end_sites if j in index),
+    )
+    motion = em.Motion(legs_only, game.rotations[:, keep], game.translations[:, keep], game.frame_time)
+    jmap = find_joint_map(legs_only)
+    assert legs_only.names[jmap["chest"]] == "spine_03" and "left_upper_arm" not in jmap
+    back = retarget(retarget(motion, walks["bandai"], plant_feet=False), motion, plant_feet=False)
+    legs = [(f"{s}_{a}", f"{s}_{b}") for s in ("left", "right") for a, b in _LIMB[:3]]
+    p, q = back.positions(), motion.positions()
+    for a, b in legs:
+        u, v = p[:, jmap[b]] - p[:, jmap[a]], q[:, jmap[b]] - q[:, jmap[a]]
+        cos = np.sum(u * v, axis=-1) / np.linalg.norm(u, axis=-1) / np.linalg.norm(v, axis=-1)
+        assert np.degrees(np.arccos(np.clip(cos, -1, 1))).max() < TOLERANCE_DEG

@@ -5,8 +5,10 @@ Found in three steps, each filling what the one before left open:
 1. a user's map (role -> joint name; :func:`read_joint_map` reads JSON or TOML files);
 2. the names (:mod:`.names`), resolved along each limb so that the roles come in body order;
 3. the topology: the hips are the joint where the legs and the spine part (three long
-   branches), the spine branch is the one with the most joints, the chest is where the arms
-   leave it, the neck branch is the shortest of the chest's branches. Along a limb, the joints
+   branches), the spine branch is the one where arms and a neck part again (with no arms: the
+   one left when the two branches most alike in length are taken as legs), the chest is where
+   the arms leave it (with no arms: the neck's parent), the neck branch is the shortest of the
+   chest's branches. Along a limb, the joints
    at one place (zero-length joints such as CMU's ``LHipJoint``) count once; the hand or foot is
    the first place at least two segments out whose remaining chain is short (under 0.75 of the
    segment before: fingers, toes), the two segments before it are the upper and lower limb, and
@@ -228,24 +230,40 @@ class _Finder:
         return branching
 
     def _trunk(self, hips: int, given: dict) -> tuple[int, list[int]]:
-        """The hips' spine branch child and its two leg branch children."""
+        """The hips' spine branch child and its two leg branch children: the legs by name, else
+        the spine is the branch where arms and a neck part (or, with no arms, the one left when
+        the two most alike in length are taken as the legs)."""
         branches = self._long(hips)
-        named_legs = [c for c in branches if any("upper_leg" in self.labels[j].roles for j in self._subtree(c)[:3])]
-        spine = max(branches, key=lambda c: len(self._subtree(c)))
-        legs = named_legs if len(named_legs) == 2 and spine not in named_legs else None
-        if legs is None:
-            others = sorted((c for c in branches if c != spine), key=lambda c: -(self.bone[c] + self.reach[c]))
-            legs = others[:2]
-        if len(legs) < 2:
+        if len(branches) < 3:
             raise self._fail("legs (the hips have fewer than two long branches besides the spine)")
-        return spine, legs
+        named = [c for c in branches if any("upper_leg" in self.labels[j].roles for j in self._subtree(c))]
+        if len(named) == 2:
+            rest = [c for c in branches if c not in named]
+            return max(rest, key=lambda c: len(self._subtree(c))), named
+        forked = [c for c in branches if any(len(self._long(j)) >= 3 for j in self._subtree(c))]
+        if len(forked) == 1:
+            others = sorted((c for c in branches if c != forked[0]), key=lambda c: -(self.bone[c] + self.reach[c]))
+            return forked[0], others[:2]
+        length = {c: self.bone[c] + self.reach[c] for c in branches}
+        pairs = [(a, b) for i, a in enumerate(branches) for b in branches[i + 1 :]]
+        first, second = min(pairs, key=lambda pair: abs(length[pair[0]] - length[pair[1]]))
+        legs = [first, second]
+        rest = [c for c in branches if c not in legs]
+        return max(rest, key=lambda c: len(self._subtree(c))), legs
 
     def _chest(self, spine_child: int, hips: int) -> tuple[int, list[int]]:
-        """The joint where the arms leave the spine, and its long branches."""
-        for j in self._main_path(spine_child):
+        """The joint where the arms leave the spine, and its long branches. A skeleton without
+        arms: the joint two below the end of the spine's chain (the neck's parent)."""
+        path = self._main_path(spine_child)
+        for j in path:
             branches = self._long(j)
             if len(branches) >= 3:
                 return j, branches
+        if len(path) >= 3 and not any(len(self._long(j)) >= 2 for j in path):
+            real = [j for j in path if self.skeleton.channels[j] and not _is_end(self.names[j])]
+            if len(real) >= 3:
+                chest = real[-3]
+                return chest, [path[path.index(chest) + 1]]
         raise self._fail("chest (no joint on the spine has three long branches: two arms and a neck)")
 
     # -- limbs
