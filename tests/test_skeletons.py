@@ -177,7 +177,7 @@ def test_conventions_are_read_from_the_data(walks, rig):
 
 
 def test_unknown_units_scale_to_a_typical_actor_and_overrides_win(walks):
-    motion = walks["lafan"].scaled(1 / 5.64)  # CMU's own unit: about 5.6 cm
+    motion = walks["lafan"].scaled(1 / 12)  # a unit of 12 cm: a 13-unit actor in no unit we know
     jmap = find_joint_map(motion.skeleton)
     read = conv.read_conventions(motion, jmap)
     assert read.unit == "unknown" and read.metres_per_unit * read.height == pytest.approx(1.70)

@@ -49,6 +49,8 @@ def test_other_skeletons_are_mapped_without_a_map_file(others):
         assert (read.up, read.facing) == ("+Y", "+Z"), name
     cmu = read_conventions(others["cmu_scaled_131_03.bvh"], find_joint_map(others["cmu_scaled_131_03.bvh"].skeleton))
     assert cmu.unit == "m" and cmu.fps == pytest.approx(120, rel=1e-3)
+    xia = read_conventions(others["dme_rest.bvh"], find_joint_map(others["dme_rest.bvh"].skeleton))
+    assert xia.unit == "cmu" and xia.height * xia.metres_per_unit == pytest.approx(1.70, abs=0.05)
 
 
 def test_bandai_clips_of_both_datasets_are_mapped(bandai1_dir, bandai2_dir):

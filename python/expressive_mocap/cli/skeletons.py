@@ -18,7 +18,7 @@ _AXES_HELP = "an axis: X, Y, Z, with a sign for facing (e.g. -Y)"
 def _add_convention_options(p, whose: str = "") -> None:
     p.add_argument("--up", metavar="AXIS", help=f"{whose}up axis, instead of reading it from the data ({_AXES_HELP})")
     p.add_argument("--facing", metavar="AXIS", help=f"{whose}facing direction at rest, instead of reading it")
-    p.add_argument("--unit", choices=("m", "cm", "mm", "in"), help=f"{whose}length unit, instead of guessing it")
+    p.add_argument("--unit", choices=("m", "cm", "mm", "in", "cmu"), help=f"{whose}length unit, instead of guessing it")
 
 
 def _map_file(path: str | None) -> dict | None:

@@ -8,8 +8,9 @@ motion to the package's canonical frame (Y up, facing +Z, metres) and back.
   up along the spine), turned so that the rest's spine stands along the up axis (Bandai-Namco's
   rest pose lies along X); snapped to the nearest horizontal axis.
 - **Actor height**: from the leg bones, which no pose changes: thigh plus shank are 0.491 of
-  the stature (Drillis & Contini's segment proportions). The unit is the one in which that height
-  is a human's (1.0-2.4 m); how sure falls off with the distance from 1.70 m.
+  the stature (Drillis & Contini's segment proportions). The unit (m, cm, mm, inches or CMU's
+  1/0.45 inch) is the one in which that height is a human's (1.0-2.4 m); how sure falls off with
+  the distance from 1.70 m.
 - **Rest pose**: T (upper arms within 25 degrees of horizontal and out to the side), A (25-70
   degrees down), else other; "crouch" when the knees are bent over 25 degrees in the rest.
 """
@@ -28,7 +29,8 @@ from .jointmap import JointMap
 
 LEG_SHARE_OF_STATURE = 0.491  # thigh + shank (Drillis & Contini 1966)
 TYPICAL_HEIGHT_M = 1.70
-UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+# "cmu": the CMU database's own unit, 1/0.45 inch (its ASF files' "length 0.45").
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "cmu": 0.0254 / 0.45}
 AXES = {"+X": (1, 0, 0), "-X": (-1, 0, 0), "+Y": (0, 1, 0), "-Y": (0, -1, 0), "+Z": (0, 0, 1), "-Z": (0, 0, -1)}
 _SAMPLED_FRAMES = 240
 
@@ -36,7 +38,8 @@ _SAMPLED_FRAMES = 240
 @dataclass(frozen=True)
 class Conventions:
     """What :func:`read_conventions` found. ``up`` and ``facing`` are axis names (``"+Y"``);
-    ``unit`` is ``"m"``, ``"cm"``, ``"mm"``, ``"in"`` or ``"unknown"``; ``metres_per_unit``
+    ``unit`` is ``"m"``, ``"cm"``, ``"mm"``, ``"in"``, ``"cmu"`` (CMU's 1/0.45 inch) or
+    ``"unknown"``; ``metres_per_unit``
     converts lengths (for an unknown unit: the scale that makes the actor 1.70 m tall);
     ``height`` is the actor's height in file units; ``sure`` holds how sure each guess is (0-1)."""
 
