@@ -134,3 +134,21 @@ def test_the_shipped_models_activity_agrees_across_skeletons_and_finds_the_wave(
         assert np.abs(values - activity["bandai"]).max() < 0.05, rig
         left, right = (values[names.index(f"UpperArm_{s}")] for s in "LR")
         assert left > 0.5 > 0.1 > right, (rig, left, right)  # the waving arm, not the other
+
+
+def test_the_model_commands_take_a_map_file(tmp_path, capsys):
+    game = tmp_path / "game.bvh"
+    em.write_bvh(synthetic_walk("game", wave="left").motion, game)
+    good, bad = tmp_path / "good.toml", tmp_path / "bad.json"
+    good.write_text('chest = "spine_02"\n')
+    bad.write_text('{"elbow": "lowerarm_l"}')
+    out = tmp_path / "calm.bvh"
+    assert main(["modulate", str(game), "--scale", "0", "--map", str(good), "-o", str(out)]) == 0
+    unmapped = em.read_bvh(out)
+    assert main(["modulate", str(game), "--scale", "0", "-o", str(out)]) == 0
+    # The chest given one joint lower changes how the body is read, so the result.
+    assert np.abs(unmapped.rotations - em.read_bvh(out).rotations).max() > 1e-3
+    capsys.readouterr()
+    for argv in (["modulate", str(game), "--scale", "0"], ["decouple", str(game)], ["calibrate", str(game)]):
+        assert main([*argv, "--map", str(bad), "-o", str(tmp_path / "x")]) == 1
+        assert "bad.json: unknown role 'elbow'" in capsys.readouterr().err

@@ -12,7 +12,18 @@ from ..bvh import read_bvh
 from ..errors import MocapError
 from ..motion import Motion
 
-__all__ = ["PROG", "Parser", "default", "finite", "positive", "read_all", "read_for_model"]
+__all__ = [
+    "PROG",
+    "Parser",
+    "add_map_option",
+    "default",
+    "finite",
+    "joint_map",
+    "positive",
+    "read_all",
+    "read_for_model",
+    "read_on_model",
+]
 
 PROG = "expressive-mocap"
 
@@ -53,14 +64,33 @@ def default(function: Callable, name: str) -> Any:
     return inspect.signature(function).parameters[name].default
 
 
-def read_for_model(path: str, model, fix: str) -> Motion:
+def add_map_option(p) -> None:
+    """--map: a joint map file, for a file of another skeleton than the model's."""
+    p.add_argument(
+        "--map",
+        metavar="MAP.json|MAP.toml",
+        help="joint map (role -> joint name) for roles the names and topology of another skeleton do not find",
+    )
+
+
+def joint_map(args) -> dict | None:
+    """The joint map of ``--map``, if given."""
+    from ..skeletons import read_joint_map
+
+    path = getattr(args, "map", None)
+    return read_joint_map(path) if path else None
+
+
+def read_for_model(path: str, model, fix: str, user_map: dict | None = None) -> Motion:
     """A BVH file that the model can take, on the model's skeleton: a motion of another humanoid
     skeleton is put on the canonical body the shipped models know (see :func:`read_on_model`
     for the way back); a skeleton that cannot be is an error naming the file and ``fix``."""
-    return read_on_model(path, model, fix)[0]
+    return read_on_model(path, model, fix, user_map)[0]
 
 
-def read_on_model(path: str, model, fix: str) -> tuple[Motion, Callable[[Motion], Motion]]:
+def read_on_model(
+    path: str, model, fix: str, user_map: dict | None = None
+) -> tuple[Motion, Callable[[Motion], Motion]]:
     """A BVH file on the model's skeleton, and how to carry an edit of it back to the file's own
     skeleton (the identity when the file is on the model's skeleton already; otherwise
     :class:`~expressive_mocap.skeletons.canonical.Carried`)."""
@@ -68,7 +98,7 @@ def read_on_model(path: str, model, fix: str) -> tuple[Motion, Callable[[Motion]
 
     motion = read_bvh(path)
     try:
-        carried = carried_for(motion, model.joint_names)
+        carried = carried_for(motion, model.joint_names, user_map)
     except MocapError as error:
         try:
             model.check_skeleton(motion)

@@ -15,7 +15,7 @@ from ..decoupling.edits import mix
 from ..decoupling.training import train_body_model
 from ..errors import MocapError
 from ..files import atomic_write_all, open_input
-from .common import PROG, default, finite, positive, read_all, read_for_model, read_on_model
+from .common import PROG, add_map_option, default, finite, joint_map, positive, read_all, read_for_model, read_on_model
 
 __all__ = [
     "BODY_MODEL_FIX",
@@ -61,6 +61,7 @@ def add_model_options(p, calibrate: bool = True) -> None:
     p.add_argument(
         "--exponent", type=positive(float), default=EXPONENT, help=f"b of the activity index (default {EXPONENT:g})"
     )
+    add_map_option(p)
 
 
 def body_model(args):
@@ -76,7 +77,9 @@ def body_model(args):
                     f"--calibrate {path}: a model file; --calibrate takes neutral BVH clips, "
                     "and a calibrated model goes to --model"
                 )
-        model = model.calibrated([read_for_model(path, model, BODY_MODEL_FIX) for path in args.calibrate])
+        model = model.calibrated(
+            [read_for_model(path, model, BODY_MODEL_FIX, joint_map(args)) for path in args.calibrate]
+        )
     return model
 
 
@@ -110,7 +113,7 @@ def cmd_decouple(args) -> int:
     from ..decoupling.algebra import decompose
 
     model = body_model(args)
-    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX)
+    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, joint_map(args))
     parts = decompose(motion, model, args.gain, args.exponent)
     prefix = str(args.output)
     if prefix.lower().endswith(".bvh"):  # -o out.bvh means the prefix out, not out.bvh_body.bvh
@@ -148,7 +151,7 @@ def cmd_modulate(args) -> int:
     from ..decoupling.edits import modulate
 
     model = body_model(args)
-    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX)
+    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, joint_map(args))
     out = back(modulate(motion, args.scale, model, args.gain, args.exponent))
     write_bvh(out, args.output)
     print(f"wrote {args.output}: expressiveness x {args.scale:g}")
@@ -178,8 +181,10 @@ def cmd_mix(args) -> int:
     from ..decoupling.edits import mix
 
     model = body_model(args)
-    body, back = read_on_model(args.body, model, BODY_MODEL_FIX)
-    expressive = read_for_model(args.expressive, model, BODY_MODEL_FIX)  # any skeleton: on the model's body
+    body, back = read_on_model(args.body, model, BODY_MODEL_FIX, joint_map(args))
+    expressive = read_for_model(
+        args.expressive, model, BODY_MODEL_FIX, joint_map(args)
+    )  # any skeleton: on the model's body
     out = back(mix(body, expressive, model, args.align, args.offset, args.gain, args.exponent))
     write_bvh(out, args.output)
     print(f"wrote {args.output}: body mechanics of {args.body}, expressiveness of {args.expressive}")
@@ -233,8 +238,8 @@ def cmd_blend(args) -> int:
         out = blend(first, second, None, args.body_window)
     else:
         model = body_model(args)
-        first, back = read_on_model(args.first, model, BODY_MODEL_FIX)
-        second = read_for_model(args.second, model, BODY_MODEL_FIX)
+        first, back = read_on_model(args.first, model, BODY_MODEL_FIX, joint_map(args))
+        second = read_for_model(args.second, model, BODY_MODEL_FIX, joint_map(args))
         out = back(blend(first, second, model, args.body_window, expressive_window, args.gain, args.exponent))
     write_bvh(out, args.output)
     a = blend_alignment(first, second, args.body_window, expressive_window)
@@ -326,6 +331,7 @@ def add_calibrate(commands) -> None:
     )
     p.add_argument("-o", "--output", required=True, metavar="CAL.npz", help="the calibrated model, for --model")
     p.add_argument("--model", metavar="MODEL.npz", help="model to calibrate (default: the shipped one)")
+    add_map_option(p)
     p.set_defaults(run=cmd_calibrate)
 
 
@@ -333,7 +339,7 @@ def cmd_calibrate(args) -> int:
     from ..decoupling.body_model import BodyModel
 
     model = BodyModel.load(args.model)
-    model = model.calibrated([read_for_model(path, model, BODY_MODEL_FIX) for path in args.neutral])
+    model = model.calibrated([read_for_model(path, model, BODY_MODEL_FIX, joint_map(args)) for path in args.neutral])
     model.save(args.output)
     angles = model.calibration_angles()
     largest = sorted(angles.items(), key=lambda kv: -kv[1])[:5]

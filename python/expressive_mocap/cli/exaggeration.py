@@ -10,7 +10,7 @@ from ..bvh import write_bvh
 from ..errors import ClipError, MocapError
 from ..exaggeration import exaggerate, swap_test, train
 from ..motion import Motion
-from .common import default, finite, positive, read_all, read_on_model
+from .common import add_map_option, default, finite, joint_map, positive, read_all, read_on_model
 
 __all__ = ["EXAGGERATION_MODEL_FIX", "add_parsers", "cmd_exaggerate", "cmd_rank", "cmd_validate"]
 
@@ -212,6 +212,7 @@ def add_exaggerate(commands) -> None:
         default=blend,
         help=f"foot locking eases in and out over this many seconds (default {blend:g})",
     )
+    add_map_option(p)
     p.set_defaults(run=cmd_exaggerate)
 
 
@@ -219,7 +220,7 @@ def cmd_exaggerate(args) -> int:
     from ..exaggeration import ExaggerationModel, exaggerate
 
     model = ExaggerationModel.load(args.model)
-    motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX)
+    motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args))
     out, report = exaggerate(
         model,
         motion,
