@@ -152,3 +152,47 @@ def test_the_model_commands_take_a_map_file(tmp_path, capsys):
     for argv in (["modulate", str(game), "--scale", "0"], ["decouple", str(game)], ["calibrate", str(game)]):
         assert main([*argv, "--map", str(bad), "-o", str(tmp_path / "x")]) == 1
         assert "bad.json: unknown role 'elbow'" in capsys.readouterr().err
+
+
+def test_a_model_trained_on_another_skeleton_exaggerates_a_bandai_walk(tmp_path):
+    """Rank on the game rig (its walks are the loaded walks carried over), exaggerate a walk of
+    the Bandai skeleton with it: the walk goes through the model's own body (its mean pose on its
+    skeleton) and back, and changes as the game rig's own walk does."""
+    game = synthetic_walk("game").motion
+    argv = []
+    for k in (1, 2, 3):
+        argv += ["--level", str(k)]
+        for p in (0, 1):
+            walk = retarget(loaded_walk(k, seconds=3.0, wobble=0.3, seed=10 * p + k), game, plant_feet=False)
+            em.write_bvh(walk, tmp_path / f"game{k}_{p}.bvh")
+            argv.append(str(tmp_path / f"game{k}_{p}.bvh"))
+    assert main(["rank", *argv, "-o", str(tmp_path / "game_walks.npz")]) == 0
+    bandai = loaded_walk(1, seconds=3.0, wobble=0.3, seed=1)
+    em.write_bvh(bandai, tmp_path / "bandai1.bvh")
+    outputs = {}
+    for name in ("bandai1", "game1_0"):
+        argv = ["exaggerate", "--model", str(tmp_path / "game_walks.npz"), "--input", str(tmp_path / f"{name}.bvh")]
+        assert main([*argv, "--to", "3", "--no-foot-lock", "-o", str(tmp_path / f"{name}_3.bvh")]) == 0
+        outputs[name] = em.read_bvh(tmp_path / f"{name}_3.bvh")
+    assert outputs["bandai1"].skeleton.names == bandai.skeleton.names
+    assert worst_angle(directions(outputs["bandai1"]), directions(bandai)) > 2
+    theirs = retarget(outputs["game1_0"], bandai, plant_feet=False)
+    assert worst_angle(directions(outputs["bandai1"]), directions(theirs)) < 10
+
+
+def test_carrying_through_a_body_in_other_axes():
+    """The body a motion is carried through may have axes of its own (a Z-up model body facing
+    -Y): an edit there comes back onto the user's skeleton as retargeting it would put it."""
+    from expressive_mocap import quat
+
+    game, smpl = synthetic_walk("game").motion, synthetic_walk("smpl").motion
+    carried = Carried(game, None, Rig.of(smpl))
+    np.testing.assert_allclose(carried.back(carried.body).positions(), game.positions(), atol=1e-8)
+    rotations = carried.body.rotations.copy()
+    arm = carried.body.skeleton.index("left_shoulder")
+    rotations[:, arm] = quat.mul(quat.about("X", np.full(len(rotations), 40.0)), rotations[:, arm])
+    edited = em.Motion(carried.body.skeleton, rotations, carried.body.translations, carried.body.frame_time)
+    ours = carried.back(edited)
+    theirs = retarget_rigs(edited, Rig.of(smpl), Rig.of(game), plant_feet=False)
+    assert worst_angle(directions(ours), directions(theirs)) < 1e-4
+    assert worst_angle(directions(ours), directions(game)) > 20

@@ -98,15 +98,17 @@ def read_on_model(
 
     motion = read_bvh(path)
     try:
-        carried = carried_for(motion, model.joint_names, user_map)
+        carried = carried_for(motion, model, user_map)
     except MocapError as error:
         try:
             model.check_skeleton(motion)
         except MocapError as refused:
             raise MocapError(f"{path}: {refused}: {fix} ({error})") from None
         raise
-    if carried is None:
-        return motion, lambda edited: edited
+    if carried is None:  # the model's own skeleton: only its axes may differ (a Z-up file)
+        from ..skeletons.conventions import upright_and_back
+
+        return upright_and_back(motion)
     return carried.body, carried.back
 
 

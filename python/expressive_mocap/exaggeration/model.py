@@ -98,6 +98,20 @@ class ExaggerationModel:
         w = self.weights[:-1].reshape(-1, 3)[:, 0]
         return [n for n, v in zip(self.joint_names, w) if v == 0.0]
 
+    def body(self) -> Motion:
+        """One frame of the model's mean pose (``reference``) on the skeleton it was trained on:
+        what a motion of another skeleton is retargeted onto to be exaggerated (every joint
+        rotates in its trained Euler order; the root and the hips also move)."""
+        from ..motion import Skeleton, order_name
+
+        position = tuple(f"{axis}position" for axis in "XYZ")
+        channels = tuple(
+            (position if j in (0, self.hips) else ()) + tuple(f"{a}rotation" for a in order_name(order))
+            for j, order in enumerate(self.orders)
+        )
+        skeleton = Skeleton(self.joint_names, self.parents, self.offsets, channels)
+        return Motion(skeleton, self.reference[None], self.offsets[None], 1 / 30)
+
     def dof_range(self, reference: str = "model") -> tuple[np.ndarray, np.ndarray]:
         """The lowest and highest value ``[D]`` of each DOF over every training sample, measured as
         :func:`~expressive_mocap.exaggeration.exaggerate` measures a motion with ``reference``: from

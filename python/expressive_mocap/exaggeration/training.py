@@ -144,7 +144,11 @@ def train(
     walking cycle, here and in :func:`~expressive_mocap.exaggeration.exaggerate` (the basis is
     phase-aligned to it). Defaults: :data:`~expressive_mocap.exaggeration.TRAINING`.
     """
-    clips = [list(p) for p in people]
+    from ..skeletons.conventions import upright
+
+    # Cycles, headings and heights are read along Y: a Z-up skeleton's clips are turned upright
+    # first, and the model is of the upright skeleton (exaggerate turns a Z-up motion likewise).
+    clips = [[upright(m) for m in p] for p in people]
     intensities = np.asarray(levels, dtype=np.float64).reshape(-1)
     _check_levels(clips, intensities)
     settings = TrainSettings(samples, share, energy, rank, degree, representation, cycle, foot)

@@ -59,7 +59,8 @@ def many_onto_canonical(motions: list[Motion], user_map: dict | None = None) -> 
 
 
 class Carried:
-    """A user's motion put on the canonical body for a model trained there, and the way back.
+    """A user's motion put on the canonical body for a model trained there (or on ``target``, a
+    model's own body), and the way back.
 
     ``body`` is the motion retargeted onto the canonical body (feet as carried: with nothing
     edited, :meth:`back` gives the user's motion back exactly). :meth:`back` carries an edit of
@@ -69,10 +70,10 @@ class Carried:
     scaled back by the ratio of the leg lengths.
     """
 
-    def __init__(self, motion: Motion, user_map: dict | None = None):
+    def __init__(self, motion: Motion, user_map: dict | None = None, target: Rig | None = None):
         self.original = motion
         self.source = Rig.of(motion, user_map)
-        self.target = canonical_rig()
+        self.target = target or canonical_rig()
         self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False)
 
     def back(self, edited: Motion) -> Motion:
@@ -85,7 +86,9 @@ class Carried:
             return retarget_rigs(edited, self.target, self.source, plant_feet=False)
         before, body_positions = self.body.fk()
         after, edited_positions = edited.fk()
-        turn = self.source.conventions.rotation()  # the user's axes -> canonical; the body's are canonical
+        # The body's axes -> canonical -> the user's: a change of orientation D on the body is
+        # user^-1 body D body^-1 user in the user's axes.
+        turn = quat.mul(quat.conjugate(self.source.conventions.rotation()), self.target.conventions.rotation())
         world, positions = self.original.fk()
         skeleton = self.original.skeleton
         parents = skeleton.parents
@@ -99,8 +102,8 @@ class Carried:
         for j in range(skeleton.n_joints):
             if j in changed:
                 b = changed[j]
-                delta = quat.mul(after[:, b], quat.conjugate(before[:, b]))  # canonical axes
-                delta = quat.mul(quat.mul(quat.conjugate(turn), delta), turn)  # the user's
+                delta = quat.mul(after[:, b], quat.conjugate(before[:, b]))  # the body's axes
+                delta = quat.mul(quat.mul(turn, delta), quat.conjugate(turn))  # the user's
                 new[:, j] = quat.mul(delta, world[:, j])
             elif parents[j] < 0:
                 new[:, j] = world[:, j]
@@ -114,7 +117,7 @@ class Carried:
         if np.abs(moved).max(initial=0.0) > 0:
             from .retargeting import _leg, _path_joint
 
-            shift = quat.rotate(quat.conjugate(turn), moved) * (_leg(self.source) / _leg(self.target))
+            shift = quat.rotate(turn, moved) * (_leg(self.source) / _leg(self.target))
             mover = _path_joint(skeleton, hips_s)
             parent = parents[mover]
             frame = new[:, parent] if parent >= 0 else np.broadcast_to([0.0, 0.0, 0.0, 1.0], new[:, 0].shape)
@@ -122,13 +125,18 @@ class Carried:
         return Motion(skeleton, rotations, translations, self.original.frame_time)
 
 
-def carried_for(motion: Motion, joint_names: tuple[str, ...], user_map: dict | None = None) -> Carried | None:
-    """How ``motion`` reaches a model trained on a skeleton of ``joint_names``: None when it is
-    that skeleton already, a :class:`Carried` through the canonical body when the model's
-    skeleton is the canonical one; otherwise :class:`MocapError`."""
-    if tuple(motion.skeleton.names) == tuple(joint_names):
+def carried_for(motion: Motion, model, user_map: dict | None = None) -> Carried | None:
+    """How ``motion`` reaches ``model`` (a body-mechanics or exaggeration model): None when it is
+    on the model's skeleton already; else a :class:`Carried` through the model's own body when the
+    model keeps its skeleton (an exaggeration model: its mean pose on its skeleton), or through
+    the canonical body when the model was trained there; otherwise :class:`MocapError`."""
+    joint_names = tuple(model.joint_names)
+    if tuple(motion.skeleton.names) == joint_names:
         return None
-    if tuple(joint_names) != canonical_shape()[0]:
+    body = model.body() if hasattr(model, "body") else None
+    if body is not None:
+        return Carried(motion, user_map, Rig.of(body))
+    if joint_names != canonical_shape()[0]:
         raise MocapError(
             f"the model was trained on a {len(joint_names)}-joint skeleton ({', '.join(joint_names[:3])}, ...), "
             "not the canonical body: only models of the canonical body take motions of other skeletons"

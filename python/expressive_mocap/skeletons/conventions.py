@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Callable
 
 import numpy as np
 
@@ -212,15 +213,28 @@ def from_canonical(motion: Motion, conventions: Conventions) -> Motion:
 def upright(motion: Motion) -> Motion:
     """``motion`` turned so that its up axis (read from its data) is +Y, lengths as they are:
     what pictures and Y-up code need. Returned as it is when already Y-up or not mappable."""
+    return upright_and_back(motion)[0]
+
+
+def upright_and_back(motion: Motion) -> tuple[Motion, Callable[[Motion], Motion]]:
+    """:func:`upright` of ``motion``, and the turn that puts a motion of the same skeleton back
+    into ``motion``'s own axes (the identity when nothing was turned)."""
     from .jointmap import find_joint_map
 
     try:
         up = read_conventions(motion, find_joint_map(motion.skeleton)).up
     except MocapError:
-        return motion
+        up = "+Y"
     if up == "+Y":
-        return motion
-    return _changed(motion, quat.between(np.array(AXES[up], float), np.array([0.0, 1.0, 0.0])), 1.0)
+        return motion, lambda edited: edited
+    turn = quat.between(np.array(AXES[up], float), np.array([0.0, 1.0, 0.0]))
+    skeleton = motion.skeleton
+
+    def back(edited: Motion) -> Motion:
+        turned = _changed(edited, quat.conjugate(turn), 1.0)
+        return Motion(skeleton, turned.rotations, turned.translations, turned.frame_time)
+
+    return _changed(motion, turn, 1.0), back
 
 
 def _changed(motion: Motion, turn: np.ndarray, scale: float) -> Motion:
@@ -245,4 +259,5 @@ __all__ = [
     "stature",
     "to_canonical",
     "upright",
+    "upright_and_back",
 ]
