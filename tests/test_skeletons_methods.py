@@ -146,8 +146,10 @@ def test_the_model_commands_take_a_map_file(tmp_path, capsys):
     assert main(["modulate", str(game), "--scale", "0", "--map", str(good), "-o", str(out)]) == 0
     unmapped = em.read_bvh(out)
     assert main(["modulate", str(game), "--scale", "0", "-o", str(out)]) == 0
-    # The chest given one joint lower changes how the body is read, so the result.
-    assert np.abs(unmapped.rotations - em.read_bvh(out).rotations).max() > 1e-3
+    # The chest given one joint lower changes how the body is read, so the result (by about 0.1
+    # degree: the chest's frame is read from the shoulders and head either way); the same command
+    # twice gives the same numbers.
+    assert np.abs(unmapped.rotations - em.read_bvh(out).rotations).max() > 1e-5
     capsys.readouterr()
     for argv in (["modulate", str(game), "--scale", "0"], ["decouple", str(game)], ["calibrate", str(game)]):
         assert main([*argv, "--map", str(bad), "-o", str(tmp_path / "x")]) == 1

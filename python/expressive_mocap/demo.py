@@ -87,6 +87,13 @@ WAVE_RAISE = 125.0  # degrees the upper arm turns up from hanging, out to the si
 WAVE_BEND = 30.0  # degrees the forearm turns further up (the elbow bends)
 
 
+def bandai_standing_pose() -> np.ndarray:
+    """``W``, the Bandai-Namco skeleton's world rotations ``[22, 4]`` (x, y, z, w) in a real neutral
+    walk's average pose, facing +Z: the upright pose its bones' twists are measured from (its rest
+    pose, every bone along its joint's X axis, is no human pose)."""
+    return _STANDING.copy()
+
+
 def bandai_like_skeleton() -> Skeleton:
     """The Bandai-Namco dataset-2 skeleton: joint names, hierarchy, rest offsets and channels
     as in ``dataset-2_walk_normal_001.bvh`` (the Hips offset is that clip's)."""
@@ -366,6 +373,7 @@ __all__ = [
     "WAVE_RAISE",
     "WalkAndWave",
     "bandai_like_skeleton",
+    "bandai_standing_pose",
     "loaded_walk",
     "procedural_walk",
     "strides_per_second",

@@ -1,20 +1,22 @@
 """Retargeting: a motion moved onto another skeleton, bone by bone in world space.
 
 Both skeletons are mapped (:mod:`.jointmap`) and brought to the canonical axes (:mod:`.conventions`).
-For every role both maps hold, an alignment ``A_r`` takes the target's rest bone onto the
-source's rest bone (the hips and chest, which carry several bones, by a frame: the line across
-the hip joints or the shoulders, and the spine; every other joint by the shortest arc from its
-bone, the line to the next mapped joint, or for a hand, toe or head the bone into it). The
+Each has a reference pose in which its bones' twists are known (:func:`reference_pose`: the rest,
+or Bandai-Namco's average walking pose). For every role both maps hold, an alignment ``A_r`` takes
+the target's frame of the role in its reference pose onto the source's (the hips and chest by
+the lines across them and up the spine; a limb segment by its bone and the plane its elbow or
+knee bends in; other joints by their bone and the body's forward, or up for the feet). The
 target joint's world rotation is then the source joint's times ``A_r``: each mapped bone points
-where the source's does, so T, A, crouched and Bandai-Namco's rest poses map onto each other,
-and A -> B -> A gives back A's world rotations of every joint both maps hold.
+where the source's does and faces the same way about itself, and A -> B -> A gives back A's
+world rotations of every joint both maps hold.
 
-Unmapped joints of the target keep their rest rotation (zero-length hip joints, twist bones,
-fingers), except the extra segments of the spine and the neck, which take equal shares of the
-turn between the mapped joints either end of their chain. The hips' path is scaled by the
-ratio of the leg lengths (which also converts the unit), above the source's floor and onto the
-target's. With ``plant_feet``, each foot is held still through the source's contacts (the
-package's contact detector on the source) with two-bone leg IK, eased in and out over 3 frames.
+Unmapped joints of the target keep their reference pose relative to their mapped ancestor
+(zero-length hip joints, twist bones, fingers), except the extra segments of the spine and the
+neck, which take equal shares of the turn between the mapped joints either end of their chain.
+The hips' path is scaled by the ratio of the leg lengths (which also converts the unit), above
+the source's floor and onto the target's. With ``plant_feet``, each foot is held still through
+the source's contacts (the package's contact detector on the source) with two-bone leg IK, eased
+in and out over 3 frames.
 """
 
 from __future__ import annotations
@@ -41,6 +43,11 @@ _NEXT = {
 }
 _BEFORE = {"hand": "forearm", "toes": "foot", "foot": "lower_leg"}
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+_UP = np.array([0.0, 1.0, 0.0])
+# A limb's three joints, by the part of each segment of it.
+_ARM, _LEG = ("upper_arm", "forearm", "hand"), ("upper_leg", "lower_leg", "foot")
+_LIMBS = {"upper_arm": _ARM, "forearm": _ARM, "upper_leg": _LEG, "lower_leg": _LEG}
+_FORWARD = np.array([0.0, 0.0, 1.0])
 
 
 class Rig(NamedTuple):
@@ -119,22 +126,78 @@ def _orthonormal(across: np.ndarray, along: np.ndarray) -> np.ndarray:
     return np.stack([x, y, np.cross(x, y)], axis=1)  # columns
 
 
+def reference_pose(skeleton: Skeleton) -> np.ndarray:
+    """World rotations ``[J, 4]`` (the skeleton's own axes) of the pose its bones' twists are
+    measured from: the rest pose (every rotation the identity) for T, A and most other rest poses,
+    whose limbs hang or spread with their hinges crosswise; for the Bandai-Namco skeleton, whose
+    rest lays every bone along its joint's X axis, a real neutral walk's average pose."""
+    from ..demo import bandai_like_skeleton, bandai_standing_pose
+
+    bandai = bandai_like_skeleton()
+    if skeleton.names == bandai.names and np.array_equal(skeleton.parents, bandai.parents):
+        return bandai_standing_pose()
+    return np.tile(_IDENTITY, (skeleton.n_joints, 1))
+
+
+def _reference(rig: Rig) -> tuple[np.ndarray, np.ndarray]:
+    """The rig's reference pose in canonical axes: world rotations ``[J, 4]`` and joint positions ``[J, 3]``."""
+    skeleton = rig.skeleton
+    world = reference_pose(skeleton)
+    positions = np.zeros((skeleton.n_joints, 3))
+    for j in range(1, skeleton.n_joints):  # parents come before their children
+        parent = skeleton.parents[j]
+        positions[j] = positions[parent] + quat.rotate(world[parent], skeleton.offsets[j])
+    turn = rig.conventions.rotation()
+    return quat.mul(quat.mul(turn, world), quat.conjugate(turn)), quat.rotate(turn, positions)
+
+
+def _role_frame(points: np.ndarray, jmap: JointMap, role: str, other: JointMap) -> np.ndarray:
+    """A role's frame (columns) in a reference pose: the hips and chest by their lines across and
+    up the spine; every other role by its bone and the body's forward (up for a foot or toes,
+    which point forward), the crosswise line a knee or elbow bends about being square to both."""
+    if role in ("hips", "chest"):
+        return _orthonormal(*_frame_vectors(points, jmap, role, other))
+    start, end, _ = _bone(jmap, role, other)
+    line = points[jmap[end]] - points[jmap[start]]
+    part = _role_of(jmap, role)
+    if part in ("foot", "toes"):
+        return _orthonormal(line, _UP)
+    return _orthonormal(line, _bend_toward(points, jmap, role) if part in _LIMBS else _FORWARD)
+
+
+def _bend_toward(points: np.ndarray, jmap: JointMap, role: str) -> np.ndarray:
+    """Where a limb's elbow or knee bend lies, square to its bone (forward at the elbow, back at
+    the knee, signed forward for both): the body's forward when the limb is almost straight, else
+    the plane its two segments make, which shows how the hinge really faces (an arm hangs with
+    the elbow turned in)."""
+    side, part = role.split("_", 1)
+    top, middle, end = (f"{side}_{p}" for p in _LIMBS[part])
+    upper = points[jmap[middle]] - points[jmap[top]]
+    lower = points[jmap[end]] - points[jmap[middle]]
+    normal = np.cross(upper, lower)
+    if np.linalg.norm(normal) < np.sin(np.radians(10.0)) * np.linalg.norm(upper) * np.linalg.norm(lower):
+        return _FORWARD
+    toward = np.cross(normal, upper)  # in the limb's plane, square to the upper segment
+    return toward if toward @ _FORWARD >= 0 else -toward
+
+
 def alignments(source: Rig, target: Rig) -> dict[str, np.ndarray]:
-    """Role -> ``A_r``, the rotation (canonical axes) taking the target's rest bone onto the source's."""
-    rest_s = quat.rotate(source.conventions.rotation(), source.skeleton.rest_positions()[0])
-    rest_t = quat.rotate(target.conventions.rotation(), target.skeleton.rest_positions()[0])
-    roles = [role for role in source.jmap.joints if role in target.jmap.joints]
+    """Role -> ``A_r`` (canonical axes), which turns the source joint's world rotation into the
+    target's: ``W_t = W_s A_r``. In the two reference poses (:func:`reference_pose`) it takes the
+    target's frame of the role onto the source's, so each bone keeps its direction and its twist
+    (which way its hinge faces) whatever the two rests are."""
+    world_s, points_s = _reference(source)
+    world_t, points_t = _reference(target)
     out = {}
-    for role in ("hips", "chest"):
-        frame_s = _orthonormal(*_frame_vectors(rest_s, source.jmap, role, target.jmap))
-        frame_t = _orthonormal(*_frame_vectors(rest_t, target.jmap, role, source.jmap))
-        out[role] = quat.from_matrix(frame_s @ frame_t.T)
-    bones = [r for r in roles if r not in out]
-    ends = [_bone(source.jmap, role, target.jmap)[:2] for role in bones]
-    lines_t = np.array([rest_t[target.jmap[e]] - rest_t[target.jmap[s]] for s, e in ends]).reshape(-1, 3)
-    lines_s = np.array([rest_s[source.jmap[e]] - rest_s[source.jmap[s]] for s, e in ends]).reshape(-1, 3)
-    out.update(zip(bones, quat.between(lines_t, lines_s)))  # one call for every bone
-    return {role: out[role] for role in roles}
+    for role in source.jmap.joints:
+        if role not in target.jmap.joints:
+            continue
+        frame_s = _role_frame(points_s, source.jmap, role, target.jmap)
+        frame_t = _role_frame(points_t, target.jmap, role, source.jmap)
+        onto = quat.from_matrix(frame_s @ frame_t.T)
+        js, jt = source.jmap[role], target.jmap[role]
+        out[role] = quat.mul(quat.mul(quat.conjugate(world_s[js]), onto), world_t[jt])
+    return out
 
 
 def retarget(
@@ -262,6 +325,7 @@ class _Plan(NamedTuple):
     shares: np.ndarray
     held: np.ndarray
     copied: np.ndarray
+    reference: np.ndarray
 
 
 _PLANS: dict = {}
@@ -335,6 +399,7 @@ def _new_plan(source: Rig, target: Rig) -> _Plan:
         np.array([x for _, _, x in shared.values()]),
         np.array(held, dtype=np.int64),
         np.array(copied, dtype=np.int64),
+        _reference(target)[0],
     )
 
 
@@ -371,13 +436,19 @@ def _transfer(
     frames, skeleton = motion.n_frames, target.skeleton
     world = np.empty((frames, skeleton.n_joints, 4))
     world[:, plan.target] = _mul(roles, plan.aligns)
+    # Unmapped joints turn with the mapped ones, as changes from the target's reference pose.
+    reference = plan.reference
     if len(plan.shared):
-        turn = _mul(quat.conjugate(world[:, plan.tops]), world[:, plan.bottoms])
-        world[:, plan.shared] = _mul(world[:, plan.tops], quat.power(turn, plan.shares))
+        top = _mul(world[:, plan.tops], quat.conjugate(reference[plan.tops]))
+        bottom = _mul(world[:, plan.bottoms], quat.conjugate(reference[plan.bottoms]))
+        turn = quat.power(_mul(quat.conjugate(top), bottom), plan.shares)
+        world[:, plan.shared] = _mul(_mul(top, turn), reference[plan.shared])
     if len(plan.held):
-        world[:, plan.held] = np.where(
-            (plan.copied >= 0)[:, None], world[:, np.maximum(plan.copied, 0)], _IDENTITY
-        )  # held at their rest rotation: their parent's world rotation, or none at the root
+        copied = np.maximum(plan.copied, 0)
+        change = np.where(
+            (plan.copied >= 0)[:, None], _mul(world[:, copied], quat.conjugate(reference[copied])), _IDENTITY
+        )
+        world[:, plan.held] = _mul(change, reference[plan.held])  # as in the reference pose to their mapped ancestor
     world = _turned(quat.conjugate(turn_t), world)  # the target's axes
     parents = skeleton.parents
     rotations = world.copy()
@@ -442,4 +513,13 @@ def _path_joint(skeleton: Skeleton, hips: int) -> int:
     )
 
 
-__all__ = ["Rig", "alignments", "carried", "rest_motion", "retarget", "retarget_clips", "retarget_rigs"]
+__all__ = [
+    "Rig",
+    "alignments",
+    "carried",
+    "reference_pose",
+    "rest_motion",
+    "retarget",
+    "retarget_clips",
+    "retarget_rigs",
+]
