@@ -198,3 +198,14 @@ def test_carrying_through_a_body_in_other_axes():
     theirs = retarget_rigs(edited, Rig.of(smpl), Rig.of(game), plant_feet=False)
     assert worst_angle(directions(ours), directions(theirs)) < 1e-4
     assert worst_angle(directions(ours), directions(game)) > 20
+
+
+def test_render_decouples_a_file_of_another_skeleton(tmp_path):
+    """`render --decoupled` and `--modulated` go through the model's body and draw the parts on the
+    file's own skeleton (before: the model refused the 35-joint game rig)."""
+    game = tmp_path / "game.bvh"
+    em.write_bvh(synthetic_walk("game", wave="left", seconds=1.0).motion, game)
+    for how in ("--decoupled", "--modulated"):
+        out = tmp_path / f"game{how}.png"
+        assert main(["render", str(game), how, "-o", str(out)]) == 0
+        assert out.read_bytes().startswith(b"\x89PNG")

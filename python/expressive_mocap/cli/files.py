@@ -14,8 +14,8 @@ from ..errors import MocapError
 from ..files import atomic_write, is_standard_output
 from ..motion import ORDERS, Motion
 from ..render import render_animation, render_poses
-from .common import PROG, default, positive
-from .decoupling import add_model_options, body_model
+from .common import PROG, default, joint_map, positive, read_on_model
+from .decoupling import BODY_MODEL_FIX, add_model_options, body_model
 
 __all__ = ["add_parsers", "cmd_convert", "cmd_info", "cmd_positions", "cmd_render"]
 
@@ -182,12 +182,15 @@ def cmd_render(args) -> int:
 
         if len(motions) != 1:
             raise MocapError("--decoupled and --modulated draw one file: give exactly one")
-        parts = decompose(motions[0], body_model(args), args.gain, args.exponent)
+        model = body_model(args)
+        # A file of another skeleton is decoupled on the model's body, and drawn on its own.
+        motion, back = read_on_model(args.files[0], model, BODY_MODEL_FIX, joint_map(args))
+        parts = decompose(motion, model, args.gain, args.exponent)
         if args.decoupled:
-            motions = [motions[0], parts.body_motion(), parts.expressive_motion()]
+            motions = [motions[0], back(parts.body_motion()), back(parts.expressive_motion())]
             titles = ["original", "body mechanics", "expressive"]
         else:
-            motions = [parts.recompose(s) for s in (0.5, 1.0, 1.5)]
+            motions = [back(parts.recompose(s)) for s in (0.5, 1.0, 1.5)]
             titles = ["50% expressive", "100% (original)", "150% expressive"]
     if args.start or args.end:
         motions = [m[args.start : args.end] for m in motions]
