@@ -16,7 +16,7 @@ from ..errors import MocapError
 from ..motion import Motion, Skeleton
 from .conventions import Conventions
 from .jointmap import JointMap, find_joint_map
-from .retargeting import Rig, retarget_clips, retarget_rigs
+from .retargeting import _IDENTITY, Rig, _mul, retarget_clips, retarget_rigs
 
 # The toe joint sits 4.35 cm above the floor on a flat foot (measured on dataset-2's walks).
 _TOE_HEIGHT_CM = 4.35
@@ -92,25 +92,20 @@ class Carried:
         world, positions = self.original.fk()
         skeleton = self.original.skeleton
         parents = skeleton.parents
-        changed = {
-            self.source.jmap[role]: joint
-            for role, joint in self.target.jmap.joints.items()
-            if role in self.source.jmap.joints
-        }
-        new = np.empty_like(world)
-        local = self.original.rotations
-        for j in range(skeleton.n_joints):
-            if j in changed:
-                b = changed[j]
-                delta = quat.mul(after[:, b], quat.conjugate(before[:, b]))  # the body's axes
-                delta = quat.mul(quat.mul(turn, delta), quat.conjugate(turn))  # the user's
-                new[:, j] = quat.mul(delta, world[:, j])
-            elif parents[j] < 0:
-                new[:, j] = world[:, j]
-            else:
-                new[:, j] = quat.mul(new[:, parents[j]], local[:, j])
+        # Each joint turns by the change of the nearest mapped joint at or above it (the root by
+        # none): mapped joints by their role's change on the body, the others with their parents.
+        roles = [role for role in self.target.jmap.joints if role in self.source.jmap.joints]
+        mapped = {self.source.jmap[role]: k for k, role in enumerate(roles)}
+        which = np.full(skeleton.n_joints, len(roles))  # the last change is none
+        for j in range(skeleton.n_joints):  # parents come before their children
+            which[j] = mapped.get(j, which[parents[j]] if parents[j] >= 0 else len(roles))
+        bodies = [self.target.jmap[role] for role in roles]
+        change = _mul(after[:, bodies], quat.conjugate(before[:, bodies]))  # the body's axes
+        change = _mul(_mul(turn, change), quat.conjugate(turn))  # the user's
+        change = np.concatenate([change, np.broadcast_to(_IDENTITY, (len(world), 1, 4))], axis=1)
+        new = _mul(change[:, which], world)
         rotations = new.copy()
-        rotations[:, 1:] = quat.mul(quat.conjugate(new[:, parents[1:]]), new[:, 1:])
+        rotations[:, 1:] = _mul(quat.conjugate(new[:, parents[1:]]), new[:, 1:])
         translations = self.original.translations.copy()
         hips_t, hips_s = self.target.jmap["hips"], self.source.jmap["hips"]
         moved = edited_positions[:, hips_t] - body_positions[:, hips_t]
