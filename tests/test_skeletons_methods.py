@@ -209,3 +209,27 @@ def test_render_decouples_a_file_of_another_skeleton(tmp_path):
         out = tmp_path / f"game{how}.png"
         assert main(["render", str(game), how, "-o", str(out)]) == 0
         assert out.read_bytes().startswith(b"\x89PNG")
+
+
+def test_the_streaming_decoupler_takes_another_skeleton():
+    """Frame by frame, a waving walk on the game rig is decoupled as the whole clip is through the
+    model's body (with the rig read from the first frame and the floor at 0, as a stream reads
+    them; to 1e-9), its body mechanics come back on the rig's own joints, and the wave is found on
+    the waving arm."""
+    from expressive_mocap import quat
+    from expressive_mocap.decoupling import StreamingDecoupler
+    from test_model import _FixedFloor
+
+    model = BodyModel.load()
+    game = synthetic_walk("game", wave="left", seconds=3.0).motion
+    stream = StreamingDecoupler(model, game.skeleton, game.frame_time)
+    pushed = [stream.push(game.rotations[f], game.translations[f]) for f in range(game.n_frames)]
+    body, expressive, activity = (np.array(x) for x in zip(*pushed))
+    carried = Carried(game, source=Rig.of(game[:1]))
+    offline = decompose(carried.body, _FixedFloor(model, 0.0))
+    np.testing.assert_allclose(activity, offline.activity, atol=1e-9)
+    assert body.shape == game.rotations.shape
+    np.testing.assert_allclose(body, carried.back(offline.body_motion()).rotations, atol=1e-9)
+    np.testing.assert_allclose(quat.mul(expressive, body), game.rotations, atol=1e-9)  # E B = O
+    names = model.joint_names
+    assert activity[:, names.index("UpperArm_L")].mean() > 0.5 > 0.1 > activity[:, names.index("UpperArm_R")].mean()

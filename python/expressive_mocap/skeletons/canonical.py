@@ -70,9 +70,11 @@ class Carried:
     scaled back by the ratio of the leg lengths.
     """
 
-    def __init__(self, motion: Motion, user_map: dict | None = None, target: Rig | None = None):
+    def __init__(
+        self, motion: Motion, user_map: dict | None = None, target: Rig | None = None, source: Rig | None = None
+    ):
         self.original = motion
-        self.source = Rig.of(motion, user_map)
+        self.source = source or Rig.of(motion, user_map)  # given: a stream's, read from its first frame
         self.target = target or canonical_rig()
         self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False)
 
