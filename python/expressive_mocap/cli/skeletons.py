@@ -44,10 +44,12 @@ def add_skeleton(commands) -> None:
 def describe(path: str, user_map: dict | None, args) -> dict:
     """What ``skeleton`` reports for one file."""
     from ..skeletons import find_joint_map, read_conventions
+    from ..skeletons.retargeting import Rig, untrusted_twists
 
     motion = read_bvh(path)
     jmap = find_joint_map(motion.skeleton, user_map)
     conventions = read_conventions(motion, jmap).with_overrides(args.up, args.facing, args.unit)
+    untrusted = untrusted_twists(motion, Rig(motion.skeleton, jmap, conventions, 0.0))
     names = motion.skeleton.names
     return {
         "file": str(path),
@@ -65,6 +67,7 @@ def describe(path: str, user_map: dict | None, args) -> dict:
         "actor_height_m": round(conventions.height * conventions.metres_per_unit, 3),
         "rest_pose": conventions.rest_pose,
         "sure": conventions.sure,
+        "twists_from_positions": sorted(untrusted),
     }
 
 
@@ -94,6 +97,11 @@ def cmd_skeleton(args) -> int:
             print(f"  {role:<16} {shown:<26} {report['how'].get(role, 'the chain from the hips to the chest')}")
         unmapped = report["unmapped"]
         print(f"  unmapped ({len(unmapped)}): {', '.join(unmapped) if unmapped else 'none'}")
+        if report["twists_from_positions"]:
+            print(
+                "  twists read from the positions (the rotations twist these bones arbitrarily): "
+                + ", ".join(report["twists_from_positions"])
+            )
     return 1 if failures else 0
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from .. import ops, quat
 from ..errors import MocapError
 from ..motion import Motion, Skeleton
+from . import twist
 from .conventions import AXES, Conventions, read_conventions
 from .jointmap import JointMap, find_joint_map
 
@@ -44,27 +45,63 @@ _NEXT = {
 _BEFORE = {"hand": "forearm", "toes": "foot", "foot": "lower_leg"}
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 _UP = np.array([0.0, 1.0, 0.0])
-# A limb's three joints, by the part of each segment of it.
-_ARM, _LEG = ("upper_arm", "forearm", "hand"), ("upper_leg", "lower_leg", "foot")
-_LIMBS = {"upper_arm": _ARM, "forearm": _ARM, "upper_leg": _LEG, "lower_leg": _LEG}
 _FORWARD = np.array([0.0, 0.0, 1.0])
 
 
 class Rig(NamedTuple):
-    """A skeleton with what retargeting needs to know about it: its joint map, conventions and
-    floor height (along its up axis, file units)."""
+    """A skeleton with what retargeting needs to know about it: its joint map, conventions, floor
+    height (along its up axis, file units) and the roles whose rotations its motion twists
+    arbitrarily, to be read from the positions instead (:func:`untrusted_twists`)."""
 
     skeleton: Skeleton
     jmap: JointMap
     conventions: Conventions
     floor: float
+    untrusted: frozenset = frozenset()
 
     @classmethod
     def of(cls, motion: Motion, user_map: dict | None = None, conventions: Conventions | None = None) -> Rig:
-        """The rig of ``motion``'s skeleton, its conventions and floor read from its frames."""
+        """The rig of ``motion``'s skeleton, its conventions, floor and untrusted twists read from its frames."""
         jmap = find_joint_map(motion.skeleton, user_map)
         conventions = conventions or read_conventions(motion, jmap)
-        return cls(motion.skeleton, jmap, conventions, _floor(motion, jmap, conventions))
+        rig = cls(motion.skeleton, jmap, conventions, _floor(motion, jmap, conventions))
+        return rig._replace(untrusted=untrusted_twists(motion, rig))
+
+
+def untrusted_twists(motion: Motion, rig: Rig) -> frozenset:
+    """The roles whose twist ``motion``'s rotations set far from what its positions show (a median
+    over the frames beyond :func:`~.twist.trusted`, 45 degrees for the hips and chest), such as a
+    network's output that turns a thigh 100 degrees about itself and the shin back, or hips and a
+    chest whose children all sit at the joint, leaving their rotations free. Real captures stay
+    under the bounds (measured: the CMU file and 3,073 of the 3,076 Bandai-Namco clips)."""
+    world, positions = motion.fk()
+    turn = rig.conventions.rotation()
+    world, points = _turned(turn, world), quat.rotate(turn, positions)
+    reference, points_ref = _reference(rig)
+    jmap, out = rig.jmap, set()
+    for role in ("hips", "chest"):
+        frame = _role_frame(points_ref, jmap, role, jmap)
+        from_frame = quat.mul(quat.conjugate(quat.from_matrix(frame)), reference[jmap[role]])
+        seen = quat.mul(quat.from_matrix(_orthonormal(*_frame_vectors(points, jmap, role, jmap))), from_frame)
+        if np.median(quat.angle(quat.mul(seen, quat.conjugate(world[:, jmap[role]])))) > twist.TRUSTED_ELSE:
+            out.add(role)
+    for role in jmap.joints:
+        if twist.readable(jmap, role, twist.READABLE):
+            frame = _role_frame(points_ref, jmap, role, jmap)
+            local = quat.conjugate(reference[jmap[role]])
+            bone = quat.rotate(world[:, jmap[role]], quat.rotate(local, frame[:, 0]))
+            second = quat.rotate(world[:, jmap[role]], quat.rotate(local, frame[:, 1]))
+            angles = twist.twist_angles(bone, second, twist.facing(points, jmap, role, bone))
+            telling = twist.telling(points, jmap, role)
+            if telling.mean() > 0.1 and np.median(np.abs(angles[telling])) > twist.trusted(role):
+                out.add(role)
+    # A limb twisted arbitrarily at one joint is twisted back at the next: read the whole limb.
+    for side in ("left", "right"):
+        for limb in (("clavicle", "upper_arm", "forearm", "hand"), ("upper_leg", "lower_leg", "foot", "toes")):
+            roles = [f"{side}_{part}" for part in limb]
+            if out.intersection(roles):
+                out.update(r for r in roles if twist.readable(jmap, r, twist.READABLE))
+    return frozenset(out)
 
 
 def _floor(motion: Motion, jmap: JointMap, conventions: Conventions) -> float:
@@ -106,24 +143,26 @@ def _bone(jmap: JointMap, role: str, other: JointMap) -> tuple[str, str, bool]:
     raise MocapError(f"no bone to align the {role.replace('_', ' ')} by")
 
 
-def _frame_vectors(rest: np.ndarray, jmap: JointMap, role: str, other: JointMap) -> tuple[np.ndarray, np.ndarray]:
-    """(across, along) of the hips or chest: the line across to the left, and up the spine."""
+def _frame_vectors(points: np.ndarray, jmap: JointMap, role: str, other: JointMap) -> tuple[np.ndarray, np.ndarray]:
+    """(across, along) ``[..., 3]`` of the hips or chest from joint positions ``[..., J, 3]``: the
+    line across to the left, and up the spine."""
+
+    def line(start: str, end: str) -> np.ndarray:
+        return points[..., jmap[end], :] - points[..., jmap[start], :]
+
     if role == "hips":
-        across = rest[jmap["left_upper_leg"]] - rest[jmap["right_upper_leg"]]
-        return across, rest[jmap["chest"]] - rest[jmap["hips"]]
+        return line("right_upper_leg", "left_upper_leg"), line("hips", "chest")
     arm = next((p for p in ("upper_arm", "clavicle") if f"left_{p}" in jmap and f"left_{p}" in other), None)
-    if arm is None:
-        across = rest[jmap["left_upper_leg"]] - rest[jmap["right_upper_leg"]]
-    else:
-        across = rest[jmap[f"left_{arm}"]] - rest[jmap[f"right_{arm}"]]
-    return across, rest[jmap["head"]] - rest[jmap["chest"]]  # the neck may sit at the chest
+    across = line("right_upper_leg", "left_upper_leg") if arm is None else line(f"right_{arm}", f"left_{arm}")
+    return across, line("chest", "head")  # the neck may sit at the chest
 
 
 def _orthonormal(across: np.ndarray, along: np.ndarray) -> np.ndarray:
-    x = across / np.linalg.norm(across)
-    y = along - x * (along @ x)
-    y = y / np.linalg.norm(y)
-    return np.stack([x, y, np.cross(x, y)], axis=1)  # columns
+    """The frame ``[..., 3, 3]`` (columns) of ``across`` and the part of ``along`` square to it."""
+    x = across / np.linalg.norm(across, axis=-1, keepdims=True)
+    y = along - x * np.sum(along * x, axis=-1, keepdims=True)
+    y = y / np.linalg.norm(y, axis=-1, keepdims=True)
+    return np.stack([x, y, np.cross(x, y)], axis=-1)  # columns
 
 
 def reference_pose(skeleton: Skeleton) -> np.ndarray:
@@ -153,32 +192,16 @@ def _reference(rig: Rig) -> tuple[np.ndarray, np.ndarray]:
 
 def _role_frame(points: np.ndarray, jmap: JointMap, role: str, other: JointMap) -> np.ndarray:
     """A role's frame (columns) in a reference pose: the hips and chest by their lines across and
-    up the spine; every other role by its bone and the body's forward (up for a foot or toes,
-    which point forward), the crosswise line a knee or elbow bends about being square to both."""
+    up the spine; a limb segment, clavicle or foot by its bone and the way the positions say it
+    faces (:func:`~.twist.facing`: where its elbow or knee bends, its foot points); any other role
+    by its bone and the body's forward (up for the toes, which point forward)."""
     if role in ("hips", "chest"):
         return _orthonormal(*_frame_vectors(points, jmap, role, other))
     start, end, _ = _bone(jmap, role, other)
     line = points[jmap[end]] - points[jmap[start]]
-    part = _role_of(jmap, role)
-    if part in ("foot", "toes"):
-        return _orthonormal(line, _UP)
-    return _orthonormal(line, _bend_toward(points, jmap, role) if part in _LIMBS else _FORWARD)
-
-
-def _bend_toward(points: np.ndarray, jmap: JointMap, role: str) -> np.ndarray:
-    """Where a limb's elbow or knee bend lies, square to its bone (forward at the elbow, back at
-    the knee, signed forward for both): the body's forward when the limb is almost straight, else
-    the plane its two segments make, which shows how the hinge really faces (an arm hangs with
-    the elbow turned in)."""
-    side, part = role.split("_", 1)
-    top, middle, end = (f"{side}_{p}" for p in _LIMBS[part])
-    upper = points[jmap[middle]] - points[jmap[top]]
-    lower = points[jmap[end]] - points[jmap[middle]]
-    normal = np.cross(upper, lower)
-    if np.linalg.norm(normal) < np.sin(np.radians(10.0)) * np.linalg.norm(upper) * np.linalg.norm(lower):
-        return _FORWARD
-    toward = np.cross(normal, upper)  # in the limb's plane, square to the upper segment
-    return toward if toward @ _FORWARD >= 0 else -toward
+    if twist.readable(jmap, role) and twist.readable(other, role):
+        return _orthonormal(line, twist.facing(points, jmap, role, line))
+    return _orthonormal(line, _UP if _role_of(jmap, role) == "toes" else _FORWARD)
 
 
 def alignments(source: Rig, target: Rig) -> dict[str, np.ndarray]:
@@ -326,6 +349,8 @@ class _Plan(NamedTuple):
     held: np.ndarray
     copied: np.ndarray
     reference: np.ndarray
+    readable: list[tuple[str, int, np.ndarray, np.ndarray]]
+    framed: list[tuple[str, int, np.ndarray]]
 
 
 _PLANS: dict = {}
@@ -372,6 +397,23 @@ def _new_plan(source: Rig, target: Rig) -> _Plan:
         swung.append(r)
         starts.append(first)
         ends.append(last)
+    # Roles whose twist the positions can tell: (role, target joint, and the joint's bone and
+    # second axis in its own rest frame, those of the role's frame in the reference pose).
+    reference_t, points_t = _reference(target)
+    readable = []
+    for role in roles:
+        if twist.readable(source.jmap, role, twist.READABLE) and twist.readable(target.jmap, role, twist.READABLE):
+            frame = _role_frame(points_t, target.jmap, role, source.jmap)
+            local = quat.conjugate(reference_t[target.jmap[role]])
+            readable.append((role, target.jmap[role], quat.rotate(local, frame[:, 0]), quat.rotate(local, frame[:, 1])))
+    # The hips and chest, whose frames the positions tell: (role, target joint, the rotation
+    # taking the role's frame in the target's reference pose onto the target's world rotation there).
+    framed = []
+    for role in ("hips", "chest"):
+        frame = _role_frame(points_t, target.jmap, role, source.jmap)
+        framed.append(
+            (role, target.jmap[role], quat.mul(quat.conjugate(quat.from_matrix(frame)), reference_t[target.jmap[role]]))
+        )
     aligned = {target.jmap[r] for r in roles}
     shared = _shared_chains(target.jmap, aligned)
     parents = target.skeleton.parents
@@ -399,7 +441,9 @@ def _new_plan(source: Rig, target: Rig) -> _Plan:
         np.array([x for _, _, x in shared.values()]),
         np.array(held, dtype=np.int64),
         np.array(copied, dtype=np.int64),
-        _reference(target)[0],
+        reference_t,
+        readable,
+        framed,
     )
 
 
@@ -436,6 +480,10 @@ def _transfer(
     frames, skeleton = motion.n_frames, target.skeleton
     world = np.empty((frames, skeleton.n_joints, 4))
     world[:, plan.target] = _mul(roles, plan.aligns)
+    if source.untrusted:
+        points = quat.rotate(turn_s, positions_s)
+        _reframe(world, points, source.jmap, target.jmap, [f for f in plan.framed if f[0] in source.untrusted])
+        _retwist(world, points, source.jmap, [r for r in plan.readable if r[0] in source.untrusted])
     # Unmapped joints turn with the mapped ones, as changes from the target's reference pose.
     reference = plan.reference
     if len(plan.shared):
@@ -456,6 +504,25 @@ def _transfer(
     translations = np.broadcast_to(skeleton.offsets, (frames, skeleton.n_joints, 3)).copy()
     _place_hips(translations, positions_s, source, target, floor)
     return Motion(skeleton, rotations, translations, motion.frame_time)
+
+
+def _reframe(world: np.ndarray, points: np.ndarray, jmap: JointMap, other: JointMap, framed: list) -> None:
+    """The hips or chest of ``world`` (the target's, canonical axes) set from the frame the
+    source's positions ``points`` show, for the source's untrusted roles ``framed``."""
+    for role, joint, from_frame in framed:
+        frame = _orthonormal(*_frame_vectors(points, jmap, role, other))
+        world[:, joint] = quat.mul(quat.from_matrix(frame), from_frame)
+
+
+def _retwist(world: np.ndarray, points: np.ndarray, jmap: JointMap, readable: list) -> None:
+    """The source's untrusted limb bones ``readable`` of ``world`` (the target's, canonical axes)
+    turned about themselves to face the way the source's positions ``points`` say."""
+    for role, joint, bone_axis, second_axis in readable:
+        bone = quat.rotate(world[:, joint], bone_axis)
+        second = quat.rotate(world[:, joint], second_axis)
+        half = 0.5 * twist.twist_angles(bone, second, twist.facing(points, jmap, role, bone))[:, None]
+        about = np.concatenate([bone * np.sin(half), np.cos(half)], axis=-1)
+        world[:, joint] = _mul(about, world[:, joint])
 
 
 def _shared_chains(jmap: JointMap, aligned: set[int]) -> dict[int, tuple[int, int, float]]:
@@ -520,6 +587,7 @@ __all__ = [
     "reference_pose",
     "rest_motion",
     "retarget",
+    "untrusted_twists",
     "retarget_clips",
     "retarget_rigs",
 ]
