@@ -111,25 +111,44 @@ def _bootstrap(cycles: np.ndarray | None, mappings: np.ndarray, weights: np.ndar
     return float(np.std(weighted_intensity(mappings, weights, cycles[draws].mean(axis=1), levels)))
 
 
+def offset_projection(basis: np.ndarray) -> np.ndarray:
+    """``[r, r]``: removes from coefficients ``[..., r]`` (as ``c @ P``) the direction a constant
+    trajectory has in the basis ``[T, r]`` (``U^T 1``), so a constant added to a DOF trajectory
+    (an actor's own posture: a joint held a few degrees otherwise throughout) leaves them unchanged;
+    what is left is how the trajectory varies over the cycle."""
+    u = basis.sum(axis=0)
+    norm = float(u @ u)
+    return np.eye(len(u)) - (np.outer(u, u) / norm if norm > 0 else 0.0)
+
+
 def estimate_intensity(
-    model: ExaggerationModel, coefficients: np.ndarray, cycle_coefficients: np.ndarray | None = None
+    model: ExaggerationModel,
+    coefficients: np.ndarray,
+    cycle_coefficients: np.ndarray | None = None,
+    *,
+    offsets: bool = False,
 ) -> IntensityEstimate:
     """The current intensity of a motion from its coefficients ``[D, r]`` under ``model``; see
-    :meth:`ExaggerationModel.estimate <expressive_mocap.exaggeration.ExaggerationModel.estimate>`."""
+    :meth:`ExaggerationModel.estimate <expressive_mocap.exaggeration.ExaggerationModel.estimate>`.
+    ``offsets`` False: from how each key DOF varies over the cycle only (:func:`offset_projection`
+    applied to the motion's, the training performances' and the mapped coefficients alike)."""
     key, levels = model.key, model.levels
-    mappings, c = model.mappings[key], np.asarray(coefficients, dtype=np.float64)[key]
+    project = np.eye(model.basis.shape[1]) if offsets else offset_projection(model.basis)
+    mappings = np.einsum("ij,njp->nip", project, model.mappings[key])
+    c = np.asarray(coefficients, dtype=np.float64)[key] @ project
+    trained = np.einsum("tr,pktd->pkdr", model.basis, model.trajectories)[:, :, key] @ project  # [P, K, n, r]
+    spread = ((trained - mapped(mappings, levels)[None]) ** 2).mean(axis=(0, 1))
     # No coefficient counts as predicted better than to a tenth of the typical change over the
     # trained range: training data exactly on the lines (one noiseless person) would otherwise
     # weigh in without bound; with that floor alone the weights are equal (plain least squares).
     change = mapped(mappings, levels[-1]) - mapped(mappings, levels[0])
     floor = 0.01 * float(np.mean(change**2)) if change.size else 0.0
-    weights = 1.0 / (model.coefficient_spread()[key] + (floor if floor > 0 else 1.0))
+    weights = 1.0 / (spread + (floor if floor > 0 else 1.0))
     k = float(weighted_intensity(mappings, weights, c[None], levels)[0])
     jackknife = _jackknife(key, mappings, weights, c, levels)
-    cycles = None if cycle_coefficients is None else np.asarray(cycle_coefficients, dtype=np.float64)[:, key]
+    cycles = None if cycle_coefficients is None else np.asarray(cycle_coefficients, dtype=np.float64)[:, key] @ project
     bootstrap = _bootstrap(cycles, mappings, weights, levels)
     # ... and how far the training performances themselves come out from their intensities.
-    trained = np.einsum("tr,pktd->pkdr", model.basis, model.trajectories)[:, :, key]
     P, K = trained.shape[:2]
     trained = trained.reshape(P * K, *trained.shape[2:])
     trained_k = weighted_intensity(mappings, weights, trained, levels)
@@ -147,4 +166,11 @@ def estimate_intensity(
     )
 
 
-__all__ = ["BOOTSTRAP_DRAWS", "POOR_FIT", "IntensityEstimate", "estimate_intensity", "weighted_intensity"]
+__all__ = [
+    "BOOTSTRAP_DRAWS",
+    "POOR_FIT",
+    "IntensityEstimate",
+    "estimate_intensity",
+    "offset_projection",
+    "weighted_intensity",
+]
