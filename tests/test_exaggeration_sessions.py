@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import warnings
 
+import numpy as np
 import pytest
 
 import expressive_mocap as em
@@ -82,6 +83,7 @@ def test_another_sessions_walks_are_estimated_near_their_intensity(walks_model, 
         before = estimate(walks_model, session1[(content, "normal")], estimate_offsets=True).estimate
         assert abs(before.k - 2) > abs(e["normal"].k - 2) + 0.2, (content, before)
         z += [(e["normal"].k - 2) / e["normal"].uncertainty, (e["active"].k - 3) / e["active"].uncertainty]
+    assert np.sqrt(np.mean(np.square(z))) < 1.4, z
 
 
 def test_a_baseline_clip_of_the_actor_removes_its_difference(walks_model, session1):

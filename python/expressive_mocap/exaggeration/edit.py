@@ -19,7 +19,7 @@ from ..quat import mean_rotation
 from ..roles import JointRoles, actor_height
 from .cycles import Cycle, SampledCycles, find_cycles, frame_yaw, sample_cycles, to_cycle_timing, without_heading
 from .dofs import dofs_to_rotations, rotations_to_dofs, sampled_dofs
-from .estimate import IntensityEstimate
+from .estimate import POOR_FIT, IntensityEstimate
 from .footlock import IDENTITY, lock_stance_feet
 from .model import ExaggerationModel
 from .settings import EDITING, REFERENCES, TRAINING
@@ -60,6 +60,7 @@ class ExaggerationReport:
                 f"estimate: fit residual {e.residual:.2f} (the training performances' own: about 1); "
                 f"uncertainty from the key joints "
                 f"{e.jackknife:.2g}, the cycles {e.bootstrap:.2g}, the training clips' own error {e.training:.2g}"
+                + (f" (x {min(e.residual, POOR_FIT):.2g} for the fit residual)" if e.residual > 1 else "")
             )
             if e.warning():
                 lines.append("warning: " + e.warning())
