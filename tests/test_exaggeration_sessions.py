@@ -118,3 +118,26 @@ def test_bad_baselines_give_clear_errors(walks_model, session1):
     with pytest.raises(ModelError, match="^baseline: the model was trained on"):
         exaggerate(walks_model, walk, 3.0, baseline=em.Motion(renamed, walk.rotations, walk.translations, 1 / 30),
                    baseline_level=2.0)  # fmt: skip
+
+
+def test_the_command_takes_a_baseline(walks_model, bandai1_dir, tmp_path, capsys):
+    """exaggerate --baseline FILE --baseline-level K (and --estimate-offsets, the former
+    estimate); either baseline flag alone is a one-line error."""
+    from expressive_mocap.cli import main
+
+    walks_model.save(tmp_path / "walks.npz")
+    clip = str(bandai1_dir / "dataset-1_walk-right_normal_001.bvh")
+    command = ["exaggerate", "--model", str(tmp_path / "walks.npz"), "--input", clip, "--to", "3"]
+    baseline = ["--baseline", str(bandai1_dir / "dataset-1_walk-left_normal_001.bvh"), "--baseline-level", "2"]
+    assert main([*command, "-o", str(tmp_path / "a.bvh"), *baseline]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("intensity 2.12 +- ") and "baseline: given intensity 2, estimated at 1.71" in out
+    assert main([*command, "-o", str(tmp_path / "b.bvh")]) == 0
+    assert capsys.readouterr().out.startswith("intensity 1.82 +- ")
+    assert main([*command, "-o", str(tmp_path / "c.bvh"), "--estimate-offsets"]) == 0
+    assert capsys.readouterr().out.startswith("intensity 1.26 +- ")
+    for alone in (baseline[:2], baseline[2:]):
+        assert main([*command, "-o", str(tmp_path / "d.bvh"), *alone]) == 1
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "--baseline and --baseline-level go together" in err
+    assert not (tmp_path / "d.bvh").exists()
