@@ -47,8 +47,9 @@ class IntensityEstimate:
     @property
     def poor_fit(self) -> bool:
         """The residual is above :data:`POOR_FIT` (a model of dataset-2's walks: its own walks
-        0.55-1.12, each take left out of training 0.59-1.19, a turning walk 1.75, runs 2.4-3.5,
-        a wave 5.8)."""
+        0.67-1.22, runs 2.6-4.6, a wave 6.2, another session's forward and sideways walks 1.4-3.1;
+        reading the DOFs' means too, its own walks 0.55-1.12, each take left out of training
+        0.59-1.19, a turning walk 1.75, runs 2.4-3.5, a wave 5.8)."""
         return self.residual > POOR_FIT
 
     def warning(self) -> str:
