@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from ..bvh import write_bvh
-from ..errors import ClipError, MocapError
+from ..errors import ArgumentError, ClipError, MocapError
 from ..exaggeration import exaggerate, swap_test, train
 from ..motion import Motion
 from .common import add_map_option, default, finite, joint_map, positive, read_all, read_on_model
@@ -205,6 +205,19 @@ def add_exaggerate(commands) -> None:
         default=reference,
         help="rotations measured from the training mean pose (default) or the motion's own",
     )
+    p.add_argument(
+        "--baseline",
+        metavar="BASELINE.bvh",
+        help="a clip of the same actor and action at a known intensity (--baseline-level): its difference from the "
+        "model at that intensity is removed before the current intensity is estimated and from the clamping range",
+    )
+    p.add_argument("--baseline-level", type=finite, metavar="K", help="the intensity of --baseline")
+    p.add_argument(
+        "--estimate-offsets",
+        action="store_true",
+        help="let the estimate read each DOF's mean over the cycle too (default: only how it varies, so the "
+        "actor's own posture does not move it)",
+    )
     p.add_argument("--no-foot-lock", action="store_true", help="do not pin the stance feet with leg IK during contacts")
     p.add_argument(
         "--blend",
@@ -219,8 +232,13 @@ def add_exaggerate(commands) -> None:
 def cmd_exaggerate(args) -> int:
     from ..exaggeration import ExaggerationModel, exaggerate
 
+    if (args.baseline is None) != (args.baseline_level is None):
+        raise ArgumentError("--baseline and --baseline-level go together: a clip of the same actor and its intensity")
     model = ExaggerationModel.load(args.model)
     motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args))
+    baseline = None
+    if args.baseline is not None:
+        baseline, _ = read_on_model(args.baseline, model, EXAGGERATION_MODEL_FIX, joint_map(args))
     out, report = exaggerate(
         model,
         motion,
@@ -231,6 +249,9 @@ def cmd_exaggerate(args) -> int:
         lock_feet=not args.no_foot_lock,
         blend=args.blend,
         reference=args.reference,
+        baseline=baseline,
+        baseline_level=args.baseline_level,
+        estimate_offsets=args.estimate_offsets,
     )
     write_bvh(back(out), args.output)
     print(report.text())

@@ -30,7 +30,10 @@ Pipeline and shapes (``T`` samples a cycle, ``D`` DOFs, ``K`` intensities, ``P``
    into an :class:`ExaggerationModel`, :mod:`.model`);
 6. :mod:`.estimate`: a new motion's current intensity ``k0`` (given, or estimated by least
    squares over the key DOFs' mapped coefficients weighted by how well the mapping predicts each,
-   with an uncertainty and a fit residual: :meth:`ExaggerationModel.estimate`);
+   from how each DOF varies over the cycle around the motion's own mean pose, so an actor's own
+   posture does not move it, optionally after a baseline clip of the actor at a known intensity
+   has taken out the actor's difference; with an uncertainty and a fit residual:
+   :meth:`ExaggerationModel.estimate`);
 7. :mod:`.edit`: per cycle: ``x' = x + U (f(k1) - f(k0))`` on the key DOFs, mapped back onto each
    cycle's own frames, cross-faded at cycle boundaries, clamped to the training range plus a
    margin, optionally with the stance foot locked (:mod:`.footlock`).

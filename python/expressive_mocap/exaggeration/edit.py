@@ -11,15 +11,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import quat
-from ..errors import ArgumentError
+from ..errors import ArgumentError, ModelError
 from ..features import foot_contacts
 from ..motion import Motion
 from ..ops import forward_kinematics
 from ..quat import mean_rotation
 from ..roles import JointRoles, actor_height
-from .cycles import Cycle, find_cycles, frame_yaw, sample_cycles, to_cycle_timing, without_heading
+from .cycles import Cycle, SampledCycles, find_cycles, frame_yaw, sample_cycles, to_cycle_timing, without_heading
 from .dofs import dofs_to_rotations, rotations_to_dofs, sampled_dofs
-from .estimate import IntensityEstimate
+from .estimate import POOR_FIT, IntensityEstimate
 from .footlock import IDENTITY, lock_stance_feet
 from .model import ExaggerationModel
 from .settings import EDITING, REFERENCES, TRAINING
@@ -31,7 +31,8 @@ class ExaggerationReport:
     (``{dof: (frames, largest excess)}``), the largest rotation change per joint (degrees), foot
     locking's largest ankle correction, the largest distance it could not close and how far it
     lowered the hips (file units), stance-foot speeds before and after; ``estimate`` how ``k0`` was
-    estimated (None when given)."""
+    estimated (None when given); ``baseline`` the baseline clip's given intensity and the one it
+    is estimated at without its own offsets removed (None without a baseline)."""
 
     k0: float
     k1: float
@@ -45,6 +46,7 @@ class ExaggerationReport:
     stance_speed_input: float
     stance_speed_output: float
     estimate: IntensityEstimate | None = None
+    baseline: tuple[float, float] | None = None
 
     def text(self) -> str:
         e = self.estimate
@@ -58,9 +60,15 @@ class ExaggerationReport:
                 f"estimate: fit residual {e.residual:.2f} (the training performances' own: about 1); "
                 f"uncertainty from the key joints "
                 f"{e.jackknife:.2g}, the cycles {e.bootstrap:.2g}, the training clips' own error {e.training:.2g}"
+                + (f" (x {min(e.residual, POOR_FIT):.2g} for the fit residual)" if e.residual > 1 else "")
             )
             if e.warning():
                 lines.append("warning: " + e.warning())
+        if self.baseline is not None:
+            lines.append(
+                f"baseline: given intensity {self.baseline[0]:g}, estimated at {self.baseline[1]:.3g}; "
+                "its offsets from the model removed before estimating and clamping"
+            )
         if self.clamped:
             worst = sorted(self.clamped.items(), key=lambda kv: -kv[1][1])
             lines.append(
@@ -150,6 +158,18 @@ def _check_arguments(model: ExaggerationModel, motion: Motion, to: float, curren
     model.check_skeleton(motion)
     if not np.isfinite(to) or (current is not None and not np.isfinite(current)):
         raise ArgumentError(f"intensities must be finite numbers, got to={to}, current={current}")
+    baseline, level = options["baseline"], options["baseline_level"]
+    if (baseline is None) != (level is None):
+        raise ArgumentError("baseline and baseline_level go together: a clip of the same actor and its known intensity")
+    if baseline is not None:
+        if not isinstance(baseline, Motion) or baseline.n_frames < 3:
+            raise ArgumentError(f"argument `baseline`: expected a Motion of at least 3 frames, got {baseline!r}")
+        try:
+            model.check_skeleton(baseline)
+        except ModelError as error:
+            raise ModelError(f"baseline: {error}") from None
+        if not np.isfinite(level):
+            raise ArgumentError(f"baseline_level must be a finite number, got {level}")
     if options["reference"] not in REFERENCES:
         raise ArgumentError(f"reference must be 'model' or 'own', got {options['reference']!r}")
     if motion.n_frames < 3:
@@ -162,12 +182,13 @@ def _check_arguments(model: ExaggerationModel, motion: Motion, to: float, curren
 
 
 def _clamp(
-    model: ExaggerationModel, X: np.ndarray, target: np.ndarray, reference: str, margin: float
+    model: ExaggerationModel, X: np.ndarray, target: np.ndarray, reference: str, margin: float, shift: np.ndarray
 ) -> tuple[np.ndarray, dict[str, tuple[int, float]]]:
-    """``target [F, D]`` kept within the training range (in the same parameterisation as ``X``, the
-    input's DOFs), widened by the margin and never tighter than the input itself; with what was
-    clamped (``{dof: (frames, largest excess)}``)."""
+    """``target [F, D]`` kept within the training range moved by ``shift [D]`` (in the same
+    parameterisation as ``X``, the input's DOFs), widened by the margin and never tighter than the
+    input itself; with what was clamped (``{dof: (frames, largest excess)}``)."""
     lower, upper = model.dof_range(reference)
+    lower, upper = lower + shift, upper + shift
     width = upper - lower
     low = np.minimum(lower - margin * width, X)
     high = np.maximum(upper + margin * width, X)
@@ -215,15 +236,62 @@ def _own_reference(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], y
     return mean_rotation(heading_free[cycles[0].start : cycles[-1].end + 1])
 
 
-def _cycle_coefficients(
-    model: ExaggerationModel, motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], reference: np.ndarray
-) -> np.ndarray:
-    """Coefficients ``[C, D, r]`` of each cycle's normalised trajectories (sampled as in training)."""
-    sampled = sample_cycles(motion, roles, cycles, model.basis.shape[0])
+def _coefficients(model: ExaggerationModel, sampled: SampledCycles, reference: np.ndarray) -> np.ndarray:
+    """Coefficients ``[C, D, r]`` of each sampled cycle's DOFs, rotations measured from ``reference``."""
     return np.einsum("tr,ctd->cdr", model.basis, sampled_dofs(sampled, reference, model.representation, model.orders))
 
 
-# Over 60 lines with its docstring, which documents every option; the body is about 40.
+@dataclass
+class _Measured:
+    """A motion measured for editing: its cycles, each frame's heading ``yaw [F]``, the rotations'
+    ``reference [J, 4]``, each cycle's coefficients ``[C, D, r]`` measured from it, and those the
+    current intensity is estimated from (``estimated``: from the motion's own mean rotations, so
+    a joint held otherwise throughout changes none of them, unless the estimate is to read offsets)."""
+
+    cycles: list[Cycle]
+    yaw: np.ndarray
+    reference: np.ndarray
+    coefficients: np.ndarray
+    estimated: np.ndarray
+
+
+def _measure(
+    model: ExaggerationModel,
+    motion: Motion,
+    roles: JointRoles,
+    reference: str,
+    estimate_offsets: bool,
+    cycles: Sequence[Cycle] | None = None,
+    contacts: np.ndarray | None = None,
+) -> _Measured:
+    if cycles is None:
+        foot = int(model.settings.get("foot", TRAINING.foot))
+        cycles = find_cycles(motion, roles, contacts, foot=foot) or [Cycle(0, motion.n_frames - 1)]
+    cycles = list(cycles)
+    yaw = frame_yaw(motion, roles, cycles, motion.positions())
+    own = _own_reference(motion, roles, cycles, yaw)
+    ref = model.reference if reference == "model" else own
+    sampled = sample_cycles(motion, roles, cycles, model.basis.shape[0])
+    coefficients = _coefficients(model, sampled, ref)
+    same = estimate_offsets or reference == "own"
+    return _Measured(cycles, yaw, ref, coefficients, coefficients if same else _coefficients(model, sampled, own))
+
+
+def _baseline_offsets(
+    model: ExaggerationModel, baseline: Motion, level: float, reference: str, estimate_offsets: bool
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """What the actor of ``baseline`` (at intensity ``level``) does otherwise than the model at that
+    level: the difference of the coefficients the estimate reads ``[D, r]``, and of each DOF's mean
+    ``[D]`` as the edit measures it (the shift of the training range); with the intensity the
+    baseline is estimated at as it is."""
+    measured = _measure(model, baseline, JointRoles.find(baseline.skeleton), reference, estimate_offsets)
+    at_level = model.predict_coefficients(level)
+    as_is = model.estimate(measured.estimated.mean(axis=0), offsets=estimate_offsets).k
+    shift = (model.basis @ (measured.coefficients.mean(axis=0) - at_level).T).mean(axis=0)
+    return measured.estimated.mean(axis=0) - at_level, shift, as_is
+
+
+# Over 60 lines with its docstring, which documents every option; the body is about 45.
 def exaggerate(
     model: ExaggerationModel,
     motion: Motion,
@@ -236,16 +304,24 @@ def exaggerate(
     fade: float = EDITING.fade,
     lock_feet: bool = EDITING.lock_feet,
     blend: float = EDITING.blend,
+    baseline: Motion | None = None,
+    baseline_level: float | None = None,
+    estimate_offsets: bool = EDITING.estimate_offsets,
     roles: JointRoles | None = None,
 ) -> tuple[Motion, ExaggerationReport]:
     """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
 
     ``current`` is ``k0``; by default (None) it is estimated from the mean coefficients of the
     motion's cycles by least squares over the key DOFs' mapped coefficients, each weighted by how
-    well the mapping predicts it (:meth:`ExaggerationModel.estimate`); the report holds the
-    estimate with its uncertainty and fit residual, and a ``UserWarning`` says when it is outside
-    the trained range. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles of
-    the foot the model was trained with; a single whole-clip cycle when none is found) gets
+    well the mapping predicts it (:meth:`ExaggerationModel.estimate`), from how each DOF varies
+    over the cycle only, so an actor's own posture (a joint held otherwise throughout) does not
+    move it (``estimate_offsets`` True: from the DOFs' means too); the report holds the estimate
+    with its uncertainty and fit residual, and a ``UserWarning`` says when it is outside the
+    trained range. ``baseline`` (a clip of the same actor and action at the known intensity
+    ``baseline_level``): its coefficients' difference from the model's at that level is removed
+    from the motion's before estimating, and the training range the DOFs are clamped to is moved
+    by it. Every cycle (``cycles``: default, the footstrike-to-footstrike cycles of the foot the
+    model was trained with; a single whole-clip cycle when none is found) gets
     ``x' = x + U (f(to) - f(k0))`` on the key DOFs, in its own timing; frames outside the cycles
     keep their values and the changes are cross-faded over ``fade`` seconds at every boundary.
     DOFs are kept within the training range widened by ``margin`` x its width (never pushed past
@@ -257,26 +333,27 @@ def exaggerate(
     (see :func:`lock_stance_feet`). Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
     Returns the new motion and an :class:`ExaggerationReport`.
     """
-    _check_arguments(
-        model, motion, to, current, {"reference": reference, "margin": margin, "fade": fade, "blend": blend}
-    )
+    options = {"reference": reference, "margin": margin, "fade": fade, "blend": blend}
+    _check_arguments(model, motion, to, current, dict(options, baseline=baseline, baseline_level=baseline_level))
     roles = roles or JointRoles.find(motion.skeleton)
     contacts = foot_contacts(motion, roles)
-    if cycles is None:
-        foot = int(model.settings.get("foot", TRAINING.foot))
-        cycles = find_cycles(motion, roles, contacts, foot=foot) or [Cycle(0, motion.n_frames - 1)]
-    cycles = list(cycles)
-    yaw = frame_yaw(motion, roles, cycles, motion.positions())
-    ref = model.reference if reference == "model" else _own_reference(motion, roles, cycles, yaw)
+    measured = _measure(model, motion, roles, reference, estimate_offsets, cycles, contacts)
+    cycles, yaw, ref = measured.cycles, measured.yaw, measured.reference
     X = motion_dofs(model, motion, roles, yaw, ref)  # [F, D]
-    per_cycle = _cycle_coefficients(model, motion, roles, cycles, ref)
-    estimate = model.estimate(per_cycle.mean(axis=0), per_cycle) if current is None else None
+    offset, shift, read_as = np.zeros_like(measured.coefficients[0]), np.zeros(model.n_dofs), None
+    if baseline is not None and baseline_level is not None:
+        offset, shift, as_is = _baseline_offsets(model, baseline, float(baseline_level), reference, estimate_offsets)
+        read_as = (float(baseline_level), as_is)
+    per_cycle = measured.estimated - offset
+    estimate = (
+        None if current is not None else model.estimate(per_cycle.mean(axis=0), per_cycle, offsets=estimate_offsets)
+    )
     k0 = estimate.k if estimate is not None else float(current)  # type: ignore[arg-type]
     if estimate is not None and estimate.warning():
         warnings.warn(estimate.warning(), stacklevel=2)
     change = (model.predict_coefficients(float(to)) - model.predict_coefficients(k0)) * model.key[:, None]  # [D, r]
     per_frame = _per_frame_change(model.basis @ change.T, cycles, motion.n_frames, int(round(fade * motion.fps)))
-    new, clamped = _clamp(model, X, X + per_frame, reference, margin)
+    new, clamped = _clamp(model, X, X + per_frame, reference, margin, shift)
     out = _rebuilt(model, motion, roles, X, new, ref, yaw)
     correction = residual = lowered = 0.0
     if lock_feet and np.abs(new - X).max(initial=0.0) > 0:
@@ -289,7 +366,7 @@ def exaggerate(
         largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
         foot_correction=correction, foot_residual=residual, hips_lowered=lowered,
         stance_speed_input=stance_foot_speed(motion, contacts, roles),
-        stance_speed_output=stance_foot_speed(out, contacts, roles),
+        stance_speed_output=stance_foot_speed(out, contacts, roles), baseline=read_as,
     )  # fmt: skip
     return out, report
 

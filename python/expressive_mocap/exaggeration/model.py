@@ -158,14 +158,20 @@ class ExaggerationModel:
         coefficients = np.einsum("tr,pktd->pkdr", self.basis, self.trajectories)
         return ((coefficients - self.predict_coefficients(self.levels)[None]) ** 2).mean(axis=(0, 1))
 
-    def estimate(self, coefficients: np.ndarray, cycle_coefficients: np.ndarray | None = None) -> IntensityEstimate:
+    def estimate(
+        self, coefficients: np.ndarray, cycle_coefficients: np.ndarray | None = None, *, offsets: bool = False
+    ) -> IntensityEstimate:
         """The current intensity of a motion from its coefficients ``[D, r]`` (the mean over its
         cycles): weighted least squares over the mapped coefficients of the key DOFs, each weighted
-        by the inverse of its :meth:`coefficient_spread` (a coefficient the mapping predicts well
-        counts more; unweighted, the dataset-2 walks' own 'normal' takes came out at 1.43 for 2).
+        by the inverse of its :meth:`coefficient_spread` (of the coefficients compared; a
+        coefficient the mapping predicts well counts more; unweighted, the dataset-2 walks' own
+        'normal' takes came out at 1.43 for 2).
         ``cycle_coefficients [C, D, r]`` (each cycle's) give the uncertainty its bootstrap part;
-        see :class:`~expressive_mocap.exaggeration.IntensityEstimate`."""
-        return estimate_intensity(self, coefficients, cycle_coefficients)
+        see :class:`~expressive_mocap.exaggeration.IntensityEstimate`. ``offsets`` False (the
+        default): only how each DOF varies over the cycle counts, not its mean (the direction a
+        constant trajectory has in the basis is projected out of every coefficient compared), so
+        a constant added to a DOF, an actor's own posture, cannot move the estimate."""
+        return estimate_intensity(self, coefficients, cycle_coefficients, offsets=offsets)
 
     def estimate_intensity(self, coefficients: np.ndarray) -> float:
         """:meth:`estimate`'s intensity alone."""

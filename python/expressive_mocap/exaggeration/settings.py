@@ -49,13 +49,16 @@ class TrainSettings:
 class EditSettings:
     """:func:`~expressive_mocap.exaggeration.exaggerate`'s defaults: the rotations' ``reference``
     ("model" or "own"), the clamping ``margin`` (share of the training range), the cross-``fade``
-    at cycle boundaries and the foot locking's ``blend`` (seconds), and whether to ``lock_feet``."""
+    at cycle boundaries and the foot locking's ``blend`` (seconds), whether to ``lock_feet``, and
+    whether the current intensity's estimate reads each DOF's mean over the cycle as well as how
+    it varies (``estimate_offsets``; False: an actor's own posture cannot move it)."""
 
     reference: str = "model"
     margin: float = 0.1
     fade: float = 0.15
     lock_feet: bool = True
     blend: float = 0.1
+    estimate_offsets: bool = False
 
 
 @dataclass(frozen=True)
