@@ -4,8 +4,10 @@ would have (the decoupling method of Boehs et al.), and its file format.
 A model predicts the local rotations of every joint except the root and the hips (those come
 from the motion itself), each on the hemisphere of its mean training rotation. It knows the
 skeleton it was trained on (joint names), the features' normalisation, the settings and the
-mean squared errors of every training stage, and optionally a calibration to one actor or
-capture session (a constant rotation per joint).
+mean squared errors of every training stage, the range of features it was trained on (inputs
+are clipped into it: outside it the network extrapolates, e.g. to a jump or a sprint it never
+saw), and optionally a calibration to one actor or capture session (a constant rotation per
+joint).
 
 Model files are ``.npz`` archives of plain arrays plus one JSON string, read with
 ``allow_pickle=False``: data, never code.
@@ -44,7 +46,8 @@ class BodyModel:
     ``joint_names``: the skeleton the model was trained on; ``predicted``: indices of the
     predicted joints; ``hemispheres [P, 4]``: each predicted joint's mean training rotation;
     ``thigh_reference [2, 4]``: hemisphere of the thigh features; ``calibration [J, 4]`` or
-    None: ``Q_j`` applied to the prediction as ``Q_j * B_j``.
+    None: ``Q_j`` applied to the prediction as ``Q_j * B_j``; ``feature_range [2, 19]`` or None:
+    the lowest and highest feature values the network is trusted with (inputs are clipped into it).
     """
 
     joint_names: tuple[str, ...]
@@ -55,6 +58,7 @@ class BodyModel:
     settings: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
     calibration: np.ndarray | None = None
+    feature_range: np.ndarray | None = None
 
     def __repr__(self) -> str:
         # One line: the dataclass default prints every weight.
@@ -96,6 +100,9 @@ class BodyModel:
 
     def predict_from_features(self, rotations: np.ndarray, features: np.ndarray) -> np.ndarray:
         """As :meth:`predict`, from ``features [F, 19]`` and the motion's ``rotations [F, J, 4]``."""
+        if self.feature_range is not None:
+            low, high = self.feature_range.astype(features.dtype)
+            features = np.clip(features, low, high)
         out = self.network.forward(features).reshape(len(features), len(self.predicted), 4)
         body = np.array(rotations, dtype=np.float64, copy=True)
         body[:, self.predicted] = quat.normalize(out)
@@ -143,6 +150,8 @@ class BodyModel:
         }
         if self.calibration is not None:
             arrays["calibration"] = self.calibration
+        if self.feature_range is not None:
+            arrays["feature_range"] = self.feature_range
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()
@@ -209,7 +218,17 @@ class BodyModel:
             raise ModelError(f"{name}: the network's arrays are invalid ({error})") from None
         layers = [f"network.{i}.{part}" for i in range(len(network.layers)) for part in ("weights", "bias")]
         check_keys(
-            arrays, ["predicted", "hemispheres", "thigh_reference", "calibration", "network.activations", *layers], name
+            arrays,
+            [
+                "predicted",
+                "hemispheres",
+                "thigh_reference",
+                "calibration",
+                "feature_range",
+                "network.activations",
+                *layers,
+            ],
+            name,
         )
         n_features = len(FEATURE_NAMES)
         if network.n_inputs != n_features or network.n_outputs != 4 * len(predicted):
@@ -228,7 +247,17 @@ class BodyModel:
             calibration=finite_array(arrays, "calibration", name, (len(joint_names), 4), kinds="f")
             if "calibration" in arrays
             else None,
+            feature_range=_feature_range(arrays, name),
         )
+
+
+def _feature_range(arrays: dict, name: str) -> np.ndarray | None:
+    if "feature_range" not in arrays:
+        return None  # a model file from before feature ranges: inputs go to the network unclipped
+    values = finite_array(arrays, "feature_range", name, (2, len(FEATURE_NAMES)), kinds="f")
+    if np.any(values[0] > values[1]):
+        raise ModelError(f"{name}: feature_range must hold the lowest values (row 0) and the highest (row 1)")
+    return values
 
 
 def poor_fit(report: dict) -> str | None:
