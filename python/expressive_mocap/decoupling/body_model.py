@@ -6,8 +6,8 @@ from the motion itself), each on the hemisphere of its mean training rotation. I
 skeleton it was trained on (joint names), the features' normalisation, the settings and the
 mean squared errors of every training stage, the range of features it was trained on (inputs
 are clipped into it: outside it the network extrapolates, e.g. to a jump or a sprint it never
-saw), and optionally a calibration to one actor or capture session (a constant rotation per
-joint).
+saw), and optionally a calibration to one actor or capture session (per joint a constant
+rotation, and by default a threshold of activity above that session's neutral residue).
 
 Model files are ``.npz`` archives of plain arrays plus one JSON string, read with
 ``allow_pickle=False``: data, never code.
@@ -37,6 +37,13 @@ FORMAT = "expressive-mocap body model"
 VERSION = 1
 DEFAULT_MODEL = "body_model.npz"  # shipped inside the package (python/expressive_mocap/data/)
 
+# Calibration's activity threshold: the NEUTRAL_PERCENTILE-th percentile of a joint's expressive
+# angle over the session's neutral clips is read as NEUTRAL_ANGLE degrees, to which the default
+# activity index gives 0.2 (chosen on dataset-1's neutral locomotion, each clip left out in turn:
+# benches/SESSIONS.md).
+NEUTRAL_PERCENTILE = 90.0
+NEUTRAL_ANGLE = 20.0
+
 
 @dataclass(frozen=True)
 class BodyModel:
@@ -46,7 +53,9 @@ class BodyModel:
     ``joint_names``: the skeleton the model was trained on; ``predicted``: indices of the
     predicted joints; ``hemispheres [P, 4]``: each predicted joint's mean training rotation;
     ``thigh_reference [2, 4]``: hemisphere of the thigh features; ``calibration [J, 4]`` or
-    None: ``Q_j`` applied to the prediction as ``Q_j * B_j``; ``feature_range [2, 19]`` or None:
+    None: ``Q_j`` applied to the prediction as ``Q_j * B_j``; ``activity_scale [J]`` or None: per
+    joint, the angle of the expressive component is divided by it before the activity index
+    reads it (at least 1; set by calibration); ``feature_range [2, 19]`` or None:
     the lowest and highest feature values the network is trusted with (inputs are clipped into it).
     """
 
@@ -59,6 +68,7 @@ class BodyModel:
     report: dict = field(default_factory=dict)
     calibration: np.ndarray | None = None
     feature_range: np.ndarray | None = None
+    activity_scale: np.ndarray | None = None
 
     def __repr__(self) -> str:
         # One line: the dataclass default prints every weight.
@@ -112,17 +122,26 @@ class BodyModel:
 
     # ---------------------------------------------------------------- calibration
 
-    def calibrated(self, neutral: Sequence[Motion]) -> BodyModel:
+    def calibrated(self, neutral: Sequence[Motion], threshold: bool = True) -> BodyModel:
         """This model calibrated to the actor or session of ``neutral`` clips (neutral movement
-        of that session): per joint ``Q_j`` = mean over all frames of ``O_j * B_j^-1``."""
+        of that session): per joint ``Q_j`` = mean over all frames of ``O_j * B_j^-1``. With
+        ``threshold`` also each joint's activity threshold: what calibration leaves of the
+        neutral clips' expressive angle (its NEUTRAL_PERCENTILE-th percentile over their frames)
+        is read as NEUTRAL_ANGLE degrees, little activity; ``activity_scale`` = the larger of 1
+        and that angle / NEUTRAL_ANGLE, so joints the model already fits keep the default."""
         if not neutral:
             raise ArgumentError("calibration needs at least one neutral clip")
-        uncalibrated = replace(self, calibration=None)
-        offsets = [quat.mul(m.rotations, quat.conjugate(uncalibrated.predict(m))) for m in neutral]
-        stacked = np.concatenate(offsets, axis=0)
-        q = quat.mean_rotation(stacked)
+        model = replace(self, calibration=None, activity_scale=None)
+        original = np.concatenate([m.rotations for m in neutral])
+        predicted = np.concatenate([model.predict(m) for m in neutral])
+        q = quat.mean_rotation(quat.mul(original, quat.conjugate(predicted)))
         q[[j for j in range(len(self.joint_names)) if j not in set(self.predicted.tolist())]] = [0.0, 0.0, 0.0, 1.0]
-        return replace(self, calibration=q)
+        model = replace(model, calibration=q)
+        if threshold:
+            residue = quat.angle(quat.mul(original, quat.conjugate(quat.mul(q[None], predicted))))
+            angle = np.degrees(np.percentile(residue, NEUTRAL_PERCENTILE, axis=0))
+            model = replace(model, activity_scale=np.maximum(1.0, angle / NEUTRAL_ANGLE))
+        return model
 
     def calibration_angles(self) -> dict[str, float]:
         """Degrees of each joint's calibration rotation (empty when uncalibrated)."""
@@ -152,6 +171,8 @@ class BodyModel:
             arrays["calibration"] = self.calibration
         if self.feature_range is not None:
             arrays["feature_range"] = self.feature_range
+        if self.activity_scale is not None:
+            arrays["activity_scale"] = self.activity_scale
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()
@@ -225,6 +246,7 @@ class BodyModel:
                 "thigh_reference",
                 "calibration",
                 "feature_range",
+                "activity_scale",
                 "network.activations",
                 *layers,
             ],
@@ -248,6 +270,7 @@ class BodyModel:
             if "calibration" in arrays
             else None,
             feature_range=_feature_range(arrays, name),
+            activity_scale=_activity_scale(arrays, name, len(joint_names)),
         )
 
 
@@ -257,6 +280,15 @@ def _feature_range(arrays: dict, name: str) -> np.ndarray | None:
     values = finite_array(arrays, "feature_range", name, (2, len(FEATURE_NAMES)), kinds="f")
     if np.any(values[0] > values[1]):
         raise ModelError(f"{name}: feature_range must hold the lowest values (row 0) and the highest (row 1)")
+    return values
+
+
+def _activity_scale(arrays: dict, name: str, n_joints: int) -> np.ndarray | None:
+    if "activity_scale" not in arrays:
+        return None
+    values = finite_array(arrays, "activity_scale", name, (n_joints,), kinds="f")
+    if np.any(values < 1.0):
+        raise ModelError(f"{name}: activity_scale must be at least 1 for every joint")
     return values
 
 
