@@ -90,8 +90,8 @@ def _hand_motion(motion: em.Motion, model, hand: str) -> float:
 
 def test_another_sessions_neutral_walk_stays_out_of_the_expressive_component(model, bandai1_dir):
     # Calibrated on four neutral clips of dataset-1, the fifth (a walk to the left) against a
-    # right-hand "bye" of the same session. Measured: walk's hands 1.6 / 0.7 cm, bye's waving hand
-    # 27 cm, its idle hand 0.7 cm; with a constant calibration only 6.3 / 2.6, 36 and 7.3 cm.
+    # right-hand "bye" of the same session. Measured: walk's hands 1.4 / 0.7 cm, bye's waving hand
+    # 27 cm, its idle hand 0.4 cm; with a constant calibration only 5.9 / 2.5, 36 and 4.8 cm.
     def clip(name):
         return em.read_bvh(bandai1_dir / f"dataset-1_{name}_001.bvh")
 
@@ -104,4 +104,4 @@ def test_another_sessions_neutral_walk_stays_out_of_the_expressive_component(mod
         if threshold:
             assert walking < 0.1 * waving and waving > 20.0 and idle < 2.0, (walking, waving, idle)
         else:  # what the threshold fixes
-            assert walking > 0.1 * waving and idle > 5.0, (walking, waving, idle)
+            assert walking > 0.1 * waving and idle > 3.0, (walking, waving, idle)

@@ -34,6 +34,7 @@ import numpy as np
 
 from .. import quat
 from ..errors import ArgumentError
+from ..features import FEATURE_NAMES
 from ..motion import Motion
 from ..roles import JointRoles
 from .body_model import BodyModel, model_features, pose_vectors
@@ -453,17 +454,22 @@ def train_body_model(
     )
 
 
-FEATURE_RANGE = "lowest and highest of the training clips' features"
+FEATURE_RANGE = "lowest and highest of the training clips' features; thigh rotations not limited"
 
 
 def feature_range(features: np.ndarray) -> np.ndarray:
     """``[2, 19]``: the range of ``features [N, 19]`` (lowest, highest of each) a body model
     trusts its network with. Clipping inputs into it keeps the network from extrapolating to
-    speeds, heights or thigh angles it never saw (a sprint, a crouch; on the shipped model,
-    measured in benches/SESSIONS.md: less expressive motion left in another session's neutral
-    locomotion). Not narrower (percentiles): standing frames are under 1% of the shipped model's
-    walks and runs, and would be read as walking."""
-    return np.stack([features.min(axis=0), features.max(axis=0)])
+    speeds, contacts, air times or hips heights it never saw (a sprint, a crouch; on the shipped
+    model, measured in benches/SESSIONS.md: less expressive motion left in another session's
+    neutral locomotion). Not narrower (percentiles): standing frames are under 1% of the shipped
+    model's walks and runs, and would be read as walking. The thigh rotations keep [-1, 1], all
+    a quaternion component can be: the network predicts the thighs from them, so a clipped thigh
+    would turn any stance beyond the training range, or another session's thighs, expressive."""
+    low, high = features.min(axis=0), features.max(axis=0)
+    thighs = [k for k, name in enumerate(FEATURE_NAMES) if name.startswith("thigh_")]
+    low[thighs], high[thighs] = -1.0, 1.0
+    return np.stack([low, high])
 
 
 def _fingerprint(motion: Motion) -> tuple:
