@@ -238,7 +238,7 @@ def main() -> None:
             replace(shipped, feature_range=None),
             lambda model, clips: model.calibrated(clips, threshold=False),
         ),
-        "after: features clipped to the training range, calibration with activity threshold": (
+        "after: features clipped to the training range (thighs free), calibration with activity threshold": (
             shipped,
             lambda model, clips: model.calibrated(clips),
         ),
