@@ -70,6 +70,34 @@ def test_calibration_raises_thresholds_only_above_the_residue_and_saves_them(mod
         BodyModel.load(tmp_path / "bad.npz")
 
 
+def test_the_streaming_decoupler_uses_the_calibrated_thresholds(model):
+    from expressive_mocap.decoupling.streaming import StreamingDecoupler
+
+    pair = walk_and_wave(seconds=2.0)
+    calibrated = model.calibrated([walk_and_wave(seconds=2.0, speed=0.8).walk])
+    calibrated = replace(calibrated, activity_scale=np.full(22, 1.5))  # raised everywhere, to tell it apart
+    waving = pair.waving[:30]
+    offline = decompose(waving, _Floor0(calibrated))
+    assert (
+        np.abs(offline.activity - decompose(waving, _Floor0(replace(calibrated, activity_scale=None))).activity).max()
+        > 0.05
+    )
+    stream = StreamingDecoupler(calibrated, waving.skeleton, waving.frame_time, floor=0.0)
+    for f in range(waving.n_frames):
+        _, _, activity = stream.push(waving.rotations[f], waving.translations[f])
+        np.testing.assert_allclose(activity, offline.activity[f], atol=1e-9)
+
+
+class _Floor0:
+    """``model`` with the floor at 0, as the streaming decoupler uses it."""
+
+    def __init__(self, model):
+        self.model, self.activity_scale = model, model.activity_scale
+
+    def predict(self, motion):
+        return self.model.predict(motion, floor=0.0)
+
+
 def test_calibrate_command_sets_thresholds_unless_told_not_to(tmp_path, capsys):
     pair = walk_and_wave(seconds=2.0)
     em.write_bvh(pair.walk, tmp_path / "walk.bvh")
@@ -78,6 +106,13 @@ def test_calibrate_command_sets_thresholds_unless_told_not_to(tmp_path, capsys):
     assert main(["calibrate", str(tmp_path / "walk.bvh"), "--no-threshold", "-o", str(tmp_path / "b.npz")]) == 0
     assert BodyModel.load(tmp_path / "a.npz").activity_scale is not None
     assert BodyModel.load(tmp_path / "b.npz").activity_scale is None
+    # Beside --calibrate on the commands that decouple.
+    em.write_bvh(pair.waving, tmp_path / "wave.bvh")
+    for flag, name in (([], "t"), (["--no-threshold"], "n")):
+        argv = ["decouple", str(tmp_path / "wave.bvh"), "--calibrate", str(tmp_path / "walk.bvh"), *flag]
+        assert main([*argv, "-o", str(tmp_path / name)]) == 0
+    activity = [np.loadtxt(tmp_path / f"{n}_activity.csv", delimiter=",", skiprows=1) for n in ("t", "n")]
+    assert np.all(activity[0] <= activity[1] + 1e-9) and activity[0].sum() < activity[1].sum()
 
 
 def _hand_motion(motion: em.Motion, model, hand: str) -> float:
