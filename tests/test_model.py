@@ -37,6 +37,19 @@ def test_training_reports_every_stage_and_beats_the_mean_pose(model):
     assert model.predicted.tolist() == list(range(2, 22))
 
 
+def test_a_trained_model_keeps_the_range_of_its_training_features(model, walks, tmp_path):
+    from expressive_mocap.decoupling.body_model import model_features
+
+    low, high = model.feature_range
+    every = np.concatenate([model_features(m, model.thigh_reference) for m in walks])
+    # The training clips' range (the test split's clips may reach beyond it), within all clips';
+    # the thigh rotations (the last 8 columns) are not limited.
+    assert np.all(low[:11] >= every.min(axis=0)[:11]) and np.all(high[:11] <= every.max(axis=0)[:11])
+    assert np.all(low[:11] < high[:11]) and np.all(low[11:] == -1.0) and np.all(high[11:] == 1.0)
+    model.save(tmp_path / "m.npz")
+    np.testing.assert_array_equal(BodyModel.load(tmp_path / "m.npz").feature_range, model.feature_range)
+
+
 def test_prediction_keeps_root_and_hips_and_gives_unit_rotations(model, walks):
     body = model.predict(walks[0])
     assert body.shape == walks[0].rotations.shape

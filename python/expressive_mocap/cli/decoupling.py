@@ -52,6 +52,7 @@ def add_model_options(p, calibrate: bool = True) -> None:
             metavar="NEUTRAL",
             help="neutral clips of the same actor/session: calibrate the model to them first",
         )
+        add_threshold_option(p)
     p.add_argument(
         "--gain",
         type=positive(float),
@@ -62,6 +63,15 @@ def add_model_options(p, calibrate: bool = True) -> None:
         "--exponent", type=positive(float), default=EXPONENT, help=f"b of the activity index (default {EXPONENT:g})"
     )
     add_map_option(p)
+
+
+def add_threshold_option(p) -> None:
+    p.add_argument(
+        "--no-threshold",
+        action="store_true",
+        help="calibrate only a constant rotation per joint, not each joint's activity threshold "
+        "(by default raised above what the neutral clips still show)",
+    )
 
 
 def body_model(args):
@@ -78,7 +88,8 @@ def body_model(args):
                     "and a calibrated model goes to --model"
                 )
         model = model.calibrated(
-            [read_for_model(path, model, BODY_MODEL_FIX, joint_map(args)) for path in args.calibrate]
+            [read_for_model(path, model, BODY_MODEL_FIX, joint_map(args)) for path in args.calibrate],
+            threshold=not args.no_threshold,
         )
     return model
 
@@ -331,6 +342,7 @@ def add_calibrate(commands) -> None:
     )
     p.add_argument("-o", "--output", required=True, metavar="CAL.npz", help="the calibrated model, for --model")
     p.add_argument("--model", metavar="MODEL.npz", help="model to calibrate (default: the shipped one)")
+    add_threshold_option(p)
     add_map_option(p)
     p.set_defaults(run=cmd_calibrate)
 
@@ -339,13 +351,20 @@ def cmd_calibrate(args) -> int:
     from ..decoupling.body_model import BodyModel
 
     model = BodyModel.load(args.model)
-    model = model.calibrated([read_for_model(path, model, BODY_MODEL_FIX, joint_map(args)) for path in args.neutral])
+    neutral = [read_for_model(path, model, BODY_MODEL_FIX, joint_map(args)) for path in args.neutral]
+    model = model.calibrated(neutral, threshold=not args.no_threshold)
     model.save(args.output)
     angles = model.calibration_angles()
     largest = sorted(angles.items(), key=lambda kv: -kv[1])[:5]
     print(f"wrote {args.output}: the model calibrated on {len(args.neutral)} neutral clip(s); largest corrections:")
     for name, degrees in largest:
         print(f"  {name:<16} {degrees:6.1f} degrees")
+    if model.activity_scale is not None:
+        raised = sorted(((s, n) for n, s in zip(model.joint_names, model.activity_scale) if s > 1.0), reverse=True)[:5]
+        print(
+            "activity thresholds raised above the neutral clips' residue: "
+            + (", ".join(f"{n} x{s:.2f}" for s, n in raised) if raised else "none")
+        )
     return 0
 
 

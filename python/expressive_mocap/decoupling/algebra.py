@@ -41,23 +41,36 @@ class FeatureModel(Protocol):
 
 
 def split(
-    original: np.ndarray, predicted: np.ndarray, gain: float = GAIN, exponent: float = EXPONENT
+    original: np.ndarray,
+    predicted: np.ndarray,
+    gain: float = GAIN,
+    exponent: float = EXPONENT,
+    activity_scale: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(expressive E*, body B', activity A)`` of ``original [F, J, 4]`` given the model's
-    ``predicted [F, J, 4]`` (:class:`~expressive_mocap.errors.ModelError` if their shapes differ)."""
+    ``predicted [F, J, 4]`` (:class:`~expressive_mocap.errors.ModelError` if their shapes differ).
+    ``activity_scale [J]``: per joint, the angle of ``E`` is divided by it before the activity
+    index reads it (a calibrated model's threshold; None: 1 everywhere)."""
     predicted = np.asarray(predicted, dtype=np.float64)
     if predicted.shape != np.shape(original):
         raise ModelError(
             f"the model predicted rotations {list(predicted.shape)} for a motion of {list(np.shape(original))}"
         )
-    return decouple_rotations(original, predicted, gain, exponent)
+    if activity_scale is None:
+        return decouple_rotations(original, predicted, gain, exponent)
+    # The kernel's steps with the angle scaled: E = O B^-1, A, E* = E^A, B' = E*^-1 O.
+    expressive = quat.mul(original, quat.conjugate(predicted))
+    activity = np.clip((np.tanh(quat.angle(expressive) / activity_scale) * gain) ** exponent, 0.0, 1.0)
+    filtered = quat.power(expressive, activity)
+    return filtered, quat.mul(quat.conjugate(filtered), original), activity
 
 
 def split_from_features(
     rotations: np.ndarray, features: np.ndarray, model: FeatureModel, gain: float = GAIN, exponent: float = EXPONENT
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`split` of ``rotations [F, J, 4]`` with the model's prediction from ``features [F, 19]``."""
-    return split(rotations, model.predict_from_features(rotations, features), gain, exponent)
+    predicted = model.predict_from_features(rotations, features)
+    return split(rotations, predicted, gain, exponent, getattr(model, "activity_scale", None))
 
 
 @dataclass(frozen=True)
@@ -94,7 +107,8 @@ def decompose(
     motion: Motion, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT
 ) -> Decomposition:
     """Split ``motion`` into expressive and body-mechanics components with ``model``."""
-    expressive, body, activity = split(motion.rotations, model.predict(motion), gain, exponent)
+    scale = getattr(model, "activity_scale", None)
+    expressive, body, activity = split(motion.rotations, model.predict(motion), gain, exponent, scale)
     return Decomposition(motion, expressive, body, activity)
 
 

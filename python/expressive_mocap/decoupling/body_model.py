@@ -4,8 +4,10 @@ would have (the decoupling method of Boehs et al.), and its file format.
 A model predicts the local rotations of every joint except the root and the hips (those come
 from the motion itself), each on the hemisphere of its mean training rotation. It knows the
 skeleton it was trained on (joint names), the features' normalisation, the settings and the
-mean squared errors of every training stage, and optionally a calibration to one actor or
-capture session (a constant rotation per joint).
+mean squared errors of every training stage, the range of features it was trained on (inputs
+are clipped into it: outside it the network extrapolates, e.g. to a jump or a sprint it never
+saw), and optionally a calibration to one actor or capture session (per joint a constant
+rotation, and by default a threshold of activity above that session's neutral residue).
 
 Model files are ``.npz`` archives of plain arrays plus one JSON string, read with
 ``allow_pickle=False``: data, never code.
@@ -35,6 +37,13 @@ FORMAT = "expressive-mocap body model"
 VERSION = 1
 DEFAULT_MODEL = "body_model.npz"  # shipped inside the package (python/expressive_mocap/data/)
 
+# Calibration's activity threshold: the NEUTRAL_PERCENTILE-th percentile of a joint's expressive
+# angle over the session's neutral clips is read as NEUTRAL_ANGLE degrees, to which the default
+# activity index gives 0.2 (chosen on dataset-1's neutral locomotion, each clip left out in turn:
+# benches/SESSIONS.md).
+NEUTRAL_PERCENTILE = 90.0
+NEUTRAL_ANGLE = 20.0
+
 
 @dataclass(frozen=True)
 class BodyModel:
@@ -44,7 +53,10 @@ class BodyModel:
     ``joint_names``: the skeleton the model was trained on; ``predicted``: indices of the
     predicted joints; ``hemispheres [P, 4]``: each predicted joint's mean training rotation;
     ``thigh_reference [2, 4]``: hemisphere of the thigh features; ``calibration [J, 4]`` or
-    None: ``Q_j`` applied to the prediction as ``Q_j * B_j``.
+    None: ``Q_j`` applied to the prediction as ``Q_j * B_j``; ``activity_scale [J]`` or None: per
+    joint, the angle of the expressive component is divided by it before the activity index
+    reads it (at least 1; set by calibration); ``feature_range [2, 19]`` or None:
+    the lowest and highest feature values the network is trusted with (inputs are clipped into it).
     """
 
     joint_names: tuple[str, ...]
@@ -55,6 +67,8 @@ class BodyModel:
     settings: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
     calibration: np.ndarray | None = None
+    feature_range: np.ndarray | None = None
+    activity_scale: np.ndarray | None = None
 
     def __repr__(self) -> str:
         # One line: the dataclass default prints every weight.
@@ -96,6 +110,9 @@ class BodyModel:
 
     def predict_from_features(self, rotations: np.ndarray, features: np.ndarray) -> np.ndarray:
         """As :meth:`predict`, from ``features [F, 19]`` and the motion's ``rotations [F, J, 4]``."""
+        if self.feature_range is not None:
+            low, high = self.feature_range.astype(features.dtype)
+            features = np.clip(features, low, high)
         out = self.network.forward(features).reshape(len(features), len(self.predicted), 4)
         body = np.array(rotations, dtype=np.float64, copy=True)
         body[:, self.predicted] = quat.normalize(out)
@@ -105,17 +122,26 @@ class BodyModel:
 
     # ---------------------------------------------------------------- calibration
 
-    def calibrated(self, neutral: Sequence[Motion]) -> BodyModel:
+    def calibrated(self, neutral: Sequence[Motion], threshold: bool = True) -> BodyModel:
         """This model calibrated to the actor or session of ``neutral`` clips (neutral movement
-        of that session): per joint ``Q_j`` = mean over all frames of ``O_j * B_j^-1``."""
+        of that session): per joint ``Q_j`` = mean over all frames of ``O_j * B_j^-1``. With
+        ``threshold`` also each joint's activity threshold: what calibration leaves of the
+        neutral clips' expressive angle (its NEUTRAL_PERCENTILE-th percentile over their frames)
+        is read as NEUTRAL_ANGLE degrees, little activity; ``activity_scale`` = the larger of 1
+        and that angle / NEUTRAL_ANGLE, so joints the model already fits keep the default."""
         if not neutral:
             raise ArgumentError("calibration needs at least one neutral clip")
-        uncalibrated = replace(self, calibration=None)
-        offsets = [quat.mul(m.rotations, quat.conjugate(uncalibrated.predict(m))) for m in neutral]
-        stacked = np.concatenate(offsets, axis=0)
-        q = quat.mean_rotation(stacked)
+        model = replace(self, calibration=None, activity_scale=None)
+        original = np.concatenate([m.rotations for m in neutral])
+        predicted = np.concatenate([model.predict(m) for m in neutral])
+        q = quat.mean_rotation(quat.mul(original, quat.conjugate(predicted)))
         q[[j for j in range(len(self.joint_names)) if j not in set(self.predicted.tolist())]] = [0.0, 0.0, 0.0, 1.0]
-        return replace(self, calibration=q)
+        model = replace(model, calibration=q)
+        if threshold:
+            residue = quat.angle(quat.mul(original, quat.conjugate(quat.mul(q[None], predicted))))
+            angle = np.degrees(np.percentile(residue, NEUTRAL_PERCENTILE, axis=0))
+            model = replace(model, activity_scale=np.maximum(1.0, angle / NEUTRAL_ANGLE))
+        return model
 
     def calibration_angles(self) -> dict[str, float]:
         """Degrees of each joint's calibration rotation (empty when uncalibrated)."""
@@ -143,6 +169,10 @@ class BodyModel:
         }
         if self.calibration is not None:
             arrays["calibration"] = self.calibration
+        if self.feature_range is not None:
+            arrays["feature_range"] = self.feature_range
+        if self.activity_scale is not None:
+            arrays["activity_scale"] = self.activity_scale
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()
@@ -209,7 +239,18 @@ class BodyModel:
             raise ModelError(f"{name}: the network's arrays are invalid ({error})") from None
         layers = [f"network.{i}.{part}" for i in range(len(network.layers)) for part in ("weights", "bias")]
         check_keys(
-            arrays, ["predicted", "hemispheres", "thigh_reference", "calibration", "network.activations", *layers], name
+            arrays,
+            [
+                "predicted",
+                "hemispheres",
+                "thigh_reference",
+                "calibration",
+                "feature_range",
+                "activity_scale",
+                "network.activations",
+                *layers,
+            ],
+            name,
         )
         n_features = len(FEATURE_NAMES)
         if network.n_inputs != n_features or network.n_outputs != 4 * len(predicted):
@@ -228,7 +269,27 @@ class BodyModel:
             calibration=finite_array(arrays, "calibration", name, (len(joint_names), 4), kinds="f")
             if "calibration" in arrays
             else None,
+            feature_range=_feature_range(arrays, name),
+            activity_scale=_activity_scale(arrays, name, len(joint_names)),
         )
+
+
+def _feature_range(arrays: dict, name: str) -> np.ndarray | None:
+    if "feature_range" not in arrays:
+        return None  # a model file from before feature ranges: inputs go to the network unclipped
+    values = finite_array(arrays, "feature_range", name, (2, len(FEATURE_NAMES)), kinds="f")
+    if np.any(values[0] > values[1]):
+        raise ModelError(f"{name}: feature_range must hold the lowest values (row 0) and the highest (row 1)")
+    return values
+
+
+def _activity_scale(arrays: dict, name: str, n_joints: int) -> np.ndarray | None:
+    if "activity_scale" not in arrays:
+        return None
+    values = finite_array(arrays, "activity_scale", name, (n_joints,), kinds="f")
+    if np.any(values < 1.0):
+        raise ModelError(f"{name}: activity_scale must be at least 1 for every joint")
+    return values
 
 
 def poor_fit(report: dict) -> str | None:

@@ -34,6 +34,7 @@ import numpy as np
 
 from .. import quat
 from ..errors import ArgumentError
+from ..features import FEATURE_NAMES
 from ..motion import Motion
 from ..roles import JointRoles
 from .body_model import BodyModel, model_features, pose_vectors
@@ -414,10 +415,11 @@ def train_body_model(
     X = np.concatenate([model_features(m, thigh_reference) for m in neutral])
     P = np.concatenate([pose_vectors(m.rotations, predicted, hemispheres) for m in neutral])
     groups = np.concatenate([np.full(m.n_frames, k) for k, m in enumerate(neutral)])
+    # The same split train_stacked_network makes: its test clips stay out of the autoencoder and
+    # of the feature range.
+    train_rows, test_rows = split_by_group(groups, 0.3, seed)
     extra = None
     if unlabelled:
-        # The same split train_stacked_network makes: keep its test clips out of the autoencoder.
-        train_rows, test_rows = split_by_group(groups, 0.3, seed)
         test_clips = {_fingerprint(neutral[k]) for k in np.unique(groups[test_rows])}
         kept = [
             pose_vectors(m.rotations, predicted, hemispheres) for m in unlabelled if _fingerprint(m) not in test_clips
@@ -439,7 +441,35 @@ def train_body_model(
         "unlabelled_frames": 0 if extra is None else int(len(extra)),
         "features": "causal; floor = 5th percentile of toe heights; thigh hemisphere = training mean",
     }
-    return BodyModel(tuple(skeleton.names), predicted, hemispheres, thigh_reference, network, settings, report)
+    settings["feature_range"] = FEATURE_RANGE
+    return BodyModel(
+        tuple(skeleton.names),
+        predicted,
+        hemispheres,
+        thigh_reference,
+        network,
+        settings,
+        report,
+        feature_range=feature_range(X[train_rows]),
+    )
+
+
+FEATURE_RANGE = "lowest and highest of the training clips' features; thigh rotations not limited"
+
+
+def feature_range(features: np.ndarray) -> np.ndarray:
+    """``[2, 19]``: the range of ``features [N, 19]`` (lowest, highest of each) a body model
+    trusts its network with. Clipping inputs into it keeps the network from extrapolating to
+    speeds, contacts, air times or hips heights it never saw (a sprint, a crouch; on the shipped
+    model, measured in benches/SESSIONS.md: less expressive motion left in another session's
+    neutral locomotion). Not narrower (percentiles): standing frames are under 1% of the shipped
+    model's walks and runs, and would be read as walking. The thigh rotations keep [-1, 1], all
+    a quaternion component can be: the network predicts the thighs from them, so a clipped thigh
+    would turn any stance beyond the training range, or another session's thighs, expressive."""
+    low, high = features.min(axis=0), features.max(axis=0)
+    thighs = [k for k, name in enumerate(FEATURE_NAMES) if name.startswith("thigh_")]
+    low[thighs], high[thighs] = -1.0, 1.0
+    return np.stack([low, high])
 
 
 def _fingerprint(motion: Motion) -> tuple:
@@ -448,7 +478,9 @@ def _fingerprint(motion: Motion) -> tuple:
 
 
 __all__ = [
+    "FEATURE_RANGE",
     "corrupt",
+    "feature_range",
     "format_report",
     "split_by_group",
     "sweep_autoencoder",
