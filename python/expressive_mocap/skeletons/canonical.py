@@ -16,7 +16,7 @@ from ..errors import MocapError
 from ..motion import Motion, Skeleton
 from .conventions import Conventions
 from .jointmap import JointMap, find_joint_map
-from .retargeting import _IDENTITY, Rig, _mul, retarget_clips, retarget_rigs
+from .retargeting import _IDENTITY, Rig, _mul, _turned, retarget_clips, retarget_rigs
 
 # The toe joint sits 4.35 cm above the floor on a flat foot (measured on dataset-2's walks).
 _TOE_HEIGHT_CM = 4.35
@@ -74,9 +74,11 @@ class Carried:
         self, motion: Motion, user_map: dict | None = None, target: Rig | None = None, source: Rig | None = None
     ):
         self.original = motion
-        self.source = source or Rig.of(motion, user_map)  # given: a stream's, read from its first frame
+        self._kinematics = motion.fk()  # read once: by the rig, the retarget and the way back
+        # Given: a stream's rig, read from its first frame.
+        self.source = source or Rig.of(motion, user_map, kinematics=self._kinematics)
         self.target = target or canonical_rig()
-        self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False)
+        self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False, kinematics=self._kinematics)
 
     def back(self, edited: Motion) -> Motion:
         """``edited`` (an edit of :attr:`body`) as a motion of the user's skeleton. An edit of
@@ -91,7 +93,7 @@ class Carried:
         # The body's axes -> canonical -> the user's: a change of orientation D on the body is
         # user^-1 body D body^-1 user in the user's axes.
         turn = quat.mul(quat.conjugate(self.source.conventions.rotation()), self.target.conventions.rotation())
-        world, positions = self.original.fk()
+        world, positions = self._kinematics
         skeleton = self.original.skeleton
         parents = skeleton.parents
         # Each joint turns by the change of the nearest mapped joint at or above it (the root by
@@ -102,12 +104,22 @@ class Carried:
         for j in range(skeleton.n_joints):  # parents come before their children
             which[j] = mapped.get(j, which[parents[j]] if parents[j] >= 0 else len(roles))
         bodies = [self.target.jmap[role] for role in roles]
-        change = _mul(after[:, bodies], quat.conjugate(before[:, bodies]))  # the body's axes
-        change = _mul(_mul(turn, change), quat.conjugate(turn))  # the user's
+        change = _turned(turn, _mul(after[:, bodies], quat.conjugate(before[:, bodies])))  # the user's axes
         change = np.concatenate([change, np.broadcast_to(_IDENTITY, (len(world), 1, 4))], axis=1)
-        new = _mul(change[:, which], world)
-        rotations = new.copy()
-        rotations[:, 1:] = _mul(quat.conjugate(new[:, parents[1:]]), new[:, 1:])
+
+        def turned(joints) -> np.ndarray:  # the joints' new world rotations
+            return _mul(change[:, which[joints]], world[:, joints])
+
+        # A joint turning with its parent keeps its local rotation: only the others are recomputed.
+        rotations = self.original.rotations.copy()
+        own = [
+            j for j in range(skeleton.n_joints) if which[j] != (which[parents[j]] if parents[j] >= 0 else len(roles))
+        ]
+        inner, roots = [j for j in own if parents[j] >= 0], [j for j in own if parents[j] < 0]
+        if inner:
+            rotations[:, inner] = _mul(quat.conjugate(turned(parents[inner])), turned(inner))
+        if roots:
+            rotations[:, roots] = turned(roots)
         translations = self.original.translations.copy()
         hips_t, hips_s = self.target.jmap["hips"], self.source.jmap["hips"]
         moved = edited_positions[:, hips_t] - body_positions[:, hips_t]
@@ -117,7 +129,7 @@ class Carried:
             shift = quat.rotate(turn, moved) * (_leg(self.source) / _leg(self.target))
             mover = _path_joint(skeleton, hips_s)
             parent = parents[mover]
-            frame = new[:, parent] if parent >= 0 else np.broadcast_to([0.0, 0.0, 0.0, 1.0], new[:, 0].shape)
+            frame = turned([parent])[:, 0] if parent >= 0 else np.broadcast_to(_IDENTITY, world[:, 0].shape)
             translations[:, mover] += quat.rotate(quat.conjugate(frame), shift)
         return Motion(skeleton, rotations, translations, self.original.frame_time)
 

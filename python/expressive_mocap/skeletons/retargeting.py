@@ -46,6 +46,7 @@ _BEFORE = {"hand": "forearm", "toes": "foot", "foot": "lower_leg"}
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 _UP = np.array([0.0, 1.0, 0.0])
 _FORWARD = np.array([0.0, 0.0, 1.0])
+_TWIST_FRAMES = 120  # frames read to tell untrusted twists
 
 
 class Rig(NamedTuple):
@@ -60,41 +61,44 @@ class Rig(NamedTuple):
     untrusted: frozenset = frozenset()
 
     @classmethod
-    def of(cls, motion: Motion, user_map: dict | None = None, conventions: Conventions | None = None) -> Rig:
-        """The rig of ``motion``'s skeleton, its conventions, floor and untrusted twists read from its frames."""
+    def of(
+        cls, motion: Motion, user_map: dict | None = None, conventions: Conventions | None = None, kinematics=None
+    ) -> Rig:
+        """The rig of ``motion``'s skeleton, its conventions, floor and untrusted twists read from
+        its frames (``kinematics``: ``motion.fk()``, when already known)."""
         jmap = find_joint_map(motion.skeleton, user_map)
         conventions = conventions or read_conventions(motion, jmap)
-        rig = cls(motion.skeleton, jmap, conventions, _floor(motion, jmap, conventions))
-        return rig._replace(untrusted=untrusted_twists(motion, rig))
+        world, positions = motion.fk() if kinematics is None else kinematics
+        rig = cls(motion.skeleton, jmap, conventions, _floor_of(positions, jmap, conventions))
+        return rig._replace(untrusted=untrusted_twists(motion, rig, (world, positions)))
 
 
-def untrusted_twists(motion: Motion, rig: Rig) -> frozenset:
+def untrusted_twists(motion: Motion, rig: Rig, kinematics=None) -> frozenset:
     """The roles whose twist ``motion``'s rotations set far from what its positions show (a median
     over the frames beyond :func:`~.twist.trusted`, 45 degrees for the hips and chest), such as a
     network's output that turns a thigh 100 degrees about itself and the shin back, or hips and a
     chest whose children all sit at the joint, leaving their rotations free. Real captures stay
-    under the bounds (measured: the CMU file and 3,073 of the 3,076 Bandai-Namco clips)."""
-    world, positions = motion.fk()
+    under the bounds (measured: the CMU file and 3,073 of the 3,076 Bandai-Namco clips).
+    ``kinematics``: ``motion.fk()``, when already known."""
+    frames = np.unique(np.linspace(0, motion.n_frames - 1, min(motion.n_frames, _TWIST_FRAMES)).astype(int))
+    # A median over evenly spread frames: a clip's is as good.
+    world, positions = motion[frames].fk() if kinematics is None else (kinematics[0][frames], kinematics[1][frames])
     turn = rig.conventions.rotation()
     world, points = _turned(turn, world), quat.rotate(turn, positions)
-    reference, points_ref = _reference(rig)
+    plan = _plan(rig, rig)  # the rig's own role frames, in its joints' rest terms
     jmap, out = rig.jmap, set()
-    for role in ("hips", "chest"):
-        frame = _role_frame(points_ref, jmap, role, jmap)
-        from_frame = quat.mul(quat.conjugate(quat.from_matrix(frame)), reference[jmap[role]])
+    for role, joint, from_frame in plan.framed:
         seen = quat.mul(quat.from_matrix(_orthonormal(*_frame_vectors(points, jmap, role, jmap))), from_frame)
-        if np.median(quat.angle(quat.mul(seen, quat.conjugate(world[:, jmap[role]])))) > twist.TRUSTED_ELSE:
+        if np.median(quat.angle(quat.mul(seen, quat.conjugate(world[:, joint])))) > twist.TRUSTED_ELSE:
             out.add(role)
-    for role in jmap.joints:
-        if twist.readable(jmap, role, twist.READABLE):
-            frame = _role_frame(points_ref, jmap, role, jmap)
-            local = quat.conjugate(reference[jmap[role]])
-            bone = quat.rotate(world[:, jmap[role]], quat.rotate(local, frame[:, 0]))
-            second = quat.rotate(world[:, jmap[role]], quat.rotate(local, frame[:, 1]))
-            angles = twist.twist_angles(bone, second, twist.facing(points, jmap, role, bone))
-            telling = twist.telling(points, jmap, role)
-            if telling.mean() > 0.1 and np.median(np.abs(angles[telling])) > twist.trusted(role):
-                out.add(role)
+    forward = twist.chest_forward(points, jmap)
+    for role, joint, bone_axis, second_axis in plan.readable:
+        bone = quat.rotate(world[:, joint], bone_axis)
+        second = quat.rotate(world[:, joint], second_axis)
+        angles = twist.twist_angles(bone, second, twist.facing(points, jmap, role, bone, forward))
+        telling = twist.telling(points, jmap, role)
+        if telling.mean() > 0.1 and np.median(np.abs(angles[telling])) > twist.trusted(role):
+            out.add(role)
     # A limb twisted arbitrarily at one joint is twisted back at the next: read the whole limb.
     for side in ("left", "right"):
         for limb in (("clavicle", "upper_arm", "forearm", "hand"), ("upper_leg", "lower_leg", "foot", "toes")):
@@ -251,9 +255,10 @@ def retarget(
     return out if fps is None else out.resample(fps=fps)
 
 
-def retarget_rigs(motion: Motion, source: Rig, goal: Rig, *, plant_feet: bool = True) -> Motion:
+def retarget_rigs(motion: Motion, source: Rig, goal: Rig, *, plant_feet: bool = True, kinematics=None) -> Motion:
     """:func:`retarget` with both rigs known (``source`` must be ``motion``'s skeleton's)."""
-    return _retarget_frames(motion, [0, motion.n_frames], source, goal, np.array([source.floor]), plant_feet)
+    bounds, floors = [0, motion.n_frames], np.array([source.floor])
+    return _retarget_frames(motion, bounds, source, goal, floors, plant_feet, kinematics=kinematics)
 
 
 def retarget_clips(
@@ -297,11 +302,12 @@ def _retarget_frames(
     floors: np.ndarray | None,
     plant_feet: bool,
     clips: list[Motion] | None = None,
+    kinematics=None,
 ) -> Motion:
     """The retarget of ``motion``, whose frames are clips end to end (clip ``i`` is frames
     ``bounds[i]`` to ``bounds[i + 1]``, its floor ``floors[i]``, None: read from each clip;
-    ``clips`` the clips themselves)."""
-    kinematics = motion.fk()
+    ``clips`` the clips themselves; ``kinematics``: ``motion.fk()`` when known)."""
+    kinematics = motion.fk() if kinematics is None else kinematics
     if floors is None:
         pieces = zip(bounds[:-1], bounds[1:])
         floors = np.array([_floor_of(kinematics[1][a:b], source.jmap, source.conventions) for a, b in pieces])
@@ -517,10 +523,11 @@ def _reframe(world: np.ndarray, points: np.ndarray, jmap: JointMap, other: Joint
 def _retwist(world: np.ndarray, points: np.ndarray, jmap: JointMap, readable: list) -> None:
     """The source's untrusted limb bones ``readable`` of ``world`` (the target's, canonical axes)
     turned about themselves to face the way the source's positions ``points`` say."""
+    forward = twist.chest_forward(points, jmap)
     for role, joint, bone_axis, second_axis in readable:
         bone = quat.rotate(world[:, joint], bone_axis)
         second = quat.rotate(world[:, joint], second_axis)
-        half = 0.5 * twist.twist_angles(bone, second, twist.facing(points, jmap, role, bone))[:, None]
+        half = 0.5 * twist.twist_angles(bone, second, twist.facing(points, jmap, role, bone, forward))[:, None]
         about = np.concatenate([bone * np.sin(half), np.cos(half)], axis=-1)
         world[:, joint] = _mul(about, world[:, joint])
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import quat
 from .jointmap import JointMap
 
 # A limb's three joints, by the part of each segment.
@@ -58,7 +59,7 @@ def chest_forward(points: np.ndarray, jmap: JointMap) -> np.ndarray:
     arm = "upper_arm" if "left_upper_arm" in jmap else "upper_leg"
     left = points[..., jmap[f"left_{arm}"], :] - points[..., jmap[f"right_{arm}"], :]
     up = points[..., jmap["head"], :] - points[..., jmap["chest"], :]
-    return _unit(np.cross(left, _square_to(up, left)))
+    return _unit(quat.cross(left, _square_to(up, left)))
 
 
 def _hinge(points: np.ndarray, jmap: JointMap, side: str, limb: tuple[str, str, str]) -> tuple[np.ndarray, np.ndarray]:
@@ -70,18 +71,20 @@ def _hinge(points: np.ndarray, jmap: JointMap, side: str, limb: tuple[str, str, 
     upper, lower = _unit(middle - top), _unit(end - middle)
     angle = np.arccos(np.clip(np.sum(upper * lower, axis=-1), -1.0, 1.0))
     sure = np.clip((angle - _STRAIGHT) / (_BENT - _STRAIGHT), 0.0, 1.0)[..., None]
-    normal = _unit(np.cross(upper, lower))
+    normal = _unit(quat.cross(upper, lower))
     return (normal if limb is _ARM else -normal), sure
 
 
-def facing(points: np.ndarray, jmap: JointMap, role: str, bone: np.ndarray) -> np.ndarray:
+def facing(
+    points: np.ndarray, jmap: JointMap, role: str, bone: np.ndarray, forward: np.ndarray | None = None
+) -> np.ndarray:
     """The direction ``[..., 3]`` square to ``role``'s ``bone`` that the positions ``[..., J, 3]``
     say it faces: for an upper arm or forearm where the elbow bends (the chest's forward when the
     arm is straight), for a thigh where the knee bends (where the foot points when the leg is
     straight), for a shin where the foot points, for a foot where the shin rises, for a clavicle
     the chest's forward, and so for the neck. ``role``'s part is one of :data:`FACING`, its joints
-    mapped (:func:`readable`)."""
-    forward = chest_forward(points, jmap)
+    mapped (:func:`readable`). ``forward``: :func:`chest_forward`, when already known."""
+    forward = chest_forward(points, jmap) if forward is None else forward
     if role in ("neck", "head"):
         return _square_to(forward, bone)
     side, part = role.split("_", 1)
@@ -94,7 +97,7 @@ def facing(points: np.ndarray, jmap: JointMap, role: str, bone: np.ndarray) -> n
         return _square_to(points[..., jmap[f"{side}_lower_leg"], :] - ankle, bone)
     hinge, sure = _hinge(points, jmap, side, LIMBS[part])
     straight = _square_to(toes - ankle if LIMBS[part] is _LEG else forward, bone)
-    return _unit(sure * _square_to(np.cross(hinge, bone), bone) + (1.0 - sure) * straight)
+    return _unit(sure * _square_to(quat.cross(hinge, bone), bone) + (1.0 - sure) * straight)
 
 
 def telling(points: np.ndarray, jmap: JointMap, role: str) -> np.ndarray:
@@ -128,7 +131,7 @@ def trusted(role: str) -> float:
 def twist_angles(bones: np.ndarray, seconds: np.ndarray, wanted: np.ndarray) -> np.ndarray:
     """Signed angles ``[...]`` about each unit ``bone`` from ``seconds`` (where the rotations put a
     bone's second axis) to ``wanted`` (where the positions say it faces), both square to it."""
-    return np.arctan2(np.sum(bones * np.cross(seconds, wanted), axis=-1), np.sum(seconds * wanted, axis=-1))
+    return np.arctan2(np.sum(bones * quat.cross(seconds, wanted), axis=-1), np.sum(seconds * wanted, axis=-1))
 
 
 __all__ = [
