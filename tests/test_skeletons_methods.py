@@ -233,3 +233,27 @@ def test_the_streaming_decoupler_takes_another_skeleton():
     np.testing.assert_allclose(quat.mul(expressive, body), game.rotations, atol=1e-9)  # E B = O
     names = model.joint_names
     assert activity[:, names.index("UpperArm_L")].mean() > 0.5 > 0.1 > activity[:, names.index("UpperArm_R")].mean()
+
+
+def test_an_exaggeration_model_records_its_skeletons_map(tmp_path):
+    """`rank` records the joint map it found (or was given with --map) in the model file, and a
+    motion of another skeleton reaches the model through that map: a chest given one joint lower
+    by the map file is the chest of the model's body."""
+    from expressive_mocap.exaggeration import ExaggerationModel
+    from expressive_mocap.skeletons.canonical import carried_for
+
+    argv = []
+    for k in (1, 2):
+        argv += ["--level", str(k)]
+        for p in (0, 1):
+            walk = retarget(loaded_walk(k, seconds=3.0, wobble=0.3, seed=10 * p + k), synthetic_walk("game").motion)
+            em.write_bvh(walk, tmp_path / f"game{k}_{p}.bvh")
+            argv.append(str(tmp_path / f"game{k}_{p}.bvh"))
+    (tmp_path / "map.json").write_text('{"chest": "spine_02"}')
+    assert main(["rank", *argv, "-o", str(tmp_path / "found.npz")]) == 0
+    assert main(["rank", *argv, "--map", str(tmp_path / "map.json"), "-o", str(tmp_path / "given.npz")]) == 0
+    found, given = (ExaggerationModel.load(tmp_path / f"{n}.npz") for n in ("found", "given"))
+    assert found.joint_map["chest"] == "spine_03" and found.joint_map["left_upper_leg"] == "thigh_l"
+    assert given.joint_map["chest"] == "spine_02"
+    carried = carried_for(loaded_walk(1, seconds=2.0), given)
+    assert carried.target.skeleton.names[carried.target.jmap["chest"]] == "spine_02"

@@ -48,6 +48,12 @@ def _add_training_options(p, model: bool = False) -> None:
     )
     p.add_argument("--rank", type=positive(int), help="number of basis vectors (default: by --energy)")
     p.add_argument(
+        "--map",
+        metavar="MAP.json|MAP.toml",
+        help="joint map (role -> joint name) of the clips' skeleton where its names and topology fall short; "
+        "the model records the map it finds",
+    )
+    p.add_argument(
         "--degree",
         type=int,
         default=degree,
@@ -126,6 +132,7 @@ def _train_from_args(args):
             representation="euler" if args.euler else "rotvec",
             cycle=cycle,
             foot=FEET.index(args.foot),
+            joint_map=joint_map(args),
         )
     except ClipError as error:
         raise MocapError(f"{paths[error.person][error.level]}: {error}") from None

@@ -49,7 +49,8 @@ class ExaggerationModel:
     from their own mean, for validation), ``cycle_trajectories [N, T, D]`` (every cycle they were
     averaged from) with ``cycle_performance [N, 2]`` (the person and intensity index of each);
     ``person_reference [P, J, 4]`` (the people's means); ``settings`` what training was run with
-    (:meth:`TrainSettings.to_dict`; see :attr:`training`).
+    (:meth:`TrainSettings.to_dict`; see :attr:`training`); ``joint_map`` which joint of its skeleton
+    plays which role (a map file's form), by which motions of other skeletons reach the model.
     """
 
     joint_names: tuple[str, ...]
@@ -78,6 +79,7 @@ class ExaggerationModel:
     cycle_trajectories: np.ndarray
     cycle_performance: np.ndarray
     settings: dict = field(default_factory=dict)
+    joint_map: dict = field(default_factory=dict)  # role -> joint name(s) of its skeleton, as found in training
 
     _ARRAYS = ARRAYS
 
@@ -212,6 +214,7 @@ class ExaggerationModel:
             "representation": self.representation,
             "energy": self.energy,
             "settings": self.settings,
+            "joint_map": self.joint_map,
         }
         arrays = {name: np.asarray(getattr(self, name)) for name in ARRAYS}
         buffer = io.BytesIO()
@@ -246,7 +249,7 @@ class ExaggerationModel:
                 joint_names=tuple(meta["joint_names"]), dof_names=tuple(meta["dof_names"]),
                 height=float(meta["height"]),
                 hips=int(meta["hips"]), representation=meta["representation"], energy=float(meta["energy"]),
-                settings=dict(meta.get("settings", {})),
+                settings=dict(meta.get("settings", {})), joint_map=dict(meta.get("joint_map") or {}),
                 **{k: (arrays[k].astype(bool) if k in ("key", "person_key") else arrays[k]) for k in ARRAYS},
             )  # fmt: skip
         except KeyError as error:

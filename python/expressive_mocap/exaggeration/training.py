@@ -130,6 +130,7 @@ def train(
     cycle: CycleChoice = TRAINING.cycle,
     foot: int = TRAINING.foot,
     roles: JointRoles | None = None,
+    joint_map: dict | None = None,
 ) -> ExaggerationModel:
     """Rank the expressive features of one action and fit the intensity mappings.
 
@@ -142,7 +143,9 @@ def train(
     expressiveness accumulated into the key set; ``degree`` the mappings' polynomial degree (<
     number of intensities); ``foot`` (0 = left, 1 = right) the foot whose footstrikes start a
     walking cycle, here and in :func:`~expressive_mocap.exaggeration.exaggerate` (the basis is
-    phase-aligned to it). Defaults: :data:`~expressive_mocap.exaggeration.TRAINING`.
+    phase-aligned to it). ``joint_map``: roles the clips' skeleton's names and topology do not
+    tell (a map file's form); the model records the whole map, by which motions of other skeletons
+    reach it. Defaults: :data:`~expressive_mocap.exaggeration.TRAINING`.
     """
     from ..skeletons.conventions import upright
 
@@ -163,7 +166,9 @@ def train(
             per_person.append(_person_dofs(person, roles, settings))
         except ClipError as error:
             raise ClipError(str(error), i, error.level) from None
-    return _model(skeleton, roles, intensities, per_person, settings)
+    model = _model(skeleton, roles, intensities, per_person, settings)
+    model.joint_map = _recorded_map(skeleton, joint_map)
+    return model
 
 
 def _model(
@@ -211,6 +216,20 @@ def _model(
         cycle_performance=cycle_performance,
         settings=settings.to_dict(),
     )
+
+
+def _recorded_map(skeleton, user_map: dict | None) -> dict:
+    """The joint map a model records of its skeleton (``user_map``'s roles, the rest found by names
+    and topology), by which motions of other skeletons reach it; {} when the skeleton has none
+    and no map was given (the model then takes its own skeleton only)."""
+    from ..skeletons.jointmap import find_joint_map
+
+    try:
+        return find_joint_map(skeleton, user_map).as_names()
+    except MocapError:
+        if user_map:
+            raise
+        return {}
 
 
 __all__ = ["train"]

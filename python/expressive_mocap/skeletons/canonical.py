@@ -144,7 +144,7 @@ def carried_for(motion: Motion, model, user_map: dict | None = None) -> Carried 
         return None
     body = model.body() if hasattr(model, "body") else None
     if body is not None:
-        return Carried(motion, user_map, Rig.of(body))
+        return Carried(motion, user_map, Rig.of(body, getattr(model, "joint_map", None) or None))
     if joint_names != canonical_shape()[0]:
         raise MocapError(
             f"the model was trained on a {len(joint_names)}-joint skeleton ({', '.join(joint_names[:3])}, ...), "
