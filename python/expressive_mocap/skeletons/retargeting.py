@@ -312,7 +312,8 @@ def _retarget_frames(
         pieces = zip(bounds[:-1], bounds[1:])
         floors = np.array([_floor_of(kinematics[1][a:b], source.jmap, source.conventions) for a, b in pieces])
     floor = np.repeat(floors, np.diff(bounds))  # per frame
-    out = _transfer(motion, source, goal, kinematics, floor)
+    world, positions = kinematics
+    out = _transfer(motion, source, goal, (_trusted(world, positions, source), positions), floor)
     if plant_feet:
         from .planting import plant_feet as plant
         from .planting import source_contacts
@@ -486,10 +487,6 @@ def _transfer(
     frames, skeleton = motion.n_frames, target.skeleton
     world = np.empty((frames, skeleton.n_joints, 4))
     world[:, plan.target] = _mul(roles, plan.aligns)
-    if source.untrusted:
-        points = quat.rotate(turn_s, positions_s)
-        _reframe(world, points, source.jmap, target.jmap, [f for f in plan.framed if f[0] in source.untrusted])
-        _retwist(world, points, source.jmap, [r for r in plan.readable if r[0] in source.untrusted])
     # Unmapped joints turn with the mapped ones, as changes from the target's reference pose.
     reference = plan.reference
     if len(plan.shared):
@@ -512,17 +509,30 @@ def _transfer(
     return Motion(skeleton, rotations, translations, motion.frame_time)
 
 
+def _trusted(world: np.ndarray, positions: np.ndarray, rig: Rig) -> np.ndarray:
+    """The world rotations ``world`` of a motion of ``rig`` with the twists its rotations do not
+    tell (``rig.untrusted``) read from its ``positions``: what the transfer then carries over."""
+    if not rig.untrusted:
+        return world
+    plan = _plan(rig, rig)  # the rig's own role frames
+    turn = rig.conventions.rotation()
+    canonical, points = _turned(turn, world).copy(), quat.rotate(turn, positions)
+    _reframe(canonical, points, rig.jmap, rig.jmap, [f for f in plan.framed if f[0] in rig.untrusted])
+    _retwist(canonical, points, rig.jmap, [r for r in plan.readable if r[0] in rig.untrusted])
+    return _turned(quat.conjugate(turn), canonical)
+
+
 def _reframe(world: np.ndarray, points: np.ndarray, jmap: JointMap, other: JointMap, framed: list) -> None:
-    """The hips or chest of ``world`` (the target's, canonical axes) set from the frame the
-    source's positions ``points`` show, for the source's untrusted roles ``framed``."""
+    """The hips or chest of ``world`` (canonical axes) set from the frame the positions
+    ``points`` show, for the roles ``framed`` (of a plan of the rig onto itself)."""
     for role, joint, from_frame in framed:
         frame = _orthonormal(*_frame_vectors(points, jmap, role, other))
         world[:, joint] = quat.mul(quat.from_matrix(frame), from_frame)
 
 
 def _retwist(world: np.ndarray, points: np.ndarray, jmap: JointMap, readable: list) -> None:
-    """The source's untrusted limb bones ``readable`` of ``world`` (the target's, canonical axes)
-    turned about themselves to face the way the source's positions ``points`` say."""
+    """The limb bones ``readable`` (of a plan of the rig onto itself) of ``world`` (canonical
+    axes) turned about themselves to face the way the positions ``points`` say."""
     forward = twist.chest_forward(points, jmap)
     for role, joint, bone_axis, second_axis in readable:
         bone = quat.rotate(world[:, joint], bone_axis)
