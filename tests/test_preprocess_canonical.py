@@ -60,6 +60,18 @@ def test_canonical_puts_every_skeleton_on_one_body(mixed, tmp_path):
         assert agree > 0.95, rig
 
 
+def test_the_model_on_another_skeleton_without_canonical_says_to_give_it(tmp_path, capsys):
+    """An archive of one skeleton other than the model's, with --model alone: each clip fails
+    naming the model's skeleton, and the message says that --canonical takes them."""
+    folder = tmp_path / "game"
+    folder.mkdir()
+    em.write_bvh(synthetic_walk("game", seconds=1.0).motion, folder / "walk.bvh")
+    assert main(["preprocess", str(folder), "-o", str(tmp_path / "m"), "--model"]) == 1
+    said = capsys.readouterr()
+    assert "this body model was trained on a 22-joint skeleton" in said.out + said.err
+    assert "--canonical retargets" in said.out + said.err
+
+
 def test_canonical_from_the_command_line_with_the_model(mixed, tmp_path, capsys):
     assert main(["preprocess", str(mixed), "-o", str(tmp_path / "m"), "--canonical", "--model", "-q"]) == 0
     ds = load_dataset(tmp_path / "m")

@@ -15,7 +15,7 @@ from .. import files as inputs
 from .. import ops
 from ..bvh import block_error, read_error
 from ..decoupling.algebra import decompose_many
-from ..errors import BVHError, MocapError
+from ..errors import BVHError, MocapError, ModelError
 from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from ..roles import JointRoles, actor_height, hips_rest_height
 from .format import MODEL_KINDS
@@ -111,11 +111,15 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: dict | N
     for members in by_hierarchy.values():
         group = _group(members, needs_roles, use_model, model)
         if isinstance(group, MocapError):  # the hierarchy lacks a role, or does not fit the model
+            hint = _CANONICAL_HINT if use_model and canonical is None and isinstance(group, ModelError) else ""
             for k, _, _ in members:
-                outcomes[k].error = f"{batch[k].source}: {group}"
+                outcomes[k].error = f"{batch[k].source}: {group}{hint}"
             continue
         groups.append(group)
     return Prepared(outcomes, groups, time.perf_counter() - start)
+
+
+_CANONICAL_HINT = " (--canonical retargets clips of any humanoid skeleton onto the model's body)"
 
 
 def onto_canonical(
