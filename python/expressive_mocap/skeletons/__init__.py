@@ -5,6 +5,8 @@
 - :mod:`.conventions`: the axes, unit, actor height and rest pose a file was captured in
   (:func:`read_conventions`), and the change to the canonical frame and back;
 - :mod:`.retargeting`: a motion moved onto another skeleton (:func:`retarget`);
+- :mod:`.twist`: how a bone faces about itself, read from joint positions;
+- :mod:`.mirror`: a motion mirrored left for right (:func:`mirror`);
 - :mod:`.synthetic`: the demo's walk on six synthetic skeletons, with their ground truth.
 """
 
@@ -23,6 +25,7 @@ _LAZY = {
     "from_canonical": "conventions",
     "Rig": "retargeting",
     "retarget": "retargeting",
+    "mirror": "mirror",
     "RIGS": "synthetic",
     "synthetic_skeleton": "synthetic",
     "synthetic_walk": "synthetic",
@@ -39,6 +42,7 @@ __all__ = [
     "find_joint_map",
     "from_canonical",
     "read_conventions",
+    "mirror",
     "read_joint_map",
     "retarget",
     "synthetic_skeleton",
