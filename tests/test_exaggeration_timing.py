@@ -143,3 +143,32 @@ def test_an_exaggerated_real_walk_moves_toward_the_active_walks(bandai2_dir):
     assert report.stance_speed_output <= 1.2 * report.stance_speed_input
     still = gait(exaggerate(model, walk, 3.0, timing=False)[0])
     np.testing.assert_allclose(still[:2], before[:2], rtol=0.02)
+
+
+def test_a_retimed_edit_carries_back_onto_another_skeleton(speed_model, tmp_path):
+    """A game-rig walk exaggerated with a model of the Bandai skeleton: the edit, retimed, is laid
+    back frame for frame on the input retimed alike, so joints the model lacks (fingers, here
+    curled) keep their rotations instead of being retargeted to rest."""
+    from expressive_mocap import quat
+    from expressive_mocap.cli import main
+    from expressive_mocap.exaggeration.timing import retime_like
+    from expressive_mocap.skeletons import retarget, synthetic_walk
+    from expressive_mocap.skeletons.canonical import carried_for
+
+    game = synthetic_walk("game").motion
+    walk = retarget(procedural_walk(6.0, speed=SPEEDS[1]), game, plant_feet=False)
+    fingers = [game.skeleton.names.index(n) for n in ("index_01_l", "thumb_01_r")]
+    rotations = walk.rotations.copy()
+    rotations[:, fingers] = quat.about("X", 30.0)
+    walk = em.Motion(walk.skeleton, rotations, walk.translations, walk.frame_time)
+    model, source, result = tmp_path / "speed.npz", tmp_path / "game.bvh", tmp_path / "faster.bvh"
+    speed_model.save(model)
+    em.write_bvh(walk, source)
+    argv = ["exaggerate", "--model", str(model), "--input", str(source), "--from", "2", "--to", "3", "-o", str(result)]
+    assert main(argv) == 0
+    out, read = em.read_bvh(result), em.read_bvh(source)
+    _, report = exaggerate(speed_model, carried_for(read, speed_model).body, 3.0, current=2.0)
+    assert report.timing is not None and out.n_frames == len(report.timing.warp) < walk.n_frames
+    expected = retime_like(read, report.timing)
+    angle = quat.angle(quat.mul(quat.conjugate(expected.rotations[:, fingers]), out.rotations[:, fingers]))
+    assert np.degrees(angle).max() < 0.1

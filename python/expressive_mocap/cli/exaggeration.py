@@ -260,6 +260,14 @@ def cmd_exaggerate(args) -> int:
         estimate_offsets=args.estimate_offsets,
         timing=not args.no_timing,
     )
+    timing = report.timing
+    if timing is not None:  # carried back onto the input retimed alike, frame for frame
+        from ..exaggeration.timing import retime_like
+
+        def retimed(original):
+            return retime_like(original, timing)
+
+        _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), retimed)
     write_bvh(back(out), args.output)
     print(report.text())
     print(f"wrote {args.output}")

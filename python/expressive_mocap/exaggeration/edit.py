@@ -289,8 +289,9 @@ def _retimed(
     new_contacts = warped_contacts(contacts, warp)
     seconds, travel = np.exp(own).mean(axis=0) * [1.0, actor_height(motion.skeleton, roles)]
     timing = Timing(
-        float(factors[0]), float(factors[1]), clamped, (seconds, travel), (seconds * factors[0], travel * factors[1])
-    )
+        float(factors[0]), float(factors[1]), clamped, (seconds, travel),
+        (seconds * factors[0], travel * factors[1]), warp, span,
+    )  # fmt: skip
     return _Retimed(held, out, new_contacts, planted_ankles(held, new_contacts, roles, shift), timing)
 
 

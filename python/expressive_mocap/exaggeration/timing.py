@@ -88,13 +88,16 @@ class Timing:
     """What the edit did to the timing: the factors the cycles' ``duration`` and the hips'
     ``travel`` over each were multiplied by, whether the training range (+ margin) ``clamped``
     them, and the motion's mean ``before`` and ``after`` as (cycle seconds, travel per cycle in
-    file units)."""
+    file units); ``warp [F']`` the input frame (fractional) of each output frame and ``span`` the
+    input frames whose travel was scaled (:func:`retime_like` retimes another motion alike)."""
 
     duration: float
     travel: float
     clamped: bool
     before: tuple[float, float]
     after: tuple[float, float]
+    warp: np.ndarray
+    span: tuple[int, int]
 
     def text(self, unit: str = "file units") -> str:
         (d0, t0), (d1, t1) = self.before, self.after
@@ -158,6 +161,12 @@ def retime(
     return Motion(motion.skeleton, rotations, translations, motion.frame_time), shift
 
 
+def retime_like(motion: Motion, timing: Timing, roles: JointRoles | None = None) -> Motion:
+    """``motion`` (of as many frames as the edited one, on any skeleton) retimed as an edit was:
+    what an edit of it carried onto another skeleton is laid back on."""
+    return retime(motion, roles or JointRoles.find(motion.skeleton), timing.warp, timing.span, timing.travel)[0]
+
+
 def warped_contacts(contacts: np.ndarray, warp: np.ndarray) -> np.ndarray:
     """Contacts ``[F, 2]`` at the fractional frames ``warp``: those of the nearest input frame."""
     return np.asarray(contacts, dtype=bool)[np.rint(warp).astype(int)]
@@ -185,6 +194,7 @@ __all__ = [
     "mapped_timing",
     "planted_ankles",
     "retime",
+    "retime_like",
     "time_warp",
     "timing_factors",
     "warped_contacts",
