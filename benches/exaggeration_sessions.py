@@ -48,6 +48,8 @@ MEASURES = (
     ("hips vertical range (cm)", "5th to 95th percentile"),
     ("trunk lean (deg)", "hips-to-neck line from vertical, forward positive"),
     ("head height (cm)", "mean"),
+    ("speed (cm/s)", "the hips' mean horizontal speed"),
+    ("cadence (steps/s)", "footstrikes of both feet per second (ankle within 10% of its height range)"),
 )
 
 
@@ -111,8 +113,21 @@ def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.degrees(np.arccos(np.clip(cos, -1, 1)))
 
 
+def _cadence(ankles: list[np.ndarray], frame_time: float) -> float:
+    """Footstrikes of both ankles ``[F, 3]`` per second between the first and the last: onsets of
+    runs of at least 3 frames within 10% of the ankle's height range above its lowest."""
+    strikes = []
+    for ankle in ankles:
+        low, high = np.percentile(ankle[:, 1], [2, 98])
+        edges = np.diff(np.r_[0, (ankle[:, 1] < low + 0.1 * (high - low)).astype(np.int8), 0])
+        starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+        strikes += [int(a) for a, b in zip(starts, ends) if b - a >= 3 and a > 0]
+    strikes.sort()
+    return (len(strikes) - 1) / ((strikes[-1] - strikes[0]) * frame_time)
+
+
 def gait(motion: em.Motion) -> np.ndarray:
-    """The six measures of :data:`MEASURES` over the frames where the hips move at more than half
+    """The measures of :data:`MEASURES` over the frames where the hips move at more than half
     their usual (90th percentile) horizontal speed: the walk itself, not its start and stop."""
     p = world_positions(motion)
     at = {name: p[:, motion.skeleton.index(name)] for name in motion.skeleton.names}
@@ -142,6 +157,8 @@ def gait(motion: em.Motion) -> np.ndarray:
             hips,
             lean[walking].mean(),
             at["Head"][walking, 1].mean(),
+            speed[walking].mean() / motion.frame_time,
+            _cadence([at["Foot_L"], at["Foot_R"]], motion.frame_time),
         ]
     )
 
@@ -200,7 +217,8 @@ def gait_table(model: ExaggerationModel, content: str) -> list[str]:
     for i, (name, _) in enumerate(MEASURES):
         gap = rows["active"][i] - rows["input"][i]
         progress = [(rows[r][i] - rows["input"][i]) / gap for r in ("before", "after", "given")]
-        values = " | ".join(f"{rows[r][i]:.1f}" for r in ("input", "before", "after", "given", "active"))
+        digits = 2 if name.startswith("cadence") else 1
+        values = " | ".join(f"{rows[r][i]:.{digits}f}" for r in ("input", "before", "after", "given", "active"))
         lines.append(f"| {name} | {values} | " + " / ".join(f"{v:.2f}" for v in progress) + " |")
     return lines + [""]
 

@@ -370,9 +370,10 @@ def test_save_load_round_trip(model, walk, tmp_path):
     b, _ = exaggerate(again, walk, 3.0)
     # Equal arrays, not equal layouts: the trained basis and mappings are strided views, the
     # loaded ones contiguous (and elsewhere in memory), so einsum and BLAS may sum in another
-    # order: a fresh-clone CI run differed by 6e-14 after the IK. A wrong array, key set or
-    # setting would move rotations by far more than 1e-12.
-    np.testing.assert_allclose(a.rotations, b.rotations, rtol=0, atol=1e-12)
+    # order: fresh-clone CI runs differed by 6e-14 after the IK, and by 1.2e-12 with NumPy 2's
+    # BLAS through the intensity estimate's least squares. A wrong array, key set or setting would
+    # move rotations by far more than 1e-9.
+    np.testing.assert_allclose(a.rotations, b.rotations, rtol=0, atol=1e-9)
 
 
 def test_damaged_model_files_give_clear_errors(model, tmp_path):

@@ -106,12 +106,14 @@ def real_arguments(
     return args, backend
 
 
-def longest_hips_step(motion: em.Motion) -> float:
-    """The longest hips step between frames, per frame at 30 fps, in cm of a Bandai-sized actor."""
+def hips_steps(motion: em.Motion) -> tuple[float, float]:
+    """The longest hips step between frames and the motion's pace (the 90th percentile step), per
+    frame at 30 fps, in cm of a Bandai-sized actor."""
     roles = JointRoles.find(motion.skeleton)
     hips = motion.positions()[:, roles.hips]
     steps = np.linalg.norm(np.diff(hips, axis=0), axis=1) * motion.fps / 30
-    return float(steps.max()) * BANDAI_ACTOR_CM / actor_height(motion.skeleton, roles)
+    scale = BANDAI_ACTOR_CM / actor_height(motion.skeleton, roles)
+    return float(steps.max()) * scale, float(np.percentile(steps, 90)) * scale
 
 
 def _mixed_archive(dataset2: Path, other: Path | None) -> Path:
@@ -145,19 +147,24 @@ def test_the_readme_examples_run_and_their_outputs_are_plausible(
         if args[0] == "decouple":
             outputs = sorted(tmp_path.glob(f"{args[args.index('-o') + 1]}_*.bvh"))
         for path in inputs:
-            longest_input_step.setdefault(path, longest_hips_step(em.read_bvh(path)))
+            longest_input_step.setdefault(path, hips_steps(em.read_bvh(path)))
         for path in outputs:
-            step = longest_hips_step(em.read_bvh(path))
-            allowed = max([5.0] + [1.05 * longest_input_step[p] for p in inputs])
+            step, pace_out = hips_steps(em.read_bvh(path))
+            # A jump is a step beyond the output's own pace: an exaggerated walk is faster throughout.
+            allowed = max(
+                [5.0]
+                + [1.05 * longest * max(1.0, pace_out / pace) for longest, pace in map(longest_input_step.get, inputs)]
+            )
             assert step <= allowed, (
                 f"{command}: {path.name} moves its hips {step:.1f} cm in a frame (allowed {allowed:.1f})"
             )
-    # The exaggerated walk keeps its stance feet down (foot locking): never above the input's.
+    # The exaggerated walk keeps its stance feet down (foot locking): never above the input's. It is
+    # retimed (faster), so its own contacts are compared with the input's highest stance ankle.
     walk = em.read_bvh(bandai2_dir / PLACEHOLDERS["walk.bvh"])
     heavier = em.read_bvh(tmp_path / "heavier.bvh")
     roles = JointRoles.find(walk.skeleton)
-    contacts = foot_contacts(walk, roles)
+    contacts, heavier_contacts = foot_contacts(walk, roles), foot_contacts(heavier, roles)
     for side, foot in enumerate(roles.feet):
-        stance = contacts[:, side]
-        rise = heavier.positions()[stance, foot, 1] - walk.positions()[stance, foot, 1]
-        assert rise.max() <= 1.0, f"a stance foot rises {rise.max():.2f} cm above the input's"
+        highest = walk.positions()[contacts[:, side], foot, 1].max()
+        rise = heavier.positions()[heavier_contacts[:, side], foot, 1].max() - highest
+        assert rise <= 1.0, f"a stance foot rises {rise:.2f} cm above the input's"

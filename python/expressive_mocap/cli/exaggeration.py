@@ -227,6 +227,12 @@ def add_exaggerate(commands) -> None:
     )
     p.add_argument("--no-foot-lock", action="store_true", help="do not pin the stance feet with leg IK during contacts")
     p.add_argument(
+        "--no-timing",
+        action="store_true",
+        help="keep the input's timing (default: the cycles' duration and the hips' travel over them change with the "
+        "intensity as the model's timing mappings say, so the output may have another number of frames)",
+    )
+    p.add_argument(
         "--blend",
         type=finite,
         default=blend,
@@ -259,7 +265,16 @@ def cmd_exaggerate(args) -> int:
         baseline=baseline,
         baseline_level=args.baseline_level,
         estimate_offsets=args.estimate_offsets,
+        timing=not args.no_timing,
     )
+    timing = report.timing
+    if timing is not None:  # carried back onto the input retimed alike, frame for frame
+        from ..exaggeration.timing import retime_like
+
+        def retimed(original):
+            return retime_like(original, timing)
+
+        _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), retimed)
     write_bvh(back(out), args.output)
     print(report.text())
     print(f"wrote {args.output}")
@@ -280,7 +295,8 @@ def add_validate(commands) -> None:
 
 
 def cmd_validate(args) -> int:
-    from ..exaggeration import leave_one_out, rank_agreement, swap_test, validation_table
+    from ..exaggeration import leave_one_out, rank_agreement, swap_test, timing_validation, validation_table
+    from ..exaggeration.validation import timing_table
 
     model, paths = _train_from_args(args)
     if paths:
@@ -293,6 +309,10 @@ def cmd_validate(args) -> int:
     ratio = "||swap - heaviest|| / ||lightest - heaviest||"
     print(f"swap test at share {share:g}: {ratio} over DOF trajectories and joint positions")
     print(validation_table(swaps, warps, rank_agreement(model) if several else None))
+    if several and model.has_timing:
+        print("")
+        print("over joint positions in time (2 s), without and with the timing swapped / warped:")
+        print(timing_table(timing_validation(model)))
     return 0
 
 

@@ -36,7 +36,11 @@ Pipeline and shapes (``T`` samples a cycle, ``D`` DOFs, ``K`` intensities, ``P``
    :meth:`ExaggerationModel.estimate`);
 7. :mod:`.edit`: per cycle: ``x' = x + U (f(k1) - f(k0))`` on the key DOFs, mapped back onto each
    cycle's own frames, cross-faded at cycle boundaries, clamped to the training range plus a
-   margin, optionally with the stance foot locked (:mod:`.footlock`).
+   margin, optionally with the stance foot locked (:mod:`.footlock`);
+8. :mod:`.timing`: each cycle's duration and the hips' travel over it (logs), mapped by intensity
+   like the coefficients; the edit retimes the cycles and scales the travel by what the mappings
+   say (for the features that follow the intensity), and foot locking holds the feet at the new
+   timing.
 
 :mod:`.validation` holds the paper's swap test and the leave-one-person-out warp, :mod:`.plot`
 the ranking's table and figure, :mod:`.settings` every default.
@@ -52,15 +56,18 @@ from .fitting import FitResult, fit
 from .footlock import lock_stance_feet
 from .model import ExaggerationModel
 from .settings import EDITING, TRAINING, VALIDATION, EditSettings, TrainSettings, ValidationSettings
+from .timing import Timing
 from .training import train
 from .validation import (
     RankAgreement,
     SwapResult,
+    TimedResult,
     WarpResult,
     dof_positions,
     leave_one_out,
     rank_agreement,
     swap_test,
+    timing_validation,
     validation_table,
 )
 
@@ -76,6 +83,8 @@ __all__ = [
     "IntensityEstimate",
     "RankAgreement",
     "SwapResult",
+    "TimedResult",
+    "Timing",
     "TrainSettings",
     "ValidationSettings",
     "WarpResult",
@@ -94,6 +103,7 @@ __all__ = [
     "stance_foot_speed",
     "subtree_weights",
     "swap_test",
+    "timing_validation",
     "to_cycle_timing",
     "train",
     "validation_table",

@@ -23,6 +23,17 @@ from .estimate import POOR_FIT, IntensityEstimate
 from .footlock import IDENTITY, lock_stance_feet
 from .model import ExaggerationModel
 from .settings import EDITING, REFERENCES, TRAINING
+from .timing import (
+    PREDICTABLE,
+    Timing,
+    cycle_timing,
+    mapped_timing,
+    planted_ankles,
+    retime,
+    time_warp,
+    timing_factors,
+    warped_contacts,
+)
 
 
 @dataclass
@@ -32,7 +43,8 @@ class ExaggerationReport:
     locking's largest ankle correction, the largest distance it could not close and how far it
     lowered the hips (file units), stance-foot speeds before and after; ``estimate`` how ``k0`` was
     estimated (None when given); ``baseline`` the baseline clip's given intensity and the one it
-    is estimated at without its own offsets removed (None without a baseline)."""
+    is estimated at without its own offsets removed (None without a baseline); ``timing`` how the
+    cycles were retimed (None when the timing was left as it was)."""
 
     k0: float
     k1: float
@@ -47,6 +59,7 @@ class ExaggerationReport:
     stance_speed_output: float
     estimate: IntensityEstimate | None = None
     baseline: tuple[float, float] | None = None
+    timing: Timing | None = None
 
     def text(self) -> str:
         e = self.estimate
@@ -77,6 +90,7 @@ class ExaggerationReport:
             )
         else:
             lines.append("nothing clamped")
+        lines.append(self.timing.text() if self.timing is not None else "timing: unchanged")
         changes = sorted(self.largest_change.items(), key=lambda kv: -kv[1])
         lines.append(
             "largest change per joint (degrees): " + ", ".join(f"{n} {v:.1f}" for n, v in changes if v >= 0.05)[:600]
@@ -230,6 +244,57 @@ def _rebuilt(
     return Motion(motion.skeleton, rotations, translations, motion.frame_time)
 
 
+@dataclass
+class _Retimed:
+    """An edit at its new timing: the input retimed alike (what the edit is compared with), the
+    contacts at the new frames, the ankles held still through them (None: the input's) and what
+    was done (None: nothing)."""
+
+    motion: Motion
+    edited: Motion
+    contacts: np.ndarray
+    ankles: np.ndarray | None = None
+    timing: Timing | None = None
+
+
+def _retimed(
+    model: ExaggerationModel,
+    motion: Motion,
+    edited: Motion,
+    roles: JointRoles,
+    cycles: Sequence[Cycle],
+    contacts: np.ndarray,
+    levels: tuple[float, float],
+    margin: float,
+) -> _Retimed:
+    """``edited`` with its cycles' duration and the hips' travel over them multiplied by what the
+    timing mappings give from ``levels`` (k0, k1), for the features that follow the intensity;
+    unchanged when the model has no timing or nothing changes."""
+    same = _Retimed(motion, edited, contacts)
+    if not model.has_timing or not cycles:
+        return same
+    assert model.timing_mappings is not None and model.timing_predictability is not None
+    live = model.timing_predictability >= PREDICTABLE
+    change = (mapped_timing(model.timing_mappings, levels[1]) - mapped_timing(model.timing_mappings, levels[0])) * live
+    positions = motion.positions()
+    own = cycle_timing(motion, roles, cycles, positions)
+    # The training range is in actor heights; the motion's own travel is measured the same way.
+    factors, clamped = timing_factors(change, own.mean(axis=0), *model.timing_range(), margin)
+    if np.abs(factors - 1).max() < 1e-9:
+        return same
+    span = (cycles[0].start, cycles[-1].end)
+    warp = time_warp(motion.n_frames, cycles, float(factors[0]))
+    held, shift = retime(motion, roles, warp, span, float(factors[1]))
+    out, _ = retime(edited, roles, warp, span, float(factors[1]))
+    new_contacts = warped_contacts(contacts, warp)
+    seconds, travel = np.exp(own).mean(axis=0) * [1.0, actor_height(motion.skeleton, roles)]
+    timing = Timing(
+        float(factors[0]), float(factors[1]), clamped, (seconds, travel),
+        (seconds * factors[0], travel * factors[1]), warp, span,
+    )  # fmt: skip
+    return _Retimed(held, out, new_contacts, planted_ankles(held, new_contacts, roles, shift), timing)
+
+
 def _own_reference(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], yaw: np.ndarray) -> np.ndarray:
     """The motion's own mean rotations ``[J, 4]`` (heading removed) over its cycles' frames."""
     heading_free = without_heading(motion.rotations, roles.hips, yaw)
@@ -307,6 +372,7 @@ def exaggerate(
     baseline: Motion | None = None,
     baseline_level: float | None = None,
     estimate_offsets: bool = EDITING.estimate_offsets,
+    timing: bool = EDITING.timing,
     roles: JointRoles | None = None,
 ) -> tuple[Motion, ExaggerationReport]:
     """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
@@ -330,7 +396,11 @@ def exaggerate(
     measured from the same reference (see :meth:`ExaggerationModel.dof_range`). ``lock_feet`` pins
     each stance foot (ankle position and foot orientation) to the input's during its contacts
     with two-bone leg IK, blended in and out over ``blend`` seconds, so the edit adds no skating
-    (see :func:`lock_stance_feet`). Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
+    (see :func:`lock_stance_feet`). ``timing``: the cycles' duration and the hips' travel over them
+    change too, by the model's timing mappings (:mod:`~expressive_mocap.exaggeration.timing`),
+    kept within the training range (+ margin); the output then has another number of frames,
+    and foot locking holds each stance foot still through its contacts at the new timing.
+    Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
     Returns the new motion and an :class:`ExaggerationReport`.
     """
     options = {"reference": reference, "margin": margin, "fade": fade, "blend": blend}
@@ -355,18 +425,21 @@ def exaggerate(
     per_frame = _per_frame_change(model.basis @ change.T, cycles, motion.n_frames, int(round(fade * motion.fps)))
     new, clamped = _clamp(model, X, X + per_frame, reference, margin, shift)
     out = _rebuilt(model, motion, roles, X, new, ref, yaw)
+    at = _retimed(model, motion, out, roles, cycles, contacts, (k0, float(to)), margin) if timing else None
+    held, out, held_contacts = (at.motion, at.edited, at.contacts) if at else (motion, out, contacts)
     correction = residual = lowered = 0.0
-    if lock_feet and np.abs(new - X).max(initial=0.0) > 0:
+    if lock_feet and (np.abs(new - X).max(initial=0.0) > 0 or (at and at.timing)):
         out, correction, residual, lowered = lock_stance_feet(
-            motion, out, contacts, roles, int(round(blend * motion.fps))
+            held, out, held_contacts, roles, int(round(blend * motion.fps)), at.ankles if at else None
         )
-    angles = np.degrees(quat.angle(quat.mul(quat.conjugate(motion.rotations), out.rotations))).max(axis=0)
+    angles = np.degrees(quat.angle(quat.mul(quat.conjugate(held.rotations), out.rotations))).max(axis=0)
     report = ExaggerationReport(
         k0=k0, k1=float(to), k0_estimated=estimate is not None, cycles=cycles, clamped=clamped, estimate=estimate,
         largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
         foot_correction=correction, foot_residual=residual, hips_lowered=lowered,
         stance_speed_input=stance_foot_speed(motion, contacts, roles),
-        stance_speed_output=stance_foot_speed(out, contacts, roles), baseline=read_as,
+        stance_speed_output=stance_foot_speed(out, held_contacts, roles), baseline=read_as,
+        timing=at.timing if at else None,
     )  # fmt: skip
     return out, report
 

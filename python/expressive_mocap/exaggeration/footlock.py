@@ -42,7 +42,12 @@ def _check_legs(skeleton, roles: JointRoles) -> None:
 
 
 def lock_stance_feet(
-    original: Motion, edited: Motion, contacts: np.ndarray, roles: JointRoles, blend_frames: int = 3
+    original: Motion,
+    edited: Motion,
+    contacts: np.ndarray,
+    roles: JointRoles,
+    blend_frames: int = 3,
+    ankles: np.ndarray | None = None,
 ) -> tuple[Motion, float, float, float]:
     """``edited`` with each foot put back where ``original`` has it while it touches the floor.
 
@@ -54,6 +59,8 @@ def lock_stance_feet(
     wanted world rotation. The toe, fixed to the foot, follows. Where a target is beyond the leg's
     reach (the edit raised the hips or spread the legs), the hips are first lowered just enough,
     eased in and out over ``blend_frames``: a stance foot is never lifted off the floor.
+    ``ankles [F, 2, 3]`` (left, right), when given, are the ankle positions held instead of the
+    original's (a retimed edit holds each foot still where the retimed input would slide).
 
     Returns the new motion, the largest distance an ankle was moved to its target, the largest
     distance left where the target was out of the leg's reach (file units; the hips could not
@@ -62,6 +69,9 @@ def lock_stance_feet(
     parents = original.skeleton.parents
     _check_legs(original.skeleton, roles)
     world_in, pos_in = forward_kinematics(original.rotations, original.translations, parents)
+    if ankles is not None:
+        pos_in = pos_in.copy()
+        pos_in[:, list(roles.feet)] = ankles
     weights = contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
     edited, lowered = _lowered_to_reach(edited, pos_in, weights, roles, blend_frames)
     world_out, pos_out = forward_kinematics(edited.rotations, edited.translations, parents)

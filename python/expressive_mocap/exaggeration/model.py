@@ -30,6 +30,8 @@ ARRAYS = (
     "person_key", "mappings", "reference", "person_reference", "lower", "upper", "trajectories", "cycle_trajectories",
     "cycle_performance",
 )  # fmt: skip
+# Arrays a model trained with timing adds (a file without them edits without timing).
+TIMING_ARRAYS = ("cycle_timing", "timing_mappings", "timing_predictability")
 
 
 @dataclass
@@ -51,6 +53,10 @@ class ExaggerationModel:
     ``person_reference [P, J, 4]`` (the people's means); ``settings`` what training was run with
     (:meth:`TrainSettings.to_dict`; see :attr:`training`); ``joint_map`` which joint of its skeleton
     plays which role (a map file's form), by which motions of other skeletons reach the model.
+    Timing (:mod:`.timing`; None in a model file written without it): ``cycle_timing [N, 2]``
+    each training cycle's log duration (s) and log travel (actor heights), ``timing_mappings
+    [2, degree + 1]`` their polynomials in k averaged over people, ``timing_predictability [2]``
+    their mean |correlation| with k.
     """
 
     joint_names: tuple[str, ...]
@@ -80,6 +86,9 @@ class ExaggerationModel:
     cycle_performance: np.ndarray
     settings: dict = field(default_factory=dict)
     joint_map: dict = field(default_factory=dict)  # role -> joint name(s) of its skeleton, as found in training
+    cycle_timing: np.ndarray | None = None
+    timing_mappings: np.ndarray | None = None
+    timing_predictability: np.ndarray | None = None
 
     _ARRAYS = ARRAYS
 
@@ -122,6 +131,16 @@ class ExaggerationModel:
         if reference == "own":
             return self.cycle_trajectories.min(axis=(0, 1)), self.cycle_trajectories.max(axis=(0, 1))
         return self.lower, self.upper
+
+    @property
+    def has_timing(self) -> bool:
+        """Whether the model holds the timing features (models written before them do not)."""
+        return self.cycle_timing is not None and self.timing_mappings is not None
+
+    def timing_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """The lowest and highest value ``[2]`` of each timing feature over every training cycle."""
+        assert self.cycle_timing is not None
+        return self.cycle_timing.min(axis=0), self.cycle_timing.max(axis=0)
 
     def cycles_of(self, people: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
         """The training cycles of ``people`` (increasing indices), in the form
@@ -217,6 +236,8 @@ class ExaggerationModel:
             "joint_map": self.joint_map,
         }
         arrays = {name: np.asarray(getattr(self, name)) for name in ARRAYS}
+        if self.has_timing:
+            arrays.update({name: np.asarray(getattr(self, name)) for name in TIMING_ARRAYS})
         buffer = io.BytesIO()
         np.savez_compressed(buffer, meta=np.array(json.dumps(meta)), **arrays)
         return buffer.getvalue()
@@ -233,7 +254,7 @@ class ExaggerationModel:
             arrays, meta, name = read_model_file(source, "exaggeration model")
             if meta.get("format") != FORMAT or meta.get("version") != VERSION:
                 raise ModelError(f"{name}: not an expressive-mocap exaggeration model of version {VERSION}")
-            check_keys(arrays, ARRAYS, name)
+            check_keys(arrays, ARRAYS + TIMING_ARRAYS, name)
             return cls._from_checked(arrays, meta, name)
         except ModelError:
             raise
@@ -251,6 +272,7 @@ class ExaggerationModel:
                 hips=int(meta["hips"]), representation=meta["representation"], energy=float(meta["energy"]),
                 settings=dict(meta.get("settings", {})), joint_map=dict(meta.get("joint_map") or {}),
                 **{k: (arrays[k].astype(bool) if k in ("key", "person_key") else arrays[k]) for k in ARRAYS},
+                **{k: arrays[k] for k in TIMING_ARRAYS if k in arrays},
             )  # fmt: skip
         except KeyError as error:
             raise ModelError(f"{name}: model file lacks {error}") from None
@@ -286,6 +308,10 @@ def _check_arrays(arrays: dict[str, np.ndarray], meta: dict[str, Any], name: str
     }  # fmt: skip
     for key, shape in shapes.items():
         finite_array(arrays, key, name, shape, kinds="fiub")
+    if any(key in arrays for key in TIMING_ARRAYS):
+        timing_shapes = {"cycle_timing": (N, 2), "timing_mappings": (2, degree), "timing_predictability": (2,)}
+        for key, shape in timing_shapes.items():
+            finite_array(arrays, key, name, shape, kinds="f")
     owners = arrays["cycle_performance"]
     valid = owners.dtype.kind in "iu" and ((owners >= 0) & (owners < [P, K])).all()
     if not valid or len(np.unique(owners[:, 0] * K + owners[:, 1])) != P * K:
@@ -305,4 +331,4 @@ def _check_arrays(arrays: dict[str, np.ndarray], meta: dict[str, Any], name: str
         )
 
 
-__all__ = ["ARRAYS", "FORMAT", "VERSION", "ExaggerationModel"]
+__all__ = ["ARRAYS", "FORMAT", "TIMING_ARRAYS", "VERSION", "ExaggerationModel"]

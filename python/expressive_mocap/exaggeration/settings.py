@@ -51,7 +51,8 @@ class EditSettings:
     ("model" or "own"), the clamping ``margin`` (share of the training range), the cross-``fade``
     at cycle boundaries and the foot locking's ``blend`` (seconds), whether to ``lock_feet``, and
     whether the current intensity's estimate reads each DOF's mean over the cycle as well as how
-    it varies (``estimate_offsets``; False: an actor's own posture cannot move it)."""
+    it varies (``estimate_offsets``; False: an actor's own posture cannot move it), and whether the
+    cycles' duration and travel change with the intensity too (``timing``)."""
 
     reference: str = "model"
     margin: float = 0.1
@@ -59,6 +60,7 @@ class EditSettings:
     lock_feet: bool = True
     blend: float = 0.1
     estimate_offsets: bool = False
+    timing: bool = True
 
 
 @dataclass(frozen=True)

@@ -17,26 +17,30 @@ from .dofs import dof_names, dof_weights, dofs_to_rotations, rotations_to_dofs, 
 from .fitting import fit
 from .model import ExaggerationModel
 from .settings import REPRESENTATIONS, TRAINING, CycleChoice, TrainSettings
+from .timing import cycle_timing, fit_timing
 
 
 @dataclass
 class _PersonDofs:
     """One person's training DOFs: each performance's trajectory ``[K, T, D]`` (the mean of its
     cycles in DOF space), every cycle ``[N, T, D]`` with its performance's index ``[N]``, and the
-    person's mean rotations ``[J, 4]`` (over every sample of every clip) they are measured from."""
+    person's mean rotations ``[J, 4]`` (over every sample of every clip) they are measured from, and
+    every cycle's timing features ``[N, 2]`` (:func:`~expressive_mocap.exaggeration.timing.cycle_timing`)."""
 
     performances: np.ndarray
     cycles: np.ndarray
     cycle_level: np.ndarray
     reference: np.ndarray
+    timing: np.ndarray
 
 
 def _person_dofs(motions: Sequence[Motion], roles: JointRoles, settings: TrainSettings) -> _PersonDofs:
-    sampled = []
+    sampled, timing = [], []
     for k, m in enumerate(motions):
         try:
             cycles = choose_cycles(m, roles, settings.cycle, settings.foot)
             sampled.append(sample_cycles(m, roles, cycles, settings.samples))
+            timing.append(cycle_timing(m, roles, cycles, m.positions()))
         except MocapError as error:  # which clip: the caller knows the person, and maybe the file
             raise ClipError(str(error), -1, k) from None
     everything = np.concatenate([s.rotations.reshape(-1, *s.rotations.shape[2:]) for s in sampled])
@@ -48,6 +52,7 @@ def _person_dofs(motions: Sequence[Motion], roles: JointRoles, settings: TrainSe
         cycles=np.concatenate(per_clip),
         cycle_level=np.repeat(np.arange(len(per_clip)), [len(c) for c in per_clip]),
         reference=reference,
+        timing=np.concatenate(timing),
     )
 
 
@@ -186,6 +191,7 @@ def _model(
         X, levels, weights, cycles=(cycle_trajectories, cycle_performance), share=settings.share,
         energy=settings.energy, rank=settings.rank, degree=settings.degree,
     )  # fmt: skip
+    timing = fit_timing(np.concatenate([d.timing for d in per_person]), cycle_performance, levels, settings.degree)
     reference = mean_rotation(refs)
     common = _common_range(per_person, reference, skeleton, settings.representation)
     return ExaggerationModel(
@@ -215,6 +221,9 @@ def _model(
         cycle_trajectories=cycle_trajectories,
         cycle_performance=cycle_performance,
         settings=settings.to_dict(),
+        cycle_timing=np.concatenate([d.timing for d in per_person]),
+        timing_mappings=timing.mappings,
+        timing_predictability=timing.predictability,
     )
 
 

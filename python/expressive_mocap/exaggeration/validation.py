@@ -5,15 +5,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
+from .. import quat
 from ..errors import ArgumentError, ModelError
 from ..ops import forward_kinematics
 from .dofs import dofs_to_rotations
 from .fitting import fit, mapped
 from .model import ExaggerationModel
 from .settings import VALIDATION
+from .timing import PREDICTABLE, fit_timing, mapped_timing
 
 
 def dof_positions(model: ExaggerationModel, dofs: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -188,6 +191,95 @@ def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
     return results
 
 
+def timed_positions(
+    model: ExaggerationModel, dofs: np.ndarray, reference: np.ndarray, timing: np.ndarray, seconds: float, fps: float
+) -> np.ndarray:
+    """World joint positions ``[N, J, 3]`` of a cycle ``dofs [T, D]`` played over ``seconds`` at
+    ``fps`` with its timing features ``timing [2]`` (log duration in seconds, log travel in actor
+    heights): the pose at each frame's phase, repeated cycle after cycle, the hips travelling
+    along +Z (the heading is removed) as far a cycle as the travel says."""
+    time = np.arange(int(round(seconds * fps))) / fps
+    duration, travel = np.exp(timing[0]), np.exp(timing[1]) * model.height
+    phase = (time / duration) % 1.0 * (len(dofs) - 1)
+    positions = dof_positions(model, quat.resample(dofs, phase, rotations=False), reference)
+    positions[..., 2] += (travel * time / duration)[:, None]
+    return positions
+
+
+@dataclass
+class TimedResult:
+    """The swap test and the leave-one-person-out warp over world joint positions in time
+    (:func:`timed_positions`, two seconds), ``||x - heavy|| / ||light - heavy||``, with the
+    light performance's timing kept (``*_without``) and with the timing swapped / warped too
+    (``*_with``)."""
+
+    person: str
+    swap_without: float
+    swap_with: float
+    warp_without: float
+    warp_with: float
+
+
+def timing_validation(model: ExaggerationModel, seconds: float = 2.0, fps: float = 30.0) -> list[TimedResult]:
+    """Each person's key DOFs swapped lightest -> heaviest, and warped with the mappings of the
+    other people (as :func:`leave_one_out`), each compared with the real heaviest over world
+    joint positions in time, without and with the timing features (swapped: the heaviest's;
+    warped: the other people's timing mappings, for the features that follow the intensity);
+    then the mean over people. Needs a model with timing and at least two people."""
+    if not model.has_timing or model.cycle_timing is None:
+        raise ModelError("the model holds no timing features (trained before them): train it again")
+    P = model.trajectories.shape[0]
+    if P < 2:
+        raise ModelError("the timing validation needs at least two people")
+    settings = model.training
+    timing = fit_timing(model.cycle_timing, model.cycle_performance, model.levels, settings.degree).performances
+    rows = []
+    for p in range(P):
+        others = [q for q in range(P) if q != p]
+        fitted = fit(
+            model.trajectories[others], model.levels, model.weights, cycles=model.cycles_of(others),
+            share=settings.share, energy=settings.energy, rank=settings.rank, degree=settings.degree,
+        )  # fmt: skip
+        chosen = np.isin(model.cycle_performance[:, 0], others)
+        owners = model.cycle_performance[chosen].copy()
+        owners[:, 0] = np.searchsorted(others, owners[:, 0])
+        theirs = fit_timing(model.cycle_timing[chosen], owners, model.levels, settings.degree)
+        low, high = model.levels[0], model.levels[-1]
+        change = (mapped(fitted.mappings, high) - mapped(fitted.mappings, low)) * fitted.key[:, None]
+        timing_change = (mapped_timing(theirs.mappings, high) - mapped_timing(theirs.mappings, low)) * (
+            theirs.predictability >= PREDICTABLE
+        )
+        light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
+        swap = light.copy()
+        swap[:, model.person_key[p]] = heavy[:, model.person_key[p]]
+        warped = light + fitted.basis @ change.T
+        play = partial(timed_positions, model, reference=model.person_reference[p], seconds=seconds, fps=fps)
+        target = play(heavy, timing=timing[p, -1])
+        base = np.linalg.norm(play(light, timing=timing[p, 0]) - target)
+        ratios = [
+            np.linalg.norm(play(x, timing=t) - target) / base
+            for x, t in (
+                (swap, timing[p, 0]),
+                (swap, timing[p, -1]),
+                (warped, timing[p, 0]),
+                (warped, timing[p, 0] + timing_change),
+            )
+        ]
+        rows.append(TimedResult(str(p), *(float(r) for r in ratios)))
+    mean = np.mean([[r.swap_without, r.swap_with, r.warp_without, r.warp_with] for r in rows], axis=0)
+    return rows + [TimedResult("mean", *(float(v) for v in mean))]
+
+
+def timing_table(results: Sequence[TimedResult]) -> str:
+    """:func:`timing_validation`'s results as text."""
+    lines = [f"{'person':<8} {'swap':>8} {'+timing':>8} | {'warp':>8} {'+timing':>8}"]
+    for r in results:
+        lines.append(
+            f"{r.person:<8} {r.swap_without:8.3f} {r.swap_with:8.3f} | {r.warp_without:8.3f} {r.warp_with:8.3f}"
+        )
+    return "\n".join(lines)
+
+
 def validation_table(
     swaps: Sequence[SwapResult], warps: Sequence[WarpResult] = (), agreement: RankAgreement | None = None
 ) -> str:
@@ -217,10 +309,14 @@ def validation_table(
 __all__ = [
     "RankAgreement",
     "SwapResult",
+    "TimedResult",
     "WarpResult",
     "dof_positions",
     "leave_one_out",
     "rank_agreement",
     "swap_test",
+    "timed_positions",
+    "timing_table",
+    "timing_validation",
     "validation_table",
 ]

@@ -1,0 +1,201 @@
+"""Timing as part of intensity: each cycle's duration and the hips' travel over it, mapped by
+intensity like the pose coefficients, and a motion retimed to the mapped timing.
+
+The cycles are time-normalised before the basis is fitted, so the pose alone cannot say that a
+livelier walk is quicker with longer strides. Two features per cycle do: ``log`` of its duration
+(seconds) and ``log`` of the hips' horizontal travel over it in actor heights (floored at
+:data:`IN_PLACE` heights, so an action done in place has a constant travel feature). Logs make a
+change a ratio: the edit multiplies the motion's own duration and travel by ``exp(g(k1) -
+g(k0))``. A feature is applied only when it follows the intensity (its correlation with the
+intensity over every training cycle, averaged over people, at least :data:`PREDICTABLE`), as only
+the key DOFs of the pose are.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import quat
+from ..motion import Motion
+from ..ops import forward_kinematics
+from ..roles import JointRoles, actor_height, path_joint
+from .cycles import Cycle
+
+TIMING_NAMES = ("duration", "travel")
+# Below this travel per cycle (actor heights) an action is done in place: its travel is not scaled.
+IN_PLACE = 0.05
+# A timing feature is applied when its mean |correlation| with the intensity reaches this.
+PREDICTABLE = 0.5
+
+
+def cycle_timing(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], positions: np.ndarray) -> np.ndarray:
+    """``[C, 2]``: per cycle, log of its duration (seconds) and log of the hips' horizontal travel
+    from its first to its last frame in actor heights (at least :data:`IN_PLACE`)."""
+    height = actor_height(motion.skeleton, roles)
+    out = np.empty((len(cycles), 2))
+    for i, c in enumerate(cycles):
+        travel = positions[c.end, roles.hips, [0, 2]] - positions[c.start, roles.hips, [0, 2]]
+        distance = max(float(np.linalg.norm(travel)) / height, IN_PLACE)
+        out[i] = np.log((c.end - c.start) * motion.frame_time), np.log(distance)
+    return out
+
+
+def _correlation(values: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """Pearson correlation of ``values [N, 2]`` with ``levels [N]`` per column (0 where constant)."""
+    dv, dk = values - values.mean(axis=0), levels - levels.mean()
+    denominator = np.sqrt((dv * dv).sum(axis=0) * (dk * dk).sum())
+    return np.where(denominator > 1e-12, (dv * dk[:, None]).sum(axis=0) / np.maximum(denominator, 1e-300), 0.0)
+
+
+@dataclass(frozen=True)
+class TimingFit:
+    """``performances [P, K, 2]`` (the mean of each performance's cycles), ``mappings [2, degree
+    + 1]`` (a polynomial in k per feature, highest power first, averaged over people) and
+    ``predictability [2]`` (mean over people of the |correlation| of every cycle's feature with
+    its intensity)."""
+
+    performances: np.ndarray
+    mappings: np.ndarray
+    predictability: np.ndarray
+
+
+def fit_timing(cycles: np.ndarray, owners: np.ndarray, levels: np.ndarray, degree: int) -> TimingFit:
+    """Fit the timing features of every training cycle ``cycles [N, 2]`` (``owners [N, 2]``: the
+    person and intensity index of each) at ``levels [K]``: per person a least-squares polynomial
+    through the performances' means, as the pose coefficients' mappings are fitted."""
+    P, K = int(owners[:, 0].max()) + 1, len(levels)
+    performances = np.zeros((P, K, 2))
+    for p in range(P):
+        for k in range(K):
+            performances[p, k] = cycles[(owners[:, 0] == p) & (owners[:, 1] == k)].mean(axis=0)
+    V = np.vander(levels, degree + 1)
+    per_person = np.linalg.lstsq(V, performances.transpose(1, 0, 2).reshape(K, -1), rcond=None)[0]
+    mappings = per_person.reshape(degree + 1, P, 2).mean(axis=1).T
+    rho = [np.abs(_correlation(cycles[owners[:, 0] == p], levels[owners[owners[:, 0] == p, 1]])) for p in range(P)]
+    return TimingFit(performances, mappings, np.mean(rho, axis=0))
+
+
+def mapped_timing(mappings: np.ndarray, k: float) -> np.ndarray:
+    """``g(k) [2]``: the timing mappings ``[2, degree + 1]`` at intensity ``k``."""
+    return mappings @ (float(k) ** np.arange(mappings.shape[-1] - 1, -1, -1))
+
+
+@dataclass(frozen=True)
+class Timing:
+    """What the edit did to the timing: the factors the cycles' ``duration`` and the hips'
+    ``travel`` over each were multiplied by, whether the training range (+ margin) ``clamped``
+    them, and the motion's mean ``before`` and ``after`` as (cycle seconds, travel per cycle in
+    file units); ``warp [F']`` the input frame (fractional) of each output frame and ``span`` the
+    input frames whose travel was scaled (:func:`retime_like` retimes another motion alike)."""
+
+    duration: float
+    travel: float
+    clamped: bool
+    before: tuple[float, float]
+    after: tuple[float, float]
+    warp: np.ndarray
+    span: tuple[int, int]
+
+    def text(self, unit: str = "file units") -> str:
+        (d0, t0), (d1, t1) = self.before, self.after
+        clamped = ", clamped to the training range (+margin)" if self.clamped else ""
+        return (
+            f"timing: cycle duration x{self.duration:.3f} ({d0:.3f} -> {d1:.3f} s, cadence "
+            f"{2 / d0:.2f} -> {2 / d1:.2f} steps/s), travel per cycle x{self.travel:.3f} (speed "
+            f"{t0 / d0:.3g} -> {t1 / d1:.3g} {unit}/s){clamped}"
+        )
+
+
+def timing_factors(
+    change: np.ndarray, own: np.ndarray, lower: np.ndarray, upper: np.ndarray, margin: float
+) -> tuple[np.ndarray, bool]:
+    """The factors ``[2]`` the motion's duration and travel are multiplied by for a mapped change
+    ``change [2]`` (in the log features) of its own mean features ``own [2]``: the new features
+    kept within the training range ``lower, upper [2]`` widened by ``margin`` x its width (never
+    tighter than the motion's own), travel left alone for an action done in place."""
+    width = upper - lower
+    low, high = np.minimum(lower - margin * width, own), np.maximum(upper + margin * width, own)
+    new = np.clip(own + change, low, high)
+    clamped = bool(np.any(np.abs(new - (own + change)) > 1e-12))
+    if own[1] <= np.log(IN_PLACE) + 1e-12:
+        new[1] = own[1]
+    return np.exp(new - own), clamped
+
+
+def time_warp(n_frames: int, cycles: Sequence[Cycle], duration: float) -> np.ndarray:
+    """Fractional input frames ``[F']`` at each output frame when the span of ``cycles`` lasts
+    ``duration`` times as long (frames before and after it keep their pace)."""
+    a, b = cycles[0].start, cycles[-1].end
+    last = a + (b - a) * duration + (n_frames - 1 - b)  # the last input frame's time, in output frames
+    t = np.arange(int(np.floor(last + 1e-9)) + 1, dtype=np.float64)
+    end = a + (b - a) * duration  # the span's last frame, in output frames
+    u = np.where(t <= a, t, np.where(t <= end, a + (t - a) / duration, t - end + b))
+    return np.clip(u, 0.0, n_frames - 1)
+
+
+def retime(
+    motion: Motion, roles: JointRoles, warp: np.ndarray, span: tuple[int, int], travel: float
+) -> tuple[Motion, np.ndarray]:
+    """``motion`` sampled at the fractional frames ``warp [F']`` (slerp, linear), the hips'
+    horizontal travel over the input frames ``span`` multiplied by ``travel`` (after it, the path
+    goes on from where the longer or shorter travel left it); with the world shift ``[F', 3]``
+    the travel added to every joint."""
+    rotations = quat.resample(motion.rotations, warp)
+    translations = quat.resample(motion.translations, warp, rotations=False)
+    shift = np.zeros((len(warp), 3))
+    if travel != 1.0:
+        hips = forward_kinematics(motion.rotations, motion.translations, motion.skeleton.parents)[1][:, roles.hips]
+        along = quat.resample(hips, np.clip(warp, *span), rotations=False)
+        shift = (travel - 1.0) * (along - hips[span[0]])  # the extra travel so far, kept after the span
+        shift[:, 1] = 0.0
+        mover = path_joint(motion.translations, motion.skeleton, roles)
+        parent = motion.skeleton.parents[mover]
+        local = shift
+        if parent >= 0:
+            world = forward_kinematics(rotations, translations, motion.skeleton.parents)[0][:, parent]
+            local = quat.rotate(quat.conjugate(world), shift)
+        translations[:, mover] += local
+    return Motion(motion.skeleton, rotations, translations, motion.frame_time), shift
+
+
+def retime_like(motion: Motion, timing: Timing, roles: JointRoles | None = None) -> Motion:
+    """``motion`` (of as many frames as the edited one, on any skeleton) retimed as an edit was:
+    what an edit of it carried onto another skeleton is laid back on."""
+    return retime(motion, roles or JointRoles.find(motion.skeleton), timing.warp, timing.span, timing.travel)[0]
+
+
+def warped_contacts(contacts: np.ndarray, warp: np.ndarray) -> np.ndarray:
+    """Contacts ``[F, 2]`` at the fractional frames ``warp``: those of the nearest input frame."""
+    return np.asarray(contacts, dtype=bool)[np.rint(warp).astype(int)]
+
+
+def planted_ankles(motion: Motion, contacts: np.ndarray, roles: JointRoles, shift: np.ndarray) -> np.ndarray:
+    """``[F, 2, 3]``: the ankles of the retimed input ``motion`` without the part of the travel's
+    ``shift [F, 3]`` that grows during each run of ``contacts`` (held at its mean over the run):
+    each stance foot rolls as in the input, where the longer or shorter path would slide it."""
+    from ..skeletons.planting import _run_offsets
+
+    positions = motion.positions()
+    held = [_run_offsets(shift, contacts[:, s]) - shift for s in (0, 1)]
+    return np.stack([positions[:, roles.feet[s]] + held[s] for s in (0, 1)], axis=1)
+
+
+__all__ = [
+    "IN_PLACE",
+    "PREDICTABLE",
+    "TIMING_NAMES",
+    "Timing",
+    "TimingFit",
+    "cycle_timing",
+    "fit_timing",
+    "mapped_timing",
+    "planted_ankles",
+    "retime",
+    "retime_like",
+    "time_warp",
+    "timing_factors",
+    "warped_contacts",
+]
