@@ -20,6 +20,7 @@ from .common import PROG, add_map_option, default, finite, joint_map, positive, 
 __all__ = [
     "BODY_MODEL_FIX",
     "DECOUPLE_SUFFIXES",
+    "add_feet_options",
     "add_model_options",
     "add_parsers",
     "body_model",
@@ -63,6 +64,22 @@ def add_model_options(p, calibrate: bool = True) -> None:
         "--exponent", type=positive(float), default=EXPONENT, help=f"b of the activity index (default {EXPONENT:g})"
     )
     add_map_option(p)
+
+
+def add_feet_options(p, joints: bool = True) -> None:
+    """--joints for the edits that take another motion's expression."""
+    if joints:
+        from ..decoupling.feet import JOINT_GROUPS
+
+        p.add_argument(
+            "--joints",
+            nargs="+",
+            choices=JOINT_GROUPS,
+            metavar="GROUP",
+            help=f"take the expressive component of these joint groups only ({', '.join(JOINT_GROUPS)}); "
+            "default: every joint as the activity index says, but not the legs when one clip stands and the other "
+            "does not",
+        )
 
 
 def add_threshold_option(p) -> None:
@@ -185,6 +202,7 @@ def add_mix(commands) -> None:
     )
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     add_model_options(p)
+    add_feet_options(p)
     p.set_defaults(run=cmd_mix)
 
 
@@ -196,7 +214,18 @@ def cmd_mix(args) -> int:
     expressive = read_for_model(
         args.expressive, model, BODY_MODEL_FIX, joint_map(args)
     )  # any skeleton: on the model's body
-    out = back(mix(body, expressive, model, args.align, args.offset, args.gain, args.exponent))
+    out = back(
+        mix(
+            body,
+            expressive,
+            model,
+            args.align,
+            args.offset,
+            args.gain,
+            args.exponent,
+            joints=args.joints,
+        )
+    )
     write_bvh(out, args.output)
     print(f"wrote {args.output}: body mechanics of {args.body}, expressiveness of {args.expressive}")
     return 0
@@ -237,6 +266,7 @@ def add_blend(commands) -> None:
     )
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     add_model_options(p)
+    add_feet_options(p)
     p.set_defaults(run=cmd_blend)
 
 
@@ -251,7 +281,18 @@ def cmd_blend(args) -> int:
         model = body_model(args)
         first, back = read_on_model(args.first, model, BODY_MODEL_FIX, joint_map(args))
         second = read_for_model(args.second, model, BODY_MODEL_FIX, joint_map(args))
-        out = back(blend(first, second, model, args.body_window, expressive_window, args.gain, args.exponent))
+        out = back(
+            blend(
+                first,
+                second,
+                model,
+                args.body_window,
+                expressive_window,
+                args.gain,
+                args.exponent,
+                joints=args.joints,
+            )
+        )
     write_bvh(out, args.output)
     a = blend_alignment(first, second, args.body_window, expressive_window)
     print(f"wrote {args.output}: {out.n_frames} frames")

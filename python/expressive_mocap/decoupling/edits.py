@@ -15,6 +15,7 @@ from ..motion import Motion
 from ..ops import compose_rotations, forward_kinematics
 from ..roles import JointRoles, facing_yaw, path_joint
 from .algebra import EXPONENT, GAIN, BodyMechanicsModel, decompose
+from .feet import chosen_joints
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -55,14 +56,20 @@ def mix(
     offset: int = 0,
     gain: float = GAIN,
     exponent: float = EXPONENT,
+    joints=None,
 ) -> Motion:
     """The body mechanics (and root trajectory) of ``body_source`` with the expressive component
     of ``expressive_source``: ``E*_Y B'_X``. The expressive source is aligned to the body source
-    frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``)."""
+    frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``).
+    ``joints``: the joints that take ``expressive_source``'s expression (group names such as
+    ``"arms"``, or a mask; default :func:`~expressive_mocap.decoupling.feet.default_mask`); the
+    others keep ``body_source``'s rotations exactly."""
     _check_same_skeleton(body_source, expressive_source, "mix")
+    mask = chosen_joints(joints, body_source, expressive_source)
     body = decompose(body_source, model, gain, exponent)
     expressive = decompose(expressive_source, model, gain, exponent).expressive
     rotations = compose_rotations(_aligned(expressive, body_source.n_frames, align, offset), body.body)
+    rotations = np.where(mask[None, :, None], rotations, body_source.rotations)
     return Motion(body_source.skeleton, rotations, body_source.translations, body_source.frame_time)
 
 
@@ -166,6 +173,7 @@ def blend(
     gain: float = GAIN,
     exponent: float = EXPONENT,
     roles: JointRoles | None = None,
+    joints=None,
 ) -> Motion:
     """Blend from ``first`` to ``second``, body mechanics over ``body_window`` and the expressive
     component over ``expressive_window`` (output frames ``(start, end)``; slerp with smoothstep
@@ -176,7 +184,9 @@ def blend(
     hips on Bandai-Namco files, whose root never moves). In the body window the path follows the
     blend of both motions' steps, so it never moves faster than either (:func:`blend_alignment`
     tells the turn and the move). Without a model (or without an expressive window) this is the
-    naive blend: whole poses over ``body_window``."""
+    naive blend: whole poses over ``body_window``. ``joints``: the joints whose expressive
+    component goes over ``expressive_window`` (as in :func:`mix`); the others' goes with their body
+    mechanics."""
     _check_same_skeleton(first, second, "blend")
     roles = roles or JointRoles.find(first.skeleton)
     start = _second_start(body_window, expressive_window)
@@ -194,7 +204,9 @@ def blend(
     else:
         a, b = decompose(first, model, gain, exponent), decompose(second, model, gain, exponent)
         body = quat.slerp(a.body[i], b.body[j], body_weights[:, None])
-        expressive = quat.slerp(a.expressive[i], b.expressive[j], _weights(frames, expressive_window)[:, None])
+        mask = chosen_joints(joints, first, second, roles)[None, :]
+        weights = np.where(mask, _weights(frames, expressive_window)[:, None], body_weights[:, None])
+        expressive = quat.slerp(a.expressive[i], b.expressive[j], weights)
         rotations = compose_rotations(expressive, body)
 
     w = body_weights[:, None, None]
