@@ -1,15 +1,19 @@
-"""Plausible decoupling edits: the expressive component taken from chosen joint groups only."""
+"""Plausible decoupling edits: stance feet kept where the body-mechanics source has them
+(modulate, mix, blend) and the expressive component taken from chosen joint groups only.
+Feet are measured on the written files with the tests' own SciPy forward kinematics."""
 
 import numpy as np
 import pytest
 
 import expressive_mocap as em
-from conftest import bvh_values
+from conftest import bvh_values, scipy_positions
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling import BodyModel
-from expressive_mocap.decoupling.edits import mix
+from expressive_mocap.decoupling.edits import blend, mix, modulate
 from expressive_mocap.decoupling.feet import default_mask, joint_mask
 from expressive_mocap.errors import ArgumentError
+from expressive_mocap.features import foot_contacts
+from expressive_mocap.roles import JointRoles
 from expressive_mocap.skeletons.canonical import canonical_skeleton
 from expressive_mocap.skeletons.synthetic import synthetic_skeleton
 
@@ -20,6 +24,28 @@ ARMS = [f"{part}_{side}" for side in "LR" for part in ("Shoulder", "UpperArm", "
 @pytest.fixture(scope="module")
 def model():
     return BodyModel.load()
+
+
+def stance_speed(path, contacts) -> float:
+    """Mean horizontal speed of the ankles and toes of the file ``path`` between two consecutive
+    frames where ``contacts [F, 2]`` has their foot down (SciPy positions of the written file)."""
+    motion = em.read_bvh(path)
+    roles = JointRoles.find(motion.skeleton)
+    positions = scipy_positions(motion.skeleton, bvh_values(path))
+    speeds = []
+    for side in (0, 1):
+        for joint in (roles.feet[side], roles.toes[side]):
+            v = np.linalg.norm(np.diff(positions[:, joint][:, [0, 2]], axis=0), axis=1) / motion.frame_time
+            speeds.append(v[contacts[1:, side] & contacts[:-1, side]])
+    return float(np.concatenate(speeds).mean())
+
+
+def speeds(tmp_path, source: em.Motion, edited: em.Motion) -> tuple[float, float]:
+    """Stance-foot speed of ``source`` and of ``edited`` over ``source``'s contacts."""
+    contacts = foot_contacts(source)
+    em.write_bvh(source, tmp_path / "source.bvh")
+    em.write_bvh(edited, tmp_path / "edited.bvh")
+    return stance_speed(tmp_path / "source.bvh", contacts), stance_speed(tmp_path / "edited.bvh", contacts)
 
 
 # Groups of joints ---------------------------------------------------------------------------
@@ -44,9 +70,8 @@ def test_joint_groups_on_another_skeleton_take_the_fingers_with_the_hand():
     arms = names(skeleton, "arms")
     assert {"LeftShoulder", "LeftHand", "LeftHandIndex1", "LThumb", "RightForeArm"} <= arms
     assert not arms & {"Hips", "Spine1", "Head", "LeftUpLeg"}
-    assert names(skeleton, "legs") == {
-        f"{s}{p}" for s in ("Left", "Right") for p in ("UpLeg", "Leg", "Foot", "ToeBase")
-    }
+    legs = {f"{side}{part}" for side in ("Left", "Right") for part in ("UpLeg", "Leg", "Foot", "ToeBase")}
+    assert names(skeleton, "legs") == legs
 
 
 def test_an_unknown_group_is_a_clear_error():
@@ -77,11 +102,9 @@ def test_mixing_the_arms_only_leaves_every_other_joint_bit_for_bit(clips, model)
     np.testing.assert_array_equal(out.rotations[:, others], walk.rotations[:, others])
     np.testing.assert_array_equal(out.translations, walk.translations)
     # ... and the arms do take the wave's expression: the right arm moves off the walk's.
-    hand = walk.skeleton.index("LowerArm_R")
-    assert (
-        np.degrees(em.quat.angle(em.quat.mul(out.rotations[:, hand], em.quat.conjugate(walk.rotations[:, hand])))).max()
-        > 30
-    )
+    forearm = walk.skeleton.index("LowerArm_R")
+    turn = em.quat.mul(out.rotations[:, forearm], em.quat.conjugate(walk.rotations[:, forearm]))
+    assert np.degrees(em.quat.angle(turn)).max() > 30
 
 
 def test_by_default_a_standing_clips_legs_are_not_laid_on_a_walk(clips, model):
@@ -89,8 +112,24 @@ def test_by_default_a_standing_clips_legs_are_not_laid_on_a_walk(clips, model):
     legs = joint_mask(walk.skeleton, "legs")
     assert not default_mask(walk, wave)[legs].any() and not default_mask(wave, walk)[legs].any()
     assert default_mask(walk, clips["walk1"]).all()  # two walks: every joint
-    out = mix(walk, wave, model)
+    out = mix(walk, wave, model, plant_feet=False)
     np.testing.assert_array_equal(out.rotations[:, legs], walk.rotations[:, legs])
+
+
+def test_modulate_keeps_the_stance_feet_of_a_stooped_walk(clips, model, tmp_path):
+    old = clips["old"]
+    before, after = speeds(tmp_path, old, modulate(old, 0.0, model))
+    assert after <= 1.2 * before
+    # Without the locking the straightened walk's stance feet slide several times as fast.
+    assert speeds(tmp_path, old, modulate(old, 0.0, model, plant_feet=False))[1] > 3 * before
+
+
+@pytest.mark.parametrize("body, expressive", [("walk1", "bye1"), ("bye1", "walk1")])
+def test_mix_keeps_the_body_sources_stance_feet(clips, model, tmp_path, body, expressive):
+    a, b = clips[body], clips[expressive]
+    for joints in (None, "all"):
+        before, after = speeds(tmp_path, a, mix(a, b, model, joints=joints))
+        assert after <= 1.2 * before, joints
 
 
 def test_mix_takes_joint_groups(bandai2_dir, tmp_path, capsys):
@@ -106,3 +145,30 @@ def test_mix_takes_joint_groups(bandai2_dir, tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["mix", "--body", str(walk), "--expressive", str(wave), "--joints", "hands", "-o", str(out)])
     assert "invalid choice: 'hands'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("windows", [((30, 40), (150, 160)), ((150, 160), (30, 40))])
+def test_blend_keeps_the_stance_feet_where_the_bodies_are_blended(clips, model, tmp_path, windows):
+    # Between the windows one clip's expression rides on the other's body: a walk's leg swing on
+    # a standing gesture, or the reverse, when every joint's expression is taken.
+    for first, second in (("old", "bye1"), ("bye1", "old")):
+        a, b = clips[first], clips[second]
+        naive = blend(a, b, None, *windows)  # its feet: the first's, then the second's
+        before, after = speeds(tmp_path, naive, blend(a, b, model, *windows, joints="all"))
+        assert after <= 1.2 * before
+        unlocked = speeds(tmp_path, naive, blend(a, b, model, *windows, joints="all", plant_feet=False))[1]
+        assert unlocked > 3 * before
+
+
+def test_modulate_plants_the_feet_of_another_skeleton(other_dir, tmp_path):
+    # A Xia-style walk goes through the canonical body and back: its own feet stay planted.
+    source = other_dir / "dme_comp_3d_2.bvh"
+    contacts = foot_contacts(em.read_bvh(source))
+    speeds = []
+    for extra in ([], ["--no-foot-lock"]):
+        out = tmp_path / f"out{len(extra)}.bvh"
+        assert main(["modulate", str(source), "--scale", "0", *extra, "-o", str(out)]) == 0
+        speeds.append(stance_speed(out, contacts))
+    before = stance_speed(source, contacts)
+    assert speeds[0] <= 1.2 * before
+    assert speeds[1] > 3 * before  # unlocked, the straightened legs slide

@@ -67,7 +67,13 @@ def add_model_options(p, calibrate: bool = True) -> None:
 
 
 def add_feet_options(p, joints: bool = True) -> None:
-    """--joints for the edits that take another motion's expression."""
+    """--no-foot-lock, and --joints for the edits that take another motion's expression."""
+    p.add_argument(
+        "--no-foot-lock",
+        action="store_true",
+        help="leave the stance feet where the edit puts them (by default they are kept where the body-mechanics "
+        "source has them during its contacts, with leg IK)",
+    )
     if joints:
         from ..decoupling.feet import JOINT_GROUPS
 
@@ -172,6 +178,7 @@ def add_modulate(commands) -> None:
     p.add_argument("--scale", type=finite, required=True, help="expressiveness factor, e.g. 0.5 or 1.5")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     add_model_options(p)
+    add_feet_options(p, joints=False)
     p.set_defaults(run=cmd_modulate)
 
 
@@ -180,7 +187,7 @@ def cmd_modulate(args) -> int:
 
     model = body_model(args)
     motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, joint_map(args))
-    out = back(modulate(motion, args.scale, model, args.gain, args.exponent))
+    out = back(modulate(motion, args.scale, model, args.gain, args.exponent, plant_feet=not args.no_foot_lock))
     write_bvh(out, args.output)
     print(f"wrote {args.output}: expressiveness x {args.scale:g}")
     return 0
@@ -224,6 +231,7 @@ def cmd_mix(args) -> int:
             args.gain,
             args.exponent,
             joints=args.joints,
+            plant_feet=not args.no_foot_lock,
         )
     )
     write_bvh(out, args.output)
@@ -291,6 +299,7 @@ def cmd_blend(args) -> int:
                 args.gain,
                 args.exponent,
                 joints=args.joints,
+                plant_feet=not args.no_foot_lock,
             )
         )
     write_bvh(out, args.output)
