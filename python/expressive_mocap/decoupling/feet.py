@@ -22,8 +22,8 @@ from ..skeletons.jointmap import JointMap, find_joint_map
 from ..skeletons.names import ARM_ROLES, LEG_ROLES
 
 JOINT_GROUPS = ("all", "arms", "upper-body", "head", "legs")
-# Both feet on the floor in at least this share of the frames: a clip that stands (a walk has both
-# down in about a quarter of its frames, a run in none).
+# Both feet on the floor in at least this share of the frames: a clip that stands. Measured on the
+# Bandai-Namco takes 001: walks 0.01-0.47, runs and dashes 0-0.09, gestures and bows 0.89-1.
 STANDING_SHARE = 0.8
 # The feet are held through each contact and this long either side of it: the contact detector
 # starts a contact once the foot is slow, a frame or two after it lands.
