@@ -172,3 +172,35 @@ def test_modulate_plants_the_feet_of_another_skeleton(other_dir, tmp_path):
     before = stance_speed(source, contacts)
     assert speeds[0] <= 1.2 * before
     assert speeds[1] > 3 * before  # unlocked, the straightened legs slide
+
+
+def test_planted_puts_the_stance_feet_back_and_eases_the_swing():
+    """On the demo's walk (no data needed): bend both knees (bones lie along X) and turn a foot;
+    through the contacts the ankles and feet are the walk's again, and the swing gets no jump."""
+    from expressive_mocap.decoupling.feet import planted
+    from expressive_mocap.demo import procedural_walk
+
+    walk = procedural_walk(seconds=3.0)
+    skeleton = walk.skeleton
+    rotations = walk.rotations.copy()
+    for name, axis, degrees in (("LowerLeg_L", "Z", 25.0), ("LowerLeg_R", "Z", -15.0), ("Foot_L", "Y", 20.0)):
+        j = skeleton.index(name)
+        rotations[:, j] = em.quat.mul(rotations[:, j], em.quat.about(axis, degrees)[None])
+    edited = em.Motion(skeleton, rotations, walk.translations, walk.frame_time)
+    out, contacts = planted(walk, edited)
+    world_in, pos_in = walk.fk()
+    world_out, pos_out = out.fk()
+    moved = edited.positions()
+    for side, (foot, toe) in enumerate((("Foot_L", "Toes_L"), ("Foot_R", "Toes_R"))):
+        f, t = skeleton.index(foot), skeleton.index(toe)
+        down = contacts[:, side]
+        assert down.any() and not down.all()
+        np.testing.assert_allclose(pos_out[down, f], pos_in[down, f], atol=1e-6)
+        np.testing.assert_allclose(pos_out[down, t], pos_in[down, t], atol=1e-6)  # the foot's rotation too
+        assert np.abs(moved[down, f] - pos_in[down, f]).max() > 1.0  # the edit had moved them (cm)
+        # No frame-to-frame step of the ankle longer than the walk's or the edit's own largest.
+        steps = [np.linalg.norm(np.diff(p[:, f], axis=0), axis=1).max() for p in (pos_in, moved, pos_out)]
+        assert steps[2] <= 1.05 * max(steps[:2])
+    # Arms and spine are the edit's.
+    upper = [skeleton.index(n) for n in ARMS + ["Spine", "Chest", "Head"]]
+    np.testing.assert_array_equal(out.rotations[:, upper], edited.rotations[:, upper])
