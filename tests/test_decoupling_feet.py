@@ -145,6 +145,9 @@ def test_mix_takes_joint_groups(bandai2_dir, tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["mix", "--body", str(walk), "--expressive", str(wave), "--joints", "hands", "-o", str(out)])
     assert "invalid choice: 'hands'" in capsys.readouterr().err
+    naive = ["blend", str(walk), str(wave), "--body-window", "30:40", "--naive", "--joints", "arms", "-o", str(out)]
+    assert main(naive) != 0
+    assert "--joints: the naive blend takes whole poses" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("windows", [((30, 40), (150, 160)), ((150, 160), (30, 40))])

@@ -282,6 +282,10 @@ def cmd_blend(args) -> int:
     from ..decoupling.edits import blend, blend_alignment
 
     expressive_window = None if args.naive else args.expressive_window or args.body_window
+    if args.naive and args.joints:
+        raise MocapError(
+            "--joints: the naive blend takes whole poses, not joints' expression; drop --naive or --joints"
+        )
     if args.naive:
         first, second = read_bvh(args.first), read_bvh(args.second)
         out = blend(first, second, None, args.body_window)
