@@ -101,11 +101,16 @@ def test_blend_heading_is_continuous_at_the_anchor(bandai2_dir, body_model):
 # --------------------------------------------------------------------------- units
 
 
-def assert_same_up_to_scale(cm: em.Motion, m: em.Motion, what: str) -> None:
-    """Rotations equal (to 1e-9 degrees), world positions equal after scaling (to 1e-9 cm)."""
+def assert_same_up_to_scale(cm: em.Motion, m: em.Motion, what: str, tolerance: float = 1e-9) -> None:
+    """Rotations equal (to ``tolerance`` degrees), world positions equal after scaling (to ``tolerance`` cm)."""
     turn = np.degrees(quat.angle(quat.mul(quat.conjugate(cm.rotations), m.rotations)))
-    assert turn.max() < 1e-9, f"{what}: rotations differ by up to {turn.max():.3g} degrees"
-    np.testing.assert_allclose(m.positions() * 100.0, cm.positions(), atol=1e-9, err_msg=what)
+    assert turn.max() < tolerance, f"{what}: rotations differ by up to {turn.max():.3g} degrees"
+    np.testing.assert_allclose(m.positions() * 100.0, cm.positions(), atol=tolerance, err_msg=what)
+
+
+# The edits that plant the feet with leg IK: its arccos of a nearly straight knee rounds differently
+# in centimetres and metres (measured: up to 1.2e-6 degrees).
+IK = 1e-5
 
 
 @pytest.fixture(scope="module")
@@ -156,12 +161,13 @@ def test_decoupling_and_features_are_unit_free(clips_cm_and_m, body_model):
     assert_same_up_to_scale(
         dc.decompose(walk, body_model).body_motion(), dc.decompose(walk_m, body_model).body_motion(), "decompose"
     )
-    assert_same_up_to_scale(dc.modulate(wave, 1.5, body_model), dc.modulate(wave_m, 1.5, body_model), "modulate")
-    assert_same_up_to_scale(dc.mix(walk, wave, body_model), dc.mix(walk_m, wave_m, body_model), "mix")
+    assert_same_up_to_scale(dc.modulate(wave, 1.5, body_model), dc.modulate(wave_m, 1.5, body_model), "modulate", IK)
+    assert_same_up_to_scale(dc.mix(walk, wave, body_model), dc.mix(walk_m, wave_m, body_model), "mix", IK)
     assert_same_up_to_scale(
         dc.blend(walk, wave, body_model, (30, 60), (60, 75)),
         dc.blend(walk_m, wave_m, body_model, (30, 60), (60, 75)),
         "blend",
+        IK,
     )
     assert_same_up_to_scale(
         dc.blend(walk, wave, None, (30, 60)), dc.blend(walk_m, wave_m, None, (30, 60)), "naive blend"

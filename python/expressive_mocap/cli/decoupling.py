@@ -20,6 +20,7 @@ from .common import PROG, add_map_option, default, finite, joint_map, positive, 
 __all__ = [
     "BODY_MODEL_FIX",
     "DECOUPLE_SUFFIXES",
+    "add_feet_options",
     "add_model_options",
     "add_parsers",
     "body_model",
@@ -63,6 +64,28 @@ def add_model_options(p, calibrate: bool = True) -> None:
         "--exponent", type=positive(float), default=EXPONENT, help=f"b of the activity index (default {EXPONENT:g})"
     )
     add_map_option(p)
+
+
+def add_feet_options(p, joints: bool = True) -> None:
+    """--no-foot-lock, and --joints for the edits that take another motion's expression."""
+    p.add_argument(
+        "--no-foot-lock",
+        action="store_true",
+        help="leave the stance feet where the edit puts them (by default they are kept where the body-mechanics "
+        "source has them during its contacts, with leg IK)",
+    )
+    if joints:
+        from ..decoupling.feet import JOINT_GROUPS
+
+        p.add_argument(
+            "--joints",
+            nargs="+",
+            choices=JOINT_GROUPS,
+            metavar="GROUP",
+            help=f"take the expressive component of these joint groups only ({', '.join(JOINT_GROUPS)}); "
+            "default: every joint as the activity index says, but not the legs when one clip stands and the other "
+            "does not",
+        )
 
 
 def add_threshold_option(p) -> None:
@@ -155,6 +178,7 @@ def add_modulate(commands) -> None:
     p.add_argument("--scale", type=finite, required=True, help="expressiveness factor, e.g. 0.5 or 1.5")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     add_model_options(p)
+    add_feet_options(p, joints=False)
     p.set_defaults(run=cmd_modulate)
 
 
@@ -163,7 +187,7 @@ def cmd_modulate(args) -> int:
 
     model = body_model(args)
     motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, joint_map(args))
-    out = back(modulate(motion, args.scale, model, args.gain, args.exponent))
+    out = back(modulate(motion, args.scale, model, args.gain, args.exponent, plant_feet=not args.no_foot_lock))
     write_bvh(out, args.output)
     print(f"wrote {args.output}: expressiveness x {args.scale:g}")
     return 0
@@ -185,6 +209,7 @@ def add_mix(commands) -> None:
     )
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     add_model_options(p)
+    add_feet_options(p)
     p.set_defaults(run=cmd_mix)
 
 
@@ -196,7 +221,19 @@ def cmd_mix(args) -> int:
     expressive = read_for_model(
         args.expressive, model, BODY_MODEL_FIX, joint_map(args)
     )  # any skeleton: on the model's body
-    out = back(mix(body, expressive, model, args.align, args.offset, args.gain, args.exponent))
+    out = back(
+        mix(
+            body,
+            expressive,
+            model,
+            args.align,
+            args.offset,
+            args.gain,
+            args.exponent,
+            joints=args.joints,
+            plant_feet=not args.no_foot_lock,
+        )
+    )
     write_bvh(out, args.output)
     print(f"wrote {args.output}: body mechanics of {args.body}, expressiveness of {args.expressive}")
     return 0
@@ -237,6 +274,7 @@ def add_blend(commands) -> None:
     )
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     add_model_options(p)
+    add_feet_options(p)
     p.set_defaults(run=cmd_blend)
 
 
@@ -244,6 +282,10 @@ def cmd_blend(args) -> int:
     from ..decoupling.edits import blend, blend_alignment
 
     expressive_window = None if args.naive else args.expressive_window or args.body_window
+    if args.naive and args.joints:
+        raise MocapError(
+            "--joints: the naive blend takes whole poses, not joints' expression; drop --naive or --joints"
+        )
     if args.naive:
         first, second = read_bvh(args.first), read_bvh(args.second)
         out = blend(first, second, None, args.body_window)
@@ -251,7 +293,19 @@ def cmd_blend(args) -> int:
         model = body_model(args)
         first, back = read_on_model(args.first, model, BODY_MODEL_FIX, joint_map(args))
         second = read_for_model(args.second, model, BODY_MODEL_FIX, joint_map(args))
-        out = back(blend(first, second, model, args.body_window, expressive_window, args.gain, args.exponent))
+        out = back(
+            blend(
+                first,
+                second,
+                model,
+                args.body_window,
+                expressive_window,
+                args.gain,
+                args.exponent,
+                joints=args.joints,
+                plant_feet=not args.no_foot_lock,
+            )
+        )
     write_bvh(out, args.output)
     a = blend_alignment(first, second, args.body_window, expressive_window)
     print(f"wrote {args.output}: {out.n_frames} frames")

@@ -15,15 +15,24 @@ from ..motion import Motion
 from ..ops import compose_rotations, forward_kinematics
 from ..roles import JointRoles, facing_yaw, path_joint
 from .algebra import EXPONENT, GAIN, BodyMechanicsModel, decompose
+from .feet import chosen_joints, planted
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 def modulate(
-    motion: Motion, scale: float, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT
+    motion: Motion,
+    scale: float,
+    model: BodyMechanicsModel,
+    gain: float = GAIN,
+    exponent: float = EXPONENT,
+    plant_feet: bool = True,
 ) -> Motion:
-    """The motion with its expressiveness scaled: ``O_s = E*^s B'`` (1 = unchanged, 0 = body mechanics only)."""
-    return decompose(motion, model, gain, exponent).recompose(scale)
+    """The motion with its expressiveness scaled: ``O_s = E*^s B'`` (1 = unchanged, 0 = body
+    mechanics only). ``plant_feet``: the stance feet kept where ``motion`` has them during its
+    contacts (:func:`~expressive_mocap.decoupling.feet.planted`)."""
+    out = decompose(motion, model, gain, exponent).recompose(scale)
+    return planted(motion, out)[0] if plant_feet else out
 
 
 def _check_same_skeleton(a: Motion, b: Motion, what: str) -> None:
@@ -55,15 +64,24 @@ def mix(
     offset: int = 0,
     gain: float = GAIN,
     exponent: float = EXPONENT,
+    joints=None,
+    plant_feet: bool = True,
 ) -> Motion:
     """The body mechanics (and root trajectory) of ``body_source`` with the expressive component
     of ``expressive_source``: ``E*_Y B'_X``. The expressive source is aligned to the body source
-    frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``)."""
+    frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``).
+    ``joints``: the joints that take ``expressive_source``'s expression (group names such as
+    ``"arms"``, or a mask; default :func:`~expressive_mocap.decoupling.feet.default_mask`); the
+    others keep ``body_source``'s rotations exactly. ``plant_feet``: the stance feet kept where
+    ``body_source`` has them during its contacts."""
     _check_same_skeleton(body_source, expressive_source, "mix")
+    mask = chosen_joints(joints, body_source, expressive_source)
     body = decompose(body_source, model, gain, exponent)
     expressive = decompose(expressive_source, model, gain, exponent).expressive
     rotations = compose_rotations(_aligned(expressive, body_source.n_frames, align, offset), body.body)
-    return Motion(body_source.skeleton, rotations, body_source.translations, body_source.frame_time)
+    rotations = np.where(mask[None, :, None], rotations, body_source.rotations)
+    out = Motion(body_source.skeleton, rotations, body_source.translations, body_source.frame_time)
+    return planted(body_source, out)[0] if plant_feet else out
 
 
 def _weights(frames: int, window: tuple[int, int]) -> np.ndarray:
@@ -166,6 +184,8 @@ def blend(
     gain: float = GAIN,
     exponent: float = EXPONENT,
     roles: JointRoles | None = None,
+    joints=None,
+    plant_feet: bool = True,
 ) -> Motion:
     """Blend from ``first`` to ``second``, body mechanics over ``body_window`` and the expressive
     component over ``expressive_window`` (output frames ``(start, end)``; slerp with smoothstep
@@ -176,7 +196,10 @@ def blend(
     hips on Bandai-Namco files, whose root never moves). In the body window the path follows the
     blend of both motions' steps, so it never moves faster than either (:func:`blend_alignment`
     tells the turn and the move). Without a model (or without an expressive window) this is the
-    naive blend: whole poses over ``body_window``."""
+    naive blend: whole poses over ``body_window``. ``joints``: the joints whose expressive
+    component goes over ``expressive_window`` (as in :func:`mix`); the others' goes with their body
+    mechanics. ``plant_feet``: the stance feet kept where the naive blend (whose feet are the
+    first's before the body window and the second's after it) has them during its contacts."""
     _check_same_skeleton(first, second, "blend")
     roles = roles or JointRoles.find(first.skeleton)
     start = _second_start(body_window, expressive_window)
@@ -184,6 +207,7 @@ def blend(
     i, j = _on_timeline(first, 0, frames), _on_timeline(second, start, frames)
     body_weights = _weights(frames, body_window)
 
+    original_second = second
     first_positions = first.positions()
     alignment = blend_alignment(first, second, body_window, expressive_window, roles, first_positions)
     carrier = alignment.joint
@@ -194,7 +218,9 @@ def blend(
     else:
         a, b = decompose(first, model, gain, exponent), decompose(second, model, gain, exponent)
         body = quat.slerp(a.body[i], b.body[j], body_weights[:, None])
-        expressive = quat.slerp(a.expressive[i], b.expressive[j], _weights(frames, expressive_window)[:, None])
+        mask = chosen_joints(joints, first, second, roles)[None, :]
+        weights = np.where(mask, _weights(frames, expressive_window)[:, None], body_weights[:, None])
+        expressive = quat.slerp(a.expressive[i], b.expressive[j], weights)
         rotations = compose_rotations(expressive, body)
 
     w = body_weights[:, None, None]
@@ -212,7 +238,11 @@ def blend(
         world_rotations, positions = forward_kinematics(rotations, translations, first.skeleton.parents)
         path = quat.rotate(quat.conjugate(world_rotations[:, parent]), path - positions[:, parent])
     translations[:, carrier] = path
-    return Motion(first.skeleton, rotations, translations, first.frame_time)
+    out = Motion(first.skeleton, rotations, translations, first.frame_time)
+    if plant_feet and model is not None and expressive_window is not None:
+        naive = blend(first, original_second, None, body_window, expressive_window, roles=roles, plant_feet=False)
+        out = planted(naive, out, roles)[0]
+    return out
 
 
 __all__ = ["BlendAlignment", "blend", "blend_alignment", "mix", "modulate"]
