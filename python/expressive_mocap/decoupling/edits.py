@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import quat
 from ..errors import ArgumentError
+from ..hinges import hinge_limits_for, limit_hinges
 from ..motion import Motion
 from ..ops import compose_rotations, forward_kinematics
 from ..roles import JointRoles, facing_yaw, path_joint
@@ -20,10 +21,26 @@ IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 def modulate(
-    motion: Motion, scale: float, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT
+    motion: Motion,
+    scale: float,
+    model: BodyMechanicsModel,
+    gain: float = GAIN,
+    exponent: float = EXPONENT,
+    hinges: bool = True,
 ) -> Motion:
-    """The motion with its expressiveness scaled: ``O_s = E*^s B'`` (1 = unchanged, 0 = body mechanics only)."""
-    return decompose(motion, model, gain, exponent).recompose(scale)
+    """The motion with its expressiveness scaled: ``O_s = E*^s B'`` (1 = unchanged, 0 = body
+    mechanics only); elbows and knees kept within their limits (``hinges``, see :func:`_limited`)."""
+    out = decompose(motion, model, gain, exponent).recompose(scale)
+    return _limited(out, [motion], [motion.rotations], hinges)
+
+
+def _limited(out: Motion, sources: list[Motion], allow: list[np.ndarray], hinges: bool) -> Motion:
+    """``out`` with every elbow and knee kept from straight to the most the body shows (plus a
+    margin), never tighter than the inputs' rotations ``allow`` (on ``out``'s timeline) have it:
+    the limits of :func:`~expressive_mocap.hinges.hinge_limits_for` the ``sources``."""
+    if not hinges:
+        return out
+    return limit_hinges(out, hinge_limits_for(sources), allow)[0]
 
 
 def _check_same_skeleton(a: Motion, b: Motion, what: str) -> None:
@@ -55,15 +72,20 @@ def mix(
     offset: int = 0,
     gain: float = GAIN,
     exponent: float = EXPONENT,
+    hinges: bool = True,
 ) -> Motion:
     """The body mechanics (and root trajectory) of ``body_source`` with the expressive component
     of ``expressive_source``: ``E*_Y B'_X``. The expressive source is aligned to the body source
-    frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``)."""
+    frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``).
+    Elbows and knees are kept within their limits (``hinges``), never tighter than either source
+    has them."""
     _check_same_skeleton(body_source, expressive_source, "mix")
     body = decompose(body_source, model, gain, exponent)
     expressive = decompose(expressive_source, model, gain, exponent).expressive
     rotations = compose_rotations(_aligned(expressive, body_source.n_frames, align, offset), body.body)
-    return Motion(body_source.skeleton, rotations, body_source.translations, body_source.frame_time)
+    out = Motion(body_source.skeleton, rotations, body_source.translations, body_source.frame_time)
+    allow = [body_source.rotations, _aligned(expressive_source.rotations, body_source.n_frames, align, offset)]
+    return _limited(out, [body_source, expressive_source], allow, hinges)
 
 
 def _weights(frames: int, window: tuple[int, int]) -> np.ndarray:
@@ -166,6 +188,7 @@ def blend(
     gain: float = GAIN,
     exponent: float = EXPONENT,
     roles: JointRoles | None = None,
+    hinges: bool = True,
 ) -> Motion:
     """Blend from ``first`` to ``second``, body mechanics over ``body_window`` and the expressive
     component over ``expressive_window`` (output frames ``(start, end)``; slerp with smoothstep
@@ -176,7 +199,8 @@ def blend(
     hips on Bandai-Namco files, whose root never moves). In the body window the path follows the
     blend of both motions' steps, so it never moves faster than either (:func:`blend_alignment`
     tells the turn and the move). Without a model (or without an expressive window) this is the
-    naive blend: whole poses over ``body_window``."""
+    naive blend: whole poses over ``body_window``. Elbows and knees are kept within their limits
+    (``hinges``), never tighter than the two motions have them."""
     _check_same_skeleton(first, second, "blend")
     roles = roles or JointRoles.find(first.skeleton)
     start = _second_start(body_window, expressive_window)
@@ -212,7 +236,8 @@ def blend(
         world_rotations, positions = forward_kinematics(rotations, translations, first.skeleton.parents)
         path = quat.rotate(quat.conjugate(world_rotations[:, parent]), path - positions[:, parent])
     translations[:, carrier] = path
-    return Motion(first.skeleton, rotations, translations, first.frame_time)
+    out = Motion(first.skeleton, rotations, translations, first.frame_time)
+    return _limited(out, [first, second], [first.rotations[i], second.rotations[j]], hinges)
 
 
 __all__ = ["BlendAlignment", "blend", "blend_alignment", "mix", "modulate"]

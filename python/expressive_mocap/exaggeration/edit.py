@@ -13,6 +13,7 @@ import numpy as np
 from .. import quat
 from ..errors import ArgumentError, ModelError
 from ..features import foot_contacts
+from ..hinges import HingeReport, limit_hinges, model_hinge_limits
 from ..motion import Motion
 from ..ops import forward_kinematics
 from ..quat import mean_rotation
@@ -47,6 +48,7 @@ class ExaggerationReport:
     stance_speed_output: float
     estimate: IntensityEstimate | None = None
     baseline: tuple[float, float] | None = None
+    hinges: HingeReport | None = None
 
     def text(self) -> str:
         e = self.estimate
@@ -77,6 +79,8 @@ class ExaggerationReport:
             )
         else:
             lines.append("nothing clamped")
+        if self.hinges is not None:
+            lines.append(self.hinges.text())
         changes = sorted(self.largest_change.items(), key=lambda kv: -kv[1])
         lines.append(
             "largest change per joint (degrees): " + ", ".join(f"{n} {v:.1f}" for n, v in changes if v >= 0.05)[:600]
@@ -355,6 +359,8 @@ def exaggerate(
     per_frame = _per_frame_change(model.basis @ change.T, cycles, motion.n_frames, int(round(fade * motion.fps)))
     new, clamped = _clamp(model, X, X + per_frame, reference, margin, shift)
     out = _rebuilt(model, motion, roles, X, new, ref, yaw)
+    # Hinges limited before the feet are locked, so that the leg IK bends each knee the right way.
+    out, hinges = limit_hinges(out, model_hinge_limits(model), allow=(motion.rotations,))
     correction = residual = lowered = 0.0
     if lock_feet and np.abs(new - X).max(initial=0.0) > 0:
         out, correction, residual, lowered = lock_stance_feet(
@@ -366,7 +372,7 @@ def exaggerate(
         largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
         foot_correction=correction, foot_residual=residual, hips_lowered=lowered,
         stance_speed_input=stance_foot_speed(motion, contacts, roles),
-        stance_speed_output=stance_foot_speed(out, contacts, roles), baseline=read_as,
+        stance_speed_output=stance_foot_speed(out, contacts, roles), baseline=read_as, hinges=hinges,
     )  # fmt: skip
     return out, report
 
