@@ -29,10 +29,11 @@ LIMBS = {"forearm": ("upper_arm", "forearm", "hand"), "lower_leg": ("upper_leg",
 HINGES = tuple(f"{side}_{part}" for part in LIMBS for side in ("left", "right"))
 BENT = 25.0  # degrees: a limb bent this far tells its hinge's axis clearly
 MARGIN = 0.1  # the room above the most flexion seen: this share of the range seen
-# The canonical body's hinges as the Bandai-Namco dataset-2 'normal' walks and runs show them
-# (CC BY-NC 4.0; 76 clips, 41,000 frames; benches/hinge_limits.py measures them): the most flexion
-# (degrees; the limit before the margin, on any skeleton whose own data does not tell it) and
-# the axis in the upper joint's frame (the rest pose's bones lie along X there).
+# The canonical body's hinges as the Bandai-Namco dataset-2 neutral locomotion shows them (CC BY-NC
+# 4.0; the 145 {walk,walk-turn-left,walk-turn-right,run}_normal clips the shipped body-mechanics
+# model learnt from; benches/hinge_limits.py measures them): the most flexion (degrees; the limit
+# before the margin, on any skeleton whose own data does not tell it) and the axis in the upper
+# joint's frame (the rest pose's bones lie along X there).
 NEUTRAL_MOST = {"left_forearm": 125.9, "right_forearm": 123.7, "left_lower_leg": 138.5, "right_lower_leg": 137.6}
 CANONICAL_AXES = {
     "left_forearm": (0.0, -1.0, 0.0),
@@ -227,7 +228,7 @@ def limit_hinges(motion: Motion, limits: HingeLimits, allow: Sequence[np.ndarray
 @lru_cache(maxsize=1)
 def canonical_hinge_limits() -> HingeLimits:
     """The canonical body's hinge limits: its axes and most flexion measured on the Bandai-Namco
-    neutral walks and runs (:data:`CANONICAL_AXES`, :data:`NEUTRAL_MOST`), plus :data:`MARGIN`."""
+    neutral locomotion (:data:`CANONICAL_AXES`, :data:`NEUTRAL_MOST`), plus :data:`MARGIN`."""
     from .skeletons.canonical import canonical_skeleton
 
     skeleton = canonical_skeleton()

@@ -312,6 +312,7 @@ def exaggerate(
     baseline_level: float | None = None,
     estimate_offsets: bool = EDITING.estimate_offsets,
     roles: JointRoles | None = None,
+    hinges: bool = True,
 ) -> tuple[Motion, ExaggerationReport]:
     """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
 
@@ -334,7 +335,10 @@ def exaggerate(
     measured from the same reference (see :meth:`ExaggerationModel.dof_range`). ``lock_feet`` pins
     each stance foot (ankle position and foot orientation) to the input's during its contacts
     with two-bone leg IK, blended in and out over ``blend`` seconds, so the edit adds no skating
-    (see :func:`lock_stance_feet`). Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
+    (see :func:`lock_stance_feet`). ``hinges``: elbows and knees kept from straight to the most
+    the training cycles bend them plus a margin, never tighter than the input has them, before the
+    feet are locked (:func:`~expressive_mocap.hinges.limit_hinges`; the report's ``hinges``).
+    Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
     Returns the new motion and an :class:`ExaggerationReport`.
     """
     options = {"reference": reference, "margin": margin, "fade": fade, "blend": blend}
@@ -359,8 +363,9 @@ def exaggerate(
     per_frame = _per_frame_change(model.basis @ change.T, cycles, motion.n_frames, int(round(fade * motion.fps)))
     new, clamped = _clamp(model, X, X + per_frame, reference, margin, shift)
     out = _rebuilt(model, motion, roles, X, new, ref, yaw)
-    # Hinges limited before the feet are locked, so that the leg IK bends each knee the right way.
-    out, hinges = limit_hinges(out, model_hinge_limits(model), allow=(motion.rotations,))
+    limited = None
+    if hinges:  # before the feet are locked, so that the leg IK bends each knee the right way
+        out, limited = limit_hinges(out, model_hinge_limits(model), allow=(motion.rotations,))
     correction = residual = lowered = 0.0
     if lock_feet and np.abs(new - X).max(initial=0.0) > 0:
         out, correction, residual, lowered = lock_stance_feet(
@@ -372,7 +377,7 @@ def exaggerate(
         largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
         foot_correction=correction, foot_residual=residual, hips_lowered=lowered,
         stance_speed_input=stance_foot_speed(motion, contacts, roles),
-        stance_speed_output=stance_foot_speed(out, contacts, roles), baseline=read_as, hinges=hinges,
+        stance_speed_output=stance_foot_speed(out, contacts, roles), baseline=read_as, hinges=limited,
     )  # fmt: skip
     return out, report
 
