@@ -13,6 +13,7 @@ plane and its twist.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -251,10 +252,24 @@ def hinge_limits_for(motions: Sequence[Motion]) -> HingeLimits:
     return learn_hinge_limits(motions, most=NEUTRAL_MOST)
 
 
+# Limits of the models seen, by identity (a model is not hashable): exaggerating asks once a clip.
+_MODEL_LIMITS: dict[int, tuple[weakref.ref, HingeLimits]] = {}
+
+
 def model_hinge_limits(model) -> HingeLimits:
     """The limits an :class:`~expressive_mocap.exaggeration.ExaggerationModel` learnt: measured
     on every training cycle it holds (each person's rotations rebuilt from their DOFs), on the
-    model's own skeleton."""
+    model's own skeleton. Kept while the model lives (models are not changed once trained)."""
+    key = id(model)
+    seen = _MODEL_LIMITS.get(key)
+    if seen is not None and seen[0]() is model:
+        return seen[1]
+    limits = _model_limits(model)
+    _MODEL_LIMITS[key] = (weakref.ref(model, lambda _: _MODEL_LIMITS.pop(key, None)), limits)
+    return limits
+
+
+def _model_limits(model) -> HingeLimits:
     from .exaggeration.dofs import dofs_to_rotations
 
     body = model.body()
@@ -262,8 +277,13 @@ def model_hinge_limits(model) -> HingeLimits:
     people = model.cycle_performance[:, 0]
     rotations = np.concatenate(
         [
-            dofs_to_rotations(c[:, : 3 * J], model.person_reference[p], model.representation, model.orders)
-            for c, p in zip(model.cycle_trajectories, people)
+            dofs_to_rotations(
+                model.cycle_trajectories[people == p, :, : 3 * J].reshape(-1, 3 * J),
+                model.person_reference[p],
+                model.representation,
+                model.orders,
+            )
+            for p in np.unique(people)
         ]
     )
     translations = np.broadcast_to(body.translations[0], (len(rotations), J, 3))
