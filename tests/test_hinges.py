@@ -157,6 +157,22 @@ def test_limits_are_learnt_about_the_way_each_hinge_bends():
         assert h.high == pytest.approx(top + 0.1 * (top - min(0.0, flexion[:, k].min())))
 
 
+def test_modulating_the_demo_walk_keeps_its_knees_from_bending_backwards():
+    """The demo walk's expressiveness scaled by 1.5 and 2 with the shipped model bends its knees
+    15-42 degrees backwards without the limits; with them no hinge passes straight, and the
+    hinges the edit left within range are as the bare method makes them."""
+    walk = procedural_walk(seconds=4.0)
+    model = BodyModel.load()
+    limits = canonical_hinge_limits()
+    knees = [k for k, h in enumerate(limits.hinges) if "lower_leg" in h.role]
+    for scale in (1.5, 2.0):
+        loose, limited = modulate(walk, scale, model, hinges=False), modulate(walk, scale, model)
+        assert limits.of(loose)[:, knees].min() < -15.0
+        assert limits.of(limited).min() >= -1e-9
+        elbows = [h.middle for h in limits.hinges if "forearm" in h.role]
+        np.testing.assert_array_equal(limited.rotations[:, elbows], loose.rotations[:, elbows])
+
+
 def test_limits_name_the_skeleton_they_do_not_fit():
     with pytest.raises(ArgumentError, match="hinge limits of a 22-joint skeleton"):
         canonical_hinge_limits().of(synthetic_walk("cmu").motion)
