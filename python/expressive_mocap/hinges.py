@@ -125,8 +125,8 @@ def learn_hinge_limits(
 ) -> HingeLimits:
     """Hinge limits learnt from real ``motions`` (one skeleton): each hinge's axis, the mean
     normal of its two segments in the upper joint's frame over the frames bent at least
-    :data:`BENT` degrees; its most flexion, the most the motions show (``most``: given per part,
-    by role such as ``"left_forearm"``, instead) plus ``margin`` x the range they show. A hinge never
+    :data:`BENT` degrees; its most flexion, the most the motions show (or ``most[role]``, e.g.
+    ``most["left_forearm"]``, where given) plus ``margin`` x the range they show. A hinge never
     bent that far in the motions is left without limits."""
     if not motions:
         raise ArgumentError("hinge limits need at least one motion to learn from")
