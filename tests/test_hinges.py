@@ -203,9 +203,11 @@ def test_no_hinge_past_straight_after_exaggerating_real_walks(bandai2_dir, walks
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # an estimate outside the trained range
             out, report = exaggerate(walks_model, walk, level)
+            _, loose = exaggerate(walks_model, walk, level, hinges=False)
         worst = most_backwards(out, walk, tmp_path)
         assert max(worst.values()) <= TOLERANCE, (level, worst)
-        assert report.stance_speed_output <= 1.2 * report.stance_speed_input + 1e-9
+        # The limits come before the feet are locked: the stance feet move no faster than without them.
+        assert report.stance_speed_output <= 1.01 * loose.stance_speed_output + 1e-9
         assert report.hinges is not None and report.hinges.most_backwards <= TOLERANCE
 
 
