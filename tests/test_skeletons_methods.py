@@ -48,9 +48,14 @@ def test_an_edit_carried_back_is_the_edited_body_on_the_users_skeleton():
     game = synthetic_walk("game", wave="left").motion
     carried = Carried(game)
     edited = modulate(carried.body, 0.0, model)
-    ours = carried.back(edited)
+    ours = carried.back(edited, hinges=False)
     theirs = retarget_rigs(edited, canonical_rig(), Rig.of(game), plant_feet=False)
     assert worst_angle(directions(ours), directions(theirs)) < 1e-4
+    # With the user's hinge limits (the default), only the left elbow moves: the arm brought down
+    # straightens it 0.75 degrees past straight on this rig.
+    limited = carried.back(edited)
+    moved = np.flatnonzero(np.abs(limited.rotations - ours.rotations).max(axis=(0, 2)) > 0)
+    assert [game.skeleton.names[j] for j in moved] == ["lowerarm_l"]
     assert ours.skeleton is game.skeleton
     twist = game.skeleton.index("upperarm_twist_01_l")
     np.testing.assert_allclose(ours.rotations[:, twist], game.rotations[:, twist], atol=1e-12)  # follows its bone

@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import quat
 from ..errors import ArgumentError
+from ..hinges import hinge_limits_for, limit_hinges
 from ..motion import Motion
 from ..ops import compose_rotations, forward_kinematics
 from ..roles import JointRoles, facing_yaw, path_joint
@@ -27,12 +28,24 @@ def modulate(
     gain: float = GAIN,
     exponent: float = EXPONENT,
     plant_feet: bool = True,
+    hinges: bool = True,
 ) -> Motion:
     """The motion with its expressiveness scaled: ``O_s = E*^s B'`` (1 = unchanged, 0 = body
-    mechanics only). ``plant_feet``: the stance feet kept where ``motion`` has them during its
-    contacts (:func:`~expressive_mocap.decoupling.feet.planted`)."""
+    mechanics only); elbows and knees kept within their limits (``hinges``, see :func:`_limited`).
+    ``plant_feet``: the stance feet kept where ``motion`` has them during its contacts
+    (:func:`~expressive_mocap.decoupling.feet.planted`)."""
     out = decompose(motion, model, gain, exponent).recompose(scale)
+    out = _limited(out, [motion], [motion.rotations], hinges)
     return planted(motion, out)[0] if plant_feet else out
+
+
+def _limited(out: Motion, sources: list[Motion], allow: list[np.ndarray], hinges: bool) -> Motion:
+    """``out`` with every elbow and knee kept from straight to the most the body shows (plus a
+    margin), never tighter than the inputs' rotations ``allow`` (on ``out``'s timeline) have it:
+    the limits of :func:`~expressive_mocap.hinges.hinge_limits_for` the ``sources``."""
+    if not hinges:
+        return out
+    return limit_hinges(out, hinge_limits_for(sources), allow)[0]
 
 
 def _check_same_skeleton(a: Motion, b: Motion, what: str) -> None:
@@ -66,6 +79,7 @@ def mix(
     exponent: float = EXPONENT,
     joints=None,
     plant_feet: bool = True,
+    hinges: bool = True,
 ) -> Motion:
     """The body mechanics (and root trajectory) of ``body_source`` with the expressive component
     of ``expressive_source``: ``E*_Y B'_X``. The expressive source is aligned to the body source
@@ -73,7 +87,8 @@ def mix(
     ``joints``: the joints that take ``expressive_source``'s expression (group names such as
     ``"arms"``, or a mask; default :func:`~expressive_mocap.decoupling.feet.default_mask`); the
     others keep ``body_source``'s rotations exactly. ``plant_feet``: the stance feet kept where
-    ``body_source`` has them during its contacts."""
+    ``body_source`` has them during its contacts. Elbows and knees are kept within their limits
+    (``hinges``), never tighter than either source has them."""
     _check_same_skeleton(body_source, expressive_source, "mix")
     mask = chosen_joints(joints, body_source, expressive_source)
     body = decompose(body_source, model, gain, exponent)
@@ -81,6 +96,8 @@ def mix(
     rotations = compose_rotations(_aligned(expressive, body_source.n_frames, align, offset), body.body)
     rotations = np.where(mask[None, :, None], rotations, body_source.rotations)
     out = Motion(body_source.skeleton, rotations, body_source.translations, body_source.frame_time)
+    allow = [body_source.rotations, _aligned(expressive_source.rotations, body_source.n_frames, align, offset)]
+    out = _limited(out, [body_source, expressive_source], allow, hinges)
     return planted(body_source, out)[0] if plant_feet else out
 
 
@@ -186,6 +203,7 @@ def blend(
     roles: JointRoles | None = None,
     joints=None,
     plant_feet: bool = True,
+    hinges: bool = True,
 ) -> Motion:
     """Blend from ``first`` to ``second``, body mechanics over ``body_window`` and the expressive
     component over ``expressive_window`` (output frames ``(start, end)``; slerp with smoothstep
@@ -199,7 +217,9 @@ def blend(
     naive blend: whole poses over ``body_window``. ``joints``: the joints whose expressive
     component goes over ``expressive_window`` (as in :func:`mix`); the others' goes with their body
     mechanics. ``plant_feet``: the stance feet kept where the naive blend (whose feet are the
-    first's before the body window and the second's after it) has them during its contacts."""
+    first's before the body window and the second's after it) has them during its contacts.
+    Elbows and knees are kept within their limits (``hinges``), never tighter than the two motions
+    have them."""
     _check_same_skeleton(first, second, "blend")
     roles = roles or JointRoles.find(first.skeleton)
     start = _second_start(body_window, expressive_window)
@@ -239,6 +259,7 @@ def blend(
         path = quat.rotate(quat.conjugate(world_rotations[:, parent]), path - positions[:, parent])
     translations[:, carrier] = path
     out = Motion(first.skeleton, rotations, translations, first.frame_time)
+    out = _limited(out, [first, second], [first.rotations[i], second.rotations[j]], hinges)
     if plant_feet and model is not None and expressive_window is not None:
         naive = blend(first, original_second, None, body_window, expressive_window, roles=roles, plant_feet=False)
         out = planted(naive, out, roles)[0]

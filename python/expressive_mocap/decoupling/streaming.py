@@ -67,7 +67,8 @@ class StreamingDecoupler:
         carried = Carried(frame, target=None, source=self._source)
         body, _, activity = self._step(carried.body, 0.0)  # the canonical body stands on 0
         on_body = carried.body
-        back = carried.back(Motion(on_body.skeleton, body[None], on_body.translations, self.frame_time))
+        # The body mechanics of one frame, not an edit: no hinge limits (one frame tells no axes).
+        back = carried.back(Motion(on_body.skeleton, body[None], on_body.translations, self.frame_time), hinges=False)
         mine = back.rotations[0]
         return mine, quat.mul(frame.rotations[0], quat.conjugate(mine)), activity
 

@@ -13,6 +13,7 @@ import numpy as np
 from .. import quat
 from ..errors import ArgumentError, ModelError
 from ..features import foot_contacts
+from ..hinges import HingeReport, limit_hinges, model_hinge_limits
 from ..motion import Motion
 from ..ops import forward_kinematics
 from ..quat import mean_rotation
@@ -60,6 +61,7 @@ class ExaggerationReport:
     estimate: IntensityEstimate | None = None
     baseline: tuple[float, float] | None = None
     timing: Timing | None = None
+    hinges: HingeReport | None = None
 
     def text(self) -> str:
         e = self.estimate
@@ -91,6 +93,8 @@ class ExaggerationReport:
         else:
             lines.append("nothing clamped")
         lines.append(self.timing.text() if self.timing is not None else "timing: unchanged")
+        if self.hinges is not None:
+            lines.append(self.hinges.text())
         changes = sorted(self.largest_change.items(), key=lambda kv: -kv[1])
         lines.append(
             "largest change per joint (degrees): " + ", ".join(f"{n} {v:.1f}" for n, v in changes if v >= 0.05)[:600]
@@ -374,6 +378,7 @@ def exaggerate(
     estimate_offsets: bool = EDITING.estimate_offsets,
     timing: bool = EDITING.timing,
     roles: JointRoles | None = None,
+    hinges: bool = True,
 ) -> tuple[Motion, ExaggerationReport]:
     """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
 
@@ -400,6 +405,9 @@ def exaggerate(
     change too, by the model's timing mappings (:mod:`~expressive_mocap.exaggeration.timing`),
     kept within the training range (+ margin); the output then has another number of frames,
     and foot locking holds each stance foot still through its contacts at the new timing.
+    ``hinges``: elbows and knees kept from straight to the most the training cycles bend them
+    plus a margin, never tighter than the input has them, before the edit is retimed and the feet
+    are locked (:func:`~expressive_mocap.hinges.limit_hinges`; the report's ``hinges``).
     Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
     Returns the new motion and an :class:`ExaggerationReport`.
     """
@@ -425,6 +433,9 @@ def exaggerate(
     per_frame = _per_frame_change(model.basis @ change.T, cycles, motion.n_frames, int(round(fade * motion.fps)))
     new, clamped = _clamp(model, X, X + per_frame, reference, margin, shift)
     out = _rebuilt(model, motion, roles, X, new, ref, yaw)
+    limited = None
+    if hinges:  # before the feet are locked, so that the leg IK bends each knee the right way
+        out, limited = limit_hinges(out, model_hinge_limits(model), allow=(motion.rotations,))
     at = _retimed(model, motion, out, roles, cycles, contacts, (k0, float(to)), margin) if timing else None
     held, out, held_contacts = (at.motion, at.edited, at.contacts) if at else (motion, out, contacts)
     correction = residual = lowered = 0.0
@@ -439,7 +450,7 @@ def exaggerate(
         foot_correction=correction, foot_residual=residual, hips_lowered=lowered,
         stance_speed_input=stance_foot_speed(motion, contacts, roles),
         stance_speed_output=stance_foot_speed(out, held_contacts, roles), baseline=read_as,
-        timing=at.timing if at else None,
+        timing=at.timing if at else None, hinges=limited,
     )  # fmt: skip
     return out, report
 

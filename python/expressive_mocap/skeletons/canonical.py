@@ -80,10 +80,24 @@ class Carried:
         self.target = target or canonical_rig()
         self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False, kinematics=self._kinematics)
 
-    def back(self, edited: Motion) -> Motion:
+    def back(self, edited: Motion, hinges: bool = True) -> Motion:
         """``edited`` (an edit of :attr:`body`) as a motion of the user's skeleton. An edit of
         another length (a blend into a second motion) has no frame-by-frame counterpart to turn:
-        it is retargeted onto the user's skeleton instead, joints the body lacks at rest."""
+        it is retargeted onto the user's skeleton instead, joints the body lacks at rest. Either
+        way (unless ``hinges`` is False) the user's elbows and knees are then kept within their
+        limits, about the axes the user's motion bends them about, never tighter than it has them
+        itself (:func:`~expressive_mocap.hinges.limit_hinges`): bodies differ, so a limb the edit
+        kept within limits on the body may pass straight on the user's."""
+        from ..hinges import hinge_limits_for, limit_hinges
+
+        out = self._back(edited)
+        if not hinges:
+            return out
+        same = out.n_frames == self.original.n_frames
+        limits = hinge_limits_for([self.original])
+        return limit_hinges(out, limits, (self.original.rotations,) if same else ())[0]
+
+    def _back(self, edited: Motion) -> Motion:
         from .. import quat
 
         if edited.n_frames != self.body.n_frames:
