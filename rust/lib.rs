@@ -12,6 +12,7 @@ pub mod format;
 pub mod gait;
 pub mod mlp;
 pub mod parse;
+pub mod retarget;
 pub mod rotations;
 pub mod zeroable;
 

@@ -308,6 +308,34 @@ def test_clips_retargeted_together_are_those_retargeted_one_by_one(walks):
         np.testing.assert_allclose(moved.positions(), alone.positions(), atol=1e-6)
 
 
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+def test_the_transfer_kernel_and_its_twin_agree_on_every_pair_of_rigs(walks):
+    from expressive_mocap import _core, reference
+    from expressive_mocap.skeletons.retargeting import _plan
+
+    rigs = {name: Rig.of(motion) for name, motion in walks.items()}
+    for a, b in itertools.permutations(RIGS, 2):
+        world, positions = walks[a].fk()
+        plan = _plan(rigs[a], rigs[b])
+        rust = _core.retarget_transfer(world, positions, plan)
+        twin = reference.retarget_transfer(world, positions, plan)
+        assert rust.shape == (walks[a].n_frames, rigs[b].skeleton.n_joints, 4)
+        np.testing.assert_allclose(rust, twin, atol=1e-12, err_msg=f"{a} -> {b}")
+
+
+def test_clips_retargeted_in_runs_are_those_retargeted_all_at_once(walks, monkeypatch):
+    from expressive_mocap.skeletons import retargeting
+    from expressive_mocap.skeletons.canonical import many_onto_canonical
+
+    smpl = walks["smpl"]
+    clips = [smpl[:90], smpl[90:200], walks["game"], smpl[200:], walks["game"][:40]]
+    at_once = many_onto_canonical(clips)
+    monkeypatch.setattr(retargeting, "CHUNK_FRAMES", 50)  # a run ends after every clip or two
+    for (moved, _), (whole, _) in zip(many_onto_canonical(clips), at_once):
+        np.testing.assert_array_equal(moved.rotations, whole.rotations)
+        np.testing.assert_array_equal(moved.translations, whole.translations)
+
+
 def test_a_skeleton_without_arms_is_mapped_and_retargeted(walks):
     """The game rig with its arms cut off: arms are optional roles, the rest maps and moves."""
     game = walks["game"]

@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from expressive_mocap.errors import ParseError
-from expressive_mocap.ops import ClipInput, GaitSettings, MotionBlock, PipelineOutputs
+from expressive_mocap.ops import ClipInput, GaitSettings, MotionBlock, PipelineOutputs, TransferPlan
 
 _F64 = npt.NDArray[np.float64]
 _Float = npt.NDArray[np.float32] | npt.NDArray[np.float64]
@@ -36,6 +36,7 @@ __all__ = [
     "parse_motion_block",
     "quat_to_euler",
     "read_motion_blocks",
+    "retarget_transfer",
 ]
 
 num_threads: int
@@ -138,3 +139,7 @@ def decouple_rotations(original: _F64, body: _F64, gain: float, exponent: float)
 
 def compose_rotations(expressive: _F64, body: _F64, scale: float = 1.0) -> _F64:
     """``expressive^scale * body`` for rotations ``[F, J, 4]``."""
+
+def retarget_transfer(world: _F64, positions: _F64, plan: TransferPlan) -> _F64:
+    """The target skeleton's local rotations ``[F, Jt, 4]`` from the source's world rotations
+    ``[F, Js, 4]`` and positions ``[F, Js, 3]``, along ``plan``."""

@@ -411,6 +411,60 @@ def clip_pipeline_many(
     )
 
 
+# -- retargeting ---------------------------------------------------------------------------------
+
+
+class TransferPlan(NamedTuple):
+    """What :func:`retarget_transfer` does in every frame, made once per pair of skeletons (see
+    :mod:`expressive_mocap.skeletons.retargeting`): per role its ``source`` and ``target`` joint
+    and alignment ``aligns [R, 4]``; the roles ``swung`` onto the source's bone from joint
+    ``starts`` to joint ``ends`` (at rest ``rest_lines [S, 3]``, canonical axes); the target's
+    spine joints ``shared`` taking the share ``shares`` of the turn from ``tops`` to
+    ``bottoms``; the target joints ``held`` at rest (the world rotation of ``copied``, -1:
+    none); the target's ``parents``; both skeletons' turns onto the canonical axes."""
+
+    source: np.ndarray
+    target: np.ndarray
+    aligns: np.ndarray
+    swung: np.ndarray
+    starts: np.ndarray
+    ends: np.ndarray
+    rest_lines: np.ndarray
+    shared: np.ndarray
+    tops: np.ndarray
+    bottoms: np.ndarray
+    shares: np.ndarray
+    held: np.ndarray
+    copied: np.ndarray
+    parents: np.ndarray
+    turn_source: tuple[float, float, float, float]
+    turn_target: tuple[float, float, float, float]
+
+    @classmethod
+    def of(cls, *parts) -> TransferPlan:
+        """A plan of the parts in the fields' order, each coerced: index arrays int64,
+        ``aligns`` and ``rest_lines`` float ``[N, 4]`` and ``[N, 3]``, turns four floats."""
+        fields = dict(zip(cls._fields, parts))
+        for name in ("aligns", "rest_lines", "shares"):
+            fields[name] = _array(name, fields[name], np.float64)
+        fields["aligns"] = fields["aligns"].reshape(-1, 4)
+        fields["rest_lines"] = fields["rest_lines"].reshape(-1, 3)
+        for name in ("source", "target", "swung", "starts", "ends", "shared", "tops", "bottoms", "held", "copied"):
+            value = np.asarray(fields[name])
+            value = value.astype(np.int64) if value.size == 0 else value  # [] reads as floats
+            fields[name] = _array(name, value, np.int64, "iu").reshape(-1)
+        fields["parents"] = _array("parents", fields["parents"], np.int64, "iu")
+        for name in ("turn_source", "turn_target"):
+            fields[name] = tuple(float(v) for v in np.asarray(fields[name], dtype=np.float64).reshape(4))
+        return cls(**fields)
+
+
+def retarget_transfer(world, positions, plan: TransferPlan) -> np.ndarray:
+    """The target skeleton's local rotations ``[F, Jt, 4]`` from the source's world rotations
+    ``world [F, Js, 4]`` and positions ``positions [F, Js, 3]``, along ``plan``."""
+    return kernels().retarget_transfer(_f64("world", world, 4), _f64("positions", positions, 3), plan)
+
+
 @dataclass(frozen=True)
 class ClipArrays:
     """One clip already decoded, for :func:`arrays_pipeline_many`: local ``rotations [F, J, 4]``
@@ -474,6 +528,7 @@ __all__ = [
     "GaitSettings",
     "MotionBlock",
     "PipelineOutputs",
+    "TransferPlan",
     "air_time",
     "arrays_pipeline_many",
     "channel_layout",
@@ -491,4 +546,5 @@ __all__ = [
     "mlp_forward",
     "quat_to_euler",
     "read_motion_blocks",
+    "retarget_transfer",
 ]

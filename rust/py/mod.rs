@@ -18,6 +18,7 @@ mod format;
 mod gait;
 mod mlp;
 mod parse;
+mod retarget;
 mod rotations;
 
 use errors::{array, shape_error};
@@ -113,5 +114,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     clip::register(m)?;
     mlp::register(m)?;
     decouple::register(m)?;
+    retarget::register(m)?;
     Ok(())
 }

@@ -15,6 +15,7 @@ from .footsteps import air_time, foot_contacts
 from .gait import clip_gait_many
 from .mlp import mlp_forward
 from .motion_block import decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
+from .retarget import retarget_transfer
 from .rotations import euler_to_quat, quat_to_euler
 
 num_threads = 1
@@ -37,4 +38,5 @@ __all__ = [
     "parse_motion_block",
     "read_motion_blocks",
     "quat_to_euler",
+    "retarget_transfer",
 ]

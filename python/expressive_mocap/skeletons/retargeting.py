@@ -40,7 +40,6 @@ _NEXT = {
     "forearm": "hand",
 }
 _BEFORE = {"hand": "forearm", "toes": "foot", "foot": "lower_leg"}
-_IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 class Rig(NamedTuple):
@@ -174,10 +173,10 @@ def retarget_clips(
     motions: list[Motion], goal: Rig, *, plant_feet: bool = True, user_map: dict | None = None
 ) -> list[tuple[Motion, JointMap]]:
     """Many clips retargeted onto ``goal`` at once, each with the joint map it was read with:
-    clips of one skeleton (same joints and offsets) are done together, their frames end to end,
-    each with its own floor and contacts; the conventions are read from the first clip of each
-    skeleton. What :func:`retarget_rigs` gives clip by clip, in a fraction of the time for short
-    clips (``preprocess --canonical``)."""
+    clips of one skeleton (same joints and offsets) are done together, their frames end to end
+    in runs of about ``CHUNK_FRAMES``, each with its own floor and contacts; the conventions are
+    read from the first clip of each skeleton. What :func:`retarget_rigs` gives clip by clip, in
+    a fraction of the time for short clips (``preprocess --canonical``)."""
     groups: dict[tuple, list[int]] = {}
     for k, motion in enumerate(motions):
         skeleton = motion.skeleton
@@ -185,8 +184,36 @@ def retarget_clips(
         groups.setdefault(key, []).append(k)
     out: list = [None] * len(motions)
     for members in groups.values():
+        source = Rig.of(motions[members[0]], user_map)
+        for run in _runs(members, motions):
+            _retarget_run(run, motions, source, goal, plant_feet, out)
+    return out
+
+
+# Frames retargeted together: enough that NumPy's work per call outweighs its overhead, few
+# enough that the intermediate arrays stay in the allocator's reused memory and the caches
+# (a whole batch at once spent a quarter of its time in fresh pages).
+CHUNK_FRAMES = 4096
+
+
+def _runs(members: list[int], motions: list[Motion]) -> list[list[int]]:
+    """``members`` cut into runs of whole clips of about :data:`CHUNK_FRAMES` frames."""
+    runs: list[list[int]] = [[]]
+    frames = 0
+    for k in members:
+        if frames >= CHUNK_FRAMES:
+            runs.append([])
+            frames = 0
+        runs[-1].append(k)
+        frames += motions[k].n_frames
+    return runs
+
+
+def _retarget_run(run: list[int], motions: list[Motion], source: Rig, goal: Rig, plant_feet: bool, out: list) -> None:
+    """The clips ``run`` of ``motions`` (one skeleton, ``source``'s) retargeted together, into ``out``."""
+    members = run
+    if True:
         clips = [motions[k] for k in members]
-        source = Rig.of(clips[0], user_map)
         bounds = np.cumsum([0] + [c.n_frames for c in clips])
         together = Motion(
             clips[0].skeleton,
@@ -200,7 +227,6 @@ def retarget_clips(
                 Motion(goal.skeleton, moved.rotations[a:b], moved.translations[a:b], clip.frame_time),
                 source.jmap,
             )
-    return out
 
 
 def _retarget_frames(
@@ -243,27 +269,6 @@ def rest_motion(skeleton: Skeleton) -> Motion:
     return Motion(skeleton, rotations, skeleton.offsets[None], 1 / 30)
 
 
-class _Plan(NamedTuple):
-    """Index arrays of one source-target pair, so a transfer is a few array operations: the
-    roles' source and target joints and alignments; the roles swung onto the source's bones (their
-    bone's end joints and rest line); the spine joints sharing a turn; the joints held at rest and
-    the joint whose world rotation each copies (-1: none, the identity)."""
-
-    source: np.ndarray
-    target: np.ndarray
-    aligns: np.ndarray
-    swung: np.ndarray
-    starts: np.ndarray
-    ends: np.ndarray
-    rest_lines: np.ndarray
-    shared: np.ndarray
-    tops: np.ndarray
-    bottoms: np.ndarray
-    shares: np.ndarray
-    held: np.ndarray
-    copied: np.ndarray
-
-
 _PLANS: dict = {}
 _PLANS_KEPT = 64
 
@@ -274,7 +279,7 @@ def _rig_key(rig: Rig) -> tuple:
     return (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), turn, tuple(jmap.joints.items()))
 
 
-def _plan(source: Rig, target: Rig) -> _Plan:
+def _plan(source: Rig, target: Rig) -> ops.TransferPlan:
     """The plan of a pair, kept for the pairs met last: an archive's clips share a few skeletons."""
     key = (_rig_key(source), _rig_key(target))
     plan = _PLANS.get(key)
@@ -285,7 +290,8 @@ def _plan(source: Rig, target: Rig) -> _Plan:
     return plan
 
 
-def _new_plan(source: Rig, target: Rig) -> _Plan:
+def _new_plan(source: Rig, target: Rig) -> ops.TransferPlan:
+    """The transfer kernel's plan of a pair: index arrays, so a transfer is one pass over the frames."""
     aligns = alignments(source, target)
     roles = list(aligns)
     rest_s = quat.rotate(source.conventions.rotation(), source.skeleton.rest_positions()[0])
@@ -321,35 +327,24 @@ def _new_plan(source: Rig, target: Rig) -> _Plan:
             ancestor = int(parents[ancestor])
         held.append(j)
         copied.append(ancestor)
-    return _Plan(
-        np.array([source.jmap[r] for r in roles], dtype=np.int64),
-        np.array([target.jmap[r] for r in roles], dtype=np.int64),
-        np.array([aligns[r] for r in roles]).reshape(-1, 4),
-        np.array(swung, dtype=np.int64),
-        np.array(starts, dtype=np.int64),
-        np.array(ends, dtype=np.int64),
-        (rest_s[ends] - rest_s[starts]).reshape(-1, 3),
-        np.array(list(shared), dtype=np.int64),
-        np.array([t for t, _, _ in shared.values()], dtype=np.int64),
-        np.array([b for _, b, _ in shared.values()], dtype=np.int64),
-        np.array([x for _, _, x in shared.values()]),
-        np.array(held, dtype=np.int64),
-        np.array(copied, dtype=np.int64),
+    return ops.TransferPlan.of(
+        [source.jmap[r] for r in roles],
+        [target.jmap[r] for r in roles],
+        [aligns[r] for r in roles],
+        swung,
+        starts,
+        ends,
+        rest_s[ends] - rest_s[starts],
+        list(shared),
+        [t for t, _, _ in shared.values()],
+        [b for _, b, _ in shared.values()],
+        [x for _, _, x in shared.values()],
+        held,
+        copied,
+        parents,
+        source.conventions.rotation(),
+        target.conventions.rotation(),
     )
-
-
-def _mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Quaternion products ``a * b`` (broadcast) of frames of joints, by the composition kernel:
-    seven times NumPy's on 30,000 frames of 31 joints (the same numbers)."""
-    shape = np.broadcast_shapes(a.shape, b.shape)
-    return ops.compose_rotations(np.broadcast_to(a, shape), np.broadcast_to(b, shape), 1.0)
-
-
-def _turned(turn: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """World ``rotations`` expressed in axes turned by ``turn``: ``turn * q * turn^-1``."""
-    if np.allclose(turn, _IDENTITY, rtol=0, atol=1e-15):  # Y up, facing +Z: nothing to turn
-        return rotations
-    return _mul(_mul(turn, rotations), quat.conjugate(turn))
 
 
 def _transfer(
@@ -357,31 +352,9 @@ def _transfer(
 ) -> Motion:
     """The target's motion (see the module's notes) from the source's world rotations and
     positions, ``kinematics``, and its floor in each frame."""
-    plan = _plan(source, target)
-    turn_s, turn_t = source.conventions.rotation(), target.conventions.rotation()
     world_s, positions_s = kinematics
-    roles = _turned(turn_s, world_s[:, plan.source])  # canonical axes
-    if len(plan.swung):
-        # Joints the map leaves out between two mapped ones (CMU's LHipJoint, a Neck1) may turn in
-        # the source while the target holds them at rest: each role is swung so that its bone lies
-        # where the source's positions put it.
-        lines = quat.rotate(turn_s, positions_s[:, plan.ends] - positions_s[:, plan.starts])
-        predicted = quat.rotate(roles[:, plan.swung], plan.rest_lines)
-        roles[:, plan.swung] = _mul(quat.between(predicted, lines), roles[:, plan.swung])
+    rotations = ops.retarget_transfer(world_s, positions_s, _plan(source, target))
     frames, skeleton = motion.n_frames, target.skeleton
-    world = np.empty((frames, skeleton.n_joints, 4))
-    world[:, plan.target] = _mul(roles, plan.aligns)
-    if len(plan.shared):
-        turn = _mul(quat.conjugate(world[:, plan.tops]), world[:, plan.bottoms])
-        world[:, plan.shared] = _mul(world[:, plan.tops], quat.power(turn, plan.shares))
-    if len(plan.held):
-        world[:, plan.held] = np.where(
-            (plan.copied >= 0)[:, None], world[:, np.maximum(plan.copied, 0)], _IDENTITY
-        )  # held at their rest rotation: their parent's world rotation, or none at the root
-    world = _turned(quat.conjugate(turn_t), world)  # the target's axes
-    parents = skeleton.parents
-    rotations = world.copy()
-    rotations[:, 1:] = _mul(quat.conjugate(world[:, parents[1:]]), world[:, 1:])
     translations = np.broadcast_to(skeleton.offsets, (frames, skeleton.n_joints, 3)).copy()
     _place_hips(translations, positions_s, source, target, floor)
     return Motion(skeleton, rotations, translations, motion.frame_time)
