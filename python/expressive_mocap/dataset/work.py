@@ -105,10 +105,10 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: dict | N
         outcomes[k].skeleton = shape
         outcomes[k].bone_length = bone_length(header.skeleton)
         by_hierarchy.setdefault(shape, []).append((k, header, text))
-    if canonical is not None:
-        by_hierarchy = onto_canonical(batch, outcomes, by_hierarchy, canonical or None)
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
+    if canonical is not None:
+        by_hierarchy = onto_canonical(batch, outcomes, by_hierarchy, canonical or None, _signed_joints(keep, use_model))
     groups = []
     for members in by_hierarchy.values():
         if not members:
@@ -122,14 +122,31 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: dict | N
     return Prepared(outcomes, groups, time.perf_counter() - start)
 
 
+def _signed_joints(keep: tuple[str, ...], use_model: bool) -> list[int] | None:
+    """The canonical body's joints whose rotations are used with their sign (None: all): every
+    joint's when rotations are stored or a model reads them, else the thighs' for the features."""
+    if use_model or "rotations" in keep:
+        return None
+    if "features" not in keep:
+        return []
+    from ..skeletons.canonical import canonical_skeleton
+
+    return JointRoles.find(canonical_skeleton()).gait_joints[1:3]  # left and right upper leg
+
+
 def onto_canonical(
-    batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, user_map: dict | None = None
+    batch: list[Item],
+    outcomes: list[Outcome],
+    by_hierarchy: dict,
+    user_map: dict | None = None,
+    signed: list[int] | None = None,
 ) -> dict:
     """``by_hierarchy`` with every clip of another skeleton than the canonical body retargeted
     onto it (all of a batch at once: :func:`~expressive_mocap.skeletons.canonical.many_onto_canonical`):
     its frames decoded here, in parallel, and handed on as arrays (under the key ``MOVED``: no
     BVH text to write and parse again), its own skeleton and joint map kept in its outcome for
-    the manifest. ``user_map``: role -> joint name, for every skeleton of the archive."""
+    the manifest. ``user_map``: role -> joint name, for every skeleton of the archive.
+    ``signed``: the joints whose rotations must keep the text's sign (:func:`as_written`)."""
     from ..skeletons.canonical import canonical_shape, many_onto_canonical
 
     target = canonical_shape()
@@ -139,7 +156,7 @@ def onto_canonical(
         moved = many_onto_canonical([motion for _, motion in read], user_map)
     except MocapError:  # one skeleton of the batch cannot be mapped: find which, clip by clip
         moved = [_one_onto_canonical(motion, user_map) for _, motion in read]
-    for (k, motion), result in zip(read, as_written(moved)):
+    for (k, motion), result in zip(read, as_written(moved, signed)):
         if isinstance(result, MocapError):
             outcomes[k].error = f"{batch[k].source}: {result}"
             continue
@@ -160,17 +177,20 @@ def onto_canonical(
     return out
 
 
-def as_written(moved: list) -> list:
-    """The retargeted clips of ``moved`` (``(Motion, map)``, or an error) with their rotations
-    as their BVH text would read back: the same rotations, each quaternion's sign that of its
-    Euler angles' (features take the thighs' hemisphere from a clip's first frame). One kernel
-    call each way for all the clips."""
+def as_written(moved: list, joints: list[int] | None = None) -> list:
+    """The retargeted clips of ``moved`` (``(Motion, map)``, or an error) with the rotations of
+    ``joints`` (None: all) as their BVH text would read back: the same rotations, each
+    quaternion's sign that of its Euler angles' (features take the thighs' hemisphere from a
+    clip's first frame). One kernel call each way for all the clips."""
     done = [m for m in moved if not isinstance(m, MocapError)]
-    if not done:
+    if not done or joints == []:
         return moved
-    orders = done[0][0].skeleton.layout()[1]  # the canonical body's: three rotation channels a joint
+    skeleton = done[0][0].skeleton
+    joints = list(range(skeleton.n_joints)) if joints is None else joints
+    orders = skeleton.layout()[1][joints]  # the canonical body's: three rotation channels a joint
     rotations = np.concatenate([m.rotations for m, _ in done])
-    rotations = ops.euler_to_quat(ops.quat_to_euler(rotations, orders), orders)
+    picked = rotations[:, joints]
+    rotations[:, joints] = ops.euler_to_quat(ops.quat_to_euler(picked, orders), orders)
     bounds = np.cumsum([0] + [m.n_frames for m, _ in done])
     it = iter(zip(bounds[:-1], bounds[1:]))
     out = []
