@@ -336,6 +336,34 @@ def test_clips_retargeted_in_runs_are_those_retargeted_all_at_once(walks, monkey
         np.testing.assert_array_equal(moved.translations, whole.translations)
 
 
+def test_run_offsets_of_clips_end_to_end_are_each_clips_own():
+    from expressive_mocap.skeletons.planting import _run_offsets
+
+    def one_clip(ankle, contact):  # the mean over the run, or over the nearest run by centre
+        edges = np.diff(np.r_[0, contact.astype(int), 0])
+        runs = list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+        if not runs:
+            return ankle
+        out = np.empty_like(ankle)
+        for f in range(len(ankle)):
+            a, b = next(((a, b) for a, b in runs if a <= f < b), None) or min(
+                runs, key=lambda r: abs(f - (r[0] + r[1] - 1) / 2)
+            )
+            out[f] = ankle[a:b].mean(axis=0)
+        return out
+
+    rng = np.random.default_rng(2)
+    for trial in range(40):
+        lengths = rng.integers(1, 40, size=rng.integers(1, 5))
+        bounds = np.r_[0, np.cumsum(lengths)]
+        ankle = rng.normal(size=(bounds[-1], 3)) * 50
+        contact = rng.random(bounds[-1]) < rng.uniform(0, 1)
+        if trial % 4 == 0:  # clips wholly in contact or not: runs end at the clips' bounds
+            contact = np.repeat(rng.random(len(lengths)) < 0.5, lengths)
+        want = np.concatenate([one_clip(ankle[a:b], contact[a:b]) for a, b in zip(bounds[:-1], bounds[1:])])
+        np.testing.assert_array_equal(_run_offsets(ankle, contact, bounds), want)
+
+
 def test_a_skeleton_without_arms_is_mapped_and_retargeted(walks):
     """The game rig with its arms cut off: arms are optional roles, the rest maps and moves."""
     game = walks["game"]

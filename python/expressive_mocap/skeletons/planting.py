@@ -8,10 +8,10 @@ import numpy as np
 
 from .. import quat
 from ..exaggeration.footlock import contact_weights
-from ..features import foot_contacts
+from ..features import FLOOR_PERCENTILE, foot_contacts, percentiles_by_clip
 from ..ik import two_bone_ik
 from ..motion import Motion
-from ..roles import JointRoles
+from ..roles import JointRoles, actor_height
 from .jointmap import JointMap
 
 BLEND_FRAMES = 3
@@ -45,8 +45,7 @@ def plant_feet(
         frames = np.flatnonzero(weights[:, s] > 0)
         if not len(frames):
             continue
-        gap = positions[:, foot] - guide[:, s]
-        offsets = np.concatenate([_run_offsets(gap[a:b], contacts[a:b, s]) for a, b in pieces])
+        offsets = _run_offsets(positions[:, foot] - guide[:, s], contacts[:, s], bounds)
         w = weights[frames, s, None]
         target = (1 - w) * positions[frames, foot] + w * (guide[frames, s] + offsets[frames])
         t = motion.translations[frames]
@@ -60,26 +59,62 @@ def plant_feet(
     return Motion(skeleton, rotations, motion.translations, motion.frame_time)
 
 
-def _run_offsets(ankle: np.ndarray, contact: np.ndarray) -> np.ndarray:
-    """Per frame, the mean of ``ankle [F, 3]`` over the nearest contact run (none: its own value)."""
+def _run_offsets(ankle: np.ndarray, contact: np.ndarray, bounds) -> np.ndarray:
+    """Per frame, the mean of ``ankle [F, 3]`` over the nearest contact run of its clip (clips
+    laid end to end as ``bounds`` says; a clip without contact: its own value). All clips at once."""
     out = ankle.copy()
-    edges = np.diff(np.r_[0, contact.astype(np.int8), 0])
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    bounds = np.asarray(bounds, dtype=np.int64)
+    clip = np.repeat(np.arange(len(bounds) - 1), np.diff(bounds))
+    # Runs begin where a contact begins or a clip does in contact, and end likewise.
+    touching = contact.astype(bool)
+    begins = touching.copy()
+    begins[1:] &= ~touching[:-1] | (clip[1:] != clip[:-1])
+    ends = touching.copy()
+    ends[:-1] &= ~touching[1:] | (clip[1:] != clip[:-1])
+    starts, stops = np.flatnonzero(begins), np.flatnonzero(ends) + 1
     if not len(starts):
         return out
     run = np.full(len(ankle), -1)
-    for k, (a, b) in enumerate(zip(starts, ends)):
-        run[a:b] = k
-    means = np.array([ankle[a:b].mean(axis=0) for a, b in zip(starts, ends)])
-    centres = (starts + ends - 1) / 2
-    nearest = np.abs(np.arange(len(ankle))[:, None] - centres[None]).argmin(axis=1)
-    return np.where((run >= 0)[:, None], means[np.maximum(run, 0)], means[nearest])
+    run[starts] = np.arange(len(starts))
+    run_of = np.maximum.accumulate(run)  # the last run begun at or before each frame
+    inside = touching & (run_of >= 0)
+    # Each run's sum in frame order (bincount adds as a run's mean does), then the means.
+    counts = (stops - starts)[:, None]
+    weights = ankle[inside]
+    sums = np.stack([np.bincount(run_of[inside], weights[:, i], len(starts)) for i in range(3)], axis=1)
+    means = sums / counts
+    # Frames outside a run take the nearest run of their clip by centre (the first of a tie).
+    run_clip = clip[starts]
+    centres = (starts + stops - 1) / 2
+    first = np.searchsorted(run_clip, clip, side="left")
+    last = np.searchsorted(run_clip, clip, side="right") - 1
+    has_runs = last >= first
+    frames = np.arange(len(ankle))
+    before = np.clip(np.searchsorted(centres, frames, side="right") - 1, first, np.maximum(last, first))
+    after = np.clip(before + 1, first, np.maximum(last, first))
+    nearer_after = np.abs(centres[np.minimum(after, len(centres) - 1)] - frames) < np.abs(
+        centres[np.minimum(before, len(centres) - 1)] - frames
+    )
+    nearest = np.where(nearer_after, after, before)
+    picked = np.where(inside, run_of, nearest)
+    use = inside | has_runs
+    out[use] = means[np.minimum(picked[use], len(means) - 1)]
+    return out
 
 
-def source_contacts(motion: Motion, rig, upright_positions: np.ndarray) -> np.ndarray:
-    """Contacts ``bool [F, 2]`` of ``motion`` (of the rig ``rig``) from its world positions turned
-    to the canonical axes (Y up, file units)."""
-    return foot_contacts(motion, JointRoles.from_map(motion.skeleton, rig.jmap), positions=upright_positions)
+def source_contacts(clips: list[Motion], rig, upright_positions: np.ndarray, bounds=None) -> np.ndarray:
+    """Contacts ``bool [F, 2]`` of ``clips`` (of the rig ``rig``, laid end to end as ``bounds``
+    says; None: one clip) from their world positions turned to the canonical axes (Y up, file
+    units), each clip on its own floor."""
+    bounds = [0, len(upright_positions)] if bounds is None else bounds
+    skeleton = clips[0].skeleton
+    roles = JointRoles.from_map(skeleton, rig.jmap)
+    height = actor_height(skeleton, roles)  # one skeleton: the same for every clip
+    floors = percentiles_by_clip(upright_positions[:, list(roles.toes), 1], bounds, FLOOR_PERCENTILE)
+    pieces = zip(clips, floors, bounds[:-1], bounds[1:])
+    return np.concatenate(
+        [foot_contacts(c, roles, floor=f, height=height, positions=upright_positions[a:b]) for c, f, a, b in pieces]
+    )
 
 
 __all__ = ["BLEND_FRAMES", "plant_feet", "source_contacts"]

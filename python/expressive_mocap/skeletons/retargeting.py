@@ -25,6 +25,7 @@ import numpy as np
 
 from .. import ops, quat
 from ..errors import MocapError
+from ..features import percentiles_by_clip
 from ..motion import Motion, Skeleton
 from .conventions import AXES, Conventions, read_conventions
 from .jointmap import JointMap, find_joint_map
@@ -65,9 +66,14 @@ def _floor(motion: Motion, jmap: JointMap, conventions: Conventions) -> float:
 
 
 def _floor_of(positions: np.ndarray, jmap: JointMap, conventions: Conventions) -> float:
+    return float(_floors_of(positions, [0, len(positions)], jmap, conventions)[0])
+
+
+def _floors_of(positions: np.ndarray, bounds, jmap: JointMap, conventions: Conventions) -> np.ndarray:
+    """The floor of each clip laid end to end in ``positions`` (see ``bounds``, :func:`_floor`)."""
     up = np.array(_axis(conventions.up))
     joints = [jmap[r] for r in ("left_foot", "right_foot", "left_toes", "right_toes") if r in jmap]
-    return float(np.percentile((positions[:, joints] @ up).min(axis=1), 5))
+    return percentiles_by_clip((positions[:, joints] @ up).min(axis=1), bounds, 5)
 
 
 def _axis(name: str) -> tuple[int, int, int]:
@@ -243,8 +249,7 @@ def _retarget_frames(
     ``clips`` the clips themselves)."""
     kinematics = motion.fk()
     if floors is None:
-        pieces = zip(bounds[:-1], bounds[1:])
-        floors = np.array([_floor_of(kinematics[1][a:b], source.jmap, source.conventions) for a, b in pieces])
+        floors = _floors_of(kinematics[1], bounds, source.jmap, source.conventions)
     floor = np.repeat(floors, np.diff(bounds))  # per frame
     out = _transfer(motion, source, goal, kinematics, floor)
     if plant_feet:
@@ -252,11 +257,9 @@ def _retarget_frames(
         from .planting import source_contacts
 
         positions = kinematics[1]
-        upright = quat.rotate(source.conventions.rotation(), positions)
-        clips = clips or [motion]
-        contacts = np.concatenate(
-            [source_contacts(c, source, upright[a:b]) for c, a, b in zip(clips, bounds[:-1], bounds[1:])]
-        )
+        turn = source.conventions.rotation()
+        upright = positions if np.array_equal(turn, [0.0, 0.0, 0.0, 1.0]) else quat.rotate(turn, positions)
+        contacts = source_contacts(clips or [motion], source, upright, bounds)
         feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
         out = plant(out, goal.jmap, contacts, carried(positions[:, feet], source, goal, floor), starts=bounds)
     return out
