@@ -147,9 +147,9 @@ def onto_canonical(
     BVH text to write and parse again), its own skeleton and joint map kept in its outcome for
     the manifest. ``user_map``: role -> joint name, for every skeleton of the archive.
     ``signed``: the joints whose rotations must keep the text's sign (:func:`as_written`)."""
-    from ..skeletons.canonical import canonical_shape, many_onto_canonical
+    from ..skeletons.canonical import canonical_shape, canonical_skeleton, many_onto_canonical
 
-    target = canonical_shape()
+    target, body = canonical_shape(), bone_length(canonical_skeleton())  # every retargeted clip's
     out: dict[tuple, list] = {target: by_hierarchy.pop(target, []), MOVED: []}
     read = _decode_whole(batch, outcomes, [m for members in by_hierarchy.values() for m in members])
     try:
@@ -172,7 +172,7 @@ def onto_canonical(
             "map": jmap.as_names(),
         }
         outcomes[k].skeleton = target
-        outcomes[k].bone_length = bone_length(clip.skeleton)
+        outcomes[k].bone_length = body
         out[MOVED].append((k, None, clip))
     return out
 
@@ -188,18 +188,12 @@ def as_written(moved: list, joints: list[int] | None = None) -> list:
     skeleton = done[0][0].skeleton
     joints = list(range(skeleton.n_joints)) if joints is None else joints
     orders = skeleton.layout()[1][joints]  # the canonical body's: three rotation channels a joint
-    rotations = np.concatenate([m.rotations for m, _ in done])
-    picked = rotations[:, joints]
-    rotations[:, joints] = ops.euler_to_quat(ops.quat_to_euler(picked, orders), orders)
+    picked = np.concatenate([m.rotations[:, joints] for m, _ in done])
+    picked = ops.euler_to_quat(ops.quat_to_euler(picked, orders), orders)
     bounds = np.cumsum([0] + [m.n_frames for m, _ in done])
-    it = iter(zip(bounds[:-1], bounds[1:]))
-    out = []
-    for m in moved:
-        if not isinstance(m, MocapError):
-            (motion, jmap), (a, b) = m, next(it)
-            m = (Motion(motion.skeleton, rotations[a:b], motion.translations, motion.frame_time), jmap)
-        out.append(m)
-    return out
+    for (motion, _), a, b in zip(done, bounds[:-1], bounds[1:]):
+        motion.rotations[:, joints] = picked[a:b]  # the retarget's own arrays: changed in place
+    return moved
 
 
 # The key in ``by_hierarchy`` of the clips retargeted onto the canonical body (as Motions).

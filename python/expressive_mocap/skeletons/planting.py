@@ -48,9 +48,9 @@ def plant_feet(
         offsets = _run_offsets(positions[:, foot] - guide[:, s], contacts[:, s], bounds)
         w = weights[frames, s, None]
         target = (1 - w) * positions[frames, foot] + w * (guide[frames, s] + offsets[frames])
-        t = motion.translations[frames]
+        t = motion.translations
         upper, lower = two_bone_ik(
-            positions[frames, hip], world[frames, hip], world[frames, knee], t[:, knee], t[:, foot], target
+            positions[frames, hip], world[frames, hip], world[frames, knee], t[frames, knee], t[frames, foot], target
         )
         parent = parents[hip]
         rotations[frames, hip] = quat.mul(quat.conjugate(world[frames, parent]), upper) if parent >= 0 else upper
