@@ -10,6 +10,7 @@ pub mod fk;
 pub mod footsteps;
 pub mod format;
 pub mod gait;
+pub mod ik;
 pub mod mlp;
 pub mod parse;
 pub mod retarget;

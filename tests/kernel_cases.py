@@ -118,4 +118,8 @@ CORE = {
     ),
     "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
     "retarget_transfer": (transfer_args, ["world", "positions", None]),
+    "two_bone_ik": (
+        lambda f: (RNG.normal(size=(f, 3)), quats(f), quats(f), RNG.normal(size=(f, 3)), *RNG.normal(size=(2, f, 3))),
+        ["root", "upper", "lower", "upper_bone", "lower_bone", "target"],
+    ),
 }

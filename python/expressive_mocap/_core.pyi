@@ -37,6 +37,7 @@ __all__ = [
     "quat_to_euler",
     "read_motion_blocks",
     "retarget_transfer",
+    "two_bone_ik",
 ]
 
 num_threads: int
@@ -143,3 +144,8 @@ def compose_rotations(expressive: _F64, body: _F64, scale: float = 1.0) -> _F64:
 def retarget_transfer(world: _F64, positions: _F64, plan: TransferPlan) -> _F64:
     """The target skeleton's local rotations ``[F, Jt, 4]`` from the source's world rotations
     ``[F, Js, 4]`` and positions ``[F, Js, 3]``, along ``plan``."""
+
+def two_bone_ik(
+    root: _F64, upper: _F64, lower: _F64, upper_bone: _F64, lower_bone: _F64, target: _F64
+) -> tuple[_F64, _F64]:
+    """New world rotations ``(upper, lower)`` ``[F, 4]`` of two-bone chains reaching for ``target``."""

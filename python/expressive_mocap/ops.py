@@ -411,6 +411,34 @@ def clip_pipeline_many(
     )
 
 
+# -- inverse kinematics ----------------------------------------------------------------------------
+
+
+def two_bone_ik(root, upper, lower, upper_bone, lower_bone, target) -> tuple[np.ndarray, np.ndarray]:
+    """New world rotations ``(upper, lower)`` ``[F, 4]`` of two-bone chains reaching for
+    ``target [F, 3]`` (see :func:`expressive_mocap.ik.two_bone_ik`); ``upper_bone`` and
+    ``lower_bone`` ``[3]`` (every frame's) or ``[F, 3]``."""
+    root = _array("root", root, np.float64)
+    frames = len(root) if root.ndim else 0
+
+    def rows(name: str, value, width: int) -> np.ndarray:
+        value = _array(name, value, np.float64)
+        if value.ndim == 1 and value.shape == (width,) and name.endswith("bone"):
+            value = np.ascontiguousarray(np.broadcast_to(value, (frames, width)))
+        if value.shape != (frames, width):
+            raise ArgumentError(f"argument `{name}`: expected shape [{frames}, {width}], got {list(value.shape)}")
+        return value
+
+    return kernels().two_bone_ik(
+        rows("root", root, 3),
+        rows("upper", upper, 4),
+        rows("lower", lower, 4),
+        rows("upper_bone", upper_bone, 3),
+        rows("lower_bone", lower_bone, 3),
+        rows("target", target, 3),
+    )
+
+
 # -- retargeting ---------------------------------------------------------------------------------
 
 
@@ -547,4 +575,5 @@ __all__ = [
     "quat_to_euler",
     "read_motion_blocks",
     "retarget_transfer",
+    "two_bone_ik",
 ]

@@ -16,6 +16,7 @@ mod fk;
 mod footsteps;
 mod format;
 mod gait;
+mod ik;
 mod mlp;
 mod parse;
 mod retarget;
@@ -115,5 +116,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     mlp::register(m)?;
     decouple::register(m)?;
     retarget::register(m)?;
+    ik::register(m)?;
     Ok(())
 }

@@ -13,6 +13,7 @@ from .features import dynamic_features
 from .fk import forward_kinematics, forward_kinematics_many
 from .footsteps import air_time, foot_contacts
 from .gait import clip_gait_many
+from .ik import two_bone_ik
 from .mlp import mlp_forward
 from .motion_block import decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
 from .retarget import retarget_transfer
@@ -39,4 +40,5 @@ __all__ = [
     "read_motion_blocks",
     "quat_to_euler",
     "retarget_transfer",
+    "two_bone_ik",
 ]
