@@ -13,6 +13,7 @@ pub mod gait;
 pub mod ik;
 pub mod mlp;
 pub mod parse;
+pub mod planting;
 pub mod retarget;
 pub mod rotations;
 pub mod zeroable;

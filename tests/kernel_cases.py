@@ -118,6 +118,19 @@ CORE = {
     ),
     "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
     "retarget_transfer": (transfer_args, ["world", "positions", None]),
+    "plant_feet": (
+        lambda f: (
+            quats(f, 4),
+            RNG.normal(size=(f, 4, 3)),
+            np.array([-1, 0, 1, 2]),
+            np.array([[1, 2, 3], [-1, -1, -1]]),
+            RNG.random((f, 2)) > 0.5,
+            RNG.normal(size=(f, 2, 3)),
+            np.array([0, f // 2, f]),
+            3,
+        ),  # fmt: skip
+        ["rotations", "translations", "parents", "legs", "contacts", "guide", "starts", None],
+    ),
     "two_bone_ik": (
         lambda f: (RNG.normal(size=(f, 3)), quats(f), quats(f), RNG.normal(size=(f, 3)), *RNG.normal(size=(2, f, 3))),
         ["root", "upper", "lower", "upper_bone", "lower_bone", "target"],

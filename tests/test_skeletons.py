@@ -323,6 +323,26 @@ def test_the_transfer_kernel_and_its_twin_agree_on_every_pair_of_rigs(walks):
         np.testing.assert_allclose(rust, twin, atol=1e-12, err_msg=f"{a} -> {b}")
 
 
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+def test_the_planting_kernel_and_its_twin_agree(walks):
+    from expressive_mocap import _core, reference
+    from expressive_mocap.skeletons.canonical import canonical_rig, onto_canonical
+
+    rng = np.random.default_rng(3)
+    for rig in ("smpl", "cmu", "game"):
+        body = onto_canonical(walks[rig], plant_feet=False)[0]
+        frames = body.n_frames
+        jmap = canonical_rig().jmap
+        legs = np.array([[jmap[f"{s}_{r}"] for r in ("upper_leg", "lower_leg", "foot")] for s in ("left", "right")])
+        contacts = rng.random((frames, 2)) < 0.6
+        guide = body.positions()[:, legs[:, 2]] + rng.normal(scale=2.0, size=(frames, 2, 3))
+        starts = np.array([0, frames // 3, frames // 3, frames])  # an empty clip too
+        args = (body.rotations, body.translations, body.skeleton.parents, legs, contacts, guide, starts, 3)
+        # Within 1e-7: the leg IK's arccos near a straight knee turns the two backends' last-bit
+        # differences into some 1e-8 (the IK kernel alone agrees with its twin to 1e-12).
+        np.testing.assert_allclose(_core.plant_feet(*args), reference.plant_feet(*args), atol=1e-7, err_msg=rig)
+
+
 def test_clips_retargeted_in_runs_are_those_retargeted_all_at_once(walks, monkeypatch):
     from expressive_mocap.skeletons import retargeting
     from expressive_mocap.skeletons.canonical import many_onto_canonical
@@ -337,7 +357,7 @@ def test_clips_retargeted_in_runs_are_those_retargeted_all_at_once(walks, monkey
 
 
 def test_run_offsets_of_clips_end_to_end_are_each_clips_own():
-    from expressive_mocap.skeletons.planting import _run_offsets
+    from expressive_mocap.reference.planting import _run_offsets
 
     def one_clip(ankle, contact):  # the mean over the run, or over the nearest run by centre
         edges = np.diff(np.r_[0, contact.astype(int), 0])

@@ -34,6 +34,7 @@ __all__ = [
     "mlp_forward",
     "num_threads",
     "parse_motion_block",
+    "plant_feet",
     "quat_to_euler",
     "read_motion_blocks",
     "retarget_transfer",
@@ -149,3 +150,16 @@ def two_bone_ik(
     root: _F64, upper: _F64, lower: _F64, upper_bone: _F64, lower_bone: _F64, target: _F64
 ) -> tuple[_F64, _F64]:
     """New world rotations ``(upper, lower)`` ``[F, 4]`` of two-bone chains reaching for ``target``."""
+
+def plant_feet(
+    rotations: _F64,
+    translations: _F64,
+    parents: npt.NDArray[np.int64],
+    legs: npt.NDArray[np.int64],
+    contacts: npt.NDArray[np.bool_],
+    guide: _F64,
+    starts: npt.NDArray[np.int64],
+    blend: int,
+) -> _F64:
+    """Local rotations ``[F, J, 4]`` with the feet planted (legs ``[2, 3]``, contacts ``[F, 2]``,
+    guide ``[F, 2, 3]``, clip ``starts``, ``blend`` frames of easing)."""

@@ -439,6 +439,23 @@ def two_bone_ik(root, upper, lower, upper_bone, lower_bone, target) -> tuple[np.
     )
 
 
+def plant_feet(rotations, translations, parents, legs, contacts, guide, starts, blend: int) -> np.ndarray:
+    """The local rotations ``[F, J, 4]`` of a motion with its feet planted (see
+    :func:`expressive_mocap.skeletons.planting.plant_feet`): ``legs [2, 3]`` (hip, knee, foot;
+    -1s: a leg left as it is), ``contacts bool [F, 2]``, ``guide [F, 2, 3]``, ``starts`` where
+    clips laid end to end begin and the last one ends, ``blend`` frames of easing."""
+    return kernels().plant_feet(
+        _f64("rotations", rotations, 4),
+        _f64("translations", translations, 3),
+        _array("parents", parents, np.int64, "iu"),
+        _array("legs", legs, np.int64, "iu"),
+        np.ascontiguousarray(contacts, dtype=bool),
+        _f64("guide", guide, 3),
+        _array("starts", starts, np.int64, "iu"),
+        int(blend),
+    )
+
+
 # -- retargeting ---------------------------------------------------------------------------------
 
 
@@ -572,6 +589,7 @@ __all__ = [
     "forward_kinematics",
     "forward_kinematics_many",
     "mlp_forward",
+    "plant_feet",
     "quat_to_euler",
     "read_motion_blocks",
     "retarget_transfer",

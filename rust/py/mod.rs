@@ -19,6 +19,7 @@ mod gait;
 mod ik;
 mod mlp;
 mod parse;
+mod planting;
 mod retarget;
 mod rotations;
 
@@ -117,5 +118,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     decouple::register(m)?;
     retarget::register(m)?;
     ik::register(m)?;
+    planting::register(m)?;
     Ok(())
 }

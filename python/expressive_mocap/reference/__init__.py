@@ -16,6 +16,7 @@ from .gait import clip_gait_many
 from .ik import two_bone_ik
 from .mlp import mlp_forward
 from .motion_block import decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
+from .planting import plant_feet
 from .retarget import retarget_transfer
 from .rotations import euler_to_quat, quat_to_euler
 
@@ -37,6 +38,7 @@ __all__ = [
     "mlp_forward",
     "num_threads",
     "parse_motion_block",
+    "plant_feet",
     "read_motion_blocks",
     "quat_to_euler",
     "retarget_transfer",
