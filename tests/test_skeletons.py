@@ -343,6 +343,20 @@ def test_the_planting_kernel_and_its_twin_agree(walks):
         np.testing.assert_allclose(_core.plant_feet(*args), reference.plant_feet(*args), atol=1e-7, err_msg=rig)
 
 
+def test_source_contacts_of_clips_end_to_end_are_each_clips_foot_contacts(walks):
+    from expressive_mocap.skeletons.planting import source_contacts
+
+    for rig in ("smpl", "cmu", "bandai"):  # Z up, and Y up
+        motion = walks[rig]
+        source = Rig.of(motion)
+        clips = [motion[:50], motion[50:51], motion[51:]]
+        bounds = np.cumsum([0] + [c.n_frames for c in clips])
+        upright = quat.rotate(source.conventions.rotation(), motion.positions())
+        roles = JointRoles.from_map(motion.skeleton, source.jmap)
+        want = [foot_contacts(c, roles, positions=upright[a:b]) for c, a, b in zip(clips, bounds[:-1], bounds[1:])]
+        np.testing.assert_array_equal(source_contacts(clips, source, upright, bounds), np.concatenate(want), rig)
+
+
 def test_clips_retargeted_in_runs_are_those_retargeted_all_at_once(walks, monkeypatch):
     from expressive_mocap.skeletons import retargeting
     from expressive_mocap.skeletons.canonical import many_onto_canonical

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import ops
-from ..features import FLOOR_PERCENTILE, foot_contacts, percentiles_by_clip
+from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from ..motion import Motion
 from ..roles import JointRoles, actor_height
 from .jointmap import JointMap
@@ -45,16 +45,18 @@ def plant_feet(
 def source_contacts(clips: list[Motion], rig, upright_positions: np.ndarray, bounds=None) -> np.ndarray:
     """Contacts ``bool [F, 2]`` of ``clips`` (of the rig ``rig``, laid end to end as ``bounds``
     says; None: one clip) from their world positions turned to the canonical axes (Y up, file
-    units), each clip on its own floor."""
+    units), each clip on its own floor: :func:`~expressive_mocap.features.foot_contacts` with its
+    defaults, all clips in one kernel call (``clip_gait_many``, clips in parallel)."""
     bounds = [0, len(upright_positions)] if bounds is None else bounds
     skeleton = clips[0].skeleton
     roles = JointRoles.from_map(skeleton, rig.jmap)
     height = actor_height(skeleton, roles)  # one skeleton: the same for every clip
-    floors = percentiles_by_clip(upright_positions[:, list(roles.toes), 1], bounds, FLOOR_PERCENTILE)
-    pieces = zip(clips, floors, bounds[:-1], bounds[1:])
-    return np.concatenate(
-        [foot_contacts(c, roles, floor=f, height=height, positions=upright_positions[a:b]) for c, f, a, b in pieces]
-    )
+    pieces = zip(clips, bounds[:-1], bounds[1:])
+    # The hips' rest height is read by the features only: none are asked for.
+    gait = [(upright_positions[a:b], c.rotations, c.frame_time, height, 1.0) for c, a, b in pieces]
+    settings = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
+    found = ops.clip_gait_many(gait, roles.gait_joints, settings, features=False, contacts=True)
+    return np.concatenate([contacts for _, contacts in found] + [np.zeros((0, 2), bool)])
 
 
 __all__ = ["BLEND_FRAMES", "plant_feet", "source_contacts"]
