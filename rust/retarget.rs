@@ -33,9 +33,13 @@ pub struct TransferPlan<'a> {
     pub tops: &'a [i64],
     pub bottoms: &'a [i64],
     pub shares: &'a [f64],
-    /// Target joints held at their rest rotation: the world rotation of `copied` (-1: none).
+    /// Target joints held as in the reference pose relative to `copied`, their nearest computed
+    /// ancestor (-1: none).
     pub held: &'a [i64],
     pub copied: &'a [i64],
+    /// `[Jt, 4]`: the target's world rotations in its reference pose (canonical axes; the rest
+    /// pose: every one the identity). Shared and held joints turn as changes from it.
+    pub reference: &'a [f64],
     /// The target skeleton's parents.
     pub parents: &'a [i64],
     /// The source's and the target's turn onto the canonical axes (x, y, z, w).
@@ -129,6 +133,7 @@ fn check_plan(plan: &TransferPlan<'_>, source_joints: usize) -> Result<()> {
     check_len("bottoms", plan.bottoms.len(), plan.shared.len())?;
     check_len("shares", plan.shares.len(), plan.shared.len())?;
     check_len("copied", plan.copied.len(), plan.held.len())?;
+    check_len("reference", plan.reference.len(), 4 * target_joints)?;
     check_indices("source", plan.source, source_joints, false)?;
     check_indices("starts", plan.starts, source_joints, false)?;
     check_indices("ends", plan.ends, source_joints, false)?;
@@ -177,17 +182,22 @@ fn transfer_frame(
     for (r, (&joint, role)) in plan.target.iter().zip(roles.iter()).enumerate() {
         scratch[joint as usize] = *role * quat_at(plan.aligns, r);
     }
+    // Unmapped joints turn with the mapped ones, as changes from the target's reference pose.
+    let reference = |joint: usize| quat_at(plan.reference, joint);
     for (h, &joint) in plan.shared.iter().enumerate() {
-        let top = scratch[plan.tops[h] as usize];
-        let turn = top.conjugate() * scratch[plan.bottoms[h] as usize];
-        scratch[joint as usize] = top * power(turn, plan.shares[h]);
+        let (top, bottom) = (plan.tops[h] as usize, plan.bottoms[h] as usize);
+        let top = scratch[top] * reference(top).conjugate();
+        let bottom = scratch[bottom] * reference(bottom).conjugate();
+        let turn = power(top.conjugate() * bottom, plan.shares[h]);
+        scratch[joint as usize] = top * turn * reference(joint as usize);
     }
     for (&joint, &copied) in plan.held.iter().zip(plan.copied) {
-        scratch[joint as usize] = if copied >= 0 {
-            scratch[copied as usize]
+        let change = if copied >= 0 {
+            scratch[copied as usize] * reference(copied as usize).conjugate()
         } else {
             DQuat::IDENTITY
         };
+        scratch[joint as usize] = change * reference(joint as usize);
     }
     if !turn_t_identity {
         for q in scratch.iter_mut() {
@@ -208,7 +218,8 @@ fn transfer_frame(
 /// `world` `[F, Js, 4]` and positions `positions` `[F, Js, 3]`, along `plan`:
 /// each role's source rotation turned to the canonical axes, swung onto the source's bone where
 /// the plan says, times its alignment; the shared spine joints by a power of the turn between
-/// their chain's ends; the held joints as their nearest computed ancestor; then turned to the
+/// their chain's ends and the held joints with their nearest computed ancestor, both as changes
+/// from the target's reference pose; then turned to the
 /// target's axes and made local to each parent.
 ///
 /// # Errors
@@ -277,6 +288,8 @@ pub fn transfer(
 mod tests {
     use super::*;
 
+    const IDENTITIES: [f64; 12] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+
     fn plan<'a>(parents: &'a [i64]) -> TransferPlan<'a> {
         TransferPlan {
             source: &[0, 1],
@@ -292,6 +305,7 @@ mod tests {
             shares: &[],
             held: &[2],
             copied: &[1],
+            reference: &IDENTITIES,
             parents,
             turn_source: [0.0, 0.0, 0.0, 1.0],
             turn_target: [0.0, 0.0, 0.0, 1.0],

@@ -74,10 +74,10 @@ def pipeline_args(frames, joints=3):
 
 def transfer_args(frames):
     """A retargeting transfer from 3 source joints onto 5 target joints: three roles (one swung),
-    a shared spine joint, a held joint; turned axes on both sides."""
+    a shared spine joint, a held joint, a turned reference pose; turned axes on both sides."""
     plan = ops.TransferPlan.of(
         [0, 1, 2], [0, 1, 3], quats(3), [1], [1], [2], RNG.normal(size=(1, 3)),
-        [2], [1], [3], [0.5], [4], [0], [-1, 0, 1, 2, 0], quats(1)[0], quats(1)[0],
+        [2], [1], [3], [0.5], [4], [0], quats(5), [-1, 0, 1, 2, 0], quats(1)[0], quats(1)[0],
     )  # fmt: skip
     return (quats(frames, 3), RNG.normal(size=(frames, 3, 3)), plan)
 

@@ -317,10 +317,12 @@ def test_the_transfer_kernel_and_its_twin_agree_on_every_pair_of_rigs(walks):
     for a, b in itertools.permutations(RIGS, 2):
         world, positions = walks[a].fk()
         plan = _plan(rigs[a], rigs[b])
-        rust = _core.retarget_transfer(world, positions, plan)
-        twin = reference.retarget_transfer(world, positions, plan)
-        assert rust.shape == (walks[a].n_frames, rigs[b].skeleton.n_joints, 4)
-        np.testing.assert_allclose(rust, twin, atol=1e-12, err_msg=f"{a} -> {b}")
+        turned = Rotation.random(len(plan.parents), random_state=1).as_quat()  # a reference pose not the rest
+        for p in (plan, plan._replace(reference=turned)):
+            rust = _core.retarget_transfer(world, positions, p)
+            twin = reference.retarget_transfer(world, positions, p)
+            assert rust.shape == (walks[a].n_frames, rigs[b].skeleton.n_joints, 4)
+            np.testing.assert_allclose(rust, twin, atol=1e-12, err_msg=f"{a} -> {b}")
 
 
 @pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")

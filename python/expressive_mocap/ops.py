@@ -465,8 +465,10 @@ class TransferPlan(NamedTuple):
     and alignment ``aligns [R, 4]``; the roles ``swung`` onto the source's bone from joint
     ``starts`` to joint ``ends`` (at rest ``rest_lines [S, 3]``, canonical axes); the target's
     spine joints ``shared`` taking the share ``shares`` of the turn from ``tops`` to
-    ``bottoms``; the target joints ``held`` at rest (the world rotation of ``copied``, -1:
-    none); the target's ``parents``; both skeletons' turns onto the canonical axes."""
+    ``bottoms``; the target joints ``held`` with ``copied``, their nearest computed ancestor
+    (-1: none); both as changes from ``reference [Jt, 4]``, the target's world rotations in its
+    reference pose (canonical axes; the rest pose: all the identity); the target's ``parents``;
+    both skeletons' turns onto the canonical axes."""
 
     source: np.ndarray
     target: np.ndarray
@@ -481,6 +483,7 @@ class TransferPlan(NamedTuple):
     shares: np.ndarray
     held: np.ndarray
     copied: np.ndarray
+    reference: np.ndarray
     parents: np.ndarray
     turn_source: tuple[float, float, float, float]
     turn_target: tuple[float, float, float, float]
@@ -488,11 +491,12 @@ class TransferPlan(NamedTuple):
     @classmethod
     def of(cls, *parts) -> TransferPlan:
         """A plan of the parts in the fields' order, each coerced: index arrays int64,
-        ``aligns`` and ``rest_lines`` float ``[N, 4]`` and ``[N, 3]``, turns four floats."""
+        ``aligns``, ``reference`` and ``rest_lines`` float ``[N, 4]`` and ``[N, 3]``, turns four floats."""
         fields = dict(zip(cls._fields, parts))
-        for name in ("aligns", "rest_lines", "shares"):
+        for name in ("aligns", "rest_lines", "shares", "reference"):
             fields[name] = _array(name, fields[name], np.float64)
         fields["aligns"] = fields["aligns"].reshape(-1, 4)
+        fields["reference"] = fields["reference"].reshape(-1, 4)
         fields["rest_lines"] = fields["rest_lines"].reshape(-1, 3)
         for name in ("source", "target", "swung", "starts", "ends", "shared", "tops", "bottoms", "held", "copied"):
             value = np.asarray(fields[name])

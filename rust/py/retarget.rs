@@ -29,6 +29,7 @@ struct PlanArgs<'py> {
     held: PyReadonlyArray1<'py, i64>,
     copied: PyReadonlyArray1<'py, i64>,
     parents: PyReadonlyArray1<'py, i64>,
+    reference: PyReadonlyArray2<'py, f64>,
     turn_source: [f64; 4],
     turn_target: [f64; 4],
 }
@@ -84,6 +85,7 @@ fn retarget_transfer<'py>(
         held,
         copied,
         parents,
+        reference: contiguous("plan", &plan.reference)?,
         turn_source: plan.turn_source,
         turn_target: plan.turn_target,
     };

@@ -34,6 +34,7 @@ def _check(plan, source_joints: int) -> None:
         "bottoms": (np.size(plan.bottoms), len(plan.shared)),
         "shares": (np.size(plan.shares), len(plan.shared)),
         "copied": (np.size(plan.copied), len(plan.held)),
+        "reference": (np.size(plan.reference), 4 * joints),
     }
     for name, (got, expected) in lengths.items():
         if got != expected:
@@ -69,12 +70,18 @@ def retarget_transfer(world: np.ndarray, positions: np.ndarray, plan) -> np.ndar
     out = np.empty((frames, joints, 4))
     out[:] = _IDENTITY  # a joint the plan leaves out
     out[:, plan.target] = quat.mul(roles, plan.aligns)
+    # Unmapped joints turn with the mapped ones, as changes from the target's reference pose.
+    reference = np.asarray(plan.reference, dtype=np.float64)
     if len(plan.shared):
-        turn = quat.mul(quat.conjugate(out[:, plan.tops]), out[:, plan.bottoms])
-        out[:, plan.shared] = quat.mul(out[:, plan.tops], quat.power(turn, plan.shares))
+        top = quat.mul(out[:, plan.tops], quat.conjugate(reference[plan.tops]))
+        bottom = quat.mul(out[:, plan.bottoms], quat.conjugate(reference[plan.bottoms]))
+        turn = quat.power(quat.mul(quat.conjugate(top), bottom), plan.shares)
+        out[:, plan.shared] = quat.mul(quat.mul(top, turn), reference[plan.shared])
     if len(plan.held):
         copied = np.asarray(plan.copied)
-        out[:, plan.held] = np.where((copied >= 0)[:, None], out[:, np.maximum(copied, 0)], _IDENTITY)
+        ancestor = quat.mul(out[:, np.maximum(copied, 0)], quat.conjugate(reference[np.maximum(copied, 0)]))
+        change = np.where((copied >= 0)[:, None], ancestor, _IDENTITY)
+        out[:, plan.held] = quat.mul(change, reference[plan.held])
     out = _turned(quat.conjugate(turn_t), out)  # the target's axes
     parents = np.asarray(plan.parents)
     local = out.copy()

@@ -30,6 +30,8 @@ from ..motion import Motion, Skeleton
 from .conventions import AXES, Conventions, read_conventions
 from .jointmap import JointMap, find_joint_map
 
+_IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+
 # The joint whose rest bone direction aligns each role (the next mapped joint out); leaf roles
 # (hand, toes, head) use the bone into them.
 _NEXT = {
@@ -344,6 +346,7 @@ def _new_plan(source: Rig, target: Rig) -> ops.TransferPlan:
         [x for _, _, x in shared.values()],
         held,
         copied,
+        np.tile(_IDENTITY, (len(parents), 1)),  # the reference pose: the rest, no joint turned
         parents,
         source.conventions.rotation(),
         target.conventions.rotation(),
