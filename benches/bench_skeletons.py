@@ -11,8 +11,8 @@ the speed of retargeting, and mixed-skeleton preprocessing against the one-skele
    is reported (bones: upper and lower legs, feet, clavicles, upper arms, forearms, neck).
 2. **Retargeting a 1,000-frame clip**: the CMU file's first 1,000 frames onto the Bandai
    skeleton and a 1,000-frame Bandai walk onto the CMU skeleton, with and without planted feet,
-   with the Rust kernels and with the NumPy twins (FK and contacts are kernels; the rest is
-   NumPy either way). Median of 15 calls after a warm-up.
+   with the Rust kernels and with the NumPy twins (FK, the pose transfer, contacts, leg IK and
+   planting are kernels; the rest is NumPy either way). Median of 15 calls after a warm-up.
 3. **Mixed preprocessing.** ``--clips`` dataset-2 clips (every k-th, sorted) preprocessed as
    they are (one skeleton, the default path), and the same clips with every second one
    retargeted onto the CMU skeleton beforehand (a mixed archive) with ``--canonical``, which puts

@@ -10,8 +10,11 @@ pub mod fk;
 pub mod footsteps;
 pub mod format;
 pub mod gait;
+pub mod ik;
 pub mod mlp;
 pub mod parse;
+pub mod planting;
+pub mod retarget;
 pub mod rotations;
 pub mod zeroable;
 

@@ -72,6 +72,16 @@ def pipeline_args(frames, joints=3):
     return ([clip, clip], np.arange(joints) - 1, [0, 1, 2, 1, 2, 2, 1], ops.GaitSettings(0.05, 0.5, 0.1, 5.0), outputs)
 
 
+def transfer_args(frames):
+    """A retargeting transfer from 3 source joints onto 5 target joints: three roles (one swung),
+    a shared spine joint, a held joint, a turned reference pose; turned axes on both sides."""
+    plan = ops.TransferPlan.of(
+        [0, 1, 2], [0, 1, 3], quats(3), [1], [1], [2], RNG.normal(size=(1, 3)),
+        [2], [1], [3], [0.5], [4], [0], quats(5), [-1, 0, 1, 2, 0], quats(1)[0], quats(1)[0],
+    )  # fmt: skip
+    return (quats(frames, 3), RNG.normal(size=(frames, 3, 3)), plan)
+
+
 # Name -> (arguments for F frames, names of the array arguments by position; None: not an array).
 CORE = {
     "parse_motion_block": (lambda f: (b"1 2 3\n" * f, 0, f, 3), []),
@@ -107,4 +117,22 @@ CORE = {
         ["original", "body"],
     ),
     "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
+    "retarget_transfer": (transfer_args, ["world", "positions", None]),
+    "plant_feet": (
+        lambda f: (
+            quats(f, 4),
+            RNG.normal(size=(f, 4, 3)),
+            np.array([-1, 0, 1, 2]),
+            np.array([[1, 2, 3], [-1, -1, -1]]),
+            RNG.random((f, 2)) > 0.5,
+            RNG.normal(size=(f, 2, 3)),
+            np.array([0, f // 2, f]),
+            3,
+        ),  # fmt: skip
+        ["rotations", "translations", "parents", "legs", "contacts", "guide", "starts", None],
+    ),
+    "two_bone_ik": (
+        lambda f: (RNG.normal(size=(f, 3)), quats(f), quats(f), RNG.normal(size=(f, 3)), *RNG.normal(size=(2, f, 3))),
+        ["root", "upper", "lower", "upper_bone", "lower_bone", "target"],
+    ),
 }

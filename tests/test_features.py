@@ -399,3 +399,17 @@ def test_gait_many_asks_only_for_what_is_wanted_and_names_bad_input(backend):
             features=True,
             contacts=True,
         )
+
+
+def test_percentiles_by_clip_are_numpys_clip_by_clip():
+    from expressive_mocap.features import percentiles_by_clip
+
+    rng = np.random.default_rng(5)
+    for trial in range(60):
+        lengths = rng.integers(1, 50, size=rng.integers(1, 6))
+        bounds = np.r_[0, np.cumsum(lengths)]
+        values = rng.normal(size=(bounds[-1], 2)) * 100
+        values = np.round(values, 1) if trial % 2 else values  # ties too
+        for q in (0, 5, 37.5, 50, 95, 100):
+            want = [np.percentile(values[a:b], q) for a, b in zip(bounds[:-1], bounds[1:])]
+            np.testing.assert_array_equal(percentiles_by_clip(values, bounds, q), want)

@@ -54,3 +54,25 @@ def test_a_target_out_of_reach_gets_the_stretched_leg_pointing_at_it(leg):
     np.testing.assert_allclose(np.linalg.norm(end - root, axis=1), REACH * length, rtol=1e-9)
     direction = (far - root) / np.linalg.norm(far - root, axis=1, keepdims=True)
     np.testing.assert_allclose((end - root) / np.linalg.norm(end - root, axis=1, keepdims=True), direction, atol=1e-9)
+
+
+def test_the_kernel_and_its_twin_agree_on_every_kind_of_target(leg):
+    import expressive_mocap as em
+    from expressive_mocap import reference
+
+    if not em.rust_available():
+        pytest.skip("the Rust extension is not built")
+    from expressive_mocap import _core
+
+    upper, lower, root = leg
+    rng = np.random.default_rng(4)
+    F = len(root)
+    straight = quat.normalize(np.tile([0.0, 0.0, 0.0, 1.0], (F, 1)))  # a straight knee: no bend plane
+    # Targets within reach, beyond it, nearer than the bones' difference, and on the root.
+    distance = np.r_[rng.uniform(10, 75, F - 6), 200.0, 200.0, 0.5, 0.5, 0.0, 0.0][:, None]
+    direction = rng.normal(size=(F, 3))
+    target = root + direction / np.linalg.norm(direction, axis=1, keepdims=True) * distance
+    for lows in (lower, straight):
+        args = (root, upper, lows, np.tile(THIGH, (F, 1)), np.tile(SHIN, (F, 1)), target)
+        for got, want in zip(_core.two_bone_ik(*args), reference.two_bone_ik(*args)):
+            np.testing.assert_allclose(got, want, atol=1e-12)

@@ -110,3 +110,38 @@ def test_a_map_file_reaches_every_clip_and_needs_canonical(mixed, tmp_path, caps
     assert record["source_skeleton"]["map"]["chest"] == "spine_02"
     with pytest.raises(ArgumentError, match="give canonical=True too"):
         preprocess(game_only, tmp_path / "n", joint_map={"chest": "spine_02"}, progress=False)
+
+
+@pytest.mark.parametrize(("keep", "model"), [(None, None), ("rotations,features,activity,body,expressive", "")])
+def test_retargeted_clips_skip_the_text_and_store_what_the_text_gave(mixed, tmp_path, monkeypatch, keep, model):
+    """The clips retargeted by ``--canonical`` reach the kernels as arrays: stored as the same
+    clips written as BVH text on the canonical body and preprocessed from that text, every kind
+    kept (the model's too), to float32 rounding, contacts alike."""
+    import expressive_mocap.bvh as bvh
+    from expressive_mocap.skeletons.canonical import many_onto_canonical
+
+    foreign = [f"walk_{rig}" for rig in RIGS[1:]]
+    moved = many_onto_canonical([em.read_bvh(mixed / f"{name}.bvh") for name in foreign])
+    as_text = tmp_path / "as_text"
+    as_text.mkdir()
+    for name, (motion, _) in zip(foreign, moved):
+        (as_text / f"{name}.bvh").write_bytes(bvh.bvh_bytes(motion))
+    expected = load_dataset(preprocess(as_text, tmp_path / "expected", keep=keep, model=model, progress=False).out)
+
+    def no_text(*args, **kwargs):
+        raise AssertionError("a retargeted clip was written as BVH text")
+
+    monkeypatch.setattr(bvh, "bvh_bytes", no_text)
+    summary = preprocess(mixed, tmp_path / "got", keep=keep, model=model, canonical=True, progress=False)
+    got = load_dataset(summary.out)
+    clips = {c["name"]: c for c in got.manifest["clips"]}
+    for record in expected.manifest["clips"]:
+        mine = clips[record["name"]]
+        assert (mine["frames"], mine["fps"]) == (record["frames"], record["fps"])
+        for kind in expected.arrays:
+            want = expected.arrays[kind][record["start"] : record["start"] + record["frames"]]
+            have = got.arrays[kind][mine["start"] : mine["start"] + mine["frames"]]
+            if kind == "contacts":
+                assert np.array_equal(have, want), record["name"]
+            else:
+                np.testing.assert_allclose(have, want, rtol=1e-5, atol=1e-4, err_msg=f"{record['name']} {kind}")

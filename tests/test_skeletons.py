@@ -330,6 +330,98 @@ def test_clips_retargeted_together_are_those_retargeted_one_by_one(walks):
         np.testing.assert_allclose(moved.positions(), alone.positions(), atol=1e-6)
 
 
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+def test_the_transfer_kernel_and_its_twin_agree_on_every_pair_of_rigs(walks):
+    from expressive_mocap import _core, reference
+    from expressive_mocap.skeletons.retargeting import _plan
+
+    rigs = {name: Rig.of(motion) for name, motion in walks.items()}
+    for a, b in itertools.permutations(RIGS, 2):
+        world, positions = walks[a].fk()
+        plan = _plan(rigs[a], rigs[b])
+        turned = Rotation.random(len(plan.parents), random_state=1).as_quat()  # a reference pose not the rest
+        for p in (plan, plan._replace(reference=turned)):
+            rust = _core.retarget_transfer(world, positions, p)
+            twin = reference.retarget_transfer(world, positions, p)
+            assert rust.shape == (walks[a].n_frames, rigs[b].skeleton.n_joints, 4)
+            np.testing.assert_allclose(rust, twin, atol=1e-12, err_msg=f"{a} -> {b}")
+
+
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+def test_the_planting_kernel_and_its_twin_agree(walks):
+    from expressive_mocap import _core, reference
+    from expressive_mocap.skeletons.canonical import canonical_rig, onto_canonical
+
+    rng = np.random.default_rng(3)
+    for rig in ("smpl", "cmu", "game"):
+        body = onto_canonical(walks[rig], plant_feet=False)[0]
+        frames = body.n_frames
+        jmap = canonical_rig().jmap
+        legs = np.array([[jmap[f"{s}_{r}"] for r in ("upper_leg", "lower_leg", "foot")] for s in ("left", "right")])
+        contacts = rng.random((frames, 2)) < 0.6
+        guide = body.positions()[:, legs[:, 2]] + rng.normal(scale=2.0, size=(frames, 2, 3))
+        starts = np.array([0, frames // 3, frames // 3, frames])  # an empty clip too
+        args = (body.rotations, body.translations, body.skeleton.parents, legs, contacts, guide, starts, 3)
+        # Within 1e-7: the leg IK's arccos near a straight knee turns the two backends' last-bit
+        # differences into some 1e-8 (the IK kernel alone agrees with its twin to 1e-12).
+        np.testing.assert_allclose(_core.plant_feet(*args), reference.plant_feet(*args), atol=1e-7, err_msg=rig)
+
+
+def test_source_contacts_of_clips_end_to_end_are_each_clips_foot_contacts(walks):
+    from expressive_mocap.skeletons.planting import source_contacts
+
+    for rig in ("smpl", "cmu", "bandai"):  # Z up, and Y up
+        motion = walks[rig]
+        source = Rig.of(motion)
+        clips = [motion[:50], motion[50:51], motion[51:]]
+        bounds = np.cumsum([0] + [c.n_frames for c in clips])
+        upright = quat.rotate(source.conventions.rotation(), motion.positions())
+        roles = JointRoles.from_map(motion.skeleton, source.jmap)
+        want = [foot_contacts(c, roles, positions=upright[a:b]) for c, a, b in zip(clips, bounds[:-1], bounds[1:])]
+        np.testing.assert_array_equal(source_contacts(clips, source, upright, bounds), np.concatenate(want), rig)
+
+
+def test_clips_retargeted_in_runs_are_those_retargeted_all_at_once(walks, monkeypatch):
+    from expressive_mocap.skeletons import retargeting
+    from expressive_mocap.skeletons.canonical import many_onto_canonical
+
+    smpl = walks["smpl"]
+    clips = [smpl[:90], smpl[90:200], walks["game"], smpl[200:], walks["game"][:40]]
+    at_once = many_onto_canonical(clips)
+    monkeypatch.setattr(retargeting, "CHUNK_FRAMES", 50)  # a run ends after every clip or two
+    for (moved, _), (whole, _) in zip(many_onto_canonical(clips), at_once):
+        np.testing.assert_array_equal(moved.rotations, whole.rotations)
+        np.testing.assert_array_equal(moved.translations, whole.translations)
+
+
+def test_run_offsets_of_clips_end_to_end_are_each_clips_own():
+    from expressive_mocap.reference.planting import _run_offsets
+
+    def one_clip(ankle, contact):  # the mean over the run, or over the nearest run by centre
+        edges = np.diff(np.r_[0, contact.astype(int), 0])
+        runs = list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+        if not runs:
+            return ankle
+        out = np.empty_like(ankle)
+        for f in range(len(ankle)):
+            a, b = next(((a, b) for a, b in runs if a <= f < b), None) or min(
+                runs, key=lambda r: abs(f - (r[0] + r[1] - 1) / 2)
+            )
+            out[f] = ankle[a:b].mean(axis=0)
+        return out
+
+    rng = np.random.default_rng(2)
+    for trial in range(40):
+        lengths = rng.integers(1, 40, size=rng.integers(1, 5))
+        bounds = np.r_[0, np.cumsum(lengths)]
+        ankle = rng.normal(size=(bounds[-1], 3)) * 50
+        contact = rng.random(bounds[-1]) < rng.uniform(0, 1)
+        if trial % 4 == 0:  # clips wholly in contact or not: runs end at the clips' bounds
+            contact = np.repeat(rng.random(len(lengths)) < 0.5, lengths)
+        want = np.concatenate([one_clip(ankle[a:b], contact[a:b]) for a, b in zip(bounds[:-1], bounds[1:])])
+        np.testing.assert_array_equal(_run_offsets(ankle, contact, bounds), want)
+
+
 def test_a_skeleton_without_arms_is_mapped_and_retargeted(walks):
     """The game rig with its arms cut off: arms are optional roles, the rest maps and moves."""
     game = walks["game"]

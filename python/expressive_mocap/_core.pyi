@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from expressive_mocap.errors import ParseError
-from expressive_mocap.ops import ClipInput, GaitSettings, MotionBlock, PipelineOutputs
+from expressive_mocap.ops import ClipInput, GaitSettings, MotionBlock, PipelineOutputs, TransferPlan
 
 _F64 = npt.NDArray[np.float64]
 _Float = npt.NDArray[np.float32] | npt.NDArray[np.float64]
@@ -34,8 +34,11 @@ __all__ = [
     "mlp_forward",
     "num_threads",
     "parse_motion_block",
+    "plant_feet",
     "quat_to_euler",
     "read_motion_blocks",
+    "retarget_transfer",
+    "two_bone_ik",
 ]
 
 num_threads: int
@@ -138,3 +141,25 @@ def decouple_rotations(original: _F64, body: _F64, gain: float, exponent: float)
 
 def compose_rotations(expressive: _F64, body: _F64, scale: float = 1.0) -> _F64:
     """``expressive^scale * body`` for rotations ``[F, J, 4]``."""
+
+def retarget_transfer(world: _F64, positions: _F64, plan: TransferPlan) -> _F64:
+    """The target skeleton's local rotations ``[F, Jt, 4]`` from the source's world rotations
+    ``[F, Js, 4]`` and positions ``[F, Js, 3]``, along ``plan``."""
+
+def two_bone_ik(
+    root: _F64, upper: _F64, lower: _F64, upper_bone: _F64, lower_bone: _F64, target: _F64
+) -> tuple[_F64, _F64]:
+    """New world rotations ``(upper, lower)`` ``[F, 4]`` of two-bone chains reaching for ``target``."""
+
+def plant_feet(
+    rotations: _F64,
+    translations: _F64,
+    parents: npt.NDArray[np.int64],
+    legs: npt.NDArray[np.int64],
+    contacts: npt.NDArray[np.bool_],
+    guide: _F64,
+    starts: npt.NDArray[np.int64],
+    blend: int,
+) -> _F64:
+    """Local rotations ``[F, J, 4]`` with the feet planted (legs ``[2, 3]``, contacts ``[F, 2]``,
+    guide ``[F, 2, 3]``, clip ``starts``, ``blend`` frames of easing)."""

@@ -16,8 +16,11 @@ mod fk;
 mod footsteps;
 mod format;
 mod gait;
+mod ik;
 mod mlp;
 mod parse;
+mod planting;
+mod retarget;
 mod rotations;
 
 use errors::{array, shape_error};
@@ -113,5 +116,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     clip::register(m)?;
     mlp::register(m)?;
     decouple::register(m)?;
+    retarget::register(m)?;
+    ik::register(m)?;
+    planting::register(m)?;
     Ok(())
 }

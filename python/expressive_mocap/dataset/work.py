@@ -17,6 +17,7 @@ from ..bvh import block_error, read_error
 from ..decoupling.algebra import decompose_many
 from ..errors import BVHError, MocapError, ModelError
 from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from ..motion import Motion
 from ..roles import JointRoles, actor_height, hips_rest_height
 from .format import MODEL_KINDS
 from .sources import Item
@@ -43,11 +44,12 @@ class Outcome:
 @dataclass
 class Group:
     """The clips of one hierarchy in a batch, ready for one kernel call: their indices in the
-    batch, headers, the kernel's per-clip tuples, the skeleton's parents and gait joints."""
+    batch, headers (None for a clip retargeted here), the kernel's per-clip arguments (BVH text,
+    or arrays for clips retargeted here), the skeleton's parents and gait joints."""
 
     indices: list[int]
     headers: list
-    clips: list[ops.ClipInput]
+    clips: list  # of ops.ClipInput, or of ops.ClipArrays
     parents: np.ndarray
     gait_joints: list[int]
 
@@ -103,12 +105,14 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: dict | N
         outcomes[k].skeleton = shape
         outcomes[k].bone_length = bone_length(header.skeleton)
         by_hierarchy.setdefault(shape, []).append((k, header, text))
-    if canonical is not None:
-        by_hierarchy = onto_canonical(batch, outcomes, by_hierarchy, canonical or None)
     use_model = any(k in MODEL_KINDS for k in keep)
     needs_roles = use_model or "features" in keep or "contacts" in keep
+    if canonical is not None:
+        by_hierarchy = onto_canonical(batch, outcomes, by_hierarchy, canonical or None, _signed_joints(keep, use_model))
     groups = []
     for members in by_hierarchy.values():
+        if not members:
+            continue
         group = _group(members, needs_roles, use_model, model)
         if isinstance(group, MocapError):  # the hierarchy lacks a role, or does not fit the model
             hint = _CANONICAL_HINT if use_model and canonical is None and isinstance(group, ModelError) else ""
@@ -122,36 +126,48 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: dict | N
 _CANONICAL_HINT = " (--canonical retargets clips of any humanoid skeleton onto the model's body)"
 
 
+def _signed_joints(keep: tuple[str, ...], use_model: bool) -> list[int] | None:
+    """The canonical body's joints whose rotations are used with their sign (None: all): every
+    joint's when rotations are stored or a model reads them, else the thighs' for the features."""
+    if use_model or "rotations" in keep:
+        return None
+    if "features" not in keep:
+        return []
+    from ..skeletons.canonical import canonical_skeleton
+
+    return JointRoles.find(canonical_skeleton()).gait_joints[1:3]  # left and right upper leg
+
+
 def onto_canonical(
-    batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, user_map: dict | None = None
+    batch: list[Item],
+    outcomes: list[Outcome],
+    by_hierarchy: dict,
+    user_map: dict | None = None,
+    signed: list[int] | None = None,
 ) -> dict:
     """``by_hierarchy`` with every clip of another skeleton than the canonical body retargeted
     onto it (all of a batch at once: :func:`~expressive_mocap.skeletons.canonical.many_onto_canonical`):
-    its BVH text rewritten on the canonical skeleton, its own skeleton and joint map kept in its
-    outcome for the manifest. ``user_map``: role -> joint name, for every skeleton of the archive."""
-    from ..bvh import bvh_bytes, parse_header, read_bvh
-    from ..skeletons.canonical import canonical_shape, many_onto_canonical
+    its frames decoded here, in parallel, and handed on as arrays (under the key ``MOVED``: no
+    BVH text to write and parse again), its own skeleton and joint map kept in its outcome for
+    the manifest. ``user_map``: role -> joint name, for every skeleton of the archive.
+    ``signed``: the joints whose rotations must keep the text's sign (:func:`as_written`)."""
+    from ..skeletons.canonical import canonical_shape, canonical_skeleton, many_onto_canonical
 
-    target = canonical_shape()
-    out: dict[tuple, list] = {target: by_hierarchy.pop(target, [])}
-    read = []
-    for members in by_hierarchy.values():
-        for k, _, text in members:
-            try:
-                read.append((k, read_bvh(text if text is not None else batch[k].source)))
-            except MocapError as error:
-                outcomes[k].error = f"{batch[k].source}: {error}"
+    target, body = canonical_shape(), bone_length(canonical_skeleton())  # every retargeted clip's
+    out: dict[tuple, list] = {target: by_hierarchy.pop(target, []), MOVED: []}
+    read = _decode_whole(batch, outcomes, [m for members in by_hierarchy.values() for m in members])
     try:
         moved = many_onto_canonical([motion for _, motion in read], user_map)
     except MocapError:  # one skeleton of the batch cannot be mapped: find which, clip by clip
         moved = [_one_onto_canonical(motion, user_map) for _, motion in read]
-    for (k, motion), result in zip(read, moved):
+    for (k, motion), result in zip(read, as_written(moved, signed)):
         if isinstance(result, MocapError):
             outcomes[k].error = f"{batch[k].source}: {result}"
             continue
         clip, jmap = result
-        data = bvh_bytes(clip)
-        header = parse_header(data, batch[k].source)
+        if not (np.isfinite(clip.rotations).all() and np.isfinite(clip.translations).all()):
+            outcomes[k].error = f"{batch[k].source}: retargeting onto the canonical body gave non-finite values"
+            continue
         skeleton = motion.skeleton
         outcomes[k].source_skeleton = {
             "joints": skeleton.n_joints,
@@ -160,9 +176,55 @@ def onto_canonical(
             "map": jmap.as_names(),
         }
         outcomes[k].skeleton = target
-        outcomes[k].bytes = outcomes[k].bytes or batch[k].size
-        outcomes[k].bone_length = bone_length(header.skeleton)
-        out[target].append((k, header, data))
+        outcomes[k].bone_length = body
+        out[MOVED].append((k, None, clip))
+    return out
+
+
+def as_written(moved: list, joints: list[int] | None = None) -> list:
+    """The retargeted clips of ``moved`` (``(Motion, map)``, or an error) with the rotations of
+    ``joints`` (None: all) as their BVH text would read back: the same rotations, each
+    quaternion's sign that of its Euler angles' (features take the thighs' hemisphere from a
+    clip's first frame). One kernel call each way for all the clips."""
+    done = [m for m in moved if not isinstance(m, MocapError)]
+    if not done or joints == []:
+        return moved
+    skeleton = done[0][0].skeleton
+    joints = list(range(skeleton.n_joints)) if joints is None else joints
+    orders = skeleton.layout()[1][joints]  # the canonical body's: three rotation channels a joint
+    picked = np.concatenate([m.rotations[:, joints] for m, _ in done])
+    picked = ops.euler_to_quat(ops.quat_to_euler(picked, orders), orders)
+    bounds = np.cumsum([0] + [m.n_frames for m, _ in done])
+    for (motion, _), a, b in zip(done, bounds[:-1], bounds[1:]):
+        motion.rotations[:, joints] = picked[a:b]  # the retarget's own arrays: changed in place
+    return moved
+
+
+# The key in ``by_hierarchy`` of the clips retargeted onto the canonical body (as Motions).
+MOVED = ("retargeted",)
+
+
+def _decode_whole(batch: list[Item], outcomes: list[Outcome], members: list) -> list[tuple[int, Motion]]:
+    """``(index, Motion)`` of the clips ``(index, header, text)`` (text: the bytes, or the path
+    to read here), their number blocks decoded together (in parallel with the Rust kernels); a
+    clip that cannot be read gets its error in its outcome, as the kernel's pipeline gives it."""
+    texts = []
+    for k, header, text in members:
+        try:
+            data = text if isinstance(text, bytes) else inputs.read_input(text)
+        except OSError as error:
+            outcomes[k].error = str(read_error(batch[k].source, error))
+            continue
+        outcomes[k].bytes = len(data)
+        texts.append((k, header, data))
+    decoded = ops.read_motion_blocks([(data, header) for _, header, data in texts])
+    out = []
+    for (k, header, _), result in zip(texts, decoded):
+        if isinstance(result, Exception):
+            outcomes[k].error = str(_clip_error(batch[k], header, result))
+        else:
+            rotations, translations = result
+            out.append((k, Motion(header.skeleton, rotations, translations, header.frame_time)))
     return out
 
 
@@ -176,8 +238,10 @@ def _one_onto_canonical(motion, user_map: dict | None):
 
 
 def _group(members: list, needs_roles: bool, use_model: bool, model) -> Group | MocapError:
-    """One hierarchy's clips ``(index, header, text)`` as one kernel call's arguments, or why not."""
-    skeleton = members[0][1].skeleton
+    """One hierarchy's clips ``(index, header, text)`` (or ``(index, None, Motion)``, a clip
+    retargeted here) as one kernel call's arguments, or why not."""
+    header, first = members[0][1:]
+    skeleton = first.skeleton if header is None else header.skeleton
     try:
         roles = JointRoles.find(skeleton) if needs_roles else None
         if use_model:
@@ -188,7 +252,11 @@ def _group(members: list, needs_roles: bool, use_model: bool, model) -> Group | 
     def scale(s) -> tuple[float, float]:  # without features or contacts the body scale is not used
         return (actor_height(s, roles), hips_rest_height(s, roles)) if roles else (1.0, 1.0)
 
-    clips = [ops.ClipInput.of(text, h, *scale(h.skeleton)) for _, h, text in members]
+    if header is None:  # the same skeleton for every clip
+        body = scale(skeleton)
+        clips: list = [ops.ClipArrays(m.rotations, m.translations, m.frame_time, *body) for _, _, m in members]
+    else:
+        clips = [ops.ClipInput.of(text, h, *scale(h.skeleton)) for _, h, text in members]
     gait_joints = roles.gait_joints if roles else [0] * 7  # without features or contacts: not used
     parents = np.ascontiguousarray(skeleton.parents, dtype=np.int64)
     return Group([k for k, _, _ in members], [h for _, h, _ in members], clips, parents, gait_joints)
@@ -215,9 +283,12 @@ def run_kernels(
             float32=not use_model,
         )
         gait = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
-        results = ops.clip_pipeline_many(
-            group.clips, group.parents, group.gait_joints, gait, outputs, inputs.MAX_INPUT_BYTES
-        )
+        if isinstance(group.clips[0], ops.ClipArrays):
+            results = ops.arrays_pipeline_many(group.clips, group.parents, group.gait_joints, gait, outputs)
+        else:
+            results = ops.clip_pipeline_many(
+                group.clips, group.parents, group.gait_joints, gait, outputs, inputs.MAX_INPUT_BYTES
+            )
         for k, header, clip, result in zip(group.indices, group.headers, group.clips, results):
             if _finish_clip(batch[k], outcomes[k], header, clip, result, keep) and use_model:
                 kept.append((k, result[1], result[2][-1]))
@@ -228,9 +299,12 @@ def run_kernels(
     return outcomes, prepared.seconds, time.perf_counter() - start
 
 
-def _finish_clip(item: Item, outcome: Outcome, header, clip: ops.ClipInput, result, keep: tuple[str, ...]) -> bool:
+def _finish_clip(
+    item: Item, outcome: Outcome, header, clip: ops.ClipInput | ops.ClipArrays, result, keep: tuple[str, ...]
+) -> bool:
     """One clip's kernel ``result`` into its outcome: its arrays as stored, or its error. True if it succeeded."""
-    if isinstance(clip.source, str) and not isinstance(result, OSError):  # the kernel read the file whole
+    if isinstance(clip, ops.ClipInput) and isinstance(clip.source, str) and not isinstance(result, OSError):
+        # the kernel read the file whole
         outcome.bytes = item.size
     if isinstance(result, Exception):
         outcome.error = str(_clip_error(item, header, result))
@@ -239,7 +313,7 @@ def _finish_clip(item: Item, outcome: Outcome, header, clip: ops.ClipInput, resu
     values = {"positions": positions, "rotations": rotations, "contacts": contacts}
     if "features" in keep:
         values["features"] = features[0]
-    outcome.frames, outcome.fps, outcome.frame_time = header.frames, 1.0 / header.frame_time, header.frame_time
+    outcome.frames, outcome.fps, outcome.frame_time = clip.frames, 1.0 / clip.frame_time, clip.frame_time
     outcome.values = {
         kind: v.astype(np.float32) if v.dtype == np.float64 else v for kind, v in values.items() if kind in keep
     }

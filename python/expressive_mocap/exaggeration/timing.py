@@ -172,14 +172,27 @@ def warped_contacts(contacts: np.ndarray, warp: np.ndarray) -> np.ndarray:
     return np.asarray(contacts, dtype=bool)[np.rint(warp).astype(int)]
 
 
+def _run_means(values: np.ndarray, contact: np.ndarray) -> np.ndarray:
+    """Per frame, the mean of ``values [F, 3]`` over the nearest run of ``contact [F]`` (none: its own value)."""
+    edges = np.diff(np.r_[0, contact.astype(np.int8), 0])
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    if not len(starts):
+        return values.copy()
+    run = np.full(len(values), -1)
+    for k, (a, b) in enumerate(zip(starts, ends)):
+        run[a:b] = k
+    means = np.array([values[a:b].mean(axis=0) for a, b in zip(starts, ends)])
+    centres = (starts + ends - 1) / 2
+    nearest = np.abs(np.arange(len(values))[:, None] - centres[None]).argmin(axis=1)
+    return np.where((run >= 0)[:, None], means[np.maximum(run, 0)], means[nearest])
+
+
 def planted_ankles(motion: Motion, contacts: np.ndarray, roles: JointRoles, shift: np.ndarray) -> np.ndarray:
     """``[F, 2, 3]``: the ankles of the retimed input ``motion`` without the part of the travel's
     ``shift [F, 3]`` that grows during each run of ``contacts`` (held at its mean over the run):
     each stance foot rolls as in the input, where the longer or shorter path would slide it."""
-    from ..skeletons.planting import _run_offsets
-
     positions = motion.positions()
-    held = [_run_offsets(shift, contacts[:, s]) - shift for s in (0, 1)]
+    held = [_run_means(shift, contacts[:, s]) - shift for s in (0, 1)]
     return np.stack([positions[:, roles.feet[s]] + held[s] for s in (0, 1)], axis=1)
 
 

@@ -13,8 +13,11 @@ from .features import dynamic_features
 from .fk import forward_kinematics, forward_kinematics_many
 from .footsteps import air_time, foot_contacts
 from .gait import clip_gait_many
+from .ik import two_bone_ik
 from .mlp import mlp_forward
 from .motion_block import decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
+from .planting import plant_feet
+from .retarget import retarget_transfer
 from .rotations import euler_to_quat, quat_to_euler
 
 num_threads = 1
@@ -35,6 +38,9 @@ __all__ = [
     "mlp_forward",
     "num_threads",
     "parse_motion_block",
+    "plant_feet",
     "read_motion_blocks",
     "quat_to_euler",
+    "retarget_transfer",
+    "two_bone_ik",
 ]

@@ -6,12 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import quat
-from ..exaggeration.footlock import contact_weights
-from ..features import foot_contacts
-from ..ik import two_bone_ik
+from .. import ops
+from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from ..motion import Motion
-from ..roles import JointRoles
+from ..roles import JointRoles, actor_height
 from .jointmap import JointMap
 
 BLEND_FRAMES = 3
@@ -29,57 +27,36 @@ def plant_feet(
     right), moving as ``guide [F, 2, 3]`` (the source's ankles in this motion's world) does, from
     where this motion has it on average over the run. Legs whose knee is not the foot's parent
     and the upper leg's child (a twist bone in the chain) are left as they are. ``starts``: where
-    clips laid end to end begin and the last one ends (runs and easing stop there)."""
+    clips laid end to end begin and the last one ends (runs and easing stop there). One kernel
+    call (``plant_feet``: FK, weights, run means and leg IK of every frame)."""
     skeleton = motion.skeleton
     parents = skeleton.parents
-    world, positions = motion.fk()
-    contacts = np.asarray(contacts, dtype=bool)
-    bounds = [0, motion.n_frames] if starts is None else [int(b) for b in starts]
-    pieces = list(zip(bounds[:-1], bounds[1:]))
-    weights = np.concatenate([contact_weights(contacts[a:b], blend_frames) for a, b in pieces])
-    rotations = motion.rotations.copy()
-    for s, side in enumerate(("left", "right")):
+    legs = []
+    for side in ("left", "right"):
         hip, knee, foot = (jmap[f"{side}_{r}"] for r in ("upper_leg", "lower_leg", "foot"))
-        if parents[foot] != knee or parents[knee] != hip:
-            continue
-        frames = np.flatnonzero(weights[:, s] > 0)
-        if not len(frames):
-            continue
-        gap = positions[:, foot] - guide[:, s]
-        offsets = np.concatenate([_run_offsets(gap[a:b], contacts[a:b, s]) for a, b in pieces])
-        w = weights[frames, s, None]
-        target = (1 - w) * positions[frames, foot] + w * (guide[frames, s] + offsets[frames])
-        t = motion.translations[frames]
-        upper, lower = two_bone_ik(
-            positions[frames, hip], world[frames, hip], world[frames, knee], t[:, knee], t[:, foot], target
-        )
-        parent = parents[hip]
-        rotations[frames, hip] = quat.mul(quat.conjugate(world[frames, parent]), upper) if parent >= 0 else upper
-        rotations[frames, knee] = quat.mul(quat.conjugate(upper), lower)
-        rotations[frames, foot] = quat.mul(quat.conjugate(lower), world[frames, foot])
+        legs.append([hip, knee, foot] if parents[foot] == knee and parents[knee] == hip else [-1, -1, -1])
+    bounds = [0, motion.n_frames] if starts is None else [int(b) for b in starts]
+    rotations = ops.plant_feet(
+        motion.rotations, motion.translations, parents, legs, contacts, guide, bounds, blend_frames
+    )
     return Motion(skeleton, rotations, motion.translations, motion.frame_time)
 
 
-def _run_offsets(ankle: np.ndarray, contact: np.ndarray) -> np.ndarray:
-    """Per frame, the mean of ``ankle [F, 3]`` over the nearest contact run (none: its own value)."""
-    out = ankle.copy()
-    edges = np.diff(np.r_[0, contact.astype(np.int8), 0])
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    if not len(starts):
-        return out
-    run = np.full(len(ankle), -1)
-    for k, (a, b) in enumerate(zip(starts, ends)):
-        run[a:b] = k
-    means = np.array([ankle[a:b].mean(axis=0) for a, b in zip(starts, ends)])
-    centres = (starts + ends - 1) / 2
-    nearest = np.abs(np.arange(len(ankle))[:, None] - centres[None]).argmin(axis=1)
-    return np.where((run >= 0)[:, None], means[np.maximum(run, 0)], means[nearest])
-
-
-def source_contacts(motion: Motion, rig, upright_positions: np.ndarray) -> np.ndarray:
-    """Contacts ``bool [F, 2]`` of ``motion`` (of the rig ``rig``) from its world positions turned
-    to the canonical axes (Y up, file units)."""
-    return foot_contacts(motion, JointRoles.from_map(motion.skeleton, rig.jmap), positions=upright_positions)
+def source_contacts(clips: list[Motion], rig, upright_positions: np.ndarray, bounds=None) -> np.ndarray:
+    """Contacts ``bool [F, 2]`` of ``clips`` (of the rig ``rig``, laid end to end as ``bounds``
+    says; None: one clip) from their world positions turned to the canonical axes (Y up, file
+    units), each clip on its own floor: :func:`~expressive_mocap.features.foot_contacts` with its
+    defaults, all clips in one kernel call (``clip_gait_many``, clips in parallel)."""
+    bounds = [0, len(upright_positions)] if bounds is None else bounds
+    skeleton = clips[0].skeleton
+    roles = JointRoles.from_map(skeleton, rig.jmap)
+    height = actor_height(skeleton, roles)  # one skeleton: the same for every clip
+    pieces = zip(clips, bounds[:-1], bounds[1:])
+    # The hips' rest height is read by the features only: none are asked for.
+    gait = [(upright_positions[a:b], c.rotations, c.frame_time, height, 1.0) for c, a, b in pieces]
+    settings = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
+    found = ops.clip_gait_many(gait, roles.gait_joints, settings, features=False, contacts=True)
+    return np.concatenate([contacts for _, contacts in found] + [np.zeros((0, 2), bool)])
 
 
 __all__ = ["BLEND_FRAMES", "plant_feet", "source_contacts"]

@@ -27,10 +27,13 @@ import numpy as np
 
 from .. import ops, quat
 from ..errors import MocapError
+from ..features import percentiles_by_clip
 from ..motion import Motion, Skeleton
 from . import twist
 from .conventions import AXES, Conventions, read_conventions
 from .jointmap import JointMap, find_joint_map
+
+_IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 # The joint whose rest bone direction aligns each role (the next mapped joint out); leaf roles
 # (hand, toes, head) use the bone into them.
@@ -85,7 +88,7 @@ def untrusted_twists(motion: Motion, rig: Rig, kinematics=None) -> frozenset:
     world, positions = motion[frames].fk() if kinematics is None else (kinematics[0][frames], kinematics[1][frames])
     turn = rig.conventions.rotation()
     world, points = _turned(turn, world), quat.rotate(turn, positions)
-    plan = _plan(rig, rig)  # the rig's own role frames, in its joints' rest terms
+    plan = _own_frames(rig)
     jmap, out = rig.jmap, set()
     for role, joint, from_frame in plan.framed:
         seen = quat.mul(quat.from_matrix(_orthonormal(*_frame_vectors(points, jmap, role, jmap))), from_frame)
@@ -114,9 +117,14 @@ def _floor(motion: Motion, jmap: JointMap, conventions: Conventions) -> float:
 
 
 def _floor_of(positions: np.ndarray, jmap: JointMap, conventions: Conventions) -> float:
+    return float(_floors_of(positions, [0, len(positions)], jmap, conventions)[0])
+
+
+def _floors_of(positions: np.ndarray, bounds, jmap: JointMap, conventions: Conventions) -> np.ndarray:
+    """The floor of each clip laid end to end in ``positions`` (see ``bounds``, :func:`_floor`)."""
     up = np.array(_axis(conventions.up))
     joints = [jmap[r] for r in ("left_foot", "right_foot", "left_toes", "right_toes") if r in jmap]
-    return float(np.percentile((positions[:, joints] @ up).min(axis=1), 5))
+    return percentiles_by_clip((positions[:, joints] @ up).min(axis=1), bounds, 5)
 
 
 def _axis(name: str) -> tuple[int, int, int]:
@@ -265,10 +273,10 @@ def retarget_clips(
     motions: list[Motion], goal: Rig, *, plant_feet: bool = True, user_map: dict | None = None
 ) -> list[tuple[Motion, JointMap]]:
     """Many clips retargeted onto ``goal`` at once, each with the joint map it was read with:
-    clips of one skeleton (same joints and offsets) are done together, their frames end to end,
-    each with its own floor and contacts; the conventions are read from the first clip of each
-    skeleton. What :func:`retarget_rigs` gives clip by clip, in a fraction of the time for short
-    clips (``preprocess --canonical``)."""
+    clips of one skeleton (same joints and offsets) are done together, their frames end to end
+    in runs of about ``CHUNK_FRAMES``, each with its own floor and contacts; the conventions are
+    read from the first clip of each skeleton. What :func:`retarget_rigs` gives clip by clip, in
+    a fraction of the time for short clips (``preprocess --canonical``)."""
     groups: dict[tuple, list[int]] = {}
     for k, motion in enumerate(motions):
         skeleton = motion.skeleton
@@ -276,8 +284,36 @@ def retarget_clips(
         groups.setdefault(key, []).append(k)
     out: list = [None] * len(motions)
     for members in groups.values():
+        source = Rig.of(motions[members[0]], user_map)
+        for run in _runs(members, motions):
+            _retarget_run(run, motions, source, goal, plant_feet, out)
+    return out
+
+
+# Frames retargeted together: enough that NumPy's work per call outweighs its overhead, few
+# enough that the intermediate arrays stay in the allocator's reused memory and the caches
+# (a whole batch at once spent a quarter of its time in fresh pages).
+CHUNK_FRAMES = 4096
+
+
+def _runs(members: list[int], motions: list[Motion]) -> list[list[int]]:
+    """``members`` cut into runs of whole clips of about :data:`CHUNK_FRAMES` frames."""
+    runs: list[list[int]] = [[]]
+    frames = 0
+    for k in members:
+        if frames >= CHUNK_FRAMES:
+            runs.append([])
+            frames = 0
+        runs[-1].append(k)
+        frames += motions[k].n_frames
+    return runs
+
+
+def _retarget_run(run: list[int], motions: list[Motion], source: Rig, goal: Rig, plant_feet: bool, out: list) -> None:
+    """The clips ``run`` of ``motions`` (one skeleton, ``source``'s) retargeted together, into ``out``."""
+    members = run
+    if True:
         clips = [motions[k] for k in members]
-        source = Rig.of(clips[0], user_map)
         bounds = np.cumsum([0] + [c.n_frames for c in clips])
         together = Motion(
             clips[0].skeleton,
@@ -291,7 +327,6 @@ def retarget_clips(
                 Motion(goal.skeleton, moved.rotations[a:b], moved.translations[a:b], clip.frame_time),
                 source.jmap,
             )
-    return out
 
 
 def _retarget_frames(
@@ -309,8 +344,7 @@ def _retarget_frames(
     ``clips`` the clips themselves; ``kinematics``: ``motion.fk()`` when known)."""
     kinematics = motion.fk() if kinematics is None else kinematics
     if floors is None:
-        pieces = zip(bounds[:-1], bounds[1:])
-        floors = np.array([_floor_of(kinematics[1][a:b], source.jmap, source.conventions) for a, b in pieces])
+        floors = _floors_of(kinematics[1], bounds, source.jmap, source.conventions)
     floor = np.repeat(floors, np.diff(bounds))  # per frame
     world, positions = kinematics
     out = _transfer(motion, source, goal, (_trusted(world, positions, source), positions), floor)
@@ -319,11 +353,9 @@ def _retarget_frames(
         from .planting import source_contacts
 
         positions = kinematics[1]
-        upright = quat.rotate(source.conventions.rotation(), positions)
-        clips = clips or [motion]
-        contacts = np.concatenate(
-            [source_contacts(c, source, upright[a:b]) for c, a, b in zip(clips, bounds[:-1], bounds[1:])]
-        )
+        turn = source.conventions.rotation()
+        upright = positions if np.array_equal(turn, [0.0, 0.0, 0.0, 1.0]) else quat.rotate(turn, positions)
+        contacts = source_contacts(clips or [motion], source, upright, bounds)
         feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
         out = plant(out, goal.jmap, contacts, carried(positions[:, feet], source, goal, floor), starts=bounds)
     return out
@@ -336,30 +368,6 @@ def rest_motion(skeleton: Skeleton) -> Motion:
     return Motion(skeleton, rotations, skeleton.offsets[None], 1 / 30)
 
 
-class _Plan(NamedTuple):
-    """Index arrays of one source-target pair, so a transfer is a few array operations: the
-    roles' source and target joints and alignments; the roles swung onto the source's bones (their
-    bone's end joints and rest line); the spine joints sharing a turn; the joints held at rest and
-    the joint whose world rotation each copies (-1: none, the identity)."""
-
-    source: np.ndarray
-    target: np.ndarray
-    aligns: np.ndarray
-    swung: np.ndarray
-    starts: np.ndarray
-    ends: np.ndarray
-    rest_lines: np.ndarray
-    shared: np.ndarray
-    tops: np.ndarray
-    bottoms: np.ndarray
-    shares: np.ndarray
-    held: np.ndarray
-    copied: np.ndarray
-    reference: np.ndarray
-    readable: list[tuple[str, int, np.ndarray, np.ndarray]]
-    framed: list[tuple[str, int, np.ndarray]]
-
-
 _PLANS: dict = {}
 _PLANS_KEPT = 64
 
@@ -370,7 +378,7 @@ def _rig_key(rig: Rig) -> tuple:
     return (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), turn, tuple(jmap.joints.items()))
 
 
-def _plan(source: Rig, target: Rig) -> _Plan:
+def _plan(source: Rig, target: Rig) -> ops.TransferPlan:
     """The plan of a pair, kept for the pairs met last: an archive's clips share a few skeletons."""
     key = (_rig_key(source), _rig_key(target))
     plan = _PLANS.get(key)
@@ -381,7 +389,40 @@ def _plan(source: Rig, target: Rig) -> _Plan:
     return plan
 
 
-def _new_plan(source: Rig, target: Rig) -> _Plan:
+class _OwnFrames(NamedTuple):
+    """A rig's role frames in its reference pose, in its joints' rest terms: per role whose twist
+    positions can tell, (role, joint, the bone and the second axis of its frame); per hips and
+    chest, (role, joint, the rotation taking the role's frame onto the joint's world rotation)."""
+
+    readable: list[tuple[str, int, np.ndarray, np.ndarray]]
+    framed: list[tuple[str, int, np.ndarray]]
+
+
+_FRAMES: dict = {}
+
+
+def _own_frames(rig: Rig) -> _OwnFrames:
+    """The rig's :class:`_OwnFrames`, kept for the rigs met last."""
+    key = _rig_key(rig)
+    if key not in _FRAMES:
+        if len(_FRAMES) >= _PLANS_KEPT:
+            _FRAMES.pop(next(iter(_FRAMES)))
+        reference, points = _reference(rig)
+        jmap, readable, framed = rig.jmap, [], []
+        for role in jmap.joints:
+            if twist.readable(jmap, role, twist.READABLE):
+                frame = _role_frame(points, jmap, role, jmap)
+                local = quat.conjugate(reference[jmap[role]])
+                readable.append((role, jmap[role], quat.rotate(local, frame[:, 0]), quat.rotate(local, frame[:, 1])))
+        for role in ("hips", "chest"):
+            frame = _role_frame(points, jmap, role, jmap)
+            framed.append((role, jmap[role], quat.mul(quat.conjugate(quat.from_matrix(frame)), reference[jmap[role]])))
+        _FRAMES[key] = _OwnFrames(readable, framed)
+    return _FRAMES[key]
+
+
+def _new_plan(source: Rig, target: Rig) -> ops.TransferPlan:
+    """The transfer kernel's plan of a pair: index arrays, so a transfer is one pass over the frames."""
     aligns = alignments(source, target)
     roles = list(aligns)
     rest_s = quat.rotate(source.conventions.rotation(), source.skeleton.rest_positions()[0])
@@ -404,23 +445,6 @@ def _new_plan(source: Rig, target: Rig) -> _Plan:
         swung.append(r)
         starts.append(first)
         ends.append(last)
-    # Roles whose twist the positions can tell: (role, target joint, and the joint's bone and
-    # second axis in its own rest frame, those of the role's frame in the reference pose).
-    reference_t, points_t = _reference(target)
-    readable = []
-    for role in roles:
-        if twist.readable(source.jmap, role, twist.READABLE) and twist.readable(target.jmap, role, twist.READABLE):
-            frame = _role_frame(points_t, target.jmap, role, source.jmap)
-            local = quat.conjugate(reference_t[target.jmap[role]])
-            readable.append((role, target.jmap[role], quat.rotate(local, frame[:, 0]), quat.rotate(local, frame[:, 1])))
-    # The hips and chest, whose frames the positions tell: (role, target joint, the rotation
-    # taking the role's frame in the target's reference pose onto the target's world rotation there).
-    framed = []
-    for role in ("hips", "chest"):
-        frame = _role_frame(points_t, target.jmap, role, source.jmap)
-        framed.append(
-            (role, target.jmap[role], quat.mul(quat.conjugate(quat.from_matrix(frame)), reference_t[target.jmap[role]]))
-        )
     aligned = {target.jmap[r] for r in roles}
     shared = _shared_chains(target.jmap, aligned)
     parents = target.skeleton.parents
@@ -434,23 +458,24 @@ def _new_plan(source: Rig, target: Rig) -> _Plan:
             ancestor = int(parents[ancestor])
         held.append(j)
         copied.append(ancestor)
-    return _Plan(
-        np.array([source.jmap[r] for r in roles], dtype=np.int64),
-        np.array([target.jmap[r] for r in roles], dtype=np.int64),
-        np.array([aligns[r] for r in roles]).reshape(-1, 4),
-        np.array(swung, dtype=np.int64),
-        np.array(starts, dtype=np.int64),
-        np.array(ends, dtype=np.int64),
-        (rest_s[ends] - rest_s[starts]).reshape(-1, 3),
-        np.array(list(shared), dtype=np.int64),
-        np.array([t for t, _, _ in shared.values()], dtype=np.int64),
-        np.array([b for _, b, _ in shared.values()], dtype=np.int64),
-        np.array([x for _, _, x in shared.values()]),
-        np.array(held, dtype=np.int64),
-        np.array(copied, dtype=np.int64),
-        reference_t,
-        readable,
-        framed,
+    return ops.TransferPlan.of(
+        [source.jmap[r] for r in roles],
+        [target.jmap[r] for r in roles],
+        [aligns[r] for r in roles],
+        swung,
+        starts,
+        ends,
+        rest_s[ends] - rest_s[starts],
+        list(shared),
+        [t for t, _, _ in shared.values()],
+        [b for _, b, _ in shared.values()],
+        [x for _, _, x in shared.values()],
+        held,
+        copied,
+        _reference(target)[0],  # unmapped joints turn as changes from the target's reference pose
+        parents,
+        source.conventions.rotation(),
+        target.conventions.rotation(),
     )
 
 
@@ -473,37 +498,9 @@ def _transfer(
 ) -> Motion:
     """The target's motion (see the module's notes) from the source's world rotations and
     positions, ``kinematics``, and its floor in each frame."""
-    plan = _plan(source, target)
-    turn_s, turn_t = source.conventions.rotation(), target.conventions.rotation()
     world_s, positions_s = kinematics
-    roles = _turned(turn_s, world_s[:, plan.source])  # canonical axes
-    if len(plan.swung):
-        # Joints the map leaves out between two mapped ones (CMU's LHipJoint, a Neck1) may turn in
-        # the source while the target holds them at rest: each role is swung so that its bone lies
-        # where the source's positions put it.
-        lines = quat.rotate(turn_s, positions_s[:, plan.ends] - positions_s[:, plan.starts])
-        predicted = quat.rotate(roles[:, plan.swung], plan.rest_lines)
-        roles[:, plan.swung] = _mul(quat.between(predicted, lines), roles[:, plan.swung])
+    rotations = ops.retarget_transfer(world_s, positions_s, _plan(source, target))
     frames, skeleton = motion.n_frames, target.skeleton
-    world = np.empty((frames, skeleton.n_joints, 4))
-    world[:, plan.target] = _mul(roles, plan.aligns)
-    # Unmapped joints turn with the mapped ones, as changes from the target's reference pose.
-    reference = plan.reference
-    if len(plan.shared):
-        top = _mul(world[:, plan.tops], quat.conjugate(reference[plan.tops]))
-        bottom = _mul(world[:, plan.bottoms], quat.conjugate(reference[plan.bottoms]))
-        turn = quat.power(_mul(quat.conjugate(top), bottom), plan.shares)
-        world[:, plan.shared] = _mul(_mul(top, turn), reference[plan.shared])
-    if len(plan.held):
-        copied = np.maximum(plan.copied, 0)
-        change = np.where(
-            (plan.copied >= 0)[:, None], _mul(world[:, copied], quat.conjugate(reference[copied])), _IDENTITY
-        )
-        world[:, plan.held] = _mul(change, reference[plan.held])  # as in the reference pose to their mapped ancestor
-    world = _turned(quat.conjugate(turn_t), world)  # the target's axes
-    parents = skeleton.parents
-    rotations = world.copy()
-    rotations[:, 1:] = _mul(quat.conjugate(world[:, parents[1:]]), world[:, 1:])
     translations = np.broadcast_to(skeleton.offsets, (frames, skeleton.n_joints, 3)).copy()
     _place_hips(translations, positions_s, source, target, floor)
     return Motion(skeleton, rotations, translations, motion.frame_time)
@@ -514,7 +511,7 @@ def _trusted(world: np.ndarray, positions: np.ndarray, rig: Rig) -> np.ndarray:
     tell (``rig.untrusted``) read from its ``positions``: what the transfer then carries over."""
     if not rig.untrusted:
         return world
-    plan = _plan(rig, rig)  # the rig's own role frames
+    plan = _own_frames(rig)
     turn = rig.conventions.rotation()
     canonical, points = _turned(turn, world).copy(), quat.rotate(turn, positions)
     _reframe(canonical, points, rig.jmap, rig.jmap, [f for f in plan.framed if f[0] in rig.untrusted])
