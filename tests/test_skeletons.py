@@ -474,8 +474,8 @@ def test_arbitrary_twists_are_read_from_the_positions():
     limbs = ["LeftUpLeg", "RightUpLeg", "LeftArm", "RightArm"]
     twisted = _twisted(clean, limbs, 120.0)
     np.testing.assert_allclose(twisted.positions(), clean.positions(), atol=1e-9)
-    assert Rig.of(clean).untrusted == frozenset()
-    found = Rig.of(twisted).untrusted
+    assert Rig.of(clean).with_twists(clean).untrusted == frozenset()
+    found = Rig.of(twisted).with_twists(twisted).untrusted
     assert {"left_upper_leg", "right_upper_leg", "left_upper_arm", "right_upper_arm"} <= found, found
     body = canonical_rig()
     ours, theirs = (retarget_rigs(m, Rig.of(m), body, plant_feet=False) for m in (twisted, clean))

@@ -21,7 +21,8 @@ class StreamingDecoupler:
 
     A ``skeleton`` other than the model's (any humanoid one; ``joint_map`` as for
     :func:`~expressive_mocap.skeletons.find_joint_map`) is read from the first frame (its
-    conventions, and its floor: the lowest foot joint then, instead of ``floor``); each frame is
+    conventions, and its floor: the lowest foot joint then, instead of ``floor``; its bones'
+    twists are taken from the rotations, which one frame cannot judge); each frame is
     retargeted onto the model's body, decoupled there, and its body mechanics carried back onto
     the frame as per-joint changes of world orientation. The rotations returned are then the
     skeleton's (the expressive component as ``O B^-1`` per joint), the activity the model's joints'.
@@ -63,7 +64,9 @@ class StreamingDecoupler:
         from ..skeletons.retargeting import Rig
 
         if self._source is None:
-            self._source = Rig.of(frame, self._joint_map)
+            # A live stream's twists are taken from its rotations: one frame cannot tell a capture
+            # that twists bones arbitrarily (measured: the demo's waving arm reads so on frame 0).
+            self._source = Rig.of(frame, self._joint_map)._replace(untrusted=frozenset())
         carried = Carried(frame, target=None, source=self._source)
         body, _, activity = self._step(carried.body, 0.0)  # the canonical body stands on 0
         on_body = carried.body

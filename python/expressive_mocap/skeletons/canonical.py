@@ -76,7 +76,9 @@ class Carried:
         self.original = motion
         self._kinematics = motion.fk()  # read once: by the rig, the retarget and the way back
         # Given: a stream's rig, read from its first frame.
-        self.source = source or Rig.of(motion, user_map, kinematics=self._kinematics)
+        self.source = (source or Rig.of(motion, user_map, kinematics=self._kinematics)).with_twists(
+            motion, self._kinematics
+        )
         self.target = target or canonical_rig()
         self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False, kinematics=self._kinematics)
 

@@ -55,25 +55,32 @@ _TWIST_FRAMES = 120  # frames read to tell untrusted twists
 class Rig(NamedTuple):
     """A skeleton with what retargeting needs to know about it: its joint map, conventions, floor
     height (along its up axis, file units) and the roles whose rotations its motion twists
-    arbitrarily, to be read from the positions instead (:func:`untrusted_twists`)."""
+    arbitrarily, to be read from the positions instead (:func:`untrusted_twists`; None until a
+    motion of it is a source: :meth:`with_twists`)."""
 
     skeleton: Skeleton
     jmap: JointMap
     conventions: Conventions
     floor: float
-    untrusted: frozenset = frozenset()
+    untrusted: frozenset | None = frozenset()
 
     @classmethod
     def of(
         cls, motion: Motion, user_map: dict | None = None, conventions: Conventions | None = None, kinematics=None
     ) -> Rig:
-        """The rig of ``motion``'s skeleton, its conventions, floor and untrusted twists read from
-        its frames (``kinematics``: ``motion.fk()``, when already known)."""
+        """The rig of ``motion``'s skeleton, its conventions and floor read from its frames
+        (``kinematics``: ``motion.fk()``, when already known); its untrusted twists are read
+        when it is first a source (:meth:`with_twists`)."""
         jmap = find_joint_map(motion.skeleton, user_map)
         conventions = conventions or read_conventions(motion, jmap)
-        world, positions = motion.fk() if kinematics is None else kinematics
-        rig = cls(motion.skeleton, jmap, conventions, _floor_of(positions, jmap, conventions))
-        return rig._replace(untrusted=untrusted_twists(motion, rig, (world, positions)))
+        positions = motion.positions() if kinematics is None else kinematics[1]
+        return cls(motion.skeleton, jmap, conventions, _floor_of(positions, jmap, conventions), None)
+
+    def with_twists(self, motion: Motion, kinematics=None) -> Rig:
+        """This rig with its untrusted twists read from ``motion`` (a motion of it), unless known."""
+        if self.untrusted is not None:
+            return self
+        return self._replace(untrusted=untrusted_twists(motion, self, kinematics))
 
 
 def untrusted_twists(motion: Motion, rig: Rig, kinematics=None) -> frozenset:
@@ -284,7 +291,8 @@ def retarget_clips(
         groups.setdefault(key, []).append(k)
     out: list = [None] * len(motions)
     for members in groups.values():
-        source = Rig.of(motions[members[0]], user_map)
+        first = motions[members[0]]
+        source = Rig.of(first, user_map).with_twists(first)  # one decision for every clip of the skeleton
         for run in _runs(members, motions):
             _retarget_run(run, motions, source, goal, plant_feet, out)
     return out
@@ -347,6 +355,7 @@ def _retarget_frames(
         floors = _floors_of(kinematics[1], bounds, source.jmap, source.conventions)
     floor = np.repeat(floors, np.diff(bounds))  # per frame
     world, positions = kinematics
+    source = source.with_twists(motion, kinematics)
     out = _transfer(motion, source, goal, (_trusted(world, positions, source), positions), floor)
     if plant_feet:
         from .planting import plant_feet as plant
