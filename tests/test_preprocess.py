@@ -295,3 +295,18 @@ def test_a_dask_cluster_writes_the_single_machine_dataset(archive, tmp_path):
     single, dask = load_dataset(tmp_path / "single"), load_dataset(tmp_path / "dask")
     assert_same_dataset(single, dask)
     assert [f["error"] for f in single.failures] == [f["error"] for f in dask.failures]
+
+
+def test_the_manifest_reads_back_with_a_clip_a_line():
+    from expressive_mocap.dataset.finish import manifest_text
+
+    manifest = {
+        "format": "x",
+        "options": {"keep": ["positions"], "canonical": True},
+        "clips": [{"name": f"c{k}", "frames": k, "source_skeleton": {"map": {"spine": ["a", "b"]}}} for k in range(3)],
+        "failures": [],
+        "feature_names": None,
+    }
+    text = manifest_text(manifest)
+    assert json.loads(text) == manifest
+    assert sum(line.lstrip().startswith('{"name"') for line in text.splitlines()) == 3

@@ -53,8 +53,22 @@ def finish(out: Path, kinds: list[Kind], clips: list, failures: list, skeleton, 
         "clips": clips,
         "failures": failures,
     }
-    atomic_write(partial / MANIFEST, json.dumps(manifest, indent=1).encode())
+    atomic_write(partial / MANIFEST, manifest_text(manifest).encode())
     move_into_place(out)
+
+
+def manifest_text(manifest: dict) -> str:
+    """The manifest as JSON to read by eye: a key a line, each clip and failure record on a line
+    of its own. (``json.dumps(indent=...)`` encodes in Python: 60 ms for 600 clips, a fifth of
+    preprocessing them; one line a record keeps the C encoder.)"""
+    lines = []
+    for key, value in manifest.items():
+        if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            records = ",\n".join("  " + json.dumps(v) for v in value)
+            lines.append(f" {json.dumps(key)}: [\n{records}\n ]")
+        else:
+            lines.append(f" {json.dumps(key)}: {json.dumps(value)}")
+    return "{\n" + ",\n".join(lines) + "\n}\n"
 
 
 def move_into_place(out: Path) -> dict:
@@ -71,4 +85,4 @@ def move_into_place(out: Path) -> dict:
     return manifest
 
 
-__all__ = ["finish", "move_into_place"]
+__all__ = ["finish", "manifest_text", "move_into_place"]
