@@ -156,7 +156,8 @@ def mixed_preprocessing(data: Path, other: Path, clips: int, rounds: int) -> lis
         for k, path in enumerate(paths):
             (one / path.name).symlink_to(path)
             if k % 2:
-                em.write_bvh(retarget(em.read_bvh(path), cmu), mixed / path.name)
+                # With six decimals, as the real CMU file (and the Bandai-Namco files) are written.
+                em.write_bvh(retarget(em.read_bvh(path), cmu), mixed / path.name, decimals=6)
             else:
                 (mixed / path.name).symlink_to(path)
             frames += em.read_bvh(path).n_frames

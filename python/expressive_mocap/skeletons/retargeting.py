@@ -292,11 +292,21 @@ def retarget_clips(
     out: list = [None] * len(motions)
     for members in groups.values():
         first = motions[members[0]]
-        source = Rig.of(first, user_map).with_twists(first)  # one decision for every clip of the skeleton
+        source = Rig.of(first, user_map)
+        key = _rig_key(source)  # one twist decision for every clip of the skeleton, batch after batch
+        if key not in _ARCHIVE_TWISTS:
+            if len(_ARCHIVE_TWISTS) >= _PLANS_KEPT:
+                _ARCHIVE_TWISTS.pop(next(iter(_ARCHIVE_TWISTS)))
+            _ARCHIVE_TWISTS[key] = source.with_twists(first).untrusted
+        source = source._replace(untrusted=_ARCHIVE_TWISTS[key])
         for run in _runs(members, motions):
             _retarget_run(run, motions, source, goal, plant_feet, out)
     return out
 
+
+# The untrusted twists of each skeleton met in clips retargeted together (an archive's), read from
+# its first clip: the same for every clip of it, whatever batch it comes in.
+_ARCHIVE_TWISTS: dict = {}
 
 # Frames retargeted together: enough that NumPy's work per call outweighs its overhead, few
 # enough that the intermediate arrays stay in the allocator's reused memory and the caches
