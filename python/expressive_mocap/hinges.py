@@ -241,6 +241,9 @@ def canonical_hinge_limits() -> HingeLimits:
     return HingeLimits(names, tuple(hinges))
 
 
+_AXIS_FRAMES = 240  # frames of each motion a skeleton's hinge axes are learnt from, at most
+
+
 def hinge_limits_for(motions: Sequence[Motion]) -> HingeLimits:
     """The limits for edits of ``motions`` (one skeleton) without a model's own: the canonical
     body's on it, else the axes learnt from the motions themselves with the canonical most
@@ -249,7 +252,10 @@ def hinge_limits_for(motions: Sequence[Motion]) -> HingeLimits:
 
     if tuple(motions[0].skeleton.names) == canonical_shape()[0]:
         return canonical_hinge_limits()
-    return learn_hinge_limits(motions, most=NEUTRAL_MOST)
+    # The axes from evenly spread frames: a clip's hinges turn about the same lines throughout,
+    # and an edit carried back to its skeleton should not cost a pass over every frame.
+    spread = [m[np.unique(np.linspace(0, m.n_frames - 1, min(m.n_frames, _AXIS_FRAMES)).astype(int))] for m in motions]
+    return learn_hinge_limits(spread, most=NEUTRAL_MOST)
 
 
 # Limits of the models seen, by identity (a model is not hashable): exaggerating asks once a clip.

@@ -9,6 +9,7 @@ joint in Z X Y order; the demo's, :func:`~expressive_mocap.demo.bandai_like_skel
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -81,6 +82,8 @@ class Carried:
         )
         self.target = target or canonical_rig()
         self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False, kinematics=self._kinematics)
+        self._body_kinematics: tuple[np.ndarray, np.ndarray] | None = None  # the body's, once needed
+        self._limits: Any = None  # the user's HingeLimits, once needed
 
     def back(self, edited: Motion, hinges: bool = True) -> Motion:
         """``edited`` (an edit of :attr:`body`) as a motion of the user's skeleton. An edit of
@@ -96,15 +99,18 @@ class Carried:
         if not hinges:
             return out
         same = out.n_frames == self.original.n_frames
-        limits = hinge_limits_for([self.original])
-        return limit_hinges(out, limits, (self.original.rotations,) if same else ())[0]
+        if self._limits is None:  # the user's hinge axes, learnt once for every edit carried back
+            self._limits = hinge_limits_for([self.original])
+        return limit_hinges(out, self._limits, (self.original.rotations,) if same else ())[0]
 
     def _back(self, edited: Motion) -> Motion:
         from .. import quat
 
         if edited.n_frames != self.body.n_frames:
             return retarget_rigs(edited, self.target, self.source, plant_feet=False)
-        before, body_positions = self.body.fk()
+        if self._body_kinematics is None:
+            self._body_kinematics = self.body.fk()
+        before, body_positions = self._body_kinematics
         after, edited_positions = edited.fk()
         # The body's axes -> canonical -> the user's: a change of orientation D on the body is
         # user^-1 body D body^-1 user in the user's axes.

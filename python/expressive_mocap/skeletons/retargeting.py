@@ -49,7 +49,7 @@ _BEFORE = {"hand": "forearm", "toes": "foot", "foot": "lower_leg"}
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 _UP = np.array([0.0, 1.0, 0.0])
 _FORWARD = np.array([0.0, 0.0, 1.0])
-_TWIST_FRAMES = 120  # frames read to tell untrusted twists
+_TWIST_FRAMES = 60  # frames read to tell untrusted twists
 
 
 class Rig(NamedTuple):
