@@ -211,10 +211,10 @@ def main() -> None:
         f"ankles' mean horizontal speed while below {CONTACT:.0%} of their height range (cm/s).",
         "Produced by `PYTHONPATH=python python benches/exaggeration_timing.py`.",
         "",
-        "The model's timing mappings (lines in k, averaged over people): log cycle duration "
-        f"{model.timing_mappings[0, 0]:+.4f} per level, log travel per cycle {model.timing_mappings[1, 0]:+.4f} per "  # type: ignore[index]
-        f"level; their mean |correlation| with the intensity over every training cycle {p_dur:.2f} / "
-        f"{p_travel:.2f} (applied at >= 0.5).",
+        "The model's timing at each trained level (the people's means, followed level to level): cycle "
+        f"duration {' / '.join(f'{np.exp(v):.3f}' for v in model.timing_mappings[0])} s, travel per cycle "  # type: ignore[index]
+        f"{' / '.join(f'{np.exp(v):.3f}' for v in model.timing_mappings[1])} actor heights; their mean "  # type: ignore[index]
+        f"|correlation| with the intensity over every training cycle {p_dur:.2f} / {p_travel:.2f} (applied at >= 0.5).",
         "",
         f"Real `active` takes {HELD_OUT_ACTIVE.start}-{HELD_OUT_ACTIVE.stop - 1}: speed {goal.speed:.1f} cm/s, cadence "
         f"{goal.cadence:.2f} steps/s (means); the training people's own `active` takes {PEOPLE.start}-"

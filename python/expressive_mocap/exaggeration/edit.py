@@ -279,7 +279,8 @@ def _retimed(
         return same
     assert model.timing_mappings is not None and model.timing_predictability is not None
     live = model.timing_predictability >= PREDICTABLE
-    change = (mapped_timing(model.timing_mappings, levels[1]) - mapped_timing(model.timing_mappings, levels[0])) * live
+    to, k0 = (mapped_timing(model.timing_mappings, model.levels, k) for k in (levels[1], levels[0]))
+    change = (to - k0) * live
     positions = motion.positions()
     own = cycle_timing(motion, roles, cycles, positions)
     # The training range is in actor heights; the motion's own travel is measured the same way.

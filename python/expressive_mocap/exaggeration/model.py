@@ -55,7 +55,8 @@ class ExaggerationModel:
     plays which role (a map file's form), by which motions of other skeletons reach the model.
     Timing (:mod:`.timing`; None in a model file written without it): ``cycle_timing [N, 2]``
     each training cycle's log duration (s) and log travel (actor heights), ``timing_mappings
-    [2, degree + 1]`` their polynomials in k averaged over people, ``timing_predictability [2]``
+    [2, K]`` the people's mean of each at every trained intensity (followed level to level:
+    :func:`~expressive_mocap.exaggeration.timing.mapped_timing`), ``timing_predictability [2]``
     their mean |correlation| with k.
     """
 
@@ -309,7 +310,7 @@ def _check_arrays(arrays: dict[str, np.ndarray], meta: dict[str, Any], name: str
     for key, shape in shapes.items():
         finite_array(arrays, key, name, shape, kinds="fiub")
     if any(key in arrays for key in TIMING_ARRAYS):
-        timing_shapes = {"cycle_timing": (N, 2), "timing_mappings": (2, degree), "timing_predictability": (2,)}
+        timing_shapes = {"cycle_timing": (N, 2), "timing_mappings": (2, K), "timing_predictability": (2,)}
         for key, shape in timing_shapes.items():
             finite_array(arrays, key, name, shape, kinds="f")
     owners = arrays["cycle_performance"]

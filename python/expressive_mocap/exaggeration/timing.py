@@ -62,25 +62,39 @@ class TimingFit:
     predictability: np.ndarray
 
 
-def fit_timing(cycles: np.ndarray, owners: np.ndarray, levels: np.ndarray, degree: int) -> TimingFit:
+def fit_timing(cycles: np.ndarray, owners: np.ndarray, levels: np.ndarray) -> TimingFit:
     """Fit the timing features of every training cycle ``cycles [N, 2]`` (``owners [N, 2]``: the
-    person and intensity index of each) at ``levels [K]``: per person a least-squares polynomial
-    through the performances' means, as the pose coefficients' mappings are fitted."""
+    person and intensity index of each) at ``levels [K]``: the people's mean performance at each
+    level, ``mappings [2, K]``, followed from level to level by :func:`mapped_timing`.
+
+    Not a line, as the pose coefficients' mappings are: timing is not a straight line of
+    intensity (the dataset-2 walks' cadence barely moves from exhausted to normal and jumps to
+    active; a line through the three carried half of the normal-to-active change). Not a
+    polynomial through the levels either: beyond them it turns back (diminishing sped a walk up)."""
     P, K = int(owners[:, 0].max()) + 1, len(levels)
     performances = np.zeros((P, K, 2))
     for p in range(P):
         for k in range(K):
             performances[p, k] = cycles[(owners[:, 0] == p) & (owners[:, 1] == k)].mean(axis=0)
-    V = np.vander(levels, degree + 1)
-    per_person = np.linalg.lstsq(V, performances.transpose(1, 0, 2).reshape(K, -1), rcond=None)[0]
-    mappings = per_person.reshape(degree + 1, P, 2).mean(axis=1).T
+    mappings = performances.mean(axis=0).T
     rho = [np.abs(_correlation(cycles[owners[:, 0] == p], levels[owners[owners[:, 0] == p, 1]])) for p in range(P)]
     return TimingFit(performances, mappings, np.mean(rho, axis=0))
 
 
-def mapped_timing(mappings: np.ndarray, k: float) -> np.ndarray:
-    """``g(k) [2]``: the timing mappings ``[2, degree + 1]`` at intensity ``k``."""
-    return mappings @ (float(k) ** np.arange(mappings.shape[-1] - 1, -1, -1))
+def mapped_timing(mappings: np.ndarray, levels: np.ndarray, k: float) -> np.ndarray:
+    """``g(k) [2]``: the timing at intensity ``k`` from the level means ``mappings [2, K]`` at
+    ``levels [K]``: straight between neighbouring levels; beyond the ends, on from the end level
+    at the slope of the line through all of them (the last step between levels alone, the
+    steepest, made exaggerated walks outrun their locked feet)."""
+    levels = np.asarray(levels, dtype=np.float64)
+    k = float(k)
+    if levels[0] <= k <= levels[-1]:
+        i = int(np.clip(np.searchsorted(levels, k) - 1, 0, len(levels) - 2))
+        share = (k - levels[i]) / (levels[i + 1] - levels[i])
+        return mappings[:, i] + share * (mappings[:, i + 1] - mappings[:, i])
+    slope = np.polyfit(levels, mappings.T, 1)[0]
+    end = 0 if k < levels[0] else -1
+    return mappings[:, end] + slope * (k - levels[end])
 
 
 @dataclass(frozen=True)

@@ -191,7 +191,7 @@ def _model(
         X, levels, weights, cycles=(cycle_trajectories, cycle_performance), share=settings.share,
         energy=settings.energy, rank=settings.rank, degree=settings.degree,
     )  # fmt: skip
-    timing = fit_timing(np.concatenate([d.timing for d in per_person]), cycle_performance, levels, settings.degree)
+    timing = fit_timing(np.concatenate([d.timing for d in per_person]), cycle_performance, levels)
     reference = mean_rotation(refs)
     common = _common_range(per_person, reference, skeleton, settings.representation)
     return ExaggerationModel(

@@ -232,7 +232,7 @@ def timing_validation(model: ExaggerationModel, seconds: float = 2.0, fps: float
     if P < 2:
         raise ModelError("the timing validation needs at least two people")
     settings = model.training
-    timing = fit_timing(model.cycle_timing, model.cycle_performance, model.levels, settings.degree).performances
+    timing = fit_timing(model.cycle_timing, model.cycle_performance, model.levels).performances
     rows = []
     for p in range(P):
         others = [q for q in range(P) if q != p]
@@ -243,12 +243,12 @@ def timing_validation(model: ExaggerationModel, seconds: float = 2.0, fps: float
         chosen = np.isin(model.cycle_performance[:, 0], others)
         owners = model.cycle_performance[chosen].copy()
         owners[:, 0] = np.searchsorted(others, owners[:, 0])
-        theirs = fit_timing(model.cycle_timing[chosen], owners, model.levels, settings.degree)
+        theirs = fit_timing(model.cycle_timing[chosen], owners, model.levels)
         low, high = model.levels[0], model.levels[-1]
         change = (mapped(fitted.mappings, high) - mapped(fitted.mappings, low)) * fitted.key[:, None]
-        timing_change = (mapped_timing(theirs.mappings, high) - mapped_timing(theirs.mappings, low)) * (
-            theirs.predictability >= PREDICTABLE
-        )
+        timing_change = (
+            mapped_timing(theirs.mappings, model.levels, high) - mapped_timing(theirs.mappings, model.levels, low)
+        ) * (theirs.predictability >= PREDICTABLE)
         light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
         swap = light.copy()
         swap[:, model.person_key[p]] = heavy[:, model.person_key[p]]
