@@ -85,10 +85,11 @@ def bvh_values(path: Path) -> np.ndarray:
     return np.loadtxt(block.splitlines(), ndmin=2)
 
 
-def scipy_positions(skeleton: em.Skeleton, values: np.ndarray) -> np.ndarray:
-    """World joint positions from channel values, composed with SciPy: per joint the rotation
-    channels in written order (intrinsic, upper case), position channels replacing the offset
-    components they name, parent x child."""
+def scipy_fk(skeleton: em.Skeleton, values: np.ndarray) -> tuple[list[Rotation], np.ndarray]:
+    """World rotations (one SciPy Rotation of every frame per joint) and positions ``[F, J, 3]``
+    from channel values, composed with SciPy: per joint the rotation channels in written order
+    (intrinsic, upper case), position channels replacing the offset components they name, parent
+    x child."""
     frames = len(values)
     world_rot: list[Rotation] = []
     world_pos = np.zeros((frames, skeleton.n_joints, 3))
@@ -111,7 +112,12 @@ def scipy_positions(skeleton: em.Skeleton, values: np.ndarray) -> np.ndarray:
         else:
             world_rot.append(world_rot[parent] * local)
             world_pos[:, j] = world_pos[:, parent] + world_rot[parent].apply(offset)
-    return world_pos
+    return world_rot, world_pos
+
+
+def scipy_positions(skeleton: em.Skeleton, values: np.ndarray) -> np.ndarray:
+    """World joint positions ``[F, J, 3]`` from channel values (see :func:`scipy_fk`)."""
+    return scipy_fk(skeleton, values)[1]
 
 
 def stick_walker(hips, left_foot, right_foot, fps: float = 30.0, prefix: str = "") -> em.Motion:

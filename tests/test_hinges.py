@@ -11,10 +11,9 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from conftest import bvh_values
+from conftest import bvh_values, scipy_fk
 from expressive_mocap import quat
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.edits import blend, mix, modulate
@@ -37,34 +36,6 @@ CMU = {
     for hinge, parts in {"elbow": ("{}Shoulder", "{}Elbow", "{}Wrist"), "knee": ("{}Hip", "{}Knee", "{}Ankle")}.items()
     for side in ("Left", "Right")
 }
-
-
-def scipy_fk(skeleton: em.Skeleton, values: np.ndarray) -> tuple[list[Rotation], np.ndarray]:
-    """World rotations (one SciPy Rotation of every frame per joint) and positions ``[F, J, 3]``
-    from channel values, composed with SciPy only."""
-    frames = len(values)
-    world_rot: list[Rotation] = []
-    world_pos = np.zeros((frames, skeleton.n_joints, 3))
-    column = 0
-    for j, channels in enumerate(skeleton.channels):
-        offset = np.tile(skeleton.offsets[j], (frames, 1))
-        axes, angles = "", []
-        for name in channels:
-            if name.endswith("rotation"):
-                axes += name[0]
-                angles.append(values[:, column])
-            else:
-                offset[:, "XYZ".index(name[0])] = values[:, column]
-            column += 1
-        local = Rotation.from_euler(axes, np.stack(angles, 1), degrees=True) if axes else Rotation.identity(frames)
-        parent = skeleton.parents[j]
-        if parent < 0:
-            world_rot.append(local)
-            world_pos[:, j] = offset
-        else:
-            world_rot.append(world_rot[parent] * local)
-            world_pos[:, j] = world_pos[:, parent] + world_rot[parent].apply(offset)
-    return world_rot, world_pos
 
 
 def limb_vectors(motion: em.Motion, limb: tuple[int, int, int], tmp_path) -> tuple[np.ndarray, np.ndarray]:
