@@ -34,11 +34,11 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap.decoupling import BodyModel
 from expressive_mocap.decoupling.edits import blend, mix, modulate
+from independent import read_fk
 
 HERE = Path(__file__).resolve().parent
 DATA = Path.home() / ".cache/motion-data/dataset"
@@ -53,61 +53,8 @@ WINDOWS = (((30, 40), (150, 160)), ((150, 160), (30, 40)))  # (body, expressive)
 
 def read_positions(path: Path) -> tuple[list[str], np.ndarray, float]:
     """Joint names, world positions ``[F, J, 3]`` and frame time of a BVH file: own parser, SciPy FK."""
-    tokens = path.read_text().split()
-    names, parents, offsets, channels, stack = [], [], [], [], []
-    i = 0
-    while tokens[i] != "MOTION":
-        t = tokens[i]
-        if t in ("ROOT", "JOINT"):
-            names.append(tokens[i + 1])
-            parents.append(stack[-1] if stack else -1)
-            i += 2
-        elif t == "End":
-            names.append(None)
-            parents.append(stack[-1])
-            i += 2
-        elif t == "{":
-            stack.append(len(names) - 1)
-            i += 1
-        elif t == "}":
-            stack.pop()
-            i += 1
-        elif t == "OFFSET":
-            offsets.append([float(x) for x in tokens[i + 1 : i + 4]])
-            i += 4
-        elif t == "CHANNELS":
-            n = int(tokens[i + 1])
-            channels.append((len(names) - 1, tokens[i + 2 : i + 2 + n]))
-            i += 2 + n
-        else:
-            i += 1
-    frames = int(tokens[i + 2])
-    frame_time = float(tokens[i + 5])
-    values = np.array(tokens[i + 6 :], dtype=float).reshape(frames, -1)
-    by_joint = dict(channels)
-    world_rot: list[Rotation] = []
-    pos = np.zeros((frames, len(names), 3))
-    column = 0
-    for j in range(len(names)):
-        offset = np.tile(offsets[j], (frames, 1))
-        axes, angles = "", []
-        for name in by_joint.get(j, []):
-            if name.endswith("rotation"):
-                axes += name[0].upper()
-                angles.append(values[:, column])
-            else:
-                offset[:, "XYZ".index(name[0].upper())] = values[:, column]
-            column += 1
-        local = Rotation.from_euler(axes, np.stack(angles, 1), degrees=True) if axes else Rotation.identity(frames)
-        p = parents[j]
-        if p < 0:
-            world_rot.append(local)
-            pos[:, j] = offset
-        else:
-            world_rot.append(world_rot[p] * local)
-            pos[:, j] = pos[:, p] + world_rot[p].apply(offset)
-    keep = [j for j, n in enumerate(names) if n is not None]
-    return [names[j] for j in keep], pos[:, keep], frame_time
+    fk = read_fk(path)
+    return fk.names, fk.positions, fk.frame_time
 
 
 def stance(names: list[str], pos: np.ndarray, frame_time: float) -> np.ndarray:

@@ -30,11 +30,11 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from expressive_mocap.bvh import read_bvh, write_bvh
 from expressive_mocap.cli import main as cli
 from expressive_mocap.skeletons import find_joint_map, retarget
+from independent import read_fk
 
 HERE = Path(__file__).resolve().parent
 XIA = ("dme_demo_3d_1", "dme_demo_3d_2", "dme_comp_3d_2", "dme_demo_video_2")
@@ -56,29 +56,10 @@ def run(*argv: str) -> str:
 
 
 def world_positions(path: Path) -> tuple[np.ndarray, list[str]]:
-    """World joint positions ``[F, J, 3]`` of a BVH file: its MOTION numbers read with NumPy and
-    composed with SciPy (channels in written order, intrinsic; position channels replace the
-    offset components they name). Only the hierarchy comes from the package's reader."""
-    skeleton = read_bvh(path).skeleton
-    block = path.read_text().split("Frame Time:", 1)[1].split("\n", 1)[1]
-    values = np.loadtxt(block.splitlines(), ndmin=2)
-    frames, column = len(values), 0
-    rotations: list[Rotation] = []
-    positions = np.zeros((frames, skeleton.n_joints, 3))
-    for j, channels in enumerate(skeleton.channels):
-        offset = np.tile(skeleton.offsets[j], (frames, 1))
-        axes, angles = "", []
-        for name in channels:
-            if name.endswith("rotation"):
-                axes, angles = axes + name[0], [*angles, values[:, column]]
-            else:
-                offset[:, "XYZ".index(name[0])] = values[:, column]
-            column += 1
-        local = Rotation.from_euler(axes, np.stack(angles, 1), degrees=True) if axes else Rotation.identity(frames)
-        parent = skeleton.parents[j]
-        rotations.append(local if parent < 0 else rotations[parent] * local)
-        positions[:, j] = offset if parent < 0 else positions[:, parent] + rotations[parent].apply(offset)
-    return positions, list(skeleton.names)
+    """World joint positions ``[F, J, 3]`` and joint names of a BVH file, by the benches' own
+    reader and SciPy FK (:mod:`independent`)."""
+    fk = read_fk(path)
+    return fk.positions, fk.names
 
 
 def roles_of(path: Path) -> dict:

@@ -31,11 +31,11 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap.exaggeration import ExaggerationModel, exaggerate, train
 from expressive_mocap.files import atomic_write
+from independent import read_fk
 
 DATA = Path.home() / ".cache/motion-data/dataset"
 STYLES = ("tired", "normal", "active")
@@ -69,43 +69,13 @@ def clip(content: str, style: str) -> em.Motion:
 # --------------------------------------------------------------------------- independent measures
 
 
-def bvh_values(path: Path) -> np.ndarray:
-    """The MOTION numbers of a BVH file, read with plain NumPy."""
-    block = path.read_text().split("Frame Time:", 1)[1].split("\n", 1)[1]
-    return np.loadtxt(block.splitlines(), ndmin=2)
-
-
 def world_positions(motion: em.Motion) -> np.ndarray:
-    """``[F, J, 3]``: the motion written as BVH, its numbers read back and composed with SciPy
-    (rotation channels intrinsic in written order; position channels replace the offset)."""
+    """``[F, J, 3]``: the motion written as BVH and read back by the benches' own reader and
+    SciPy FK (:mod:`independent`)."""
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "motion.bvh"
         em.write_bvh(motion, path)
-        values = bvh_values(path)
-    skeleton = motion.skeleton
-    frames = len(values)
-    rotations: list[Rotation] = []
-    positions = np.zeros((frames, skeleton.n_joints, 3))
-    column = 0
-    for j, channels in enumerate(skeleton.channels):
-        offset = np.tile(skeleton.offsets[j], (frames, 1))
-        axes, angles = "", []
-        for name in channels:
-            if name.endswith("rotation"):
-                axes += name[0]
-                angles.append(values[:, column])
-            else:
-                offset[:, "XYZ".index(name[0])] = values[:, column]
-            column += 1
-        local = Rotation.from_euler(axes, np.stack(angles, 1), degrees=True) if axes else Rotation.identity(frames)
-        parent = skeleton.parents[j]
-        if parent < 0:
-            rotations.append(local)
-            positions[:, j] = offset
-        else:
-            rotations.append(rotations[parent] * local)
-            positions[:, j] = positions[:, parent] + rotations[parent].apply(offset)
-    return positions
+        return read_fk(path).positions
 
 
 def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:

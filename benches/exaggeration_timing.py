@@ -28,11 +28,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap.exaggeration import exaggerate, train
 from expressive_mocap.files import atomic_write
+from independent import read_fk
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_DATA = Path.home() / ".cache/motion-data/dataset/Bandai-Namco-Research-Motiondataset-2/data"
@@ -56,65 +56,9 @@ class Clip:
 
 
 def read_clip(path: Path) -> Clip:
-    """Joint names and world positions of a BVH file: the hierarchy parsed line by line, rotation
-    channels composed intrinsically in written order with SciPy, parent x child."""
-    text = Path(path).read_text()
-    head, motion = text.split("MOTION", 1)
-    names, parents, offsets, channels, stack = [], [], [], [], []
-    tokens = head.split()
-    i = 0
-    while i < len(tokens):
-        t = tokens[i]
-        if t in ("ROOT", "JOINT"):
-            names.append(tokens[i + 1])
-            parents.append(stack[-1] if stack else -1)
-            i += 2
-        elif t == "End":
-            names.append(None)
-            parents.append(stack[-1])
-            i += 2
-        elif t == "{":
-            stack.append(len(names) - 1)
-            i += 1
-        elif t == "}":
-            stack.pop()
-            i += 1
-        elif t == "OFFSET":
-            offsets.append([float(v) for v in tokens[i + 1 : i + 4]])
-            i += 4
-        elif t == "CHANNELS":
-            n = int(tokens[i + 1])
-            channels.append((len(names) - 1, tokens[i + 2 : i + 2 + n]))
-            i += 2 + n
-        else:
-            i += 1
-    lines = motion.strip().splitlines()
-    frame_time = float(lines[1].split(":")[1])
-    values = np.loadtxt(lines[2:], ndmin=2)
-    F, J = len(values), len(names)
-    by_joint = dict(channels)
-    world_rot: list = [None] * J
-    positions = np.zeros((F, J, 3))
-    column = 0
-    for j in range(J):
-        offset = np.tile(offsets[j], (F, 1))
-        axes, angles = "", []
-        for name in by_joint.get(j, []):
-            if name.endswith("rotation"):
-                axes += name[0]
-                angles.append(values[:, column])
-            else:
-                offset[:, "XYZ".index(name[0])] = values[:, column]
-            column += 1
-        local = Rotation.from_euler(axes, np.stack(angles, 1), degrees=True) if axes else Rotation.identity(F)
-        p = parents[j]
-        if p < 0:
-            world_rot[j], positions[:, j] = local, offset
-        else:
-            world_rot[j] = world_rot[p] * local
-            positions[:, j] = positions[:, p] + world_rot[p].apply(offset)
-    keep = [j for j, n in enumerate(names) if n is not None]
-    return Clip([names[j] for j in keep], positions[:, keep], frame_time)
+    """Joint names and world positions of a BVH file (the benches' own reader and SciPy FK)."""
+    fk = read_fk(path)
+    return Clip(fk.names, fk.positions, fk.frame_time)
 
 
 @dataclass

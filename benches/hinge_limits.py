@@ -22,13 +22,11 @@ import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import io
 import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap.decoupling.body_model import BodyModel
@@ -37,6 +35,7 @@ from expressive_mocap.exaggeration import exaggerate, train
 from expressive_mocap.files import atomic_write
 from expressive_mocap.hinges import CANONICAL_AXES, NEUTRAL_MOST, model_hinge_limits
 from expressive_mocap.skeletons.canonical import carried_for
+from independent import scipy_fk
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_DATA = Path.home() / ".cache/motion-data/dataset/Bandai-Namco-Research-Motiondataset-2/data"
@@ -57,79 +56,6 @@ CMU = {
 
 
 # --- an independent BVH reader and SciPy forward kinematics -------------------------------------
-
-
-def parse_bvh(text: str) -> tuple[list[str], list[int], np.ndarray, list[list[str]], np.ndarray]:
-    """Names, parents, offsets ``[J, 3]``, channel names per joint and the MOTION numbers."""
-    head, motion = text.split("MOTION", 1)
-    names: list[str] = []
-    parents: list[int] = []
-    offsets: list[list[float]] = []
-    channels: list[list[str]] = []
-    stack: list[int] = []
-    in_site = False
-    tokens = head.split()
-    i = 0
-    while i < len(tokens):
-        t = tokens[i]
-        if t in ("ROOT", "JOINT"):
-            names.append(tokens[i + 1])
-            parents.append(stack[-1] if stack else -1)
-            i += 2
-            continue
-        if t == "End":
-            in_site = True
-            i += 2
-            continue
-        if t == "{":
-            if not in_site:
-                stack.append(len(names) - 1)
-        elif t == "}":
-            if in_site:
-                in_site = False
-            else:
-                stack.pop()
-        elif t == "OFFSET":
-            if not in_site:
-                offsets.append([float(v) for v in tokens[i + 1 : i + 4]])
-            i += 4
-            continue
-        elif t == "CHANNELS":
-            n = int(tokens[i + 1])
-            channels.append(tokens[i + 2 : i + 2 + n])
-            i += 2 + n
-            continue
-        i += 1
-    lines = motion.split("Frame Time:", 1)[1].split("\n", 1)[1]
-    values = np.loadtxt(io.StringIO(lines), ndmin=2)
-    return names, parents, np.array(offsets), channels, values
-
-
-def scipy_fk(text: str) -> tuple[list[str], list[Rotation], np.ndarray]:
-    """Joint names, world rotations (per joint, every frame) and positions ``[F, J, 3]``."""
-    names, parents, offsets, channels, values = parse_bvh(text)
-    frames = len(values)
-    world_rot: list[Rotation] = []
-    world_pos = np.zeros((frames, len(names), 3))
-    column = 0
-    for j, chans in enumerate(channels):
-        offset = np.tile(offsets[j], (frames, 1))
-        axes, angles = "", []
-        for name in chans:
-            if name.lower().endswith("rotation"):
-                axes += name[0].upper()
-                angles.append(values[:, column])
-            else:
-                offset[:, "XYZ".index(name[0].upper())] = values[:, column]
-            column += 1
-        local = Rotation.from_euler(axes, np.stack(angles, 1), degrees=True) if axes else Rotation.identity(frames)
-        if parents[j] < 0:
-            world_rot.append(local)
-            world_pos[:, j] = offset
-        else:
-            world_rot.append(world_rot[parents[j]] * local)
-            world_pos[:, j] = world_pos[:, parents[j]] + world_rot[parents[j]].apply(offset)
-    return names, world_rot, world_pos
 
 
 def segments(fk, limb: tuple[str, str, str]) -> tuple[np.ndarray, np.ndarray]:
