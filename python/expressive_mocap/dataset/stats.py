@@ -1,0 +1,129 @@
+"""Normalisation statistics of a dataset's kinds: per channel mean and std over all rows.
+
+A dataset written with statistics holds them in ``manifest["stats"][kind] = {"mean", "std",
+"frames"}`` (``mean`` and ``std`` nested lists shaped like one row, the population std, 1.0 where
+a channel's std is below 1e-8). :meth:`Normaliser.of` reads them, or computes the same from the
+data for a dataset that has none (:func:`compute_stats`: float64, streaming over rows in chunks,
+Chan's parallel merge of per-chunk means and squared deviations, so neither memory nor precision
+depends on the dataset's size).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+
+import numpy as np
+
+from ..errors import ArgumentError
+
+MIN_STD = 1e-8  # a channel whose std is below this is recorded with std 1.0 (dividing stays safe)
+CHUNK_ROWS = 65536
+
+
+def float_kinds(dataset) -> list[str]:
+    """The kinds of ``dataset`` stored as floating point (those statistics are for)."""
+    return [k for k, a in dataset.arrays.items() if np.issubdtype(a.dtype, np.floating)]
+
+
+def compute_stats(dataset, kinds: Iterable[str] | None = None, chunk_rows: int = CHUNK_ROWS) -> dict:
+    """``{kind: {"mean", "std", "frames"}}`` (the manifest's format) computed from ``dataset``'s
+    arrays over all rows, in float64, ``chunk_rows`` rows at a time."""
+    if chunk_rows < 1:
+        raise ArgumentError(f"argument `chunk_rows`: expected a positive count, got {chunk_rows}")
+    stats = {}
+    for kind in float_kinds(dataset) if kinds is None else kinds:
+        array = dataset.arrays[kind]
+        n, mean, m2 = 0, np.zeros(array.shape[1:]), np.zeros(array.shape[1:])
+        for start in range(0, len(array), chunk_rows):
+            chunk = np.asarray(array[start : start + chunk_rows], dtype=np.float64)
+            k = len(chunk)
+            chunk_mean = chunk.mean(axis=0)
+            chunk_m2 = ((chunk - chunk_mean) ** 2).sum(axis=0)
+            delta = chunk_mean - mean
+            total = n + k
+            mean = mean + delta * (k / total)
+            m2 = m2 + chunk_m2 + delta**2 * (n * k / total)
+            n = total
+        std = np.sqrt(m2 / n) if n else np.ones_like(mean)
+        std = np.where(std < MIN_STD, 1.0, std)
+        stats[kind] = {"mean": mean.tolist(), "std": std.tolist(), "frames": n}
+    return stats
+
+
+class Normaliser:
+    """``(x - mean) / std`` per channel of each kind, and back.
+
+    ``Normaliser(stats)`` from ``{kind: {"mean", "std", ...}}``; ``Normaliser.of(dataset)`` from
+    its manifest's statistics, computed from its arrays when the manifest has none. Arrays of a
+    kind may carry any leading axes (``[T, ...]``, ``[B, T, ...]``): the statistics broadcast
+    over them. Results are float32 (float64 in, float64 out)."""
+
+    def __init__(self, stats: Mapping[str, Mapping]):
+        self.mean: dict[str, np.ndarray] = {}
+        self.std: dict[str, np.ndarray] = {}
+        self.frames: dict[str, int] = {}
+        for kind, entry in stats.items():
+            mean, std = np.asarray(entry["mean"], dtype=np.float64), np.asarray(entry["std"], dtype=np.float64)
+            if mean.shape != std.shape:
+                raise ArgumentError(f"stats of {kind!r}: mean {list(mean.shape)} and std {list(std.shape)} differ")
+            if not np.all(std > 0):
+                raise ArgumentError(f"stats of {kind!r}: a std that is not positive")
+            self.mean[kind], self.std[kind] = mean, std
+            self.frames[kind] = int(entry.get("frames", 0))
+        self._cache: dict[tuple[str, np.dtype], tuple[np.ndarray, np.ndarray]] = {}
+
+    @classmethod
+    def of(cls, dataset, kinds: Iterable[str] | None = None, chunk_rows: int = CHUNK_ROWS) -> Normaliser:
+        """The statistics of ``dataset`` (``kinds``: its float kinds by default): the manifest's
+        where it has them, computed from the arrays for the kinds it lacks."""
+        wanted = float_kinds(dataset) if kinds is None else list(kinds)
+        recorded = dataset.manifest.get("stats") or {}
+        missing = [k for k in wanted if k not in recorded]
+        computed = compute_stats(dataset, missing, chunk_rows) if missing else {}
+        return cls({k: recorded[k] if k in recorded else computed[k] for k in wanted})
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        return tuple(self.mean)
+
+    def to_dict(self) -> dict:
+        """The statistics in the manifest's format."""
+        return {
+            k: {"mean": self.mean[k].tolist(), "std": self.std[k].tolist(), "frames": self.frames[k]} for k in self.mean
+        }
+
+    def _stats(self, kind: str, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if kind not in self.mean:
+            raise KeyError(f"no statistics of {kind!r}; this normaliser has {', '.join(self.mean) or 'none'}")
+        dtype = np.dtype(np.float64 if values.dtype == np.float64 else np.float32)
+        key = (kind, dtype)
+        if key not in self._cache:
+            self._cache[key] = (self.mean[kind].astype(dtype), self.std[kind].astype(dtype))
+        mean, std = self._cache[key]
+        if values.shape[values.ndim - mean.ndim :] != mean.shape:
+            raise ArgumentError(f"{kind}: rows of shape {list(mean.shape)} expected, got {list(values.shape)}")
+        return mean, std
+
+    def normalise(self, kind: str, values) -> np.ndarray:
+        """``(values - mean) / std`` of ``kind``."""
+        values = np.asarray(values)
+        mean, std = self._stats(kind, values)
+        return (values - mean) / std
+
+    def denormalise(self, kind: str, values) -> np.ndarray:
+        """``values * std + mean`` of ``kind``: the inverse of :meth:`normalise`."""
+        values = np.asarray(values)
+        mean, std = self._stats(kind, values)
+        return values * std + mean
+
+    def __getstate__(self) -> dict:
+        return {"stats": self.to_dict()}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(state["stats"])  # type: ignore[misc]
+
+    def __repr__(self) -> str:
+        return f"Normaliser({', '.join(self.mean)})"
+
+
+__all__ = ["MIN_STD", "Normaliser", "compute_stats", "float_kinds"]
