@@ -56,6 +56,12 @@ record), :mod:`.npy` (the data files written in pieces), :mod:`.journal`, :mod:`
 manifest, last), :mod:`.run` (:func:`preprocess`), :mod:`.summary`; :mod:`.format` (file names,
 manifest checks, verification), :mod:`.lock`, :mod:`.folder` (whose folder it is),
 :mod:`.reader` (:class:`Dataset`, :func:`load_dataset`).
+
+For training (docs/training.md): :mod:`.stats` (:class:`Normaliser`), :mod:`.labels`
+(:class:`Labels` from names or a CSV), :mod:`.splits` (:func:`split`), :mod:`.windows`
+(:class:`Windows`, views), :mod:`.augment` (:class:`Augment`), :mod:`.batches`
+(:class:`WindowReader`, :class:`Batches`, :func:`batches`) and :mod:`.torch_dataset`
+(:class:`WindowDataset` for a PyTorch ``DataLoader``).
 """
 
 from ..lazy import lazy_exports
@@ -63,11 +69,48 @@ from .format import KINDS
 from .lock import FolderLock
 from .reader import Clip, Dataset, load_dataset
 
-# The writing side loads on first use: reading a dataset (load_dataset) stays light.
-_LAZY = {"Summary": "summary", "open_source": "sources", "preprocess": "run"}
+# The writing side and the training helpers load on first use: load_dataset stays light.
+_LAZY = {
+    "Summary": "summary",
+    "open_source": "sources",
+    "preprocess": "run",
+    "Normaliser": "stats",
+    "compute_stats": "stats",
+    "Labels": "labels",
+    "BANDAI": "labels",
+    "split": "splits",
+    "Windows": "windows",
+    "clip_windows": "windows",
+    "Augment": "augment",
+    "WindowReader": "batches",
+    "Batches": "batches",
+    "batches": "batches",
+    "WindowDataset": "torch_dataset",
+}
 
 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 
-__all__ = ["KINDS", "Clip", "Dataset", "FolderLock", "Summary", "load_dataset", "open_source", "preprocess"]
+__all__ = [
+    "BANDAI",
+    "KINDS",
+    "Augment",
+    "Batches",
+    "Clip",
+    "Dataset",
+    "FolderLock",
+    "Labels",
+    "Normaliser",
+    "Summary",
+    "WindowDataset",
+    "WindowReader",
+    "Windows",
+    "batches",
+    "clip_windows",
+    "compute_stats",
+    "load_dataset",
+    "open_source",
+    "preprocess",
+    "split",
+]
