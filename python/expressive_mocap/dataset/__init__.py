@@ -60,7 +60,7 @@ manifest checks, verification), :mod:`.lock`, :mod:`.folder` (whose folder it is
 For training (docs/training.md): :mod:`.stats` (:class:`Normaliser`), :mod:`.labels`
 (:class:`Labels` from names or a CSV), :mod:`.splits` (:func:`split`), :mod:`.windows`
 (:class:`Windows`, views), :mod:`.augment` (:class:`Augment`), :mod:`.batches`
-(:class:`WindowReader`, :class:`Batches`, :func:`batches`) and :mod:`.torch_dataset`
+(:class:`WindowReader`, :class:`Batches`, :func:`window_batches`) and :mod:`.torch_dataset`
 (:class:`WindowDataset` for a PyTorch ``DataLoader``).
 """
 
@@ -84,7 +84,7 @@ _LAZY = {
     "Augment": "augment",
     "WindowReader": "batches",
     "Batches": "batches",
-    "batches": "batches",
+    "window_batches": "batches",
     "WindowDataset": "torch_dataset",
 }
 
@@ -106,7 +106,7 @@ __all__ = [
     "WindowDataset",
     "WindowReader",
     "Windows",
-    "batches",
+    "window_batches",
     "clip_windows",
     "compute_stats",
     "load_dataset",

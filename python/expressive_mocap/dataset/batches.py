@@ -148,7 +148,7 @@ class Batches:
         return self.epoch(number)
 
 
-def batches(
+def window_batches(
     dataset,
     length: int,
     stride: int | None = None,
@@ -174,4 +174,4 @@ def batches(
     return Batches(reader, batch_size, shuffle, seed, drop_last)
 
 
-__all__ = ["Batches", "WindowReader", "batches"]
+__all__ = ["Batches", "WindowReader", "window_batches"]
