@@ -21,7 +21,6 @@ from expressive_mocap.dataset import (
     clip_windows,
     compute_stats,
     load_dataset,
-    preprocess,
     split,
     window_batches,
 )
@@ -29,26 +28,12 @@ from expressive_mocap.dataset.augment import rotate_window_kinds
 from expressive_mocap.errors import ArgumentError, DatasetError
 from expressive_mocap.representations import KINDS as FORMS
 from expressive_mocap.representations import encode
-
-CLIPS = [
-    "dataset-2_walk_normal_001",
-    "dataset-2_walk_normal_002",
-    "dataset-2_walk_elderly_001",
-    "dataset-2_run_normal_001",
-    "dataset-2_run_elderly_002",
-    "sub/dataset-2_walk-turn-left_active_002",
-]
+from training_clips import training_dataset
 
 
 @pytest.fixture(scope="module")
 def folder(bandai2_dir, tmp_path_factory):
-    root = tmp_path_factory.mktemp("training")
-    (root / "src" / "sub").mkdir(parents=True)
-    for name in CLIPS:
-        os.symlink(bandai2_dir / f"{name.rsplit('/', 1)[-1]}.bvh", root / "src" / f"{name}.bvh")
-    summary = preprocess(root / "src", root / "ds", keep="positions,rotations,contacts", progress=False)
-    assert summary.clips_ok == len(CLIPS)
-    return root / "ds"
+    return training_dataset(bandai2_dir, tmp_path_factory.mktemp("training"))
 
 
 @pytest.fixture(scope="module")
