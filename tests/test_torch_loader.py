@@ -97,3 +97,19 @@ def test_getitems_returns_the_same_windows_as_getitem(folder):
         single = dataset[i]
         for key in ("positions", "rotations", "contacts", "clip", "start", "valid"):
             np.testing.assert_array_equal(item[key], single[key])
+
+
+def test_whole_batches_through_a_batch_sampler(folder):
+    ds = load_dataset(folder)
+    dataset = WindowDataset(folder, 24, 24, padding="zero", kinds=["positions", "contacts"])
+    windows = Windows(ds, 24, 24, "zero")
+    sampler = torch.utils.data.BatchSampler(torch.utils.data.RandomSampler(dataset), 16, drop_last=False)
+    loader = torch.utils.data.DataLoader(dataset, batch_size=None, sampler=sampler, num_workers=2)
+    seen = []
+    for batch in loader:
+        assert set(batch) >= {"positions", "contacts", "window", "clip", "start", "valid"}
+        for j, w in enumerate(batch["window"].tolist()):
+            np.testing.assert_array_equal(batch["positions"][j].numpy(), windows.read(ds.positions, w))
+            np.testing.assert_array_equal(batch["contacts"][j].numpy(), windows.read(ds.contacts, w))
+            seen.append(w)
+    assert sorted(seen) == list(range(len(windows)))

@@ -143,17 +143,34 @@ def rotate_window_kinds(batch: dict, angles: np.ndarray, manifest: Mapping, root
 
 def interpolate(kind: str, a: np.ndarray, b: np.ndarray, frac: np.ndarray, manifest: Mapping) -> np.ndarray:
     """Frames between ``a`` and ``b`` (``[B, T, ...]``, the frames before and after each sample)
-    at ``frac [B, T]`` in [0, 1): exactly ``a`` where ``frac`` is 0."""
+    at ``frac [B, T]`` in [0, 1): ``a`` where ``frac`` is 0 (to rounding, for rotations)."""
     at = frac.reshape(frac.shape + (1,) * (a.ndim - 2))
     if a.dtype == bool or kind == "contacts":
         return np.where(at < 0.5, a, b)
     if kind == "rotations" or kind in QUATERNION_KINDS:
         form, order = rotation_form(manifest) if kind == "rotations" else ("quaternion", "ZXY")
-        qa, qb = decode(a, form, order), decode(b, form, order)
-        mixed = quat.slerp(qa, qb, np.broadcast_to(at[..., 0], qa.shape[:-1]))
-        mixed = encode(mixed, form, order) if form != "quaternion" else mixed
-        return np.where(at == 0, a, mixed.astype(a.dtype))
-    return np.where(at == 0, a, a + (b - a) * at.astype(a.dtype))
+        if form == "quaternion":  # as stored, in float32
+            return nlerp(a, b, at.astype(a.dtype))
+        return encode(nlerp(decode(a, form, order), decode(b, form, order), at), form, order).astype(a.dtype)
+    mixed = b - a
+    mixed *= at.astype(a.dtype)
+    mixed += a
+    return mixed
+
+
+def nlerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Quaternions ``[..., 4]`` between ``a`` and ``b`` (shortest arc) at ``t`` (broadcast to
+    ``[..., 1]``), normalised. Between neighbouring frames (a few degrees apart) it differs from
+    slerp by less than float32's precision in angle (the error grows as the angle cubed), at a
+    fraction of slerp's cost."""
+    sign = np.where(np.einsum("...i,...i->...", a, b) < 0, -1.0, 1.0).astype(a.dtype)
+    mixed = b * sign[..., None]
+    mixed -= a
+    mixed *= t
+    mixed += a
+    norm = np.sqrt(np.einsum("...i,...i->...", mixed, mixed))
+    mixed /= norm[..., None]
+    return mixed
 
 
 def scale_rates(kind: str, values: np.ndarray, speeds: np.ndarray) -> np.ndarray:
@@ -173,6 +190,7 @@ __all__ = [
     "Augment",
     "about_up",
     "interpolate",
+    "nlerp",
     "rotate_root",
     "rotate_vectors",
     "rotate_window_kinds",

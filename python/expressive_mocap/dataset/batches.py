@@ -78,13 +78,13 @@ class WindowReader:
             frac = np.where(base + 1 <= (remaining - 1)[:, None], at - base, 0.0)
             frac = np.minimum(frac, 1.0)
             after = np.minimum(base + 1, (remaining - 1)[:, None])
-            rows = start[:, None, None] + np.stack([base, after], axis=-1)
+            rows = start[:, None] + np.stack([base, after])  # [2, B, T]: each half in row order
             valid = np.minimum(length, (remaining - 1) // speeds + 1).astype(np.int64)
         batch: dict = {}
         for kind, array in self.arrays.items():
             values = array[rows.ravel()].reshape(rows.shape + array.shape[1:])
             if frac is not None:
-                values = interpolate(kind, values[:, :, 0], values[:, :, 1], frac, self.manifest)
+                values = interpolate(kind, values[0], values[1], frac, self.manifest)
                 values = scale_rates(kind, values, speeds)
             batch[kind] = values.astype(np.float32, copy=False)
         if np.any(angles):
@@ -92,11 +92,12 @@ class WindowReader:
         if self.normaliser is not None:
             for kind in batch:
                 if kind in self.normaliser.mean:
-                    batch[kind] = self.normaliser.normalise(kind, batch[kind]).astype(np.float32, copy=False)
+                    batch[kind] = self.normaliser.normalise(kind, batch[kind], out=batch[kind])  # fresh arrays
         for kind in batch:
             sigma = augment.noise_of(kind) if augment is not None and kind != "contacts" else 0.0
             if sigma and rng is not None:
-                batch[kind] = batch[kind] + sigma * rng.standard_normal(batch[kind].shape, dtype=np.float32)
+                noise = rng.standard_normal(batch[kind].shape, dtype=np.float32)
+                batch[kind] = np.add(batch[kind], np.multiply(noise, sigma, out=noise), out=noise)
         if w.padding == "zero" and np.any(valid < length):
             padded = steps >= valid[:, None]
             for kind in batch:

@@ -104,11 +104,14 @@ class Normaliser:
             raise ArgumentError(f"{kind}: rows of shape {list(mean.shape)} expected, got {list(values.shape)}")
         return mean, std
 
-    def normalise(self, kind: str, values) -> np.ndarray:
-        """``(values - mean) / std`` of ``kind``."""
+    def normalise(self, kind: str, values, out: np.ndarray | None = None) -> np.ndarray:
+        """``(values - mean) / std`` of ``kind`` (into ``out``, which may be ``values``)."""
         values = np.asarray(values)
         mean, std = self._stats(kind, values)
-        return (values - mean) / std
+        if out is None:
+            return (values - mean) / std
+        np.subtract(values, mean, out=out)
+        return np.divide(out, std, out=out)
 
     def denormalise(self, kind: str, values) -> np.ndarray:
         """``values * std + mean`` of ``kind``: the inverse of :meth:`normalise`."""

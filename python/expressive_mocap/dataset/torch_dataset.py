@@ -86,7 +86,14 @@ class WindowDataset:
     def __len__(self) -> int:
         return len(self.reader.windows)
 
-    def __getitem__(self, index: int) -> dict:
+    def __getitem__(self, index) -> dict:
+        """Window ``index`` as an item; or, for a list of indices, those windows as one batch
+        (``[B, T, ...]`` arrays in the order of their rows, ``window`` naming them): the fast
+        path for ``DataLoader(ds, batch_size=None, sampler=BatchSampler(...))``, nothing to
+        collate."""
+        if not isinstance(index, (int, np.integer)):
+            wanted = np.asarray(index, dtype=np.int64) % max(len(self), 1)
+            return self.reader.read(wanted, self._rng(wanted))
         if not -len(self) <= index < len(self):
             raise IndexError(f"window {index} of {len(self)}")
         index = int(index) % len(self)
@@ -96,10 +103,12 @@ class WindowDataset:
     def __getitems__(self, indices: Sequence[int]) -> list[dict]:
         """The windows ``indices`` read as one batch, returned one dict per index, in order."""
         wanted = np.asarray(indices, dtype=np.int64) % max(len(self), 1)
-        rng = np.random.default_rng([self.seed, self.epoch, int(wanted[0]) if len(wanted) else 0, len(wanted)])
-        batch = self.reader.read(wanted, rng)
+        batch = self.reader.read(wanted, self._rng(wanted))
         place = _places(wanted, batch["window"])
         return [_item(batch, int(j)) for j in place]
+
+    def _rng(self, wanted: np.ndarray) -> np.random.Generator:
+        return np.random.default_rng([self.seed, self.epoch, int(wanted[0]) if len(wanted) else 0, len(wanted)])
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()

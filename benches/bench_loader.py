@@ -1,0 +1,103 @@
+"""Frames per second delivered by the training loader: python benches/bench_loader.py DATASET
+
+Shuffled 64-frame windows (stride 16), batches of 256, from a memory-mapped dataset (e.g. the
+whole dataset-2 archive preprocessed with ``--keep positions,rotations,contacts``), through
+:class:`~expressive_mocap.dataset.Batches` in this process: plain, normalised, and with each
+augmentation. Frames delivered = windows x 64. The page cache is warmed by a first pass, so the
+figures are of the loader, not of the disk.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from expressive_mocap.dataset import Augment, load_dataset, window_batches
+
+CASES = {
+    "plain": {},
+    "normalised": {"normalise": True},
+    "rotation": {"augment": Augment(rotate=True)},
+    "speed 0.8-1.25": {"augment": Augment(speed=(0.8, 1.25))},
+    "noise 0.01": {"augment": Augment(noise=0.01)},
+    "rotation + speed, normalised": {"augment": Augment(rotate=True, speed=(0.8, 1.25)), "normalise": True},
+    "all three, normalised": {"augment": Augment(rotate=True, speed=(0.8, 1.25), noise=0.01), "normalise": True},
+}
+
+
+def rate(loader, batches: int) -> float:
+    """Frames per second over ``batches`` batches of the loader's first epoch (best of 3)."""
+    best = 0.0
+    for repeat in range(3):
+        frames, start = 0, time.perf_counter()
+        for i, batch in enumerate(loader.epoch(repeat)):
+            frames += batch["positions"].shape[0] * batch["positions"].shape[1]
+            if i + 1 == batches:
+                break
+        best = max(best, frames / (time.perf_counter() - start))
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("dataset")
+    parser.add_argument("--batches", type=int, default=100, help="batches timed per repeat (default 100)")
+    parser.add_argument("--torch", action="store_true", help="also through a PyTorch DataLoader")
+    args = parser.parse_args()
+    ds = load_dataset(args.dataset)
+    print(ds)
+    kinds = [k for k in ("positions", "rotations", "contacts") if k in ds.kinds]
+    warm = window_batches(ds, 64, 16, batch_size=256, kinds=kinds, shuffle=False)
+    for _ in warm.epoch(0):  # the page cache
+        pass
+    print(f"{len(warm.reader.windows):,} windows of 64 frames, stride 16; batches of 256; kinds {', '.join(kinds)}")
+    print("| case | frames/s | batches/s |\n|---|---|---|")
+    for name, options in CASES.items():
+        loader = window_batches(ds, 64, 16, batch_size=256, kinds=kinds, seed=0, **options)
+        frames = rate(loader, args.batches)
+        print(f"| {name} | {frames / 1e6:.2f} M | {frames / (256 * 64):.0f} |")
+    if args.torch:
+        torch_rates(args.dataset, kinds, args.batches)
+
+
+def torch_rates(folder: str, kinds: list[str], batches: int) -> None:
+    """The same windows through WindowDataset and a PyTorch DataLoader (tensors out)."""
+    import torch
+
+    from expressive_mocap.dataset import WindowDataset
+
+    print("\nPyTorch DataLoader over WindowDataset (batch 256, shuffled; tensors delivered)")
+    print("| case | workers | frames/s |\n|---|---|---|")
+    for name, augment in (("plain", None), ("rotation + speed", Augment(rotate=True, speed=(0.8, 1.25)))):
+        dataset = WindowDataset(folder, 64, 16, kinds=kinds, augment=augment)
+        for workers in (0, 2):
+            loader = torch.utils.data.DataLoader(
+                dataset, batch_size=256, shuffle=True, num_workers=workers, persistent_workers=workers > 0
+            )
+            best = 0.0
+            for _ in range(3):
+                frames, start = 0, time.perf_counter()
+                for i, batch in enumerate(loader):
+                    frames += batch["positions"].shape[0] * batch["positions"].shape[1]
+                    if i + 1 == batches:
+                        break
+                best = max(best, frames / (time.perf_counter() - start))
+            print(f"| {name} | {workers} | {best / 1e6:.2f} M |")
+        sampler = torch.utils.data.BatchSampler(torch.utils.data.RandomSampler(dataset), 256, drop_last=False)
+        for workers in (0, 2):
+            loader = torch.utils.data.DataLoader(
+                dataset, batch_size=None, sampler=sampler, num_workers=workers, persistent_workers=workers > 0
+            )
+            best = 0.0
+            for _ in range(3):
+                frames, start = 0, time.perf_counter()
+                for i, batch in enumerate(loader):
+                    frames += batch["positions"].shape[0] * batch["positions"].shape[1]
+                    if i + 1 == batches:
+                        break
+                best = max(best, frames / (time.perf_counter() - start))
+            print(f"| {name}, whole batches (BatchSampler) | {workers} | {best / 1e6:.2f} M |")
+
+
+if __name__ == "__main__":
+    main()
