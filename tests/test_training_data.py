@@ -139,15 +139,31 @@ def test_splits_are_disjoint_cover_all_and_keep_mirrored_copies_together(by):
     }
 
 
-def test_splits_are_stable_under_adding_clips_and_follow_the_seed():
+def test_hash_splits_are_stable_under_adding_clips_and_follow_the_seed():
     old, new = NAMES[:60], NAMES  # more clips later
-    before, after = split(old, seed=1), split(new, seed=1)
+    before, after = split(old, seed=1, method="hash"), split(new, seed=1, method="hash")
     placed = {new[i]: name for name, idx in after.items() for i in idx}
     for name, idx in before.items():
         assert all(placed[old[i]] == name for i in idx)
     sizes = {k: len(v) for k, v in after.items()}
     assert abs(sizes["train"] / len(new) - 0.8) < 0.1 and sizes["val"] and sizes["test"]
-    assert any(not np.array_equal(split(new, seed=2)[k], after[k]) for k in after)
+    assert any(not np.array_equal(split(new, seed=2, method="hash")[k], after[k]) for k in after)
+
+
+@pytest.mark.parametrize("groups", [3, 10, 11, 57])
+def test_rank_splits_give_each_split_its_share_of_groups(groups):
+    names = [f"clip{i:03d}" for i in range(groups)]
+    parts = split(names, fractions=(0.8, 0.1, 0.1), seed=4)
+    sizes = [len(parts[k]) for k in ("train", "val", "test")]
+    assert sum(sizes) == groups and min(sizes) >= 1  # nothing lost, no split left empty
+    assert all(abs(size - f * groups) < 1 + 1e-9 for size, f in zip(sizes[1:], (0.1, 0.1)) if groups >= 10)
+    same = {k: list(v) for k, v in parts.items()}
+    assert {k: list(v) for k, v in split(names, fractions=(0.8, 0.1, 0.1), seed=4).items()} == same
+    assert any({k: list(v) for k, v in split(names, seed=s).items()} != same for s in range(5, 10))
+    grown = split(names + ["extra"], fractions=(0.8, 0.1, 0.1), seed=4)
+    placed = {i: k for k, idx in grown.items() for i in idx}
+    moved = sum(placed[i] != k for k, idx in parts.items() for i in idx)
+    assert moved <= 2  # one more group shifts at most the two boundaries
 
 
 def test_held_out_groups_are_exact_and_checked():

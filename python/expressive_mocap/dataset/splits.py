@@ -2,10 +2,17 @@
 
 Clips are split in groups: by clip, each clip with its mirrored copy (``X@mirrored`` always goes
 with ``X``); by a label field (``"take"``, ``"style"``, an actor column of a CSV...), every clip
-of one value. Each group goes to a split by a hash of ``(seed, group key)`` mapped to [0, 1) and
-cut at the cumulative fractions: the same seed gives the same split, and adding clips never moves
-a group that was already there (the price: the fractions hold on average, not exactly, which
-matters when there are few groups; an explicit ``held_out`` list is exact).
+of one value. Groups are ordered by a hash of ``(seed, group key)`` (the same seed, the same
+order, on any machine) and dealt out in that order by ``method``:
+
+- ``"rank"`` (the default): each split gets its fraction of the groups, rounded (largest
+  remainders), and at least one group when its fraction is not 0 and there are enough groups, so
+  10 contents split 0.8/0.1/0.1 are 8/1/1. Adding groups moves at most a few at the boundaries.
+- ``"hash"``: a group goes where its hash, in [0, 1), falls between the cumulative fractions:
+  adding clips never moves a group already there, and the fractions hold on average only (10
+  groups may leave a split empty).
+
+An explicit ``held_out`` list names the groups of each split instead.
 """
 
 from __future__ import annotations
@@ -54,6 +61,7 @@ def split(
     held_out: Mapping[str, Sequence[str]] | None = None,
     seed: int = 0,
     labels: Labels | None = None,
+    method: str = "rank",
 ) -> dict[str, np.ndarray]:
     """``{split name: sorted clip indices}`` of ``dataset`` (a Dataset, or a list of clip names).
 
@@ -79,15 +87,36 @@ def split(
     else:
         cuts = _fractions(fractions)
         names = list(cuts)
-        bounds = np.cumsum(list(cuts.values()))
-        bounds[-1] = 1.0  # rounding
-        cache: dict[str, str] = {}
-        for key in keys:
-            if key not in cache:
-                cache[key] = names[int(np.searchsorted(bounds, unit_hash(seed, key), side="right"))]
-        assigned = [cache[k] for k in keys]
+        hashes = {key: unit_hash(seed, key) for key in keys}
+        if method == "hash":
+            bounds = np.cumsum(list(cuts.values()))
+            bounds[-1] = 1.0  # rounding
+            where = {key: names[int(np.searchsorted(bounds, h, side="right"))] for key, h in hashes.items()}
+        elif method == "rank":
+            order = sorted(hashes, key=lambda key: (hashes[key], key))
+            counts = group_counts(len(order), list(cuts.values()))
+            where = dict(zip(order, np.repeat(names, counts)))
+        else:
+            raise ArgumentError(f"argument `method`: 'rank' or 'hash', got {method!r}")
+        assigned = [str(where[k]) for k in keys]
     groups = np.array(assigned)
     return {name: np.flatnonzero(groups == name).astype(np.int64) for name in names}
+
+
+def group_counts(groups: int, fractions: Sequence[float]) -> np.ndarray:
+    """How many of ``groups`` each split gets: its fraction rounded by largest remainders, then
+    one taken from the largest split for each empty split whose fraction is not 0 (while groups
+    last)."""
+    share = np.asarray(fractions, dtype=np.float64) * groups
+    counts = np.floor(share).astype(np.int64)
+    for i in np.argsort(-(share - counts), kind="stable")[: groups - int(counts.sum())]:
+        counts[i] += 1
+    for i in np.flatnonzero((counts == 0) & (share > 0)):
+        donor = int(np.argmax(counts))
+        if counts[donor] > 1:
+            counts[donor] -= 1
+            counts[i] += 1
+    return counts
 
 
 def _fractions(fractions) -> dict[str, float]:
@@ -104,4 +133,4 @@ def _fractions(fractions) -> dict[str, float]:
     return out
 
 
-__all__ = ["DEFAULT_FRACTIONS", "group_keys", "split", "unit_hash"]
+__all__ = ["DEFAULT_FRACTIONS", "group_counts", "group_keys", "split", "unit_hash"]
