@@ -3,13 +3,15 @@ append per kind: one dataset holds one skeleton, in one unit, and each clip name
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .journal import JournalRecord
 from .sources import Item
 from .work import Outcome
+
+MIRRORED = "@mirrored"  # what a mirror image's name adds to its clip's
 
 # People differ in size by less than this factor; units (cm/inch 2.54, m/cm 100) by more.
 SAME_UNITS_RATIO = 2.0
@@ -24,6 +26,8 @@ class Collected:
     arrays: dict[str, list[np.ndarray]]
     rows: int
     skeleton: dict | None
+    sums: dict[str, list] = field(default_factory=dict)  # kind -> [rows, sums of rows, sums of squares]
+    up: list | None = None  # the up axis of the dataset's world positions, when a clip found it
 
 
 def collect(
@@ -37,8 +41,11 @@ def collect(
 ) -> Collected:
     """The batch's outcomes in order: clips and failures into ``record`` (a clip of another
     skeleton than the dataset's, the first parsed clip's, is a failure; so is a clip whose name
-    ``taken``, the names taken so far, already holds), their arrays per kind."""
+    ``taken``, the names taken so far, already holds), their arrays per kind; a clip's mirror
+    image right after it, as a clip of its own (``{name}@mirrored``, ``mirror_of`` its name)."""
     arrays: dict[str, list[np.ndarray]] = {k: [] for k in keep}
+    totals: dict[str, list] = {}
+    up = None
     for item, outcome in zip(batch, outcomes):
         shape, error = outcome.skeleton, outcome.error
         if item.name in taken:
@@ -50,6 +57,9 @@ def collect(
                 ),
             )
         taken.add(item.name)
+        image = f"{item.name}{MIRRORED}"
+        if outcome.mirrored is not None and error is None and image in taken:
+            error = f"{item.source}: its mirror image's name {image!r} is already in the dataset"
         if shape is not None:
             if skeleton is None:
                 names, parents = list(shape[0]), list(shape[1])
@@ -59,14 +69,28 @@ def collect(
         if error is not None:
             record.failures.append({"name": item.name, "source": item.source, "error": error})
             continue
-        for kind in keep:
-            arrays[kind].append(outcome.values[kind])
-        record.clips.append({"name": item.name, "source": item.source, "frames": outcome.frames,
-                             "fps": outcome.fps, "frame_time": outcome.frame_time, "start": rows})  # fmt: skip
-        if outcome.source_skeleton is not None:
-            record.clips[-1]["source_skeleton"] = outcome.source_skeleton
-        rows += outcome.frames
-    return Collected(arrays, rows, skeleton)
+        up = up or outcome.up
+        if outcome.mirrored is not None:
+            taken.add(image)
+        images = [(item.name, outcome.values, outcome.sums)]
+        if outcome.mirrored is not None:
+            images.append((f"{item.name}{MIRRORED}", outcome.mirrored, outcome.mirrored_sums))
+        for name, values, sums in images:
+            for kind in keep:
+                arrays[kind].append(values[kind])
+            record.clips.append({"name": name, "source": item.source, "frames": outcome.frames,
+                                 "fps": outcome.fps, "frame_time": outcome.frame_time, "start": rows})  # fmt: skip
+            if name != item.name:
+                record.clips[-1]["mirror_of"] = item.name
+            if outcome.source_fps is not None:
+                record.clips[-1]["source_fps"] = outcome.source_fps
+            if outcome.source_skeleton is not None:
+                record.clips[-1]["source_skeleton"] = outcome.source_skeleton
+            for kind, (first, second) in sums.items():
+                total = totals.setdefault(kind, [0, 0.0, 0.0])
+                total[0], total[1], total[2] = total[0] + outcome.frames, total[1] + first, total[2] + second
+            rows += outcome.frames
+    return Collected(arrays, rows, skeleton, totals, None if up is None else list(up))
 
 
 def _skeleton_error(item: Item, shape: tuple, length: float, skeleton: dict, error: str | None) -> str | None:
@@ -110,4 +134,4 @@ def _units_error(item: Item, length: float, skeleton: dict) -> str | None:
     )
 
 
-__all__ = ["SAME_UNITS_RATIO", "Collected", "collect"]
+__all__ = ["MIRRORED", "SAME_UNITS_RATIO", "Collected", "collect"]

@@ -17,7 +17,7 @@ import re
 
 import numpy as np
 
-from .. import quat
+from .. import ops, quat
 from ..motion import Motion, Skeleton
 from .jointmap import JointMap
 from .names import label
@@ -56,10 +56,23 @@ def _reflected(q: np.ndarray) -> np.ndarray:
 
 def mirror(motion: Motion, user_map: dict | None = None) -> Motion:
     """``motion`` mirrored left for right (see the module's notes), on the same skeleton."""
-    rig = Rig.of(motion, user_map)
-    skeleton, parents = motion.skeleton, motion.skeleton.parents
+    return mirror_many([motion], user_map)[0]
+
+
+def mirror_many(motions: list[Motion], user_map: dict | None = None) -> list[Motion]:
+    """Each of ``motions`` (all of one skeleton) mirrored as :func:`mirror` mirrors it, all at
+    once: one forward kinematics and one pass of quaternion products over their frames together,
+    the skeleton's conventions read from the first. What ``preprocess --mirror`` runs a batch through."""
+    if not motions:
+        return []
+    rig = Rig.of(motions[0], user_map)
+    skeleton, parents = motions[0].skeleton, motions[0].skeleton.parents
+    frames = np.array([m.n_frames for m in motions])
+    starts = np.concatenate([[0], np.cumsum(frames)[:-1]])
+    rotations = np.concatenate([m.rotations for m in motions])
+    translations = np.concatenate([m.translations for m in motions])
     turn = rig.conventions.rotation()
-    world, positions = motion.fk()
+    world, positions = ops.forward_kinematics(rotations, translations, parents)
     world = _turned(turn, world)
     positions = quat.rotate(turn, positions)
     reference = _turned(turn, reference_pose(skeleton))
@@ -69,18 +82,25 @@ def mirror(motion: Motion, user_map: dict | None = None) -> Motion:
     new_positions = positions[:, partner] * np.array([-1.0, 1.0, 1.0])
     new_world = _turned(quat.conjugate(turn), new_world)
     new_positions = quat.rotate(quat.conjugate(turn), new_positions)
-    rotations = new_world.copy()
+    new_rotations = new_world.copy()
     inner = parents >= 0
-    rotations[:, inner] = quat.mul(quat.conjugate(new_world[:, parents[inner]]), new_world[:, inner])
-    translations = motion.translations.copy()
-    moving = np.ptp(motion.translations, axis=0).max(axis=-1) > 1e-9  # the joints that carry the path
-    for j in np.flatnonzero(moving | ~inner):
+    new_rotations[:, inner] = quat.mul(quat.conjugate(new_world[:, parents[inner]]), new_world[:, inner])
+    new_translations = translations.copy()
+    # The joints that carry the path, clip by clip: any whose translation changes over the clip.
+    spread = np.maximum.reduceat(translations, starts) - np.minimum.reduceat(translations, starts)
+    moving = np.repeat(spread.max(axis=-1) > 1e-9, frames, axis=0) | ~inner  # [frames, J]
+    for j in np.flatnonzero(moving.any(axis=0)):
+        rows = moving[:, j]
         if parents[j] < 0:
-            translations[:, j] = new_positions[:, j]
+            new_translations[rows, j] = new_positions[rows, j]
         else:
-            offset = new_positions[:, j] - new_positions[:, parents[j]]
-            translations[:, j] = quat.rotate(quat.conjugate(new_world[:, parents[j]]), offset)
-    return Motion(skeleton, rotations, translations, motion.frame_time)
+            offset = new_positions[rows, j] - new_positions[rows, parents[j]]
+            new_translations[rows, j] = quat.rotate(quat.conjugate(new_world[rows, parents[j]]), offset)
+    cuts = np.cumsum(frames)[:-1]
+    return [
+        Motion(skeleton, r, t, m.frame_time)
+        for m, r, t in zip(motions, np.split(new_rotations, cuts), np.split(new_translations, cuts))
+    ]
 
 
-__all__ = ["mirror", "partners"]
+__all__ = ["mirror", "mirror_many", "partners"]
