@@ -52,6 +52,8 @@ class HeadingFrame:
 
     def harmonised(self, points: np.ndarray) -> np.ndarray:
         """Points or directions ``[..., 3]`` in harmonised axes (Y up, +Z the skeleton's facing)."""
+        if np.array_equal(self.matrix, np.eye(3)):  # Y up and facing +Z already
+            return points
         return points @ self.matrix.T
 
     def yaw(self, positions: np.ndarray) -> np.ndarray:
@@ -65,7 +67,7 @@ class HeadingFrame:
 
     def origin(self, positions: np.ndarray) -> np.ndarray:
         """Each frame's heading origin ``[F, 3]`` in harmonised axes: the hips on the floor."""
-        origin = self.harmonised(positions[:, self.hips])
+        origin = np.array(self.harmonised(positions[:, self.hips]))
         origin[:, 1] = 0.0
         return origin
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import derive
 from .journal import JournalRecord
 from .sources import Item
 from .work import Outcome
@@ -66,16 +67,21 @@ def collect(
                 skeleton = record.skeleton = {"names": names, "parents": parents, "bone_length": outcome.bone_length}
             else:
                 error = _skeleton_error(item, shape, outcome.bone_length, skeleton, error)
+        _add_sums(totals, outcome.sums)  # its group's, when it carries them (even if it fails here)
         if error is not None:
             record.failures.append({"name": item.name, "source": item.source, "error": error})
+            if outcome.error is None and outcome.values:  # its rows were in its group's sums: take them out
+                for values in (outcome.values, outcome.mirrored or {}):
+                    own = {k: derive.totals([v]) for k, v in values.items() if k in keep and v.dtype.kind == "f"}
+                    _add_sums(totals, own, -1)
             continue
         up = up or outcome.up
         if outcome.mirrored is not None:
             taken.add(image)
-        images = [(item.name, outcome.values, outcome.sums)]
+        images = [(item.name, outcome.values)]
         if outcome.mirrored is not None:
-            images.append((f"{item.name}{MIRRORED}", outcome.mirrored, outcome.mirrored_sums))
-        for name, values, sums in images:
+            images.append((f"{item.name}{MIRRORED}", outcome.mirrored))
+        for name, values in images:
             for kind in keep:
                 arrays[kind].append(values[kind])
             record.clips.append({"name": name, "source": item.source, "frames": outcome.frames,
@@ -86,11 +92,15 @@ def collect(
                 record.clips[-1]["source_fps"] = outcome.source_fps
             if outcome.source_skeleton is not None:
                 record.clips[-1]["source_skeleton"] = outcome.source_skeleton
-            for kind, (first, second) in sums.items():
-                total = totals.setdefault(kind, [0, 0.0, 0.0])
-                total[0], total[1], total[2] = total[0] + outcome.frames, total[1] + first, total[2] + second
             rows += outcome.frames
     return Collected(arrays, rows, skeleton, totals, None if up is None else list(up))
+
+
+def _add_sums(totals: dict, sums: dict, sign: int = 1) -> None:
+    """``sums`` (kind -> ``(rows, sums, squares)``) added into ``totals`` (or taken out, ``sign=-1``)."""
+    for kind, (n, first, second) in sums.items():
+        total = totals.setdefault(kind, [0, 0.0, 0.0])
+        total[0], total[1], total[2] = total[0] + sign * n, total[1] + sign * first, total[2] + sign * second
 
 
 def _skeleton_error(item: Item, shape: tuple, length: float, skeleton: dict, error: str | None) -> str | None:

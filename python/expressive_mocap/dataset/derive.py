@@ -215,17 +215,20 @@ def _positions(
     return out
 
 
-def sums(values: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per clip, the float64 sums of the rows ``values [N, ...]`` and of their squares ``[C, ...]``
-    (clips begin at rows ``starts``): the running normalisation statistics' increments."""
-    wide = values.astype(np.float64)
-    ends = np.append(starts[1:], len(values))
-    first, second = np.zeros((2, len(starts)) + values.shape[1:])
-    some = ends > starts  # reduceat gives a clip of no frames the next row: none are summed for it
-    if some.any():
-        first[some] = np.add.reduceat(wide, starts[some], axis=0)
-        second[some] = np.add.reduceat(wide * wide, starts[some], axis=0)
-    return first, second
+def totals(arrays: list[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
+    """``(rows, sums, squares)``: the row count of ``arrays`` (``[n_i, ...]``, one row shape) and
+    the float64 sums of their rows and of their rows' squares ``[...]``, the increments of the
+    running normalisation statistics (:mod:`.stats`). Accumulated in float64 without a float64
+    copy of the rows."""
+    rows = sum(len(a) for a in arrays)
+    shape = arrays[0].shape[1:]
+    first, second = np.zeros(shape), np.zeros(shape)
+    for start in range(0, len(arrays), 64):  # a few MB at a time (see .work.CHUNK_FRAMES)
+        part = arrays[start : start + 64]
+        flat = (np.concatenate(part) if len(part) > 1 else part[0]).reshape(-1, first.size)
+        first += flat.sum(axis=0, dtype=np.float64).reshape(shape)
+        second += np.einsum("ij,ij->j", flat, flat, dtype=np.float64).reshape(shape)
+    return rows, first, second
 
 
-__all__ = ["DERIVED_KINDS", "POSITION_FRAMES", "Options", "derive", "gradient", "resampled", "sums"]
+__all__ = ["DERIVED_KINDS", "POSITION_FRAMES", "Options", "derive", "gradient", "resampled", "totals"]

@@ -20,7 +20,7 @@ from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_T
 from ..heading import HeadingFrame
 from ..motion import Motion, Skeleton
 from ..roles import JointRoles, actor_height, hips_rest_height
-from .derive import Options, derive, resampled, sums
+from .derive import Options, derive, resampled, totals
 from .format import MODEL_KINDS
 from .sources import Item
 
@@ -45,8 +45,8 @@ class Outcome:
     source_skeleton: dict | None = None  # with canonical: the clip's own skeleton and map, if retargeted
     source_fps: float | None = None  # with a resampling fps: the clip's own
     mirrored: dict[str, np.ndarray] | None = None  # with mirror: the mirror image's values
-    sums: dict[str, tuple] = field(default_factory=dict)  # kind -> float64 sums of rows and squares
-    mirrored_sums: dict[str, tuple] = field(default_factory=dict)
+    # kind -> (rows, sums, squares) in float64 of its group of the batch (carried by one clip; see .collect)
+    sums: dict[str, tuple] = field(default_factory=dict)
     up: tuple | None = None  # the skeleton's up axis as found in its world positions (None: not found)
 
 
@@ -232,6 +232,7 @@ def decoded(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, opti
     skeletons.mirror.mirror_many`: all of a hierarchy's clips of the batch at once), as
     ``(by_hierarchy, {key: [Motion]})``. A hierarchy that cannot be mirrored fails its clips."""
     from ..skeletons.mirror import mirror_many
+    from ..skeletons.retargeting import Rig
 
     out: dict[tuple, list] = {}
     mirrors: dict[tuple, list] = {}
@@ -250,7 +251,12 @@ def decoded(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, opti
             motions.append((k, None, motion))
         if options.mirror and motions:
             try:
-                mirrors[key] = mirror_many([m for _, _, m in motions])
+                rig = Rig.of(motions[0][2])
+                mirrors[key] = [
+                    image
+                    for part in chunks([m for _, _, m in motions], lambda m: m.n_frames)
+                    for image in mirror_many(part, rig=rig)
+                ]
             except MocapError as error:
                 for k, _, _ in motions:
                     outcomes[k].error = f"{batch[k].source}: cannot be mirrored: {error}"
@@ -335,6 +341,7 @@ def run_kernels(
     plain = options.plain(keep)
     requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
     kept = []  # (values to update, local rotations, model features) of each clip for the model
+    finished = []  # (an outcome of the group, [values]) of each group, for the sums
     for group in prepared.groups:
         outputs = ops.PipelineOutputs(
             positions=options.positions_needed(keep) or options.heading(keep),
@@ -354,7 +361,7 @@ def run_kernels(
             )
         done = []  # (values, kernel result, frame time) of each clip and mirror image that succeeded
         for number, (k, header, clip, result) in enumerate(zip(group.indices, group.headers, group.clips, results)):
-            if _finish_clip(batch[k], outcomes[k], header, clip, result, keep):
+            if _finish_clip(batch[k], outcomes[k], header, clip, result, keep, plain):
                 done.append((outcomes[k].values, result, clip.frame_time))
                 if group.mirrors:
                     image = results[len(group.clips) + number]
@@ -365,11 +372,14 @@ def run_kernels(
             _derive_group(group, done, keep, options, frame)
         if use_model and frame is not False:
             kept += [(values, result[1], result[2][-1]) for values, result, _ in done]
+        if done:
+            carrier = next(outcomes[k] for k in group.indices if outcomes[k].values is done[0][0])
+            finished.append((carrier, [values for values, _, _ in done]))
     if use_model:
         parts = decompose_many([r for _, r, _ in kept], [f for _, _, f in kept], model, model_float32)
         for (values, _, _), clip_parts in zip(kept, parts):
             values.update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
-    _sums(outcomes, keep)
+    _sums(finished, keep)
     return outcomes, prepared.seconds, time.perf_counter() - start
 
 
@@ -410,47 +420,71 @@ def _frame(group: Group, outcomes: list[Outcome], done: list, keep: tuple[str, .
 
 def _derive_group(group: Group, done: list, keep: tuple[str, ...], options: Options, frame) -> None:
     """The stored forms (:func:`.derive.derive`) of a hierarchy's clips and mirror images that
-    succeeded, ``done`` ``(values, kernel result, frame time)``, all at once; each clip's slices
-    into its values."""
-    positions = [r[0] for _, r, _ in done] if done[0][1][0] is not None else None
-    frames = np.array([len(r[0] if r[0] is not None else r[1]) for _, r, _ in done])
-    starts = np.concatenate([[0], np.cumsum(frames)[:-1]])
-    stored = derive(
-        keep,
-        options,
-        np.concatenate(positions) if positions is not None else None,
-        np.concatenate([r[1] for _, r, _ in done]) if done[0][1][1] is not None else None,
-        starts,
-        np.repeat([t for _, _, t in done], frames),
-        frame,
-        int(np.flatnonzero(group.parents < 0)[0]),
-    )
-    for (values, _, _), first, count in zip(done, starts, frames):
-        values.update({kind: array[first : first + count] for kind, array in stored.items()})
+    succeeded, ``done`` ``(values, kernel result, frame time)``, a chunk of clips at a time
+    (:func:`chunks`); each clip's slices into its values."""
+    root = int(np.flatnonzero(group.parents < 0)[0])
+    for part in chunks(done, lambda entry: len(entry[1][0] if entry[1][0] is not None else entry[1][1])):
+        positions = [r[0] for _, r, _ in part] if part[0][1][0] is not None else None
+        frames = np.array([len(r[0] if r[0] is not None else r[1]) for _, r, _ in part])
+        starts = np.concatenate([[0], np.cumsum(frames)[:-1]])
+        stored = derive(
+            keep,
+            options,
+            np.concatenate(positions) if positions is not None else None,
+            np.concatenate([r[1] for _, r, _ in part]) if part[0][1][1] is not None else None,
+            starts,
+            np.repeat([t for _, _, t in part], frames),
+            frame,
+            root,
+        )
+        for (values, _, _), first, count in zip(part, starts, frames):
+            values.update({kind: array[first : first + count] for kind, array in stored.items()})
 
 
-def _sums(outcomes: list[Outcome], keep: tuple[str, ...]) -> None:
-    """Each clip's (and mirror image's) float64 sums of its rows and their squares per float kind
-    kept, for the normalisation statistics, computed over a batch's clips of one row shape at once."""
-    slots = [(o.values, o.sums) for o in outcomes if o.error is None]
-    slots += [(o.mirrored, o.mirrored_sums) for o in outcomes if o.error is None and o.mirrored is not None]
-    for kind in keep:
-        by_shape: dict[tuple, list] = {}
-        for values, sums_out in slots:
-            array = values.get(kind)
-            if array is not None and array.dtype.kind == "f":
-                by_shape.setdefault(array.shape[1:], []).append((array, sums_out))
-        for members in by_shape.values():
-            frames = np.array([len(a) for a, _ in members])
-            first, second = sums(np.concatenate([a for a, _ in members]), np.concatenate([[0], np.cumsum(frames)[:-1]]))
-            for (_, sums_out), s1, s2 in zip(members, first, second):
-                sums_out[kind] = (s1, s2)
+# Frames a chunk of clips holds when derived or mirrored together: arrays of a few MB, which the
+# allocator reuses chunk after chunk; a whole batch's arrays at once (hundreds of MB) were fresh
+# pages every time, and faulting them in took a third of the run (system time).
+CHUNK_FRAMES = 8192
+
+
+def chunks(items: list, frames) -> list[list]:
+    """``items`` in consecutive runs of about :data:`CHUNK_FRAMES` frames (``frames(item)``) each."""
+    out: list[list] = [[]]
+    count = 0
+    for item in items:
+        if out[-1] and count + frames(item) > CHUNK_FRAMES:
+            out.append([])
+            count = 0
+        out[-1].append(item)
+        count += frames(item)
+    return out
+
+
+def _sums(finished: list, keep: tuple[str, ...]) -> None:
+    """The float64 sums of rows and squares (:func:`.derive.totals`) per float kind kept over each
+    hierarchy's clips and mirror images that succeeded, ``finished`` ``(outcome, [values])``,
+    into that outcome's ``sums``: one reduction a kind over a group, not one a clip."""
+    for carrier, done in finished:
+        if carrier.error is not None:  # the group failed after its kernel (no heading frame)
+            continue
+        for kind in keep:
+            arrays = [values[kind] for values in done if kind in values and values[kind].dtype.kind == "f"]
+            if arrays:
+                carrier.sums[kind] = totals(arrays)
 
 
 def _finish_clip(
-    item: Item, outcome: Outcome, header, clip: ops.ClipInput | ops.ClipArrays, result, keep: tuple[str, ...]
+    item: Item,
+    outcome: Outcome,
+    header,
+    clip: ops.ClipInput | ops.ClipArrays,
+    result,
+    keep: tuple[str, ...],
+    plain: bool = True,
 ) -> bool:
-    """One clip's kernel ``result`` into its outcome: its arrays as stored, or its error. True if it succeeded."""
+    """One clip's kernel ``result`` into its outcome: its arrays as stored (but positions and
+    rotations only when ``plain``: else :func:`_derive_group` stores them), or its error. True if
+    it succeeded."""
     if isinstance(clip, ops.ClipInput) and isinstance(clip.source, str) and not isinstance(result, OSError):
         # the kernel read the file whole
         outcome.bytes = item.size
@@ -458,7 +492,8 @@ def _finish_clip(
         outcome.error = str(_clip_error(item, header, result))
         return False
     positions, rotations, features, contacts = result
-    values = {"positions": positions, "rotations": rotations, "contacts": contacts}
+    values = {"positions": positions, "rotations": rotations} if plain else {}
+    values["contacts"] = contacts
     if "features" in keep:
         values["features"] = features[0]
     outcome.frames, outcome.fps, outcome.frame_time = clip.frames, 1.0 / clip.frame_time, clip.frame_time
