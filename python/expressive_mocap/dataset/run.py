@@ -278,6 +278,7 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
         syncer.close()
         close_client()
     summary.clips_ok, summary.clips_failed = len(state.clips), len(state.failures)
+    summary.clips_mirrored = sum("mirror_of" in clip for clip in state.clips)
     summary.failures = state.failures
     summary.seconds = time.perf_counter() - started
     return summary
