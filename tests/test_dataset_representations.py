@@ -306,3 +306,24 @@ def test_a_dask_cluster_writes_the_same_model_ready_dataset(tmp_path):
     assert single.names == dask.names and single.manifest["stats"] == dask.manifest["stats"]
     for kind in single.kinds:
         np.testing.assert_array_equal(single.arrays[kind], dask.arrays[kind])
+
+
+def test_clips_of_one_frame_and_of_none_go_through_every_option(tmp_path):
+    walk = synthetic_walk("bandai", seconds=1.0).motion
+    (tmp_path / "src").mkdir()
+    em.write_bvh(walk, tmp_path / "src" / "a.bvh")
+    em.write_bvh(
+        em.Motion(walk.skeleton, walk.rotations[:1], walk.translations[:1], walk.frame_time), tmp_path / "b.bvh"
+    )
+    text = (tmp_path / "b.bvh").read_text()
+    (tmp_path / "src" / "b_one.bvh").write_text(text)
+    (tmp_path / "src" / "c_none.bvh").write_text(text[: text.index("Frames:")] + "Frames: 0\nFrame Time: 0.0333333\n")
+    run(tmp_path / "src", tmp_path / "ds", keep=ALL, positions="clip", mirror=True, fps=24)
+    ds = load_dataset(tmp_path / "ds")
+    assert [(c["name"], c["frames"]) for c in ds.clips] == [
+        ("a", 25), ("a@mirrored", 25), ("b_one", 1), ("b_one@mirrored", 1), ("c_none", 0), ("c_none@mirrored", 0)
+    ]  # fmt: skip
+    one = ds.clip("b_one")
+    for kind in ("velocities", "accelerations", "root_velocity", "angular_velocities"):
+        assert np.all(one[kind] == 0), kind  # no time to change in
+    assert all(np.isfinite(ds.arrays[k]).all() for k in ds.kinds if k != "contacts")

@@ -251,7 +251,7 @@ def decoded(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, opti
             motions.append((k, None, motion))
         if options.mirror and motions:
             try:
-                rig = Rig.of(motions[0][2])
+                rig = Rig.of(max((m for _, _, m in motions), key=lambda m: m.n_frames))
                 mirrors[key] = [
                     image
                     for part in chunks([m for _, _, m in motions], lambda m: m.n_frames)

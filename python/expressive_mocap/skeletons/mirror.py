@@ -73,7 +73,7 @@ def mirror_many(motions: list[Motion], user_map: dict | None = None, rig: Rig | 
     skeleton's (:class:`~.retargeting.Rig`), when known."""
     if not motions:
         return []
-    rig = rig or Rig.of(motions[0], user_map)
+    rig = rig or Rig.of(max(motions, key=lambda m: m.n_frames), user_map)
     skeleton, parents = motions[0].skeleton, motions[0].skeleton.parents
     frames = np.array([m.n_frames for m in motions])
     starts = np.concatenate([[0], np.cumsum(frames)[:-1]])
@@ -81,7 +81,10 @@ def mirror_many(motions: list[Motion], user_map: dict | None = None, rig: Rig | 
     translations = np.concatenate([m.translations for m in motions])
     partner = partners(skeleton, rig.jmap)
     # The joints that carry the path, clip by clip: any whose translation changes over the clip.
-    spread = np.maximum.reduceat(translations, starts) - np.minimum.reduceat(translations, starts)
+    spread = np.zeros((len(motions),) + translations.shape[1:])
+    some = frames > 0  # reduceat would give a clip of no frames the next clip's first row
+    if some.any():
+        spread[some] = np.maximum.reduceat(translations, starts[some]) - np.minimum.reduceat(translations, starts[some])
     moving = np.repeat(spread.max(axis=-1) > 1e-9, frames, axis=0) | (parents < 0)  # [frames, J]
     inner = parents >= 0
     if np.all(partner[parents[inner]] == parents[partner[inner]]) and np.all(partner[~inner] == np.flatnonzero(~inner)):
