@@ -327,3 +327,25 @@ def test_clips_of_one_frame_and_of_none_go_through_every_option(tmp_path):
     for kind in ("velocities", "accelerations", "root_velocity", "angular_velocities"):
         assert np.all(one[kind] == 0), kind  # no time to change in
     assert all(np.isfinite(ds.arrays[k]).all() for k in ds.kinds if k != "contacts")
+
+
+def test_stats_leave_out_clips_that_fail_after_their_kernels(tmp_path):
+    """Another skeleton, a clip in other units and a mirror image's name taken: failures decided
+    after the batch's sums were taken, taken out of them again."""
+    walk = synthetic_walk("bandai", seconds=1.0).motion
+    (tmp_path / "src").mkdir()
+    em.write_bvh(walk, tmp_path / "src" / "a.bvh")
+    em.write_bvh(walk.scaled(100.0), tmp_path / "src" / "b_in_other_units.bvh")
+    em.write_bvh(synthetic_walk("smpl", seconds=1.0).motion, tmp_path / "src" / "c_smpl.bvh")
+    em.write_bvh(walk.resample(fps=24), tmp_path / "src" / "d.bvh")
+    em.write_bvh(walk.resample(fps=20), tmp_path / "src" / "a@mirrored.bvh")  # the name of a's image
+    summary = run(tmp_path / "src", tmp_path / "ds", keep="positions,velocities", mirror=True)
+    assert summary.clips_failed == 3 and summary.clips_ok == 4
+    assert "already in the dataset" in " ".join(f["error"] for f in summary.failures)
+    ds = load_dataset(tmp_path / "ds")
+    for kind, entry in ds.manifest["stats"].items():
+        values = np.asarray(ds.arrays[kind], dtype=np.float64)
+        assert entry["frames"] == len(values)
+        np.testing.assert_allclose(entry["mean"], values.mean(axis=0), atol=1e-6 * np.abs(values).max())
+        std = values.std(axis=0)
+        np.testing.assert_allclose(entry["std"], np.where(std < 1e-8, 1.0, std), rtol=1e-6)

@@ -67,10 +67,14 @@ def collect(
                 skeleton = record.skeleton = {"names": names, "parents": parents, "bone_length": outcome.bone_length}
             else:
                 error = _skeleton_error(item, shape, outcome.bone_length, skeleton, error)
-        _add_sums(totals, outcome.sums)  # its group's, when it carries them (even if it fails here)
+        # Sums go by hierarchy: a group of the dataset's adds its sums (carried by one of its clips,
+        # even one failing here), and takes out those of its clips that fail here.
+        ours = outcome.skeleton is not None and _same(outcome.skeleton, skeleton)
+        if ours:
+            _add_sums(totals, outcome.sums)
         if error is not None:
             record.failures.append({"name": item.name, "source": item.source, "error": error})
-            if outcome.error is None and outcome.values:  # its rows were in its group's sums: take them out
+            if ours and outcome.error is None and outcome.values:  # its rows were in its group's sums
                 for values in (outcome.values, outcome.mirrored or {}):
                     own = {k: derive.totals([v]) for k, v in values.items() if k in keep and v.dtype.kind == "f"}
                     _add_sums(totals, own, -1)
@@ -94,6 +98,11 @@ def collect(
                 record.clips[-1]["source_skeleton"] = outcome.source_skeleton
             rows += outcome.frames
     return Collected(arrays, rows, skeleton, totals, None if up is None else list(up))
+
+
+def _same(shape: tuple, skeleton: dict | None) -> bool:
+    """Whether joint names and parents ``shape`` are the dataset's ``skeleton``'s."""
+    return skeleton is not None and list(shape[0]) == skeleton["names"] and list(shape[1]) == skeleton["parents"]
 
 
 def _add_sums(totals: dict, sums: dict, sign: int = 1) -> None:
