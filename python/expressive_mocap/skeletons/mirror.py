@@ -131,7 +131,7 @@ def _linear(rig: Rig, partner: np.ndarray, rotations, translations, moving) -> t
     new_rotations = (rotation_maps @ rotations[:, partner, :, None])[..., 0]  # 2x einsum's speed
     new_translations = translations.copy()
     for j in np.flatnonzero(moving.any(axis=0)):
-        rows = moving[:, j]
+        rows = slice(None) if moving[:, j].all() else moving[:, j]  # a slice: no copy of the rows picked
         new_translations[rows, j] = translations[rows, partner[j]] @ translation_maps[j].T
     return new_rotations, new_translations
 
