@@ -76,8 +76,12 @@ def turn_by_yaw(vectors: np.ndarray, yaw: np.ndarray) -> np.ndarray:
     """Vectors ``[F, ..., 3]`` turned about +Y by ``yaw [F]`` radians (``R_y(yaw) v``)."""
     shape = (-1,) + (1,) * (vectors.ndim - 2)
     cos, sin = np.cos(yaw).reshape(shape), np.sin(yaw).reshape(shape)
-    x, y, z = vectors[..., 0], vectors[..., 1], vectors[..., 2]
-    return np.stack([cos * x + sin * z, y, cos * z - sin * x], axis=-1)
+    x, z = vectors[..., 0], vectors[..., 2]
+    out = np.empty(np.broadcast_shapes(vectors.shape, cos.shape + (3,)))
+    out[..., 0] = cos * x + sin * z
+    out[..., 1] = vectors[..., 1]
+    out[..., 2] = cos * z - sin * x
+    return out
 
 
 def to_heading(points: np.ndarray, frame: HeadingFrame, yaw: np.ndarray, origin: np.ndarray) -> np.ndarray:

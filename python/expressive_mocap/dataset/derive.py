@@ -168,7 +168,7 @@ def derive(
     out: dict[str, np.ndarray] = {}
     if rotations is not None and "rotations" in keep:
         form, order = options.form
-        out["rotations"] = representations.encode(rotations, form, order) if form != "quaternion" else rotations
+        out["rotations"] = representations.encode(rotations, form, order, np.float32)
     if rotations is not None and "angular_velocities" in keep:
         out["angular_velocities"] = gradient(rotations, starts, frame_time, _rotation_change)
     if positions is not None and options.positions_needed(keep):
