@@ -10,6 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from expressive_mocap import quat
 from expressive_mocap.dataset import (
@@ -309,6 +310,20 @@ def test_heading_frame_kinds_do_not_turn_and_undefined_kinds_are_refused():
     np.testing.assert_allclose(world["velocities"][1, 0, 0], [-1, -1, 1], atol=1e-6)
     with pytest.raises(ArgumentError, match="body"):
         rotate_window_kinds({"body": np.zeros((1, 1, 1, 4))}, np.ones(1), manifest, [0])
+
+
+def test_rotations_turn_about_their_own_worlds_up():
+    """Harmonised positions are Y up; a Z-up file's rotations are not, and turn about Z."""
+    manifest = {"options": {"positions": "heading"}, "up": [0, 1, 0], "rotations_up": [0, 0, 1]}
+    q = Rotation.random(6, random_state=2).as_quat().reshape(1, 1, 6, 4)
+    batch = {"rotations": q.astype(np.float32), "angular_velocities": np.ones((1, 1, 6, 3), np.float32)}
+    rotate_window_kinds(batch, np.array([0.7]), manifest, [0])
+    expected = (Rotation.from_euler("z", 0.7) * Rotation.from_quat(q[0, 0, 0])).as_quat()
+    assert abs(abs(float(np.dot(batch["rotations"][0, 0, 0], expected))) - 1) < 1e-6
+    np.testing.assert_allclose(batch["rotations"][0, 0, 1:], q[0, 0, 1:], atol=1e-7)  # only the root turns
+    np.testing.assert_allclose(
+        batch["angular_velocities"][0, 0, 0], Rotation.from_euler("z", 0.7).apply([1, 1, 1]), atol=1e-6
+    )
 
 
 def test_speed_factor_one_is_the_identity_and_two_skips_every_other_frame(ds):

@@ -559,9 +559,9 @@ def arrays_pipeline_many(
     dtype = np.float32 if outputs.float32 else np.float64
     return [
         (
-            p.astype(dtype) if outputs.positions else None,
-            r.astype(dtype) if outputs.rotations else None,
-            [f.astype(dtype) for f in found],
+            p.astype(dtype, copy=False) if outputs.positions else None,
+            r.astype(dtype, copy=False) if outputs.rotations else None,
+            [f.astype(dtype, copy=False) for f in found],
             contact,
         )
         for (r, _, _), (_, p), found, contact in zip(local, kinematics, features, contacts)

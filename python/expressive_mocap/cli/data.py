@@ -121,8 +121,26 @@ def add_preprocess(commands) -> None:
     p.add_argument(
         "--keep",
         metavar="KINDS",
-        help="comma-separated: positions,rotations,features,contacts,activity,body,expressive "
+        help="comma-separated: positions,rotations,features,contacts,activity,body,expressive,"
+        "velocities,accelerations,root_velocity,angular_velocities "
         "(default: positions,features,contacts, plus activity with --model)",
+    )
+    p.add_argument(
+        "--rotations",
+        default="quaternion",
+        metavar="FORM",
+        help="the form of the rotations kind: quaternion (default), 6d, matrix, axis-angle, euler[:ORDER]",
+    )
+    p.add_argument(
+        "--positions",
+        default="world",
+        choices=("world", "root", "heading", "clip"),
+        help="the frame of the positions (and velocities): world (as in the files, default), root (minus the "
+        "root joint's), heading (each frame on the floor under the hips facing +Z), clip (the first frame's heading)",
+    )
+    p.add_argument("--fps", type=positive(float), metavar="F", help="resample every clip to F frames per second first")
+    p.add_argument(
+        "--mirror", action="store_true", help="also store each clip mirrored left for right, as NAME@mirrored"
     )
     p.add_argument(
         "--model",
@@ -185,6 +203,10 @@ def cmd_preprocess(args) -> int:
         progress=not args.quiet,
         canonical=args.canonical,
         joint_map=_joint_map(args.map),
+        rotations=args.rotations,
+        positions=args.positions,
+        fps=args.fps,
+        mirror=args.mirror,
     )
     print("\n".join(summary.lines()))
     if summary.finished and summary.clips_ok == 0:  # a dataset of nothing is not a success

@@ -15,14 +15,17 @@ The output format: a folder ::
 
     OUT/manifest.json      clips (name, source, frames, fps, start row), failures with their
                            errors, the skeleton (joint names, parents), the kinds kept and their
-                           shapes, the options, the package version; written last
+                           shapes, the options, the positions' up axis, each float kind's mean
+                           and std ("stats"), the package version; written last
     OUT/offsets.npy        int64 [C + 1]: clip i is rows offsets[i]:offsets[i + 1] of every kind
-    OUT/positions.npy      float32 [N, J, 3]  world positions (file units)
-    OUT/rotations.npy      float32 [N, J, 4]  local rotations (x, y, z, w)
+    OUT/positions.npy      float32 [N, J, 3]  positions (file units; world, or --positions' frame)
+    OUT/rotations.npy      float32 [N, J, n]  local rotations (x, y, z, w; or --rotations' form)
     OUT/features.npy       float32 [N, 19]    dynamic_features (causal; FEATURE_NAMES)
     OUT/contacts.npy       bool    [N, 2]     foot_contacts (offline; left, right)
     OUT/activity.npy       float32 [N, J]     decomposition activity per joint (--model)
     OUT/body.npy, OUT/expressive.npy  float32 [N, J, 4]  B' and E* (--model)
+    OUT/velocities.npy, accelerations.npy, root_velocity.npy [N, 4], angular_velocities.npy
+                           time derivatives (:mod:`.derive`; docs/preprocessing.md)
 
 (N = frames of all clips, rows in clip order.) Why NumPy ``.npy`` files and a JSON manifest:
 they need nothing beyond NumPy, every array can be memory-mapped (``np.load(mmap_mode="r")``:
@@ -50,7 +53,9 @@ second clip of a name already taken is a failure; the manifest records each file
 mtime, and :func:`load_dataset` refuses files that do not match it.
 
 The modules: :mod:`.sources` (the clips of SRC), :mod:`.work` (one batch's headers and
-kernels; the model through :func:`expressive_mocap.decoupling.decompose_many`), :mod:`.pipeline` (threads on
+kernels; the model through :func:`expressive_mocap.decoupling.decompose_many`), :mod:`.derive`
+(the model-ready forms: rotation forms, position frames, time derivatives, resampling),
+:mod:`.stats` (normalisation statistics), :mod:`.pipeline` (threads on
 this machine), :mod:`.cluster` (Dask), :mod:`.collect` (a batch's outcomes into its journal
 record), :mod:`.npy` (the data files written in pieces), :mod:`.journal`, :mod:`.finish` (the
 manifest, last), :mod:`.run` (:func:`preprocess`), :mod:`.summary`; :mod:`.format` (file names,

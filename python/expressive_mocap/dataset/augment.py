@@ -20,6 +20,9 @@ activity                      same                                        interp
 body, expressive              not defined: an error                       slerp
 ============================  ==========================================  ==========================
 
+Rotations and angular velocities turn about ``manifest["rotations_up"]``, the up axis of the
+file's world they are in (``manifest["up"]`` is the positions', Y in the harmonised frames).
+
 Speed factor s > 1 plays the motion faster: the window's ``T`` frames are read ``s`` source
 frames apart (``s * (T - 1)`` frames of the clip); past the clip's end its last frame repeats.
 """
@@ -126,11 +129,14 @@ def rotate_window_kinds(batch: dict, angles: np.ndarray, manifest: Mapping, root
     if bad:
         raise ArgumentError(f"rotation augmentation is not defined for {', '.join(bad)}: leave them out")
     options = manifest.get("options") or {}
-    q = about_up(manifest.get("up") or [0.0, 1.0, 0.0], angles)
+    up = manifest.get("up") or [0.0, 1.0, 0.0]
+    q = about_up(up, angles)
     if options.get("positions", "world") != "heading":
         for kind in VECTOR_KINDS:
             if kind in batch:
                 batch[kind] = rotate_vectors(batch[kind], q)
+    # Rotations stay in the file's world, whose up the positions' may not be (harmonised frames).
+    q = about_up(manifest.get("rotations_up") or up, angles)
     for kind in ROOT_VECTOR_KINDS:
         if kind in batch:
             values = batch[kind].copy()

@@ -9,7 +9,7 @@ from collections.abc import Callable, Iterator
 
 from ..errors import ArgumentError
 from .sources import Item
-from .work import Outcome, compute, load_model
+from .work import PLAIN, Outcome, compute, load_model
 
 
 def client_for(cluster) -> tuple:
@@ -40,7 +40,7 @@ _MODELS: dict = {}
 
 
 def remote_batch(
-    batch: list[Item], keep, model, model_float32: bool, backend: str, canonical: dict | None = None
+    batch: list[Item], keep, model, model_float32: bool, backend: str, canonical: dict | None = None, options=PLAIN
 ) -> tuple[list[Outcome], float, float]:
     """What a cluster's worker does with one batch: :func:`~.work.compute`, with the model loaded
     once per worker process and the client's backend."""
@@ -49,7 +49,7 @@ def remote_batch(
     if model is not None and model not in _MODELS:
         _MODELS[model] = load_model(model)
     with use_backend(backend):
-        return compute(batch, keep, _MODELS.get(model), model_float32, canonical)
+        return compute(batch, keep, _MODELS.get(model), model_float32, canonical, options)
 
 
 def on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:

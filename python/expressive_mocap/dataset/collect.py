@@ -3,13 +3,16 @@ append per kind: one dataset holds one skeleton, in one unit, and each clip name
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import derive
 from .journal import JournalRecord
 from .sources import Item
 from .work import Outcome
+
+MIRRORED = "@mirrored"  # what a mirror image's name adds to its clip's
 
 # People differ in size by less than this factor; units (cm/inch 2.54, m/cm 100) by more.
 SAME_UNITS_RATIO = 2.0
@@ -24,6 +27,8 @@ class Collected:
     arrays: dict[str, list[np.ndarray]]
     rows: int
     skeleton: dict | None
+    sums: dict[str, list] = field(default_factory=dict)  # kind -> [rows, sums of rows, sums of squares]
+    up: list | None = None  # the up axis of the dataset's world positions, when a clip found it
 
 
 def collect(
@@ -37,8 +42,11 @@ def collect(
 ) -> Collected:
     """The batch's outcomes in order: clips and failures into ``record`` (a clip of another
     skeleton than the dataset's, the first parsed clip's, is a failure; so is a clip whose name
-    ``taken``, the names taken so far, already holds), their arrays per kind."""
+    ``taken``, the names taken so far, already holds), their arrays per kind; a clip's mirror
+    image right after it, as a clip of its own (``{name}@mirrored``, ``mirror_of`` its name)."""
     arrays: dict[str, list[np.ndarray]] = {k: [] for k in keep}
+    totals: dict[str, list] = {}
+    up = None
     for item, outcome in zip(batch, outcomes):
         shape, error = outcome.skeleton, outcome.error
         if item.name in taken:
@@ -50,23 +58,58 @@ def collect(
                 ),
             )
         taken.add(item.name)
+        image = f"{item.name}{MIRRORED}"
+        if outcome.mirrored is not None and error is None and image in taken:
+            error = f"{item.source}: its mirror image's name {image!r} is already in the dataset"
         if shape is not None:
             if skeleton is None:
                 names, parents = list(shape[0]), list(shape[1])
                 skeleton = record.skeleton = {"names": names, "parents": parents, "bone_length": outcome.bone_length}
             else:
                 error = _skeleton_error(item, shape, outcome.bone_length, skeleton, error)
+        # Sums go by hierarchy: a group of the dataset's adds its sums (carried by one of its clips,
+        # even one failing here), and takes out those of its clips that fail here.
+        ours = outcome.skeleton is not None and _same(outcome.skeleton, skeleton)
+        if ours:
+            _add_sums(totals, outcome.sums)
         if error is not None:
             record.failures.append({"name": item.name, "source": item.source, "error": error})
+            if ours and outcome.error is None and outcome.values:  # its rows were in its group's sums
+                for values in (outcome.values, outcome.mirrored or {}):
+                    own = {k: derive.totals([v]) for k, v in values.items() if k in keep and v.dtype.kind == "f"}
+                    _add_sums(totals, own, -1)
             continue
-        for kind in keep:
-            arrays[kind].append(outcome.values[kind])
-        record.clips.append({"name": item.name, "source": item.source, "frames": outcome.frames,
-                             "fps": outcome.fps, "frame_time": outcome.frame_time, "start": rows})  # fmt: skip
-        if outcome.source_skeleton is not None:
-            record.clips[-1]["source_skeleton"] = outcome.source_skeleton
-        rows += outcome.frames
-    return Collected(arrays, rows, skeleton)
+        up = up or outcome.up
+        if outcome.mirrored is not None:
+            taken.add(image)
+        images = [(item.name, outcome.values)]
+        if outcome.mirrored is not None:
+            images.append((f"{item.name}{MIRRORED}", outcome.mirrored))
+        for name, values in images:
+            for kind in keep:
+                arrays[kind].append(values[kind])
+            record.clips.append({"name": name, "source": item.source, "frames": outcome.frames,
+                                 "fps": outcome.fps, "frame_time": outcome.frame_time, "start": rows})  # fmt: skip
+            if name != item.name:
+                record.clips[-1]["mirror_of"] = item.name
+            if outcome.source_fps is not None:
+                record.clips[-1]["source_fps"] = outcome.source_fps
+            if outcome.source_skeleton is not None:
+                record.clips[-1]["source_skeleton"] = outcome.source_skeleton
+            rows += outcome.frames
+    return Collected(arrays, rows, skeleton, totals, None if up is None else list(up))
+
+
+def _same(shape: tuple, skeleton: dict | None) -> bool:
+    """Whether joint names and parents ``shape`` are the dataset's ``skeleton``'s."""
+    return skeleton is not None and list(shape[0]) == skeleton["names"] and list(shape[1]) == skeleton["parents"]
+
+
+def _add_sums(totals: dict, sums: dict, sign: int = 1) -> None:
+    """``sums`` (kind -> ``(rows, sums, squares)``) added into ``totals`` (or taken out, ``sign=-1``)."""
+    for kind, (n, first, second) in sums.items():
+        total = totals.setdefault(kind, [0, 0.0, 0.0])
+        total[0], total[1], total[2] = total[0] + sign * n, total[1] + sign * first, total[2] + sign * second
 
 
 def _skeleton_error(item: Item, shape: tuple, length: float, skeleton: dict, error: str | None) -> str | None:
@@ -110,4 +153,4 @@ def _units_error(item: Item, length: float, skeleton: dict) -> str | None:
     )
 
 
-__all__ = ["SAME_UNITS_RATIO", "Collected", "collect"]
+__all__ = ["MIRRORED", "SAME_UNITS_RATIO", "Collected", "collect"]

@@ -19,9 +19,12 @@ from .format import FORMAT, MANIFEST, OFFSETS, PARTIAL, VERSION, data_file, file
 from .npy import Kind, write_final_header
 
 
-def finish(out: Path, kinds: list[Kind], clips: list, failures: list, skeleton, rows: int, options: dict) -> None:
+def finish(
+    out: Path, kinds: list[Kind], clips: list, failures: list, skeleton, rows: int, options: dict, extra: dict
+) -> None:
     """Headers into the data files, offsets and manifest (with each file's size and mtime) into
-    .partial, then everything renamed into ``out``, manifest last."""
+    .partial, then everything renamed into ``out``, manifest last. ``extra``: the positions'
+    ``up`` axis and the kinds' ``stats``."""
     from .. import __version__
 
     partial = out / PARTIAL
@@ -50,6 +53,9 @@ def finish(out: Path, kinds: list[Kind], clips: list, failures: list, skeleton, 
         },
         "files": file_record(partial, [OFFSETS] + [data_file(k.name) for k in kinds]),
         "feature_names": list(FEATURE_NAMES) if any(k.name == "features" for k in kinds) else None,
+        "up": extra.get("up"),
+        "rotations_up": extra.get("rotations_up"),
+        "stats": extra.get("stats", {}),
         "clips": clips,
         "failures": failures,
     }

@@ -26,8 +26,28 @@ from ..errors import ArgumentError, DatasetError
 
 FORMAT = "expressive-mocap dataset"
 VERSION = 2  # 2: the manifest records each file's size and mtime; clips keyed by name
-KINDS = ("positions", "rotations", "features", "contacts", "activity", "body", "expressive")
-MODEL_KINDS = ("activity", "body", "expressive")  # the kinds that need a body-mechanics model
+KINDS = (
+    "positions",
+    "rotations",
+    "features",
+    "contacts",
+    "activity",
+    "body",
+    "expressive",
+    "velocities",
+    "accelerations",
+    "root_velocity",
+    "angular_velocities",
+)
+MODEL_KINDS = ("activity", "body", "expressive")
+# Values of a rotation in each form of --rotations (representations.KINDS; not imported: reading stays light).
+ROTATION_WIDTHS = {
+    "quaternion": 4,
+    "6d": 6,
+    "matrix": 9,
+    "axis-angle": 3,
+    "euler": 3,
+}  # the kinds that need a body-mechanics model
 DEFAULT_KEEP = ("positions", "features", "contacts")  # + activity with a model
 MANIFEST = "manifest.json"
 OFFSETS = "offsets.npy"
@@ -85,7 +105,34 @@ def _manifest_problem(manifest) -> str | None:
             or not all(isinstance(n, int) and n >= 0 for n in shape)
         ):
             return f"{kind}: shape {shape} does not hold the {rows} frames of the dataset"
-    return _clips_problem(clips, rows)
+    return _options_problem(manifest, kinds) or _clips_problem(clips, rows)
+
+
+def _options_problem(manifest: dict, kinds: dict) -> str | None:
+    """Why the manifest's rotation form, up axis or statistics do not fit its kinds, or None."""
+    options = manifest.get("options") or {}
+    form = str(options.get("rotations") or "quaternion").partition(":")[0]
+    if form not in ROTATION_WIDTHS:
+        return f"rotations in an unknown form {form!r}"
+    if "rotations" in kinds and kinds["rotations"]["shape"][-1:] != [ROTATION_WIDTHS[form]]:
+        return f"rotations of shape {kinds['rotations']['shape']} are not in the form {form!r} it names"
+    for key in ("up", "rotations_up"):
+        up = manifest.get(key)
+        if up is not None and (not isinstance(up, list) or len(up) != 3):
+            return f"an up axis ({key}) that is not 3 numbers: {str(up)[:80]}"
+    stats = manifest.get("stats") or {}
+    if not isinstance(stats, dict):
+        return "statistics that are not a mapping of kinds"
+    for kind, entry in stats.items():
+        row = kinds.get(kind, {}).get("shape", [None])[1:]
+        if (
+            kind not in kinds
+            or not isinstance(entry, dict)
+            or list(np.shape(entry.get("mean", 0.0))) != row
+            or list(np.shape(entry.get("std", 0.0))) != row
+        ):
+            return f"statistics of {kind!r} that do not fit its kinds' rows"
+    return None
 
 
 def _clips_problem(clips: list, rows: int) -> str | None:
@@ -195,6 +242,7 @@ __all__ = [
     "MODEL_KINDS",
     "OFFSETS",
     "OWN_FILES",
+    "ROTATION_WIDTHS",
     "PARTIAL",
     "PARTIAL_FILES",
     "RUN",

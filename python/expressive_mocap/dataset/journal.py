@@ -16,8 +16,9 @@ from .sources import Item
 class JournalRecord:
     """One batch written: its number, the names of its ``items`` (clips and failures), the
     manifest records of its ``clips`` and ``failures``, the dataset's ``skeleton`` when this
-    batch found it (its first parsed clip), and the dataset's row count after the batch. On
-    disk, a JSON object of these keys (``skeleton`` only when found)."""
+    batch found it (its first parsed clip), the dataset's row count after the batch, the run's
+    running sums for the normalisation statistics and the positions' ``up`` axis when this batch
+    found it. On disk, a JSON object of these keys (``skeleton`` and ``up`` only when found)."""
 
     batch: int
     items: list[str]
@@ -25,11 +26,17 @@ class JournalRecord:
     failures: list[dict] = field(default_factory=list)
     skeleton: dict | None = None
     rows: int = 0
+    sums: dict | None = None  # the run's sums for the statistics after this batch: kind -> [rows, sums, squares]
+    up: list | None = None  # the world positions' up axis, when this batch found it
 
     def to_json(self) -> dict:
         record: dict = {"batch": self.batch, "items": self.items, "clips": self.clips, "failures": self.failures}
         if self.skeleton is not None:
             record["skeleton"] = self.skeleton
+        if self.up is not None:
+            record["up"] = self.up
+        if self.sums is not None:
+            record["sums"] = self.sums
         record["rows"] = self.rows
         return record
 
@@ -42,6 +49,8 @@ class JournalRecord:
             record["failures"],
             record.get("skeleton"),
             record["rows"],
+            record.get("sums"),
+            record.get("up"),
         )
 
 

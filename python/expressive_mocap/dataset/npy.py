@@ -43,17 +43,30 @@ class Kind:
         return int(np.prod(self.row, dtype=np.int64)) * self.dtype.itemsize
 
 
-def kinds_for(keep: tuple[str, ...], joints: int) -> list[Kind]:
-    """How each kind kept is stored, for a skeleton of ``joints`` joints."""
+def kinds_for(keep: tuple[str, ...], joints: int, width: int = 4) -> list[Kind]:
+    """How each kind kept is stored, for a skeleton of ``joints`` joints whose rotations take
+    ``width`` values each (the form of ``--rotations``; the manifest's options name it)."""
     f32 = np.dtype(np.float32)
     table = {
-        "positions": (f32, (joints, 3), "world positions [N, J, 3] (file units)"),
-        "rotations": (f32, (joints, 4), "local rotations [N, J, 4] (x, y, z, w)"),
+        "positions": (f32, (joints, 3), "positions [N, J, 3] (file units; frame: options.positions, axes: up)"),
+        "rotations": (f32, (joints, width), f"local rotations [N, J, {width}] (form: options.rotations)"),
         "features": (f32, (len(FEATURE_NAMES),), "dynamic_features [N, 19] (causal defaults), columns FEATURE_NAMES"),
         "contacts": (np.dtype(bool), (2,), "foot_contacts [N, 2] (offline defaults; left, right)"),
         "activity": (f32, (joints,), "decomposition activity per joint [N, J] in [0, 1]"),
         "body": (f32, (joints, 4), "body-mechanics rotations B' [N, J, 4] (x, y, z, w)"),
         "expressive": (f32, (joints, 4), "filtered expressive rotations E* [N, J, 4] (x, y, z, w)"),
+        "velocities": (f32, (joints, 3), "velocities of the positions [N, J, 3] (units/s; heading: in each frame's)"),
+        "accelerations": (f32, (joints, 3), "accelerations of the positions [N, J, 3] (units/s^2)"),
+        "root_velocity": (
+            f32,
+            (4,),
+            "hips' velocity in its heading frame [N, 4]: left, up, forward (units/s), yaw rate (rad/s)",
+        ),
+        "angular_velocities": (
+            f32,
+            (joints, 3),
+            "local rotation rates [N, J, 3] (rotation vectors, rad/s, parent's axes)",
+        ),
     }
     return [Kind(k, *table[k]) for k in keep]
 

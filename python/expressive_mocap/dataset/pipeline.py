@@ -31,7 +31,9 @@ def batched(items: Iterator[Item], batch_bytes: float) -> Iterator[list[Item]]:
         yield batch
 
 
-def local(batches, limit, stopped, keep, model, model_float32, canonical: dict | None = None) -> Iterator[tuple]:
+def local(
+    batches, limit, stopped, keep, model, model_float32, canonical: dict | None = None, options=work.PLAIN
+) -> Iterator[tuple]:
     """``(batch, outcomes, seconds reading headers, seconds in the kernels)`` of each batch in
     order, on this machine, up to ``limit`` batches (``stopped`` gets an entry if more were left).
 
@@ -59,7 +61,7 @@ def local(batches, limit, stopped, keep, model, model_float32, canonical: dict |
         with in_kernels:
             if stopping.is_set():
                 raise CancelledError
-            return work.run_kernels(batch, ready, keep, model, model_float32)
+            return work.run_kernels(batch, ready, keep, model, model_float32, options)
 
     def submit_next() -> None:
         batch = next(batches, None)  # taken here, in order (a tar stream is read here)
@@ -67,7 +69,9 @@ def local(batches, limit, stopped, keep, model, model_float32, canonical: dict |
             running.append(
                 (
                     batch,
-                    kernel_pool.submit(compute, batch, header_pool.submit(work.prepare, batch, keep, model, canonical)),
+                    kernel_pool.submit(
+                        compute, batch, header_pool.submit(work.prepare, batch, keep, model, canonical, options)
+                    ),
                 )
             )
 

@@ -18,6 +18,7 @@ from ..files import atomic_write
 from ..progress import Progress
 from .cluster import client_for, on_cluster
 from .collect import collect
+from .derive import Options
 from .finish import finish, move_into_place
 from .folder import finished_manifest, remove_dataset, remove_partial
 from .format import DEFAULT_KEEP, JOURNAL, KINDS, MANIFEST, MODEL_KINDS, PARTIAL, RUN, data_file, verify
@@ -26,6 +27,7 @@ from .lock import FolderLock
 from .npy import Kind, append_rows, cut_data_files, flush, kinds_for, raise_failed_flush
 from .pipeline import Workers, batched, local
 from .sources import Item, Source, open_source
+from .stats import as_json, merged, statistics
 from .summary import MB, Summary
 from .work import Outcome, load_model
 
@@ -44,6 +46,10 @@ def preprocess(
     progress: bool = True,
     canonical: bool = False,
     joint_map: dict | None = None,
+    rotations: str | None = None,
+    positions: str | None = None,
+    fps: float | None = None,
+    mirror: bool = False,
 ) -> Summary:
     """Preprocess every clip of ``src`` (folder, glob, .zip or tar) into the dataset folder ``out``.
 
@@ -64,6 +70,14 @@ def preprocess(
     manifest record (``source_skeleton``); without it, one dataset holds one skeleton.
     ``joint_map``: with ``canonical``, role -> joint name for roles the names and topology do not
     find (:func:`~expressive_mocap.skeletons.read_joint_map`), for every skeleton of the archive.
+
+    Model-ready arrays (docs/preprocessing.md, "Model-ready arrays"): ``rotations`` the stored
+    form of the rotations (``"quaternion"``, ``"6d"``, ``"matrix"``, ``"axis-angle"``,
+    ``"euler:ZXY"``); ``positions`` their frame (``"world"``, ``"root"``, ``"heading"``,
+    ``"clip"``); ``fps`` resamples every clip first; ``mirror`` stores each clip's mirror image
+    after it (``{name}@mirrored``). The kinds ``velocities``, ``accelerations``,
+    ``root_velocity`` and ``angular_velocities`` may be kept; the manifest records every float
+    kind's mean and std (``manifest["stats"]``).
     Returns a :class:`Summary`.
     """
     started = time.perf_counter()
@@ -74,15 +88,17 @@ def preprocess(
         raise ArgumentError(f"keeping {needed} needs a body-mechanics model (--model)")
     if batch_mb <= 0:
         raise ArgumentError(f"batch_mb must be positive, got {batch_mb}")
+    shaping = Options.of(rotations, positions, fps, mirror)
     body_model = load_model(model) if model is not None else None
     # The source in one canonical form (a resumed run may spell it otherwise: relative, through a link).
     source_path = os.path.realpath(src) if Path(src).exists() else os.path.abspath(src)
     options = {"keep": list(kept), "model": _model_label(model), "model_float32": bool(model_float32),
                "source": source_path, "backend": get_backend(), "canonical": bool(canonical),
-               "joint_map": joint_map or None}  # fmt: skip
+               "joint_map": joint_map or None, **shaping.record()}  # fmt: skip
     if joint_map and not canonical:
         raise ArgumentError("a joint map is for retargeting clips onto the canonical body: give canonical=True too")
-    settings = _Settings(kept, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress)
+    settings = _Settings(kept, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress,
+                         shaping)  # fmt: skip
 
     finished_manifest(out)  # refuse a folder that is not ours before putting a lock file in it
     source = open_source(src)  # a bad SRC fails before OUT is touched
@@ -119,6 +135,7 @@ class _Settings:
     max_batches: int | None
     cluster: object
     progress: bool
+    shaping: Options
 
 
 @dataclass
@@ -135,6 +152,8 @@ class _State:
     rows: int = 0
     kinds: list[Kind] | None = None
     batches: int = 0
+    sums: dict = field(default_factory=dict)  # the statistics' running sums (see .stats)
+    up: list | None = None
 
 
 def _keep(keep, model) -> tuple[str, ...]:
@@ -178,7 +197,7 @@ def _summary_of(out: Path, manifest: dict, started: float) -> Summary:
                    seconds=time.perf_counter() - started)  # fmt: skip
 
 
-def _resume(partial: Path, options: dict, keep: tuple[str, ...]) -> _State:
+def _resume(partial: Path, options: dict, keep: tuple[str, ...], width: int) -> _State:
     """The state of the run in ``partial``: a new one (its options recorded), or the interrupted
     one of the same options, its data files cut back to its last journaled batch."""
     run_file = partial / RUN
@@ -200,8 +219,10 @@ def _resume(partial: Path, options: dict, keep: tuple[str, ...]) -> _State:
     }  # a second clip of a name fails
     state.skeleton = next((e.skeleton for e in entries if e.skeleton), None)
     state.rows = entries[-1].rows if entries else 0
+    state.sums = next((e.sums for e in reversed(entries) if e.sums is not None), {})
+    state.up = next((e.up for e in entries if e.up), None)
     if state.skeleton:
-        state.kinds = kinds_for(keep, len(state.skeleton["names"]))
+        state.kinds = kinds_for(keep, len(state.skeleton["names"]), width)
         cut_data_files(partial, state.kinds, state.rows)
     return state
 
@@ -213,7 +234,7 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
     partial.mkdir(exist_ok=True)
     if (partial / MANIFEST).exists():  # interrupted while moving the finished files into place
         return _summary_of(out, move_into_place(out), started)
-    state = _resume(partial, settings.options, settings.keep)
+    state = _resume(partial, settings.options, settings.keep, settings.shaping.width)
     summary = Summary(str(out), clips_resumed=sum(state.done.values()))
     client, close_client = client_for(settings.cluster) if settings.cluster is not None else (None, lambda: None)
     # Flushes each batch's rows to disk in the background. A daemon worker, never joined: a
@@ -225,15 +246,19 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
         bar = Progress(total_bytes, "preprocess", "B", enabled=settings.progress)
         stopped: list[bool] = []
         flushes: list[Future] = []
-        batches = batched(todo, settings.batch_mb * MB)
+        # Clips decoded into arrays in Python (to resample or mirror them) take ~4x the memory of
+        # the Rust pipeline's: a quarter of the batch size keeps the peak where it was (340 MB
+        # against 820 MB for dataset-2 with --mirror, as fast).
+        batches = batched(todo, settings.batch_mb * MB / (4 if settings.shaping.decoded else 1))
         if client is None:
             results = local(batches, settings.max_batches, stopped, settings.keep, settings.body_model,
-                            settings.model_float32, _canonical(settings.options))  # fmt: skip
+                            settings.model_float32, _canonical(settings.options), settings.shaping)  # fmt: skip
         else:
-            work = (settings.keep, settings.model, settings.model_float32, get_backend(), _canonical(settings.options))
+            work = (settings.keep, settings.model, settings.model_float32, get_backend(), _canonical(settings.options),
+                    settings.shaping)  # fmt: skip
             results = on_cluster(batches, settings.max_batches, stopped, client, work)
         for batch, outcomes, headers_s, kernels_s in results:
-            record, nbytes, write_s = _write_batch(state, batch, outcomes, settings.keep, syncer, flushes)
+            record, nbytes, write_s = _write_batch(state, batch, outcomes, settings, syncer, flushes)
             del outcomes  # hold no batch's arrays while the next one is taken
             _count(summary, record, nbytes, headers_s, kernels_s, write_s)
             files = len(state.clips) + len(state.failures)
@@ -242,7 +267,10 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
         if not stopped:
             t0 = time.perf_counter()
             raise_failed_flush(flushes, wait=True)
-            finish(out, state.kinds or [], state.clips, state.failures, state.skeleton, state.rows, settings.options)
+            extra = {"up": [0.0, 1.0, 0.0] if settings.shaping.positions != "world" else state.up,
+                     "rotations_up": state.up, "stats": statistics(state.sums)}  # fmt: skip
+            finish(out, state.kinds or [], state.clips, state.failures, state.skeleton, state.rows, settings.options,
+                   extra)  # fmt: skip
             summary.write_s += time.perf_counter() - t0
             summary.finished = True
         bar.close()
@@ -250,6 +278,7 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
         syncer.close()
         close_client()
     summary.clips_ok, summary.clips_failed = len(state.clips), len(state.failures)
+    summary.clips_mirrored = sum("mirror_of" in clip for clip in state.clips)
     summary.failures = state.failures
     summary.seconds = time.perf_counter() - started
     return summary
@@ -264,18 +293,24 @@ def _todo(source: Source, done: Counter) -> tuple:
 
 
 def _write_batch(
-    state: _State, batch: list[Item], outcomes: list[Outcome], keep, syncer: Workers, flushes: list[Future]
+    state: _State, batch: list[Item], outcomes: list[Outcome], settings: _Settings, syncer: Workers, flushes: list
 ) -> tuple[JournalRecord, int, float]:
     """One batch's rows appended to the data files (synced in the background), then its journal
-    line. Returns its record, the bytes of BVH read and the seconds taken."""
-    partial = state.partial
+    line (with the statistics' running sums). Returns its record, the bytes of BVH read and the
+    seconds taken."""
+    partial, keep = state.partial, settings.keep
     record = JournalRecord(state.batches, [item.name for item in batch])
     nbytes = sum(outcome.bytes for outcome in outcomes)  # bytes read, not sizes declared
     start = time.perf_counter()
     collected = collect(batch, outcomes, state.skeleton, keep, record, state.rows, state.taken)
     state.rows, state.skeleton = collected.rows, collected.skeleton
+    if collected.sums:
+        state.sums = as_json(merged(state.sums, collected.sums))
+    record.sums = state.sums
+    if state.up is None and collected.up is not None:
+        state.up = record.up = collected.up
     if record.skeleton is not None:  # the first clip parsed: now the row shapes are known
-        state.kinds = kinds_for(keep, len(record.skeleton["names"]))
+        state.kinds = kinds_for(keep, len(record.skeleton["names"]), settings.shaping.width)
         cut_data_files(partial, state.kinds, 0)
     for kind in state.kinds or ():
         if record.clips:

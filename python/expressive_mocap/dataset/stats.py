@@ -1,11 +1,19 @@
-"""Normalisation statistics of a dataset's kinds: per channel mean and std over all rows.
+"""Normalisation statistics of a dataset's float kinds: per channel mean and std over all rows.
 
-A dataset written with statistics holds them in ``manifest["stats"][kind] = {"mean", "std",
-"frames"}`` (``mean`` and ``std`` nested lists shaped like one row, the population std, 1.0 where
-a channel's std is below 1e-8). :meth:`Normaliser.of` reads them, or computes the same from the
-data for a dataset that has none (:func:`compute_stats`: float64, streaming over rows in chunks,
-Chan's parallel merge of per-chunk means and squared deviations, so neither memory nor precision
+Written: gathered while a run's batches are written, per kind the row count and the float64 sums
+of the rows and of their squares (each clip's summed in the kernel thread, :func:`.derive.sums`),
+carried from batch to batch in the journal (so a resumed run goes on from them), turned into
+``manifest["stats"][kind] = {"mean", "std", "frames"}`` at the end (:func:`statistics`: nested
+lists shaped like one row, the population std). Sums of squares lose precision when a channel's
+mean is far larger than its spread; in float64 that costs about ``1e-16 * (mean / std)^2`` of the
+std: ``1e-10`` for world positions a kilometre from the origin moving by a metre.
+
+Read: :meth:`Normaliser.of` takes them from the manifest, or computes the same from the data for
+a dataset that has none (:func:`compute_stats`: float64, streaming over rows in chunks, Chan's
+parallel merge of per-chunk means and squared deviations, so neither memory nor precision
 depends on the dataset's size).
+
+Channels whose std is under :data:`MIN_STD` get 1.0, so that dividing by it is always safe.
 """
 
 from __future__ import annotations
@@ -18,6 +26,34 @@ from ..errors import ArgumentError
 
 MIN_STD = 1e-8  # a channel whose std is below this is recorded with std 1.0 (dividing stays safe)
 CHUNK_ROWS = 65536
+
+
+def merged(total: dict, batch: dict) -> dict:
+    """``total`` (kind -> ``[rows, sums, squares]``, as JSON lists or arrays) with a batch's added."""
+    out = {kind: [n, np.asarray(s1), np.asarray(s2)] for kind, (n, s1, s2) in total.items()}
+    for kind, (n, s1, s2) in batch.items():
+        if kind in out:
+            out[kind] = [out[kind][0] + n, out[kind][1] + s1, out[kind][2] + s2]
+        else:
+            out[kind] = [n, np.asarray(s1, dtype=np.float64), np.asarray(s2, dtype=np.float64)]
+    return out
+
+
+def as_json(total: dict) -> dict:
+    """The running sums as JSON values (floats round-trip exactly)."""
+    return {kind: [int(n), np.asarray(s1).tolist(), np.asarray(s2).tolist()] for kind, (n, s1, s2) in total.items()}
+
+
+def statistics(total: dict) -> dict:
+    """``{kind: {"mean", "std", "frames"}}`` (nested lists shaped like one row) of the running sums."""
+    out = {}
+    for kind, (n, s1, s2) in total.items():
+        s1, s2 = np.asarray(s1, dtype=np.float64), np.asarray(s2, dtype=np.float64)
+        mean = s1 / max(n, 1)
+        std = np.sqrt(np.maximum(s2 / max(n, 1) - mean * mean, 0.0))
+        std = np.where(std < MIN_STD, 1.0, std)
+        out[kind] = {"mean": mean.tolist(), "std": std.tolist(), "frames": int(n)}
+    return out
 
 
 def float_kinds(dataset) -> list[str]:
@@ -129,4 +165,4 @@ class Normaliser:
         return f"Normaliser({', '.join(self.mean)})"
 
 
-__all__ = ["MIN_STD", "Normaliser", "compute_stats", "float_kinds"]
+__all__ = ["MIN_STD", "Normaliser", "as_json", "compute_stats", "float_kinds", "merged", "statistics"]

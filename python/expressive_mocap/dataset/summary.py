@@ -29,6 +29,7 @@ class Summary:
     batches: int = 0
     finished: bool = False
     failures: list = field(default_factory=list)
+    clips_mirrored: int = 0  # of clips_ok, the mirror images (--mirror)
 
     @property
     def mb_per_s(self) -> float:
@@ -37,7 +38,9 @@ class Summary:
     def lines(self) -> list[str]:
         state = "finished" if self.finished else "stopped early (rerun the same command to resume)"
         out = [
-            f"{self.out}: {state}; {self.clips_ok} clips ok, {self.clips_failed} failed"
+            f"{self.out}: {state}; {self.clips_ok} clips ok"
+            + (f" ({self.clips_mirrored} of them mirror images)" if self.clips_mirrored else "")
+            + f", {self.clips_failed} failed"
             + (f" ({self.clips_resumed} done by an earlier run)" if self.clips_resumed else ""),
             f"  {self.frames:,} frames, {self.bytes_read / MB:.1f} MB of BVH read this run in {self.seconds:.2f} s "
             f"({self.mb_per_s:.0f} MB/s)",

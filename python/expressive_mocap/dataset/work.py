@@ -17,10 +17,14 @@ from ..bvh import block_error, read_error
 from ..decoupling.algebra import decompose_many
 from ..errors import BVHError, MocapError, ModelError
 from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
-from ..motion import Motion
+from ..heading import HeadingFrame
+from ..motion import Motion, Skeleton
 from ..roles import JointRoles, actor_height, hips_rest_height
+from .derive import Options, derive, resampled, totals
 from .format import MODEL_KINDS
 from .sources import Item
+
+PLAIN = Options()  # the stored forms of a run without model-ready options
 
 
 @dataclass
@@ -39,6 +43,11 @@ class Outcome:
     frame_time: float = 0.0
     values: dict[str, np.ndarray] = field(default_factory=dict)
     source_skeleton: dict | None = None  # with canonical: the clip's own skeleton and map, if retargeted
+    source_fps: float | None = None  # with a resampling fps: the clip's own
+    mirrored: dict[str, np.ndarray] | None = None  # with mirror: the mirror image's values
+    # kind -> (rows, sums, squares) in float64 of its group of the batch (carried by one clip; see .collect)
+    sums: dict[str, tuple] = field(default_factory=dict)
+    up: tuple | None = None  # the skeleton's up axis as found in its world positions (None: not found)
 
 
 @dataclass
@@ -52,6 +61,8 @@ class Group:
     clips: list  # of ops.ClipInput, or of ops.ClipArrays
     parents: np.ndarray
     gait_joints: list[int]
+    skeleton: Skeleton | None = None
+    mirrors: list = field(default_factory=list)  # with mirror: the clips' mirror images (ops.ClipArrays)
 
 
 @dataclass
@@ -78,20 +89,28 @@ def bone_length(skeleton) -> float:
 
 
 def compute(
-    batch: list[Item], keep: tuple[str, ...], model, model_float32: bool, canonical: dict | None = None
+    batch: list[Item],
+    keep: tuple[str, ...],
+    model,
+    model_float32: bool,
+    canonical: dict | None = None,
+    options: Options = PLAIN,
 ) -> tuple[list[Outcome], float, float]:
     """The work on one batch, one outcome per item, as a cluster's worker does it. Returns the
     outcomes and the seconds spent preparing (headers) and in the kernels."""
-    return run_kernels(batch, prepare(batch, keep, model, canonical), keep, model, model_float32)
+    return run_kernels(batch, prepare(batch, keep, model, canonical, options), keep, model, model_float32, options)
 
 
-def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: dict | None = None) -> Prepared:
+def prepare(
+    batch: list[Item], keep: tuple[str, ...], model, canonical: dict | None = None, options: Options = PLAIN
+) -> Prepared:
     """The Python work before a batch's kernels: the clips' headers, from the files' first bytes
     (:func:`~expressive_mocap.bvh.read_header`; zip members are decompressed here, a tar's
     members come already read), each hierarchy's joint roles and each clip's body scale and
     channel layout. ``canonical`` (a joint map, ``{}`` for none; None: off): clips of any other
     skeleton than the canonical body are read whole and retargeted onto it here
-    (:func:`onto_canonical`)."""
+    (:func:`onto_canonical`). ``options`` that resample or mirror have every clip read whole
+    here, resampled and mirrored (:func:`decoded`)."""
     start = time.perf_counter()
     outcomes = [Outcome() for _ in batch]
     by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
@@ -109,11 +128,14 @@ def prepare(batch: list[Item], keep: tuple[str, ...], model, canonical: dict | N
     needs_roles = use_model or "features" in keep or "contacts" in keep
     if canonical is not None:
         by_hierarchy = onto_canonical(batch, outcomes, by_hierarchy, canonical or None, _signed_joints(keep, use_model))
+    mirrors: dict[tuple, list] = {}
+    if options.decoded:
+        by_hierarchy, mirrors = decoded(batch, outcomes, by_hierarchy, options, canonical)
     groups = []
-    for members in by_hierarchy.values():
+    for shape, members in by_hierarchy.items():
         if not members:
             continue
-        group = _group(members, needs_roles, use_model, model)
+        group = _group(members, needs_roles, use_model, model, mirrors.get(shape, []))
         if isinstance(group, MocapError):  # the hierarchy lacks a role, or does not fit the model
             hint = _CANONICAL_HINT if use_model and canonical is None and isinstance(group, ModelError) else ""
             for k, _, _ in members:
@@ -204,6 +226,45 @@ def as_written(moved: list, joints: list[int] | None = None) -> list:
 MOVED = ("retargeted",)
 
 
+def decoded(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, options: Options, canonical) -> tuple:
+    """``by_hierarchy`` with every clip read whole (as Motions), resampled to ``options.fps``,
+    and, with ``options.mirror``, each hierarchy's mirror images (:func:`~expressive_mocap.
+    skeletons.mirror.mirror_many`: all of a hierarchy's clips of the batch at once), as
+    ``(by_hierarchy, {key: [Motion]})``. A hierarchy that cannot be mirrored fails its clips."""
+    from ..skeletons.mirror import mirror_many
+    from ..skeletons.retargeting import Rig
+
+    out: dict[tuple, list] = {}
+    mirrors: dict[tuple, list] = {}
+    for key, members in by_hierarchy.items():
+        texts = [m for m in members if m[1] is not None]
+        read = {k: motion for k, motion in _decode_whole(batch, outcomes, texts)}
+        read.update({k: motion for k, header, motion in members if header is None})
+        motions = []
+        for k, _, _ in members:
+            if k not in read:
+                continue
+            motion = read[k]
+            if options.fps is not None:
+                outcomes[k].source_fps = motion.fps
+                motion = resampled(motion, options.fps)
+            motions.append((k, None, motion))
+        if options.mirror and motions:
+            try:
+                rig = Rig.of(max((m for _, _, m in motions), key=lambda m: m.n_frames))
+                mirrors[key] = [
+                    image
+                    for part in chunks([m for _, _, m in motions], lambda m: m.n_frames)
+                    for image in mirror_many(part, rig=rig)
+                ]
+            except MocapError as error:
+                for k, _, _ in motions:
+                    outcomes[k].error = f"{batch[k].source}: cannot be mirrored: {error}"
+                motions = []
+        out[key] = motions
+    return out, mirrors
+
+
 def _decode_whole(batch: list[Item], outcomes: list[Outcome], members: list) -> list[tuple[int, Motion]]:
     """``(index, Motion)`` of the clips ``(index, header, text)`` (text: the bytes, or the path
     to read here), their number blocks decoded together (in parallel with the Rust kernels); a
@@ -237,9 +298,10 @@ def _one_onto_canonical(motion, user_map: dict | None):
         return error
 
 
-def _group(members: list, needs_roles: bool, use_model: bool, model) -> Group | MocapError:
+def _group(members: list, needs_roles: bool, use_model: bool, model, mirrors: list) -> Group | MocapError:
     """One hierarchy's clips ``(index, header, text)`` (or ``(index, None, Motion)``, a clip
-    retargeted here) as one kernel call's arguments, or why not."""
+    read whole here) and their mirror images (Motions, or none) as one kernel call's arguments,
+    or why not."""
     header, first = members[0][1:]
     skeleton = first.skeleton if header is None else header.skeleton
     try:
@@ -255,54 +317,174 @@ def _group(members: list, needs_roles: bool, use_model: bool, model) -> Group | 
     if header is None:  # the same skeleton for every clip
         body = scale(skeleton)
         clips: list = [ops.ClipArrays(m.rotations, m.translations, m.frame_time, *body) for _, _, m in members]
+        images = [ops.ClipArrays(m.rotations, m.translations, m.frame_time, *body) for m in mirrors]
     else:
-        clips = [ops.ClipInput.of(text, h, *scale(h.skeleton)) for _, h, text in members]
+        clips, images = [ops.ClipInput.of(text, h, *scale(h.skeleton)) for _, h, text in members], []
     gait_joints = roles.gait_joints if roles else [0] * 7  # without features or contacts: not used
     parents = np.ascontiguousarray(skeleton.parents, dtype=np.int64)
-    return Group([k for k, _, _ in members], [h for _, h, _ in members], clips, parents, gait_joints)
+    indices, headers = [k for k, _, _ in members], [h for _, h, _ in members]
+    return Group(indices, headers, clips, parents, gait_joints, skeleton, images)
 
 
 def run_kernels(
-    batch: list[Item], prepared: Prepared, keep: tuple[str, ...], model, model_float32: bool
+    batch: list[Item], prepared: Prepared, keep: tuple[str, ...], model, model_float32: bool, options: Options = PLAIN
 ) -> tuple[list[Outcome], float, float]:
     """Everything else of each clip (reading the file, its MOTION block, FK, features, contacts)
     as one task of one kernel call per hierarchy, clips in parallel (``clip_pipeline_many``; the
-    NumPy twin composes the other kernels' twins), then the model on the whole batch. Returns the
-    outcomes, the seconds :func:`prepare` took and the seconds taken here."""
+    NumPy twin composes the other kernels' twins; mirror images ride along in the same call),
+    the stored forms of :mod:`.derive` per hierarchy, then the model on the whole batch, then
+    each clip's sums for the normalisation statistics. Returns the outcomes, the seconds
+    :func:`prepare` took and the seconds taken here."""
     start = time.perf_counter()
     outcomes = prepared.outcomes
     use_model = any(k in MODEL_KINDS for k in keep)
+    plain = options.plain(keep)
     requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
-    kept = []  # (index, local rotations, model features) of each clip for the model
+    kept = []  # (values to update, local rotations, model features) of each clip for the model
+    finished = []  # (an outcome of the group, [values]) of each group, for the sums
     for group in prepared.groups:
         outputs = ops.PipelineOutputs(
-            positions="positions" in keep,
-            rotations="rotations" in keep or use_model,
+            positions=options.positions_needed(keep) or options.heading(keep),
+            rotations=options.rotations_needed(keep) or use_model,
             features=tuple(ops.FeatureRequest(*r) for r in requests),
             contacts="contacts" in keep,
-            float32=not use_model,
+            float32=plain and not use_model,
         )
         gait = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
         if isinstance(group.clips[0], ops.ClipArrays):
-            results = ops.arrays_pipeline_many(group.clips, group.parents, group.gait_joints, gait, outputs)
+            results = ops.arrays_pipeline_many(
+                group.clips + group.mirrors, group.parents, group.gait_joints, gait, outputs
+            )
         else:
             results = ops.clip_pipeline_many(
                 group.clips, group.parents, group.gait_joints, gait, outputs, inputs.MAX_INPUT_BYTES
             )
-        for k, header, clip, result in zip(group.indices, group.headers, group.clips, results):
-            if _finish_clip(batch[k], outcomes[k], header, clip, result, keep) and use_model:
-                kept.append((k, result[1], result[2][-1]))
+        done = []  # (values, kernel result, frame time) of each clip and mirror image that succeeded
+        for number, (k, header, clip, result) in enumerate(zip(group.indices, group.headers, group.clips, results)):
+            if _finish_clip(batch[k], outcomes[k], header, clip, result, keep, plain):
+                done.append((outcomes[k].values, result, clip.frame_time))
+                if group.mirrors:
+                    image = results[len(group.clips) + number]
+                    outcomes[k].mirrored = mirrored = _mirror_values(outcomes[k].values, image, keep)
+                    done.append((mirrored, image, clip.frame_time))
+        frame = _frame(group, [outcomes[k] for k in group.indices], done, keep, options)
+        if not plain and done and frame is not False:
+            _derive_group(group, done, keep, options, frame)
+        if use_model and frame is not False:
+            kept += [(values, result[1], result[2][-1]) for values, result, _ in done]
+        if done:
+            carrier = next(outcomes[k] for k in group.indices if outcomes[k].values is done[0][0])
+            finished.append((carrier, [values for values, _, _ in done]))
     if use_model:
         parts = decompose_many([r for _, r, _ in kept], [f for _, _, f in kept], model, model_float32)
-        for (k, _, _), clip_parts in zip(kept, parts):
-            outcomes[k].values.update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
+        for (values, _, _), clip_parts in zip(kept, parts):
+            values.update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
+    _sums(finished, keep)
     return outcomes, prepared.seconds, time.perf_counter() - start
 
 
+def _mirror_values(values: dict, result, keep: tuple[str, ...]) -> dict:
+    """A clip's mirror image's values (kind -> array) from its kernel ``result``: contacts are the
+    clip's own, left for right (the image's feet are the clip's, swapped)."""
+    if isinstance(result, Exception):  # arrays the clip's own kernel read: not expected to fail
+        raise result
+    positions, rotations, features, _ = result
+    mirrored = {"positions": positions, "rotations": rotations}
+    if "features" in keep:
+        mirrored["features"] = features[0].astype(np.float32)
+    if "contacts" in keep:
+        mirrored["contacts"] = np.ascontiguousarray(values["contacts"][:, ::-1])
+    return {kind: v for kind, v in mirrored.items() if kind in keep}
+
+
+def _frame(group: Group, outcomes: list[Outcome], done: list, keep: tuple[str, ...], options: Options):
+    """The heading frame of a hierarchy whose clips that succeeded are ``done`` (None: no world
+    positions, or no frame found where the kinds kept do not need one; False: not found where
+    they do, and the clips failed), its up axis in each outcome."""
+    if not done or done[0][1][0] is None:
+        return None
+    sample = np.concatenate([r[0][:: max(1, len(r[0]) // 8)] for _, r, _ in done[:64]])
+    try:
+        frame = HeadingFrame.of(group.skeleton or group.headers[0].skeleton, sample)
+    except MocapError as error:
+        if not options.heading(keep):
+            return None
+        for outcome in outcomes:
+            if outcome.error is None:
+                outcome.error = f"no heading frame for --positions {options.positions}: {error}"
+        return False
+    for outcome in outcomes:
+        outcome.up = frame.up
+    return frame
+
+
+def _derive_group(group: Group, done: list, keep: tuple[str, ...], options: Options, frame) -> None:
+    """The stored forms (:func:`.derive.derive`) of a hierarchy's clips and mirror images that
+    succeeded, ``done`` ``(values, kernel result, frame time)``, a chunk of clips at a time
+    (:func:`chunks`); each clip's slices into its values."""
+    root = int(np.flatnonzero(group.parents < 0)[0])
+    for part in chunks(done, lambda entry: len(entry[1][0] if entry[1][0] is not None else entry[1][1])):
+        positions = [r[0] for _, r, _ in part] if part[0][1][0] is not None else None
+        frames = np.array([len(r[0] if r[0] is not None else r[1]) for _, r, _ in part])
+        starts = np.concatenate([[0], np.cumsum(frames)[:-1]])
+        stored = derive(
+            keep,
+            options,
+            np.concatenate(positions) if positions is not None else None,
+            np.concatenate([r[1] for _, r, _ in part]) if part[0][1][1] is not None else None,
+            starts,
+            np.repeat([t for _, _, t in part], frames),
+            frame,
+            root,
+        )
+        for (values, _, _), first, count in zip(part, starts, frames):
+            values.update({kind: array[first : first + count] for kind, array in stored.items()})
+
+
+# Frames a chunk of clips holds when derived or mirrored together: arrays of a few MB, which the
+# allocator reuses chunk after chunk; a whole batch's arrays at once (hundreds of MB) were fresh
+# pages every time, and faulting them in took a third of the run (system time).
+CHUNK_FRAMES = 8192
+
+
+def chunks(items: list, frames) -> list[list]:
+    """``items`` in consecutive runs of about :data:`CHUNK_FRAMES` frames (``frames(item)``) each."""
+    out: list[list] = [[]]
+    count = 0
+    for item in items:
+        if out[-1] and count + frames(item) > CHUNK_FRAMES:
+            out.append([])
+            count = 0
+        out[-1].append(item)
+        count += frames(item)
+    return out
+
+
+def _sums(finished: list, keep: tuple[str, ...]) -> None:
+    """The float64 sums of rows and squares (:func:`.derive.totals`) per float kind kept over each
+    hierarchy's clips and mirror images that succeeded, ``finished`` ``(outcome, [values])``,
+    into that outcome's ``sums``: one reduction a kind over a group, not one a clip."""
+    for carrier, done in finished:
+        if carrier.error is not None:  # the group failed after its kernel (no heading frame)
+            continue
+        for kind in keep:
+            arrays = [values[kind] for values in done if kind in values and values[kind].dtype.kind == "f"]
+            if arrays:
+                carrier.sums[kind] = totals(arrays)
+
+
 def _finish_clip(
-    item: Item, outcome: Outcome, header, clip: ops.ClipInput | ops.ClipArrays, result, keep: tuple[str, ...]
+    item: Item,
+    outcome: Outcome,
+    header,
+    clip: ops.ClipInput | ops.ClipArrays,
+    result,
+    keep: tuple[str, ...],
+    plain: bool = True,
 ) -> bool:
-    """One clip's kernel ``result`` into its outcome: its arrays as stored, or its error. True if it succeeded."""
+    """One clip's kernel ``result`` into its outcome: its arrays as stored (but positions and
+    rotations only when ``plain``: else :func:`_derive_group` stores them), or its error. True if
+    it succeeded."""
     if isinstance(clip, ops.ClipInput) and isinstance(clip.source, str) and not isinstance(result, OSError):
         # the kernel read the file whole
         outcome.bytes = item.size
@@ -310,7 +492,8 @@ def _finish_clip(
         outcome.error = str(_clip_error(item, header, result))
         return False
     positions, rotations, features, contacts = result
-    values = {"positions": positions, "rotations": rotations, "contacts": contacts}
+    values = {"positions": positions, "rotations": rotations} if plain else {}
+    values["contacts"] = contacts
     if "features" in keep:
         values["features"] = features[0]
     outcome.frames, outcome.fps, outcome.frame_time = clip.frames, 1.0 / clip.frame_time, clip.frame_time

@@ -174,11 +174,9 @@ def guess_unit(height: float) -> tuple[str, float, float]:
     return best
 
 
-def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
-    """The conventions of ``motion`` (see the module's notes)."""
-    skeleton = motion.skeleton
-    frames = np.unique(np.linspace(0, motion.n_frames - 1, min(motion.n_frames, _SAMPLED_FRAMES)).astype(int))
-    positions = motion[frames].positions()
+def up_and_facing(skeleton: Skeleton, jmap: JointMap, positions: np.ndarray) -> tuple[tuple, tuple]:
+    """``((up, how sure), (facing, how sure))`` of a skeleton whose posed world positions
+    ``[F, J, 3]`` (a sample of frames) are given (see the module's notes)."""
     feet = 0.5 * (positions[:, jmap["left_foot"]] + positions[:, jmap["right_foot"]])
     head_up = np.mean(positions[:, jmap["head"]] - feet, axis=0)
     up, up_sure = _nearest_axis(head_up)
@@ -187,6 +185,19 @@ def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
     upright = quat.between(rest_up, np.array(AXES[up], float))
     forward = quat.rotate(upright, rest_forward)
     facing, facing_sure = _nearest_axis(forward - np.dot(forward, AXES[up]) * np.array(AXES[up]), exclude=up)
+    return (up, up_sure), (facing, facing_sure)
+
+
+def frame_rotation(up: str, facing: str) -> np.ndarray:
+    """The rotation (quaternion) taking axis ``up`` to +Y and ``facing`` to +Z (names such as ``"+Z"``)."""
+    return _frame_rotation(up, facing)
+
+
+def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
+    """The conventions of ``motion`` (see the module's notes)."""
+    skeleton = motion.skeleton
+    frames = np.unique(np.linspace(0, motion.n_frames - 1, min(motion.n_frames, _SAMPLED_FRAMES)).astype(int))
+    (up, up_sure), (facing, facing_sure) = up_and_facing(skeleton, jmap, motion[frames].positions())
     height = stature(skeleton, jmap)
     unit, metres, unit_sure = guess_unit(height)
     kind, kind_sure = rest_pose_kind(skeleton, jmap)
@@ -252,12 +263,14 @@ __all__ = [
     "UNITS",
     "Conventions",
     "body_axes",
+    "frame_rotation",
     "from_canonical",
     "guess_unit",
     "read_conventions",
     "rest_pose_kind",
     "stature",
     "to_canonical",
+    "up_and_facing",
     "upright",
     "upright_and_back",
 ]

@@ -1,0 +1,234 @@
+"""Model-ready arrays: the options of ``preprocess`` that shape what is stored (rotation form,
+position frame, frame rate, mirrored copies) and the pure functions that make a batch's stored
+arrays from its clips' world positions and local rotations.
+
+Everything here works on the clips of one skeleton at once, their frames concatenated
+(``starts``: each clip's first row), so a batch costs a few NumPy calls, not a few per clip.
+Time derivatives are ``np.gradient``'s, clip by clip: central differences, one-sided at a clip's
+first and last frame, zero for a one-frame clip; no difference ever spans two clips.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import quat, representations
+from ..errors import ArgumentError
+from ..heading import HeadingFrame, to_heading, turn_by_yaw
+from ..motion import Motion
+
+POSITION_FRAMES = ("world", "root", "heading", "clip")
+DERIVED_KINDS = ("velocities", "accelerations", "root_velocity", "angular_velocities")
+# A resampled clip takes the source's every n-th frame as it is when the rates are this close to n:1
+# (files round the frame time: 0.0333333 s for 30 fps).
+RATE_TOLERANCE = 1e-4
+
+
+@dataclass(frozen=True)
+class Options:
+    """How the stored arrays are shaped: ``rotations`` (a form of
+    :data:`~expressive_mocap.representations.KINDS`, ``"euler:ORDER"`` for Euler angles),
+    ``positions`` (:data:`POSITION_FRAMES`), ``fps`` (resample every clip first; None: as read)
+    and ``mirror`` (store each clip's mirror image after it)."""
+
+    rotations: str = "quaternion"
+    positions: str = "world"
+    fps: float | None = None
+    mirror: bool = False
+
+    @classmethod
+    def of(cls, rotations: str | None = None, positions: str | None = None, fps=None, mirror: bool = False) -> Options:
+        """Checked options; ``"euler"`` alone is ``"euler:ZXY"``. An ArgumentError names a bad one."""
+        rotations = rotations or "quaternion"
+        form, _, order = rotations.partition(":")
+        if form not in representations.KINDS or (order and form != "euler"):
+            raise ArgumentError(
+                f"--rotations: expected one of {', '.join(representations.KINDS)} (euler:ORDER for an order), "
+                f"got {rotations!r}"
+            )
+        if form == "euler":
+            order = (order or "ZXY").upper()
+            if sorted(order) != ["X", "Y", "Z"]:
+                raise ArgumentError(
+                    f"--rotations: an Euler order is X, Y and Z once each, e.g. euler:ZXY, got {order!r}"
+                )
+            rotations = f"euler:{order}"
+        positions = positions or "world"
+        if positions not in POSITION_FRAMES:
+            raise ArgumentError(f"--positions: expected one of {', '.join(POSITION_FRAMES)}, got {positions!r}")
+        if fps is not None:
+            if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not (np.isfinite(fps) and fps > 0):
+                raise ArgumentError(f"--fps: a positive number of frames per second, got {fps!r}")
+            fps = float(fps)
+        return cls(rotations, positions, fps, bool(mirror))
+
+    @property
+    def form(self) -> tuple[str, str]:
+        """The rotation form and its Euler order (``"ZXY"`` unless Euler)."""
+        form, _, order = self.rotations.partition(":")
+        return form, order or "ZXY"
+
+    @property
+    def width(self) -> int:
+        """Values a rotation takes in the stored form."""
+        return representations.KINDS[self.form[0]]
+
+    @property
+    def decoded(self) -> bool:
+        """Whether clips are decoded into arrays before the kernels (to resample or mirror them)."""
+        return self.fps is not None or self.mirror
+
+    def heading(self, keep) -> bool:
+        """Whether the skeleton's heading frame (its up axis at least) is needed for the kinds ``keep``."""
+        moving = any(k in keep for k in ("positions", "velocities", "accelerations"))
+        return "root_velocity" in keep or (moving and self.positions != "world")
+
+    def positions_needed(self, keep) -> bool:
+        return any(k in keep for k in ("positions", "velocities", "accelerations", "root_velocity"))
+
+    def rotations_needed(self, keep) -> bool:
+        return "rotations" in keep or "angular_velocities" in keep
+
+    def plain(self, keep) -> bool:
+        """Whether the kernels' float32 outputs are stored as they are (today's datasets)."""
+        return (
+            self.rotations == "quaternion"
+            and self.positions == "world"
+            and not self.mirror
+            and not any(k in keep for k in DERIVED_KINDS)
+        )
+
+    def record(self) -> dict:
+        """The options as the manifest records them."""
+        return {"rotations": self.rotations, "positions": self.positions, "fps": self.fps, "mirror": self.mirror}
+
+
+def resampled(motion: Motion, fps: float) -> Motion:
+    """``motion`` at ``fps`` frames a second, from its first frame, as many frames as its duration
+    holds: each source frame as it is when ``fps`` divides the source's rate (the same rate: the
+    clip itself; half: every second frame), else slerp for rotations and linear for translations
+    between the two nearest frames."""
+    ratio = (1.0 / motion.frame_time) / fps  # source frames per output frame
+    step = round(ratio)
+    if step >= 1 and abs(ratio - step) <= RATE_TOLERANCE * ratio:
+        rows = slice(0, motion.n_frames, step)
+        return Motion(motion.skeleton, motion.rotations[rows], motion.translations[rows], 1.0 / fps)
+    if motion.n_frames < 2:
+        return Motion(motion.skeleton, motion.rotations, motion.translations, 1.0 / fps)
+    count = int(np.floor((motion.n_frames - 1) / ratio + 0.01)) + 1
+    position = np.minimum(np.arange(count) * ratio, motion.n_frames - 1)
+    rotations = quat.resample(motion.rotations, position)
+    translations = quat.resample(motion.translations, position, rotations=False)
+    return Motion(motion.skeleton, rotations, translations, 1.0 / fps)
+
+
+def gradient(values: np.ndarray, starts: np.ndarray, frame_time: np.ndarray, difference=np.subtract) -> np.ndarray:
+    """Per clip ``np.gradient`` of rows ``values [N, ...]`` over time: clips begin at rows
+    ``starts [C]``, ``frame_time [N]`` each row's clip's. ``difference(a, b)`` is ``a - b``
+    (or, for rotations, the rotation vector from ``b`` to ``a``)."""
+    n = len(values)
+    out = np.zeros(values.shape[:1] + difference(values[:1], values[:1]).shape[1:])
+    if n < 2:
+        return out
+    ends = np.append(starts[1:], n)
+    starts, ends = starts[ends > starts], ends[ends > starts]  # a clip of no frames has no rows
+    out[1:-1] = difference(values[2:], values[:-2])
+    scale = 2.0 * frame_time
+    single = ends - starts == 1
+    first, last = starts[~single], ends[~single] - 1
+    out[first] = difference(values[first + 1], values[first])
+    out[last] = difference(values[last], values[last - 1])
+    scale[first], scale[last] = frame_time[first], frame_time[last]
+    out[starts[single]] = 0.0
+    return out / scale.reshape((-1,) + (1,) * (out.ndim - 1))
+
+
+def _rotation_change(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rotation vectors of ``a b^-1``: the turn from ``b`` to ``a`` in the axes they are written in."""
+    return quat.log(quat.mul(a, quat.conjugate(b)))
+
+
+def derive(
+    keep,
+    options: Options,
+    positions: np.ndarray | None,
+    rotations: np.ndarray | None,
+    starts: np.ndarray,
+    frame_time: np.ndarray,
+    frame: HeadingFrame | None,
+    root: int = 0,
+) -> dict[str, np.ndarray]:
+    """The stored arrays (float32, kind -> ``[N, ...]``) of the kinds ``keep`` among positions,
+    rotations and :data:`DERIVED_KINDS`, for clips of one skeleton whose world ``positions [N, J, 3]``
+    and local ``rotations [N, J, 4]`` are concatenated (clips begin at rows ``starts``, each row's
+    clip's ``frame_time [N]``). ``frame``: the skeleton's heading frame, when ``options.heading(keep)``;
+    ``root``: the root joint. See docs/preprocessing.md for each kind's definition."""
+    out: dict[str, np.ndarray] = {}
+    if rotations is not None and "rotations" in keep:
+        form, order = options.form
+        out["rotations"] = representations.encode(rotations, form, order, np.float32)
+    if rotations is not None and "angular_velocities" in keep:
+        out["angular_velocities"] = gradient(rotations, starts, frame_time, _rotation_change)
+    if positions is not None and options.positions_needed(keep):
+        out.update(_positions(keep, options, positions, starts, frame_time, frame, root))
+    return {kind: np.asarray(values, dtype=np.float32) for kind, values in out.items()}
+
+
+def _positions(
+    keep, options: Options, positions: np.ndarray, starts: np.ndarray, frame_time: np.ndarray, frame, root: int
+) -> dict[str, np.ndarray]:
+    """The positions kept, their velocities and accelerations and the root velocity."""
+    out = {}
+    where = options.positions
+    if frame is None and options.heading(keep):
+        raise ArgumentError(f"--positions {where} and root_velocity need the skeleton's heading frame")
+    turned = where in ("heading", "clip") or "root_velocity" in keep
+    yaw = np.unwrap(frame.yaw(positions)) if turned else np.zeros(len(positions))
+    origin = frame.origin(positions) if turned else np.zeros((len(positions), 3))
+    if where == "world":
+        stored = positions
+    elif where == "root":
+        stored = frame.harmonised(positions - positions[:, root : root + 1])
+    elif where == "heading":
+        stored = to_heading(positions, frame, yaw, origin)
+    else:  # clip: every frame in its clip's first frame's heading frame
+        first = np.repeat(starts, np.diff(np.append(starts, len(positions))))
+        stored = to_heading(positions, frame, yaw[first], origin[first])
+    if "positions" in keep:
+        out["positions"] = stored
+    if "velocities" in keep or "accelerations" in keep:
+        # heading: the world's velocity (harmonised axes) turned into each frame's heading
+        moving = frame.harmonised(positions) if where == "heading" else stored
+        velocities = gradient(moving, starts, frame_time)
+        if "velocities" in keep:
+            out["velocities"] = turn_by_yaw(velocities, -yaw) if where == "heading" else velocities
+        if "accelerations" in keep:
+            accelerations = gradient(velocities, starts, frame_time)
+            out["accelerations"] = turn_by_yaw(accelerations, -yaw) if where == "heading" else accelerations
+    if "root_velocity" in keep:
+        hips = gradient(frame.harmonised(positions[:, frame.hips]), starts, frame_time)
+        out["root_velocity"] = np.concatenate(
+            [turn_by_yaw(hips, -yaw), gradient(yaw, starts, frame_time)[:, None]], axis=-1
+        )
+    return out
+
+
+def totals(arrays: list[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
+    """``(rows, sums, squares)``: the row count of ``arrays`` (``[n_i, ...]``, one row shape) and
+    the float64 sums of their rows and of their rows' squares ``[...]``, the increments of the
+    running normalisation statistics (:mod:`.stats`). Accumulated in float64 without a float64
+    copy of the rows."""
+    rows = sum(len(a) for a in arrays)
+    shape = arrays[0].shape[1:]
+    first, second = np.zeros(shape), np.zeros(shape)
+    for start in range(0, len(arrays), 64):  # a few MB at a time (see .work.CHUNK_FRAMES)
+        part = arrays[start : start + 64]
+        flat = (np.concatenate(part) if len(part) > 1 else part[0]).reshape(-1, first.size)
+        first += flat.sum(axis=0, dtype=np.float64).reshape(shape)
+        second += np.einsum("ij,ij->j", flat, flat, dtype=np.float64).reshape(shape)
+    return rows, first, second
+
+
+__all__ = ["DERIVED_KINDS", "POSITION_FRAMES", "Options", "derive", "gradient", "resampled", "totals"]
