@@ -43,10 +43,12 @@ def main() -> None:
     parser.add_argument("dataset")
     parser.add_argument("--batches", type=int, default=100, help="batches timed per repeat (default 100)")
     parser.add_argument("--torch", action="store_true", help="also through a PyTorch DataLoader")
+    parser.add_argument("--kinds", help="comma-separated kinds to load (default: positions,rotations,contacts)")
     args = parser.parse_args()
     ds = load_dataset(args.dataset)
     print(ds)
-    kinds = [k for k in ("positions", "rotations", "contacts") if k in ds.kinds]
+    wanted = args.kinds.split(",") if args.kinds else ("positions", "rotations", "contacts")
+    kinds = [k for k in wanted if k in ds.kinds]
     warm = window_batches(ds, 64, 16, batch_size=256, kinds=kinds, shuffle=False)
     for _ in warm.epoch(0):  # the page cache
         pass

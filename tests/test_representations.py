@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
+from scipy.spatial.transform import Rotation, Slerp
 
 from expressive_mocap import quat
 from expressive_mocap import representations as rep
@@ -81,3 +81,24 @@ def test_bad_kinds_and_shapes_are_named():
         rep.decode(np.zeros((2, 5)), "6d")
     with pytest.raises(ArgumentError, match=r"expected shape \[..., 4\]"):
         rep.encode(np.zeros((2, 3)), "matrix")
+
+
+@pytest.mark.parametrize("kind", list(rep.KINDS))
+def test_interpolation_follows_slerp_between_neighbouring_frames(kind):
+    """Rotations 3 degrees apart (a fast joint between two frames at 30 fps), mixed at random t."""
+    rng = np.random.default_rng(5)
+    a = Rotation.random(500, random_state=5)
+    axes = rng.normal(size=(500, 3))
+    b = Rotation.from_rotvec(axes / np.linalg.norm(axes, axis=1, keepdims=True) * np.radians(3.0)) * a
+    t = rng.uniform(size=500)
+    slerped = Rotation.from_quat(
+        [Slerp([0, 1], Rotation.concatenate([a[i], b[i]]))(t[i]).as_quat() for i in range(500)]
+    )
+    va, vb = (rep.encode(r.as_quat(), kind).astype(np.float32) for r in (a, b))
+    mixed = rep.interpolate(va, vb, t[:, None], kind)
+    assert mixed.dtype == np.float32 and mixed.shape == va.shape
+    off = np.degrees((Rotation.from_quat(rep.decode(mixed, kind)).inv() * slerped).magnitude())
+    assert off.max() < (0.015 if kind in ("6d", "matrix") else 1e-3)
+    for end, expected in ((0.0, a), (1.0, b)):  # the ends are the frames themselves
+        at = rep.decode(rep.interpolate(va, vb, np.full((500, 1), end), kind), kind)
+        assert np.degrees((Rotation.from_quat(at).inv() * expected).magnitude()).max() < 1e-3

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import quat
+from .. import quat, representations
 from ..errors import ArgumentError
 from ..representations import decode, encode
 
@@ -157,7 +157,7 @@ def interpolate(kind: str, a: np.ndarray, b: np.ndarray, frac: np.ndarray, manif
         form, order = rotation_form(manifest) if kind == "rotations" else ("quaternion", "ZXY")
         if form == "quaternion":  # as stored, in float32
             return nlerp(a, b, at.astype(a.dtype))
-        return encode(nlerp(decode(a, form, order), decode(b, form, order), at), form, order).astype(a.dtype)
+        return representations.interpolate(a, b, at, form, order)
     mixed = b - a
     mixed *= at.astype(a.dtype)
     mixed += a
