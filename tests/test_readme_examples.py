@@ -39,6 +39,7 @@ PAGES = [
     "docs/decoupling.md",
     "docs/exaggeration.md",
     "docs/preprocessing.md",
+    "docs/training.md",
     "docs/speed.md",
     "docs/safety.md",
     "docs/methods.md",
