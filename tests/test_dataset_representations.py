@@ -350,3 +350,52 @@ def test_stats_leave_out_clips_that_fail_after_their_kernels(tmp_path):
         np.testing.assert_allclose(entry["mean"], values.mean(axis=0), atol=1e-6 * np.abs(values).max())
         std = values.std(axis=0)
         np.testing.assert_allclose(entry["std"], np.where(std < 1e-8, 1.0, std), rtol=1e-6)
+
+
+@pytest.mark.real_data
+def test_the_heading_kind_takes_heading_positions_back_to_the_world(clips, world, frame, tmp_path):
+    run(clips, tmp_path / "ds", keep="positions,heading", positions="heading")
+    ds = load_dataset(tmp_path / "ds")
+    heading = ds.arrays["heading"].astype(np.float64)
+    origin = np.stack([heading[:, 0], np.zeros(len(heading)), heading[:, 1]], axis=-1)
+    back = from_heading(ds.positions.astype(np.float64), frame, heading[:, 2], origin)
+    np.testing.assert_allclose(back, world.positions, atol=2e-3)  # the heading frames lose nothing
+
+
+@pytest.mark.real_data
+def test_windows_in_their_first_frame_are_the_same_from_either_stored_frame(clips, tmp_path):
+    """A window's own frame found from per-frame heading positions and from per-clip ones agrees,
+    and puts its first frame's hips at the origin facing +Z."""
+    from expressive_mocap.dataset import WindowReader, Windows
+
+    batches = {}
+    for where in ("heading", "clip"):
+        run(clips, tmp_path / where, keep="positions,velocities,heading", positions=where)
+        ds = load_dataset(tmp_path / where)
+        windows = Windows(ds, 40, 25)
+        batches[where] = WindowReader(ds, windows, frame="window").read(np.arange(len(windows)))
+    a, b = batches["heading"], batches["clip"]
+    for kind in ("positions", "velocities", "heading"):
+        np.testing.assert_allclose(a[kind], b[kind], atol=5e-2 if kind == "velocities" else 1e-2)
+    skeleton = em.read_bvh(next(clips.glob("*.bvh"))).skeleton
+    frame = HeadingFrame.of(skeleton, a["positions"][:, 0].astype(np.float64))
+    first = a["positions"][:, 0].astype(np.float64)
+    np.testing.assert_allclose(first[:, frame.hips, [0, 2]], 0.0, atol=1e-3)
+    np.testing.assert_allclose(frame.yaw(first), 0.0, atol=1e-4)
+    np.testing.assert_allclose(a["heading"][:, 0], 0.0, atol=1e-4)  # the first frame is the window's origin
+    later = a["positions"][:, -1].astype(np.float64)  # later frames move away from it
+    assert np.abs(later[:, frame.hips, [0, 2]]).max() > 10.0
+
+
+@pytest.mark.real_data
+def test_window_frames_are_refused_without_a_heading_frame(clips, tmp_path):
+    from expressive_mocap.dataset import WindowReader, Windows
+
+    run(clips, tmp_path / "world", keep="positions,heading")
+    ds = load_dataset(tmp_path / "world")
+    with pytest.raises(ArgumentError, match="heading frame"):
+        WindowReader(ds, Windows(ds, 20), frame="window")
+    run(clips, tmp_path / "nokind", keep="positions", positions="heading")
+    ds = load_dataset(tmp_path / "nokind")
+    with pytest.raises(ArgumentError, match="`heading` kind"):
+        WindowReader(ds, Windows(ds, 20), frame="window")

@@ -122,7 +122,7 @@ def add_preprocess(commands) -> None:
         "--keep",
         metavar="KINDS",
         help="comma-separated: positions,rotations,features,contacts,activity,body,expressive,"
-        "velocities,accelerations,root_velocity,angular_velocities "
+        "velocities,accelerations,root_velocity,angular_velocities,heading "
         "(default: positions,features,contacts, plus activity with --model)",
     )
     p.add_argument(

@@ -14,6 +14,7 @@ rotations                     root joint(s): theta composed before them   slerp 
                               (decode, rotate, encode in their form)
 root_velocity                 same (heading frame)                        interpolated, x s
 angular_velocities            root joint(s): rotated (parent = world)     interpolated, x s
+heading                       origin turned, yaw + theta                  interpolated
 features                      same (heading frame)                        velocities x s, air time / s
 contacts                      same                                        nearest frame
 activity                      same                                        interpolated
@@ -37,6 +38,7 @@ import numpy as np
 
 from .. import quat, representations
 from ..errors import ArgumentError
+from ..heading import turn_by_yaw
 from ..representations import decode, encode
 
 VECTOR_KINDS = ("positions", "velocities", "accelerations")  # rotated unless in the heading frame
@@ -135,6 +137,13 @@ def rotate_window_kinds(batch: dict, angles: np.ndarray, manifest: Mapping, root
         for kind in VECTOR_KINDS:
             if kind in batch:
                 batch[kind] = rotate_vectors(batch[kind], q)
+    if "heading" in batch:  # harmonised axes: a turn about the file's up is one about +Y
+        heading = batch["heading"].astype(np.float64)
+        count, length = heading.shape[:2]
+        origin = np.stack([heading[..., 0], np.zeros_like(heading[..., 0]), heading[..., 1]], axis=-1)
+        turned = turn_by_yaw(origin.reshape(-1, 3), np.repeat(angles, length)).reshape(count, length, 3)
+        yaw = heading[..., 2] + angles[:, None]
+        batch["heading"] = np.stack([turned[..., 0], turned[..., 2], yaw], axis=-1).astype(batch["heading"].dtype)
     # Rotations stay in the file's world, whose up the positions' may not be (harmonised frames).
     q = about_up(manifest.get("rotations_up") or up, angles)
     for kind in ROOT_VECTOR_KINDS:

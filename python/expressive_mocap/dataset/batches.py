@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from .augment import UNDEFINED_UNDER_ROTATION, Augment, interpolate, rotate_window_kinds, scale_rates
+from .frames import check_window_frame, to_window_frame
 from .labels import Labels
 from .stats import Normaliser, float_kinds
 from .windows import Windows
@@ -29,7 +30,9 @@ class WindowReader:
     ``augment``: an :class:`~expressive_mocap.dataset.augment.Augment`; ``normaliser``: a
     :class:`~expressive_mocap.dataset.stats.Normaliser` applied to the kinds it has statistics
     of (after augmentation, before noise); ``labels``: :class:`~expressive_mocap.dataset.labels.Labels`
-    of the dataset's clips."""
+    of the dataset's clips; ``frame``: ``"stored"`` (as the dataset holds them) or ``"window"``
+    (each window in its first frame's heading frame, :mod:`~expressive_mocap.dataset.frames`,
+    before the rotation augmentation)."""
 
     def __init__(
         self,
@@ -39,8 +42,15 @@ class WindowReader:
         augment: Augment | None = None,
         normaliser: Normaliser | None = None,
         labels: Labels | None = None,
+        frame: str = "stored",
     ):
         kinds = list(dataset.arrays) if kinds is None else list(kinds)
+        if frame not in ("stored", "window"):
+            raise ArgumentError(f"argument `frame`: 'stored' or 'window', got {frame!r}")
+        if frame == "window":
+            check_window_frame(dataset.manifest, dataset.arrays)
+        self.frame, self.offsets = frame, dataset.offsets
+        self.heading = dataset.arrays.get("heading")
         unknown = [k for k in kinds if k not in dataset.arrays]
         if unknown:
             raise ArgumentError(f"argument `kinds`: {unknown} not in this dataset ({', '.join(dataset.arrays)})")
@@ -53,6 +63,14 @@ class WindowReader:
         undefined = [k for k in UNDEFINED_UNDER_ROTATION if k in kinds]
         if augment is not None and augment.rotate and undefined:  # fail now, not in the first batch
             raise ArgumentError(f"rotation augmentation is not defined for {', '.join(undefined)}")
+
+    def _gather(self, kind: str, array, rows: np.ndarray, frac, speeds: np.ndarray) -> np.ndarray:
+        """``array``'s rows ``rows`` (``[B, T]``, or ``[2, B, T]`` mixed at ``frac`` when resampled)."""
+        values = array[rows.ravel()].reshape(rows.shape + array.shape[1:])
+        if frac is not None:
+            values = interpolate(kind, values[0], values[1], frac, self.manifest)
+            values = scale_rates(kind, values, speeds)
+        return values.astype(np.float32, copy=False)
 
     def read(self, indices, rng: np.random.Generator | None = None) -> dict:
         """The windows ``indices`` (of ``self.windows``) as one batch, in the order of their rows
@@ -82,11 +100,14 @@ class WindowReader:
             valid = np.minimum(length, (remaining - 1) // speeds + 1).astype(np.int64)
         batch: dict = {}
         for kind, array in self.arrays.items():
-            values = array[rows.ravel()].reshape(rows.shape + array.shape[1:])
-            if frac is not None:
-                values = interpolate(kind, values[0], values[1], frac, self.manifest)
-                values = scale_rates(kind, values, speeds)
-            batch[kind] = values.astype(np.float32, copy=False)
+            batch[kind] = self._gather(kind, array, rows, frac, speeds)
+        clips = w.clip[idx]
+        if self.frame == "window":
+            heading = batch.get("heading")
+            if heading is None:
+                heading = self._gather("heading", self.heading, rows, frac, speeds)
+            clip_heading = np.asarray(self.heading[self.offsets[clips]])
+            to_window_frame(batch, heading, clip_heading, self.manifest["options"]["positions"])
         if np.any(angles):
             rotate_window_kinds(batch, angles, self.manifest, self.roots)
         if self.normaliser is not None:
@@ -102,7 +123,6 @@ class WindowReader:
             padded = steps >= valid[:, None]
             for kind in batch:
                 batch[kind] = np.where(padded.reshape(padded.shape + (1,) * (batch[kind].ndim - 2)), 0, batch[kind])
-        clips = w.clip[idx]
         batch.update(window=idx, clip=clips, start=w.offset[idx], valid=valid)
         if self.labels is not None:
             batch["labels"] = {f: c[clips] for f, c in self.labels.codes.items()}
@@ -163,6 +183,7 @@ def window_batches(
     shuffle: bool = True,
     seed: int = 0,
     drop_last: bool = False,
+    frame: str = "stored",
 ) -> Batches:
     """Batches of ``length``-frame windows of ``dataset``'s ``clips`` (indices, e.g. a split's; all
     by default) in one call. ``normalise=True`` uses the dataset's statistics
@@ -171,7 +192,7 @@ def window_batches(
     kinds = list(dataset.arrays) if kinds is None else list(kinds)
     floats = [k for k in float_kinds(dataset) if k in kinds]
     normaliser = Normaliser.of(dataset, floats) if normalise is True else normalise
-    reader = WindowReader(dataset, windows, kinds, augment, normaliser or None, labels)
+    reader = WindowReader(dataset, windows, kinds, augment, normaliser or None, labels, frame)
     return Batches(reader, batch_size, shuffle, seed, drop_last)
 
 

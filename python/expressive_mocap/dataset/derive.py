@@ -20,7 +20,7 @@ from ..heading import HeadingFrame, to_heading, turn_by_yaw
 from ..motion import Motion
 
 POSITION_FRAMES = ("world", "root", "heading", "clip")
-DERIVED_KINDS = ("velocities", "accelerations", "root_velocity", "angular_velocities")
+DERIVED_KINDS = ("velocities", "accelerations", "root_velocity", "angular_velocities", "heading")
 # A resampled clip takes the source's every n-th frame as it is when the rates are this close to n:1
 # (files round the frame time: 0.0333333 s for 30 fps).
 RATE_TOLERANCE = 1e-4
@@ -83,10 +83,10 @@ class Options:
     def heading(self, keep) -> bool:
         """Whether the skeleton's heading frame (its up axis at least) is needed for the kinds ``keep``."""
         moving = any(k in keep for k in ("positions", "velocities", "accelerations"))
-        return "root_velocity" in keep or (moving and self.positions != "world")
+        return "root_velocity" in keep or "heading" in keep or (moving and self.positions != "world")
 
     def positions_needed(self, keep) -> bool:
-        return any(k in keep for k in ("positions", "velocities", "accelerations", "root_velocity"))
+        return any(k in keep for k in ("positions", "velocities", "accelerations", "root_velocity", "heading"))
 
     def rotations_needed(self, keep) -> bool:
         return "rotations" in keep or "angular_velocities" in keep
@@ -184,7 +184,7 @@ def _positions(
     where = options.positions
     if frame is None and options.heading(keep):
         raise ArgumentError(f"--positions {where} and root_velocity need the skeleton's heading frame")
-    turned = where in ("heading", "clip") or "root_velocity" in keep
+    turned = where in ("heading", "clip") or "root_velocity" in keep or "heading" in keep
     yaw = np.unwrap(frame.yaw(positions)) if turned else np.zeros(len(positions))
     origin = frame.origin(positions) if turned else np.zeros((len(positions), 3))
     if where == "world":
@@ -207,6 +207,8 @@ def _positions(
         if "accelerations" in keep:
             accelerations = gradient(velocities, starts, frame_time)
             out["accelerations"] = turn_by_yaw(accelerations, -yaw) if where == "heading" else accelerations
+    if "heading" in keep:  # what takes any of the frames back to the world's (harmonised) axes
+        out["heading"] = np.stack([origin[:, 0], origin[:, 2], yaw], axis=-1)
     if "root_velocity" in keep:
         hips = gradient(frame.harmonised(positions[:, frame.hips]), starts, frame_time)
         out["root_velocity"] = np.concatenate(

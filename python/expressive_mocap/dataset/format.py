@@ -38,6 +38,7 @@ KINDS = (
     "accelerations",
     "root_velocity",
     "angular_velocities",
+    "heading",
 )
 MODEL_KINDS = ("activity", "body", "expressive")
 # Values of a rotation in each form of --rotations (representations.KINDS; not imported: reading stays light).

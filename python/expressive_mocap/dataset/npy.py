@@ -67,6 +67,7 @@ def kinds_for(keep: tuple[str, ...], joints: int, width: int = 4) -> list[Kind]:
             (joints, 3),
             "local rotation rates [N, J, 3] (rotation vectors, rad/s, parent's axes)",
         ),
+        "heading": (f32, (3,), "each frame's heading frame [N, 3]: origin x, z (units), yaw (rad), harmonised axes"),
     }
     return [Kind(k, *table[k]) for k in keep]
 

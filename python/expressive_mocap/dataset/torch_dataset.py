@@ -49,12 +49,13 @@ class WindowDataset:
         labels: str | Labels | None = None,
         seed: int = 0,
         check_times: bool = True,
+        frame: str = "stored",
     ):
         self.folder = os.fspath(folder)
         self.length, self.stride, self.padding, self.check_times = length, stride, padding, check_times
         self.kinds = None if kinds is None else list(kinds)
         self.clips = None if clips is None else np.asarray(clips, dtype=np.int64)
-        self.augment, self.seed, self.epoch = augment, seed, 0
+        self.augment, self.seed, self.epoch, self.frame = augment, seed, 0, frame
         self.labels = BANDAI if labels == "bandai" else labels
         self._reader: WindowReader | None = None
         self._dataset: Any = None
@@ -75,7 +76,7 @@ class WindowDataset:
             dataset = load_dataset(self.folder, check_times=self.check_times)
             windows = Windows(dataset, self.length, self.stride, self.padding, self.clips)
             labels = Labels.from_names(dataset, self.labels) if isinstance(self.labels, str) else self.labels
-            self._reader = WindowReader(dataset, windows, self.kinds, self.augment, self.normaliser, labels)
+            self._reader = WindowReader(dataset, windows, self.kinds, self.augment, self.normaliser, labels, self.frame)
             self._dataset = dataset
         return self._reader
 
