@@ -4,10 +4,13 @@ one a single-machine run writes."""
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
+import time
 from collections import deque
 from collections.abc import Callable, Iterator
 
-from ..errors import ArgumentError
+from ..errors import ArgumentError, DatasetError
 from .sources import Item
 from .work import Outcome, compute, load_model
 
@@ -52,9 +55,20 @@ def remote_batch(
         return compute(batch, keep, _MODELS.get(model), model_float32, canonical)
 
 
+# How long a run waits for a cluster with no worker (none started yet, or all of them gone)
+# before it stops, its batches written so far kept for the rerun.
+WAIT_FOR_WORKERS = 60.0
+
+
 def on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
     """As :func:`~.pipeline.local`, the batches run on a Dask cluster: a few per worker in flight,
-    results taken back in order (memory stays bounded, the output is written in order)."""
+    results taken back in order (memory stays bounded, the output is written in order).
+
+    A batch whose worker dies is run again by the scheduler on another worker. A cluster without
+    workers for :data:`WAIT_FOR_WORKERS` seconds, a lost scheduler, or a batch that killed every
+    worker it was given, stop the run with a :class:`DatasetError` (the batches written so far
+    stay: the same command resumes after them)."""
+    _wait_for_workers(client)
     window = 2 * max(1, len(client.scheduler_info().get("workers", {})))
     running: deque = deque()
     for count, batch in enumerate(batches):
@@ -64,10 +78,58 @@ def on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
         running.append((batch, client.submit(remote_batch, batch, *work, pure=False)))
         if len(running) >= window:
             done, future = running.popleft()
-            yield (done, *future.result())
+            yield (done, *_result(client, future, done))
     while running:
         done, future = running.popleft()
-        yield (done, *future.result())
+        yield (done, *_result(client, future, done))
+
+
+_RESUME = "the batches written so far are kept: run the same command again to resume"
+
+
+def _wait_for_workers(client) -> None:
+    from distributed import TimeoutError as DaskTimeout
+
+    try:
+        client.wait_for_workers(1, timeout=WAIT_FOR_WORKERS)
+    except DaskTimeout:
+        raise DatasetError(
+            f"the Dask scheduler at {client.scheduler.address} has no workers (waited {WAIT_FOR_WORKERS:.0f} s): "
+            "start some with `dask worker ADDRESS` on machines that can read SRC"
+        ) from None
+
+
+def _result(client, future, batch: list[Item]) -> tuple:
+    """A batch's result, waiting while the cluster has workers; an error that says what happened
+    (and that the run resumes) when it cannot come."""
+    from distributed import KilledWorker
+    from distributed import TimeoutError as DaskTimeout
+    from distributed.comm import CommClosedError
+
+    idle_since: float | None = None
+    while True:
+        try:
+            return future.result(timeout=1.0)
+        except DaskTimeout:
+            if client.nthreads():
+                idle_since = None
+                continue
+            idle_since = idle_since or time.monotonic()
+            if time.monotonic() - idle_since > WAIT_FOR_WORKERS:
+                future.cancel()
+                raise DatasetError(
+                    f"every worker of the Dask cluster at {client.scheduler.address} has gone "
+                    f"(none for {WAIT_FOR_WORKERS:.0f} s); {_RESUME}"
+                ) from None
+        except KilledWorker:
+            raise DatasetError(
+                f"the batch of clips {batch[0].name} .. {batch[-1].name} killed every Dask worker that ran it "
+                f"(out of memory? try a smaller --batch-mb); {_RESUME}"
+            ) from None
+        except (concurrent.futures.CancelledError, asyncio.CancelledError, CommClosedError) as error:
+            # Cancelled: the client lost the scheduler; closed: also the connection fetching the result.
+            reason = getattr(error, "reason", None) or str(error).rsplit(": ", 1)[-1] or type(error).__name__
+            raise DatasetError(f"lost the Dask scheduler at {client.scheduler.address} ({reason}); {_RESUME}") from None
 
 
 __all__ = ["client_for", "on_cluster", "remote_batch"]
