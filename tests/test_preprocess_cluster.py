@@ -287,6 +287,11 @@ def test_a_cluster_without_workers_stops_the_run_and_it_resumes(clips, local, tm
     kw = dict(keep="positions,rotations,features,contacts,activity", model="", batch_mb=0.25, progress=False)
     out = tmp_path / "ds"
     with dask_cluster(tmp_path / "none", workers=0) as cluster:
+        client, close = cluster_module.client_for(cluster.address)
+        try:  # results come from the workers, not relayed by the scheduler (twice the traffic)
+            assert client.direct_to_workers is True
+        finally:
+            close()
         with pytest.raises(DatasetError, match="has no workers .waited 2 s.: start some with `dask worker"):
             bounded(preprocess, clips, out, cluster=cluster.address, **kw)
     with dask_cluster(tmp_path / "one", workers=1) as cluster:
