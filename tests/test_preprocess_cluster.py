@@ -96,8 +96,6 @@ def env_for(marks: Path | None) -> dict:
     env = {**os.environ, "PYTHONPATH": PACKAGE_ROOT}
     if marks is not None:
         env["EXPRESSIVE_MOCAP_TEST_MARKS"] = str(marks)
-    # A client that lost its scheduler gives up after this, not Dask's default 30 s.
-    env["DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT"] = "5s"
     return env
 
 
