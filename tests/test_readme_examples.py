@@ -39,6 +39,8 @@ PAGES = [
     "docs/decoupling.md",
     "docs/exaggeration.md",
     "docs/preprocessing.md",
+    "docs/cluster.md",
+    "docs/ml_datasets.md",
     "docs/speed.md",
     "docs/safety.md",
     "docs/methods.md",
