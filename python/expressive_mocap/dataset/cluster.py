@@ -109,30 +109,40 @@ def _result(client, future, batch: list[Item]) -> tuple:
     from distributed import TimeoutError as DaskTimeout
     from distributed.comm import CommClosedError
 
+    # Cancelled: the client lost the scheduler; closed: a connection to it or to a worker.
+    lost = (concurrent.futures.CancelledError, asyncio.CancelledError, CommClosedError)
     idle_since: float | None = None
     while True:
         try:
             return future.result(timeout=1.0)
         except DaskTimeout:
-            if client.nthreads():
-                idle_since = None
-                continue
-            idle_since = idle_since or time.monotonic()
-            if time.monotonic() - idle_since > WAIT_FOR_WORKERS:
-                future.cancel()
-                raise DatasetError(
-                    f"every worker of the Dask cluster at {client.scheduler.address} has gone "
-                    f"(none for {WAIT_FOR_WORKERS:.0f} s); {_RESUME}"
-                ) from None
+            pass
         except KilledWorker:
             raise DatasetError(
                 f"the batch of clips {batch[0].name} .. {batch[-1].name} killed every Dask worker that ran it "
                 f"(out of memory? try a smaller --batch-mb); {_RESUME}"
             ) from None
-        except (concurrent.futures.CancelledError, asyncio.CancelledError, CommClosedError) as error:
-            # Cancelled: the client lost the scheduler; closed: also the connection fetching the result.
-            reason = getattr(error, "reason", None) or str(error).rsplit(": ", 1)[-1] or type(error).__name__
-            raise DatasetError(f"lost the Dask scheduler at {client.scheduler.address} ({reason}); {_RESUME}") from None
+        except lost as error:
+            raise _lost(client, error) from None
+        try:
+            workers = len(client.nthreads())
+        except (*lost, OSError) as error:
+            raise _lost(client, error) from None
+        if workers:
+            idle_since = None
+            continue
+        idle_since = idle_since or time.monotonic()
+        if time.monotonic() - idle_since > WAIT_FOR_WORKERS:
+            future.cancel()
+            raise DatasetError(
+                f"every worker of the Dask cluster at {client.scheduler.address} has gone "
+                f"(none for {WAIT_FOR_WORKERS:.0f} s); {_RESUME}"
+            )
+
+
+def _lost(client, error: BaseException) -> DatasetError:
+    reason = getattr(error, "reason", None) or str(error).rsplit(": ", 1)[-1] or type(error).__name__
+    return DatasetError(f"lost the Dask scheduler at {client.scheduler.address} ({reason}); {_RESUME}")
 
 
 __all__ = ["client_for", "on_cluster", "remote_batch"]
