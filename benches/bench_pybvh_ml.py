@@ -273,13 +273,14 @@ def main() -> None:
         f"- pybvh-ml: `preprocess_directory(SRC, OUT.npz, {', '.join(f'{k}={v!r}' for k, v in PYBVH_ML.items())})`",
         f"- ours: `expressive-mocap preprocess SRC -o OUT {' '.join(ours_options)} -q` ({ours_note})",
         "",
-        "| program | runs | process wall s | the call s | imports s | peak RSS | output |",
-        "|---|---|---|---|---|---|---|",
+        "| program | runs | process wall s | (min-max) | the call s | imports s | peak RSS | output |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for kind, label in (("pybvh-ml", f"pybvh-ml {pybvh_ml.__version__}"), ("ours", "expressive-mocap")):
         m = median[kind]
         lines.append(
-            f"| {label} | {len(times[kind])} | {m['wall']:.2f} | {m['call']:.2f} | {m['imports']:.2f} | "
+            f"| {label} | {len(times[kind])} | {m['wall']:.2f} | ({min(r['wall'] for r in times[kind]):.2f}-"
+            f"{max(r['wall'] for r in times[kind]):.2f}) | {m['call']:.2f} | {m['imports']:.2f} | "
             f"{m['peak'] / 1e6:.0f} MB | {m['output'] / 1e6:.0f} MB |"
         )
     verdict = {r: "**pass**" if r >= 20 else "**fail**" for r in (ratio_wall, ratio_call)}
