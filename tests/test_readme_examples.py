@@ -40,6 +40,8 @@ PAGES = [
     "docs/exaggeration.md",
     "docs/preprocessing.md",
     "docs/training.md",
+    "docs/cluster.md",
+    "docs/ml_datasets.md",
     "docs/speed.md",
     "docs/safety.md",
     "docs/methods.md",

@@ -4,10 +4,13 @@ one a single-machine run writes."""
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
+import time
 from collections import deque
 from collections.abc import Callable, Iterator
 
-from ..errors import ArgumentError
+from ..errors import ArgumentError, DatasetError
 from .sources import Item
 from .work import PLAIN, Outcome, compute, load_model
 
@@ -24,14 +27,17 @@ def client_for(cluster) -> tuple:
         local = LocalCluster(
             n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
         )
-        client = Client(local)
+        client = Client(local, direct_to_workers=True)
 
         def close() -> None:
             client.close()
             local.close()
 
         return client, close
-    client = Client(str(cluster))
+    # Results fetched from the workers themselves: by default a client outside the cluster has
+    # the scheduler relay them, every batch's arrays crossing the network twice (if a worker
+    # cannot be reached from here, Dask falls back to the relay for its results).
+    client = Client(str(cluster), direct_to_workers=True)
     closer: Callable[[], None] = client.close
     return client, closer
 
@@ -52,9 +58,20 @@ def remote_batch(
         return compute(batch, keep, _MODELS.get(model), model_float32, canonical, options)
 
 
+# How long a run waits for a cluster with no worker (none started yet, or all of them gone)
+# before it stops, its batches written so far kept for the rerun.
+WAIT_FOR_WORKERS = 60.0
+
+
 def on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
     """As :func:`~.pipeline.local`, the batches run on a Dask cluster: a few per worker in flight,
-    results taken back in order (memory stays bounded, the output is written in order)."""
+    results taken back in order (memory stays bounded, the output is written in order).
+
+    A batch whose worker dies is run again by the scheduler on another worker. A cluster without
+    workers for :data:`WAIT_FOR_WORKERS` seconds, a lost scheduler, or a batch that killed every
+    worker it was given, stop the run with a :class:`DatasetError` (the batches written so far
+    stay: the same command resumes after them)."""
+    _wait_for_workers(client)
     window = 2 * max(1, len(client.scheduler_info().get("workers", {})))
     running: deque = deque()
     for count, batch in enumerate(batches):
@@ -64,10 +81,68 @@ def on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
         running.append((batch, client.submit(remote_batch, batch, *work, pure=False)))
         if len(running) >= window:
             done, future = running.popleft()
-            yield (done, *future.result())
+            yield (done, *_result(client, future, done))
     while running:
         done, future = running.popleft()
-        yield (done, *future.result())
+        yield (done, *_result(client, future, done))
+
+
+_RESUME = "the batches written so far are kept: run the same command again to resume"
+
+
+def _wait_for_workers(client) -> None:
+    from distributed import TimeoutError as DaskTimeout
+
+    try:
+        client.wait_for_workers(1, timeout=WAIT_FOR_WORKERS)
+    except DaskTimeout:
+        raise DatasetError(
+            f"the Dask scheduler at {client.scheduler.address} has no workers (waited {WAIT_FOR_WORKERS:.0f} s): "
+            "start some with `dask worker ADDRESS` on machines that can read SRC"
+        ) from None
+
+
+def _result(client, future, batch: list[Item]) -> tuple:
+    """A batch's result, waiting while the cluster has workers; an error that says what happened
+    (and that the run resumes) when it cannot come."""
+    from distributed import KilledWorker
+    from distributed import TimeoutError as DaskTimeout
+    from distributed.comm import CommClosedError
+
+    # Cancelled: the client lost the scheduler; closed: a connection to it or to a worker.
+    lost = (concurrent.futures.CancelledError, asyncio.CancelledError, CommClosedError)
+    idle_since: float | None = None
+    while True:
+        try:
+            return future.result(timeout=1.0)
+        except DaskTimeout:
+            pass
+        except KilledWorker:
+            raise DatasetError(
+                f"the batch of clips {batch[0].name} .. {batch[-1].name} killed every Dask worker that ran it "
+                f"(out of memory? try a smaller --batch-mb); {_RESUME}"
+            ) from None
+        except lost as error:
+            raise _lost(client, error) from None
+        try:
+            workers = len(client.nthreads())
+        except (*lost, OSError) as error:
+            raise _lost(client, error) from None
+        if workers:
+            idle_since = None
+            continue
+        idle_since = idle_since or time.monotonic()
+        if time.monotonic() - idle_since > WAIT_FOR_WORKERS:
+            future.cancel()
+            raise DatasetError(
+                f"every worker of the Dask cluster at {client.scheduler.address} has gone "
+                f"(none for {WAIT_FOR_WORKERS:.0f} s); {_RESUME}"
+            )
+
+
+def _lost(client, error: BaseException) -> DatasetError:
+    reason = getattr(error, "reason", None) or str(error).rsplit(": ", 1)[-1] or type(error).__name__
+    return DatasetError(f"lost the Dask scheduler at {client.scheduler.address} ({reason}); {_RESUME}")
 
 
 __all__ = ["client_for", "on_cluster", "remote_batch"]
