@@ -140,14 +140,14 @@ def timing_factors(
 
 
 def time_warp(n_frames: int, cycles: Sequence[Cycle], duration: float) -> np.ndarray:
-    """Fractional input frames ``[F']`` at each output frame when the span of ``cycles`` lasts
-    ``duration`` times as long (frames before and after it keep their pace)."""
-    a, b = cycles[0].start, cycles[-1].end
-    last = a + (b - a) * duration + (n_frames - 1 - b)  # the last input frame's time, in output frames
-    t = np.arange(int(np.floor(last + 1e-9)) + 1, dtype=np.float64)
-    end = a + (b - a) * duration  # the span's last frame, in output frames
-    u = np.where(t <= a, t, np.where(t <= end, a + (t - a) / duration, t - end + b))
-    return np.clip(u, 0.0, n_frames - 1)
+    """Fractional input frames ``[F']`` at each output frame when the motion lasts ``duration``
+    times as long: its partial cycles before the first whole one and after the last take the new
+    tempo too (kept at the input's, they left a jump in tempo at the first and last footstrike of
+    the span, and the edit short of the cycle duration it maps to: 0.95 of the dataset-2 training
+    people's active cadence instead of 1.0). ``cycles``: the edited cycles (only their presence
+    matters; the hips' travel is scaled over their span alone, see :func:`retime`)."""
+    t = np.arange(int(np.floor((n_frames - 1) * duration + 1e-9)) + 1, dtype=np.float64)
+    return np.clip(t / duration, 0.0, n_frames - 1)
 
 
 def retime(
