@@ -14,6 +14,8 @@ import time
 
 from expressive_mocap.dataset import Augment, load_dataset, window_batches
 
+LENGTH, STRIDE, BATCH = 64, 16, 256  # frames a window, frames between windows, windows a batch
+
 CASES = {
     "plain": {},
     "normalised": {"normalise": True},
@@ -31,7 +33,7 @@ def rate(loader, batches: int) -> float:
     for repeat in range(3):
         frames, start = 0, time.perf_counter()
         for i, batch in enumerate(loader.epoch(repeat)):
-            frames += batch["positions"].shape[0] * batch["positions"].shape[1]
+            frames += batch["clip"].shape[0] * LENGTH
             if i + 1 == batches:
                 break
         best = max(best, frames / (time.perf_counter() - start))
@@ -49,15 +51,16 @@ def main() -> None:
     print(ds)
     wanted = args.kinds.split(",") if args.kinds else ("positions", "rotations", "contacts")
     kinds = [k for k in wanted if k in ds.kinds]
-    warm = window_batches(ds, 64, 16, batch_size=256, kinds=kinds, shuffle=False)
+    warm = window_batches(ds, LENGTH, STRIDE, batch_size=BATCH, kinds=kinds, shuffle=False)
     for _ in warm.epoch(0):  # the page cache
         pass
-    print(f"{len(warm.reader.windows):,} windows of 64 frames, stride 16; batches of 256; kinds {', '.join(kinds)}")
+    windows = len(warm.reader.windows)
+    print(f"{windows:,} windows of {LENGTH} frames, stride {STRIDE}; batches of {BATCH}; kinds {', '.join(kinds)}")
     print("| case | frames/s | batches/s |\n|---|---|---|")
     for name, options in CASES.items():
-        loader = window_batches(ds, 64, 16, batch_size=256, kinds=kinds, seed=0, **options)
+        loader = window_batches(ds, LENGTH, STRIDE, batch_size=BATCH, kinds=kinds, seed=0, **options)
         frames = rate(loader, args.batches)
-        print(f"| {name} | {frames / 1e6:.2f} M | {frames / (256 * 64):.0f} |")
+        print(f"| {name} | {frames / 1e6:.2f} M | {frames / (BATCH * LENGTH):.0f} |")
     if args.torch:
         torch_rates(args.dataset, kinds, args.batches)
 
@@ -68,10 +71,10 @@ def torch_rates(folder: str, kinds: list[str], batches: int) -> None:
 
     from expressive_mocap.dataset import WindowDataset
 
-    print("\nPyTorch DataLoader over WindowDataset (batch 256, shuffled; tensors delivered)")
+    print(f"\nPyTorch DataLoader over WindowDataset (batch {BATCH}, shuffled; tensors delivered)")
     print("| case | workers | frames/s |\n|---|---|---|")
     for name, augment in (("plain", None), ("rotation + speed", Augment(rotate=True, speed=(0.8, 1.25)))):
-        dataset = WindowDataset(folder, 64, 16, kinds=kinds, augment=augment)
+        dataset = WindowDataset(folder, LENGTH, STRIDE, kinds=kinds, augment=augment)
         for workers in (0, 2):
             loader = torch.utils.data.DataLoader(
                 dataset, batch_size=256, shuffle=True, num_workers=workers, persistent_workers=workers > 0
@@ -80,12 +83,12 @@ def torch_rates(folder: str, kinds: list[str], batches: int) -> None:
             for _ in range(3):
                 frames, start = 0, time.perf_counter()
                 for i, batch in enumerate(loader):
-                    frames += batch["positions"].shape[0] * batch["positions"].shape[1]
+                    frames += batch["clip"].shape[0] * LENGTH
                     if i + 1 == batches:
                         break
                 best = max(best, frames / (time.perf_counter() - start))
             print(f"| {name} | {workers} | {best / 1e6:.2f} M |")
-        sampler = torch.utils.data.BatchSampler(torch.utils.data.RandomSampler(dataset), 256, drop_last=False)
+        sampler = torch.utils.data.BatchSampler(torch.utils.data.RandomSampler(dataset), BATCH, drop_last=False)
         for workers in (0, 2):
             loader = torch.utils.data.DataLoader(
                 dataset, batch_size=None, sampler=sampler, num_workers=workers, persistent_workers=workers > 0
@@ -94,7 +97,7 @@ def torch_rates(folder: str, kinds: list[str], batches: int) -> None:
             for _ in range(3):
                 frames, start = 0, time.perf_counter()
                 for i, batch in enumerate(loader):
-                    frames += batch["positions"].shape[0] * batch["positions"].shape[1]
+                    frames += batch["clip"].shape[0] * LENGTH
                     if i + 1 == batches:
                         break
                 best = max(best, frames / (time.perf_counter() - start))
