@@ -14,17 +14,29 @@ def finished_manifest(out: Path) -> dict | None:
     """The manifest of the finished dataset in ``out``, None when there is none, after refusing a
     folder that is not ours to write: not a folder, a ``.partial`` that is not a real folder
     (a link would make us write elsewhere), or a non-empty folder that holds neither a dataset
-    nor an unfinished run (the user's own files are never replaced)."""
+    nor an unfinished run (the user's own files are never replaced).
+
+    Another run may be changing ``out`` meanwhile (this is called before the lock is taken, and
+    again under it): the folder is judged from one listing of its names, and a file that goes
+    while it is read means a run at work, left to the lock to name."""
     if not out.exists():
         return None
     if not out.is_dir():
         raise DatasetError(f"{out}: not a folder (a dataset is a folder)")
+    try:
+        return _judged(out, set(os.listdir(out)))
+    except FileNotFoundError:  # a run renaming its files into place right now
+        return None
+
+
+def _judged(out: Path, names: set[str]) -> dict | None:
+    """:func:`finished_manifest` of ``out`` whose names were ``names`` when listed."""
     partial = out / PARTIAL
-    if partial.is_symlink() or (partial.exists() and not partial.is_dir()):
+    if PARTIAL in names and (partial.is_symlink() or (partial.exists() and not partial.is_dir())):
         raise DatasetError(f"{partial}: not a folder of ours (a link or a file); move it away")
-    if (out / MANIFEST).exists():
+    if MANIFEST in names:
         return read_manifest(out / MANIFEST)
-    if partial.exists():
+    if PARTIAL in names:
         # Without run.json: a run of ours starting (another process making it right now) or
         # killed as it started, if it holds only our names; anything else is not ours.
         if not (partial / RUN).is_file() and not all(_ours(name) for name in os.listdir(partial)):
@@ -37,7 +49,7 @@ def finished_manifest(out: Path) -> dict | None:
                     "not ours to replace; move them away"
                 )
         return None
-    foreign = sorted(set(os.listdir(out)) - {LOCK})
+    foreign = sorted(names - {LOCK})
     if foreign:
         shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5 else "")
         raise DatasetError(f"{out} is not empty ({shown}) and holds no dataset: choose a new or empty folder")

@@ -25,6 +25,25 @@ class FolderLock:
         self.path = folder / LOCK
         self.handle: int | None = None
 
+    def refuse_if_held(self) -> None:
+        """Raise the error :meth:`__enter__` would if another run holds the lock now, creating
+        nothing (no lock file: nobody holds it). For the checks made before locking: a folder
+        another run is writing is named as that, not judged half-written."""
+        import fcntl
+
+        try:
+            handle = os.open(self.path, os.O_RDONLY | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0))
+        except OSError:
+            return  # none yet, or not ours to open: __enter__ says which
+        try:
+            fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise self._busy(handle) from None
+        except OSError:
+            pass
+        finally:
+            os.close(handle)
+
     def __enter__(self) -> FolderLock:
         import fcntl
 
@@ -35,11 +54,9 @@ class FolderLock:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            holder = _holder(handle)
+            busy = self._busy(handle)
             os.close(handle)
-            raise DatasetError(
-                f"{self.folder} is being written by another run ({holder}); wait for it to end or stop it"
-            ) from None
+            raise busy from None
         except OSError as error:
             os.close(handle)
             raise DatasetError(f"cannot lock {self.path}: {error.strerror or error}") from None
@@ -53,6 +70,10 @@ class FolderLock:
         os.pwrite(handle, json.dumps(record).encode(), 0)
         self.handle = handle
         return self
+
+    def _busy(self, handle: int) -> DatasetError:
+        holder = _holder(handle)
+        return DatasetError(f"{self.folder} is being written by another run ({holder}); wait for it to end or stop it")
 
     def __exit__(self, *exc) -> None:
         if self.handle is not None:

@@ -100,6 +100,7 @@ def preprocess(
     settings = _Settings(kept, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress,
                          shaping)  # fmt: skip
 
+    FolderLock(out).refuse_if_held()  # a folder another run is writing: say so, not judge it mid-change
     finished_manifest(out)  # refuse a folder that is not ours before putting a lock file in it
     source = open_source(src)  # a bad SRC fails before OUT is touched
     try:
