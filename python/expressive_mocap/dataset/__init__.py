@@ -55,6 +55,7 @@ mtime, and :func:`load_dataset` refuses files that do not match it.
 The modules: :mod:`.sources` (the clips of SRC), :mod:`.work` (one batch's headers and
 kernels; the model through :func:`expressive_mocap.decoupling.decompose_many`), :mod:`.derive`
 (the model-ready forms: rotation forms, position frames, time derivatives, resampling),
+:mod:`.forms` (a batch's forms after its kernels: mirror images, heading frame, sums),
 :mod:`.stats` (normalisation statistics), :mod:`.pipeline` (threads on
 this machine), :mod:`.cluster` (Dask), :mod:`.collect` (a batch's outcomes into its journal
 record), :mod:`.npy` (the data files written in pieces), :mod:`.journal`, :mod:`.finish` (the

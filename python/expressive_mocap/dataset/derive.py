@@ -225,7 +225,7 @@ def totals(arrays: list[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
     rows = sum(len(a) for a in arrays)
     shape = arrays[0].shape[1:]
     first, second = np.zeros(shape), np.zeros(shape)
-    for start in range(0, len(arrays), 64):  # a few MB at a time (see .work.CHUNK_FRAMES)
+    for start in range(0, len(arrays), 64):  # a few MB at a time (see .forms.CHUNK_FRAMES)
         part = arrays[start : start + 64]
         flat = (np.concatenate(part) if len(part) > 1 else part[0]).reshape(-1, first.size)
         first += flat.sum(axis=0, dtype=np.float64).reshape(shape)

@@ -17,11 +17,11 @@ from ..bvh import block_error, read_error
 from ..decoupling.algebra import decompose_many
 from ..errors import BVHError, MocapError, ModelError
 from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
-from ..heading import HeadingFrame
 from ..motion import Motion, Skeleton
 from ..roles import JointRoles, actor_height, hips_rest_height
-from .derive import Options, derive, resampled, totals
+from .derive import Options, resampled
 from .format import MODEL_KINDS
+from .forms import add_sums, chunks, derive_group, heading_frame, mirror_values
 from .sources import Item
 
 PLAIN = Options()  # the stored forms of a run without model-ready options
@@ -365,11 +365,11 @@ def run_kernels(
                 done.append((outcomes[k].values, result, clip.frame_time))
                 if group.mirrors:
                     image = results[len(group.clips) + number]
-                    outcomes[k].mirrored = mirrored = _mirror_values(outcomes[k].values, image, keep)
+                    outcomes[k].mirrored = mirrored = mirror_values(outcomes[k].values, image, keep)
                     done.append((mirrored, image, clip.frame_time))
-        frame = _frame(group, [outcomes[k] for k in group.indices], done, keep, options)
+        frame = heading_frame(group, [outcomes[k] for k in group.indices], done, keep, options)
         if not plain and done and frame is not False:
-            _derive_group(group, done, keep, options, frame)
+            derive_group(group, done, keep, options, frame)
         if use_model and frame is not False:
             kept += [(values, result[1], result[2][-1]) for values, result, _ in done]
         if done:
@@ -379,98 +379,8 @@ def run_kernels(
         parts = decompose_many([r for _, r, _ in kept], [f for _, _, f in kept], model, model_float32)
         for (values, _, _), clip_parts in zip(kept, parts):
             values.update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
-    _sums(finished, keep)
+    add_sums(finished, keep)
     return outcomes, prepared.seconds, time.perf_counter() - start
-
-
-def _mirror_values(values: dict, result, keep: tuple[str, ...]) -> dict:
-    """A clip's mirror image's values (kind -> array) from its kernel ``result``: contacts are the
-    clip's own, left for right (the image's feet are the clip's, swapped)."""
-    if isinstance(result, Exception):  # arrays the clip's own kernel read: not expected to fail
-        raise result
-    positions, rotations, features, _ = result
-    mirrored = {"positions": positions, "rotations": rotations}
-    if "features" in keep:
-        mirrored["features"] = features[0].astype(np.float32)
-    if "contacts" in keep:
-        mirrored["contacts"] = np.ascontiguousarray(values["contacts"][:, ::-1])
-    return {kind: v for kind, v in mirrored.items() if kind in keep}
-
-
-def _frame(group: Group, outcomes: list[Outcome], done: list, keep: tuple[str, ...], options: Options):
-    """The heading frame of a hierarchy whose clips that succeeded are ``done`` (None: no world
-    positions, or no frame found where the kinds kept do not need one; False: not found where
-    they do, and the clips failed), its up axis in each outcome."""
-    if not done or done[0][1][0] is None:
-        return None
-    sample = np.concatenate([r[0][:: max(1, len(r[0]) // 8)] for _, r, _ in done[:64]])
-    try:
-        frame = HeadingFrame.of(group.skeleton or group.headers[0].skeleton, sample)
-    except MocapError as error:
-        if not options.heading(keep):
-            return None
-        for outcome in outcomes:
-            if outcome.error is None:
-                outcome.error = f"no heading frame for --positions {options.positions}: {error}"
-        return False
-    for outcome in outcomes:
-        outcome.up = frame.up
-    return frame
-
-
-def _derive_group(group: Group, done: list, keep: tuple[str, ...], options: Options, frame) -> None:
-    """The stored forms (:func:`.derive.derive`) of a hierarchy's clips and mirror images that
-    succeeded, ``done`` ``(values, kernel result, frame time)``, a chunk of clips at a time
-    (:func:`chunks`); each clip's slices into its values."""
-    root = int(np.flatnonzero(group.parents < 0)[0])
-    for part in chunks(done, lambda entry: len(entry[1][0] if entry[1][0] is not None else entry[1][1])):
-        positions = [r[0] for _, r, _ in part] if part[0][1][0] is not None else None
-        frames = np.array([len(r[0] if r[0] is not None else r[1]) for _, r, _ in part])
-        starts = np.concatenate([[0], np.cumsum(frames)[:-1]])
-        stored = derive(
-            keep,
-            options,
-            np.concatenate(positions) if positions is not None else None,
-            np.concatenate([r[1] for _, r, _ in part]) if part[0][1][1] is not None else None,
-            starts,
-            np.repeat([t for _, _, t in part], frames),
-            frame,
-            root,
-        )
-        for (values, _, _), first, count in zip(part, starts, frames):
-            values.update({kind: array[first : first + count] for kind, array in stored.items()})
-
-
-# Frames a chunk of clips holds when derived or mirrored together: arrays of a few MB, which the
-# allocator reuses chunk after chunk; a whole batch's arrays at once (hundreds of MB) were fresh
-# pages every time, and faulting them in took a third of the run (system time).
-CHUNK_FRAMES = 8192
-
-
-def chunks(items: list, frames) -> list[list]:
-    """``items`` in consecutive runs of about :data:`CHUNK_FRAMES` frames (``frames(item)``) each."""
-    out: list[list] = [[]]
-    count = 0
-    for item in items:
-        if out[-1] and count + frames(item) > CHUNK_FRAMES:
-            out.append([])
-            count = 0
-        out[-1].append(item)
-        count += frames(item)
-    return out
-
-
-def _sums(finished: list, keep: tuple[str, ...]) -> None:
-    """The float64 sums of rows and squares (:func:`.derive.totals`) per float kind kept over each
-    hierarchy's clips and mirror images that succeeded, ``finished`` ``(outcome, [values])``,
-    into that outcome's ``sums``: one reduction a kind over a group, not one a clip."""
-    for carrier, done in finished:
-        if carrier.error is not None:  # the group failed after its kernel (no heading frame)
-            continue
-        for kind in keep:
-            arrays = [values[kind] for values in done if kind in values and values[kind].dtype.kind == "f"]
-            if arrays:
-                carrier.sums[kind] = totals(arrays)
 
 
 def _finish_clip(
@@ -483,7 +393,7 @@ def _finish_clip(
     plain: bool = True,
 ) -> bool:
     """One clip's kernel ``result`` into its outcome: its arrays as stored (but positions and
-    rotations only when ``plain``: else :func:`_derive_group` stores them), or its error. True if
+    rotations only when ``plain``: else :func:`.forms.derive_group` stores them), or its error. True if
     it succeeded."""
     if isinstance(clip, ops.ClipInput) and isinstance(clip.source, str) and not isinstance(result, OSError):
         # the kernel read the file whole
