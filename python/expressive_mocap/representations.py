@@ -122,9 +122,11 @@ def interpolate(a, b, t, kind: str, order: str = "ZXY") -> np.ndarray:
     linearly then made a rotation again (Gram-Schmidt on the first two columns): within 0.012
     degrees of slerp for rotations 3 degrees apart (0.13 for 10; neighbouring frames of a motion),
     at a tenth of the cost of going through quaternions; other forms through quaternions (nlerp
-    along the shorter arc, within 4e-5 degrees of slerp at 3)."""
+    along the shorter arc, within 4e-5 degrees of slerp at 3; quaternions as they are)."""
     a, b = np.asarray(a), np.asarray(b)
     t = np.asarray(t, dtype=a.dtype)
+    if kind == "quaternion":
+        return nlerp(a, b, t)
     if kind in ("6d", "matrix"):
         mixed = a + (b - a) * t
         if kind == "matrix":
@@ -132,9 +134,22 @@ def interpolate(a, b, t, kind: str, order: str = "ZXY") -> np.ndarray:
             first, second = _gram_schmidt(columns.reshape(mixed.shape[:-1] + (6,)))
             return np.stack([first, second, np.cross(first, second)], axis=-1).reshape(mixed.shape).astype(a.dtype)
         return np.concatenate(_gram_schmidt(mixed), axis=-1).astype(a.dtype)
-    qa, qb = decode(a, kind, order), decode(b, kind, order)
-    qb = np.where(np.sum(qa * qb, axis=-1, keepdims=True) < 0, -qb, qb)
-    return encode(quat.normalize(qa + (qb - qa) * t), kind, order).astype(a.dtype)
+    return encode(nlerp(decode(a, kind, order), decode(b, kind, order), t), kind, order).astype(a.dtype)
 
 
-__all__ = ["KINDS", "decode", "encode", "interpolate"]
+def nlerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Quaternions ``[..., 4]`` between ``a`` and ``b`` (shortest arc) at ``t`` (broadcast to
+    ``[..., 1]``), normalised. Between neighbouring frames (a few degrees apart) it differs from
+    slerp by less than float32's precision in angle (the error grows as the angle cubed), at a
+    fraction of slerp's cost."""
+    sign = np.where(np.einsum("...i,...i->...", a, b) < 0, -1.0, 1.0).astype(a.dtype)
+    mixed = b * sign[..., None]
+    mixed -= a
+    mixed *= t
+    mixed += a
+    norm = np.sqrt(np.einsum("...i,...i->...", mixed, mixed))
+    mixed /= norm[..., None]
+    return mixed
+
+
+__all__ = ["KINDS", "decode", "encode", "interpolate", "nlerp"]

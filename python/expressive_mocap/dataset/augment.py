@@ -38,8 +38,8 @@ import numpy as np
 
 from .. import quat, representations
 from ..errors import ArgumentError
-from ..heading import turn_by_yaw
 from ..representations import decode, encode
+from .frames import turn_headings
 
 VECTOR_KINDS = ("positions", "velocities", "accelerations")  # rotated unless in the heading frame
 ROOT_ROTATION_KINDS = ("rotations",)
@@ -138,12 +138,7 @@ def rotate_window_kinds(batch: dict, angles: np.ndarray, manifest: Mapping, root
             if kind in batch:
                 batch[kind] = rotate_vectors(batch[kind], q)
     if "heading" in batch:  # harmonised axes: a turn about the file's up is one about +Y
-        heading = batch["heading"].astype(np.float64)
-        count, length = heading.shape[:2]
-        origin = np.stack([heading[..., 0], np.zeros_like(heading[..., 0]), heading[..., 1]], axis=-1)
-        turned = turn_by_yaw(origin.reshape(-1, 3), np.repeat(angles, length)).reshape(count, length, 3)
-        yaw = heading[..., 2] + angles[:, None]
-        batch["heading"] = np.stack([turned[..., 0], turned[..., 2], yaw], axis=-1).astype(batch["heading"].dtype)
+        batch["heading"] = turn_headings(batch["heading"].astype(np.float64), angles).astype(batch["heading"].dtype)
     # Rotations stay in the file's world, whose up the positions' may not be (harmonised frames).
     q = about_up(manifest.get("rotations_up") or up, angles)
     for kind in ROOT_VECTOR_KINDS:
@@ -164,27 +159,10 @@ def interpolate(kind: str, a: np.ndarray, b: np.ndarray, frac: np.ndarray, manif
         return np.where(at < 0.5, a, b)
     if kind == "rotations" or kind in QUATERNION_KINDS:
         form, order = rotation_form(manifest) if kind == "rotations" else ("quaternion", "ZXY")
-        if form == "quaternion":  # as stored, in float32
-            return nlerp(a, b, at.astype(a.dtype))
         return representations.interpolate(a, b, at, form, order)
     mixed = b - a
     mixed *= at.astype(a.dtype)
     mixed += a
-    return mixed
-
-
-def nlerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Quaternions ``[..., 4]`` between ``a`` and ``b`` (shortest arc) at ``t`` (broadcast to
-    ``[..., 1]``), normalised. Between neighbouring frames (a few degrees apart) it differs from
-    slerp by less than float32's precision in angle (the error grows as the angle cubed), at a
-    fraction of slerp's cost."""
-    sign = np.where(np.einsum("...i,...i->...", a, b) < 0, -1.0, 1.0).astype(a.dtype)
-    mixed = b * sign[..., None]
-    mixed -= a
-    mixed *= t
-    mixed += a
-    norm = np.sqrt(np.einsum("...i,...i->...", mixed, mixed))
-    mixed /= norm[..., None]
     return mixed
 
 
@@ -205,7 +183,6 @@ __all__ = [
     "Augment",
     "about_up",
     "interpolate",
-    "nlerp",
     "rotate_root",
     "rotate_vectors",
     "rotate_window_kinds",

@@ -37,9 +37,13 @@ def check_window_frame(manifest, kinds) -> None:
         raise ArgumentError("window frames need the `heading` kind: preprocess with --keep ...,heading")
 
 
-def _origin(heading: np.ndarray) -> np.ndarray:
-    """``[..., 3]`` heading origins on the floor from headings ``[..., 3]`` (x, z, yaw)."""
-    return np.stack([heading[..., 0], np.zeros_like(heading[..., 0]), heading[..., 1]], axis=-1)
+def turn_headings(heading: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Headings ``[B, T, 3]`` (x, z, yaw) turned about +Y by ``angles [B]``: each origin turned
+    about the world's, each yaw plus the angle."""
+    count, length = heading.shape[:2]
+    origin = np.stack([heading[..., 0], np.zeros_like(heading[..., 0]), heading[..., 1]], axis=-1)
+    turned = turn_by_yaw(origin.reshape(-1, 3), np.repeat(angles, length)).reshape(count, length, 3)
+    return np.stack([turned[..., 0], turned[..., 2], heading[..., 2] + angles[:, None]], axis=-1)
 
 
 def to_window_frame(batch: dict, heading: np.ndarray, clip_heading: np.ndarray, where: str) -> None:
@@ -47,23 +51,22 @@ def to_window_frame(batch: dict, heading: np.ndarray, clip_heading: np.ndarray, 
     heading frame, from each frame's ``heading [B, T, 3]`` and, for ``where == "clip"``, each
     window's clip's first frame's ``clip_heading [B, 3]`` (the frame its positions are stored in)."""
     heading = np.asarray(heading, dtype=np.float64)
-    first = heading[:, 0]
+    first = heading[:, :1] * [1.0, 1.0, 0.0]  # the first frame's origin (its yaw is turned off below)
+    back = -heading[:, 0, 2]  # R_y(-yaw_0)
     stored = heading if where == "heading" else np.broadcast_to(np.asarray(clip_heading)[:, None], heading.shape)
+    seen = turn_headings(stored - first, back)  # each stored frame from the window's first
     count, length = heading.shape[:2]
-    turn = (stored[..., 2] - first[:, None, 2]).reshape(-1)  # [B * T]
-    back = np.repeat(-first[:, 2], length)  # R_y(-yaw_0) per frame
-    shift = turn_by_yaw((_origin(stored) - _origin(first)[:, None]).reshape(-1, 3), back).reshape(count, length, 3)
     for kind in MOVING_KINDS:
         if kind in batch:
             values = batch[kind]
-            turned = turn_by_yaw(values.reshape(count * length, -1, 3), turn).reshape(values.shape)
+            turned = turn_by_yaw(values.reshape(count * length, -1, 3), seen[..., 2].reshape(-1)).reshape(values.shape)
             if kind == "positions":
-                turned += shift[:, :, None, :]
+                turned[..., 0] += seen[..., 0, None]
+                turned[..., 2] += seen[..., 1, None]
             batch[kind] = turned.astype(values.dtype)
     if "heading" in batch:  # each frame's heading as seen from the window's first
-        own = turn_by_yaw((_origin(heading) - _origin(first)[:, None]).reshape(-1, 3), back).reshape(count, length, 3)
-        relative = np.stack([own[..., 0], own[..., 2], heading[..., 2] - first[:, None, 2]], axis=-1)
-        batch["heading"] = relative.astype(batch["heading"].dtype)
+        own = seen if where == "heading" else turn_headings(heading - first, back)
+        batch["heading"] = own.astype(batch["heading"].dtype)
 
 
-__all__ = ["MOVING_KINDS", "STORED_FRAMES", "check_window_frame", "to_window_frame"]
+__all__ = ["MOVING_KINDS", "STORED_FRAMES", "check_window_frame", "to_window_frame", "turn_headings"]
