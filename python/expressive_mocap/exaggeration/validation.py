@@ -169,26 +169,32 @@ def leave_one_out(model: ExaggerationModel) -> list[WarpResult]:
     P = model.trajectories.shape[0]
     if P < 2:
         raise ModelError("leave-one-person-out needs at least two people")
-    settings = model.training
     results = []
     for p in range(P):
-        others = [q for q in range(P) if q != p]
-        fitted = fit(
-            model.trajectories[others], model.levels, model.weights, cycles=model.cycles_of(others),
-            share=settings.share, energy=settings.energy, rank=settings.rank, degree=settings.degree,
-        )  # fmt: skip
-        change = (mapped(fitted.mappings, model.levels[-1]) - mapped(fitted.mappings, model.levels[0])) * fitted.key[
-            :, None
-        ]
+        _, key, warped = _warped_by_the_others(model, p)
         light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
-        warped = light + fitted.basis @ change.T
         reference = model.person_reference[p]
         hp = dof_positions(model, heavy, reference)
         ratio = np.linalg.norm(warped - heavy) / np.linalg.norm(light - heavy)
         light_distance = np.linalg.norm(dof_positions(model, light, reference) - hp)
         positions = np.linalg.norm(dof_positions(model, warped, reference) - hp) / light_distance
-        results.append(WarpResult(str(p), int(fitted.key.sum()), float(ratio), float(positions)))
+        results.append(WarpResult(str(p), int(key.sum()), float(ratio), float(positions)))
     return results
+
+
+def _warped_by_the_others(model: ExaggerationModel, p: int) -> tuple[list[int], np.ndarray, np.ndarray]:
+    """Person ``p``'s lightest performance warped to the heaviest intensity (``x + U (f(k_K) -
+    f(k_1))`` on the key DOFs) by a fit of the other people with the model's settings: ``(the
+    others, the fit's key DOFs [D], the warped performance [T, D])``."""
+    others = [q for q in range(model.trajectories.shape[0]) if q != p]
+    settings = model.training
+    fitted = fit(
+        model.trajectories[others], model.levels, model.weights, cycles=model.cycles_of(others),
+        share=settings.share, energy=settings.energy, rank=settings.rank, degree=settings.degree,
+    )  # fmt: skip
+    low, high = model.levels[0], model.levels[-1]
+    change = (mapped(fitted.mappings, high) - mapped(fitted.mappings, low)) * fitted.key[:, None]
+    return others, fitted.key, model.trajectories[p, 0] + fitted.basis @ change.T
 
 
 def timed_positions(
@@ -231,28 +237,21 @@ def timing_validation(model: ExaggerationModel, seconds: float = 2.0, fps: float
     P = model.trajectories.shape[0]
     if P < 2:
         raise ModelError("the timing validation needs at least two people")
-    settings = model.training
     timing = fit_timing(model.cycle_timing, model.cycle_performance, model.levels).performances
     rows = []
     for p in range(P):
-        others = [q for q in range(P) if q != p]
-        fitted = fit(
-            model.trajectories[others], model.levels, model.weights, cycles=model.cycles_of(others),
-            share=settings.share, energy=settings.energy, rank=settings.rank, degree=settings.degree,
-        )  # fmt: skip
+        others, _, warped = _warped_by_the_others(model, p)
         chosen = np.isin(model.cycle_performance[:, 0], others)
         owners = model.cycle_performance[chosen].copy()
         owners[:, 0] = np.searchsorted(others, owners[:, 0])
         theirs = fit_timing(model.cycle_timing[chosen], owners, model.levels)
         low, high = model.levels[0], model.levels[-1]
-        change = (mapped(fitted.mappings, high) - mapped(fitted.mappings, low)) * fitted.key[:, None]
         timing_change = (
             mapped_timing(theirs.mappings, model.levels, high) - mapped_timing(theirs.mappings, model.levels, low)
         ) * (theirs.predictability >= PREDICTABLE)
         light, heavy = model.trajectories[p, 0], model.trajectories[p, -1]
         swap = light.copy()
         swap[:, model.person_key[p]] = heavy[:, model.person_key[p]]
-        warped = light + fitted.basis @ change.T
         play = partial(timed_positions, model, reference=model.person_reference[p], seconds=seconds, fps=fps)
         target = play(heavy, timing=timing[p, -1])
         base = np.linalg.norm(play(light, timing=timing[p, 0]) - target)
