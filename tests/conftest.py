@@ -61,6 +61,21 @@ def bandai2_dir() -> Path:
 
 
 @pytest.fixture(scope="session")
+def walks_people(bandai2_dir) -> list:
+    """Dataset-2's walks, take ``p`` of exhausted / normal / active as person ``p``, takes 1-8."""
+    styles = ("exhausted", "normal", "active")  # intensities 1, 2, 3
+    return [[em.read_bvh(bandai2_dir / f"dataset-2_walk_{s}_{p:03d}.bvh") for s in styles] for p in range(1, 9)]
+
+
+@pytest.fixture(scope="session")
+def walks_model(walks_people):
+    """The exaggeration model of :func:`walks_people` at intensities 1, 2, 3 (trained once)."""
+    from expressive_mocap.exaggeration import train
+
+    return train(walks_people, (1.0, 2.0, 3.0))
+
+
+@pytest.fixture(scope="session")
 def bandai1_dir() -> Path:
     """dataset-1 clips."""
     return _dataset_dir(1)

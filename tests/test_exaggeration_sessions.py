@@ -14,24 +14,12 @@ import pytest
 import expressive_mocap as em
 from expressive_mocap import quat
 from expressive_mocap.errors import ArgumentError, ModelError
-from expressive_mocap.exaggeration import exaggerate, train
+from expressive_mocap.exaggeration import exaggerate
 
 # A posture: joints held turned by a constant 10 degrees in their parent's frame throughout, the
 # turns chosen so that each moved the estimate the same way when it read the DOFs' means.
 POSTURE = {"UpperArm_R": ("Y", 10), "Shoulder_L": ("Y", 10), "Shoulder_R": ("Y", -10), "UpperArm_L": ("Y", -10),
            "Chest": ("Z", 10)}  # fmt: skip
-
-
-@pytest.fixture(scope="module")
-def walks_model(bandai2_dir):
-    people = [
-        [
-            em.read_bvh(bandai2_dir / f"dataset-2_walk_{style}_{p:03d}.bvh")
-            for style in ("exhausted", "normal", "active")
-        ]
-        for p in range(1, 9)
-    ]
-    return train(people, [1, 2, 3])
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.edits import blend, mix, modulate
 from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import ArgumentError
-from expressive_mocap.exaggeration import exaggerate, train
+from expressive_mocap.exaggeration import exaggerate
 from expressive_mocap.hinges import canonical_hinge_limits, learn_hinge_limits, limit_hinges
 from expressive_mocap.skeletons.canonical import carried_for
 from expressive_mocap.skeletons.synthetic import synthetic_walk
@@ -152,18 +152,6 @@ def test_limits_name_the_skeleton_they_do_not_fit():
         canonical_hinge_limits().of(synthetic_walk("cmu").motion)
     with pytest.raises(ArgumentError, match="at least one motion"):
         learn_hinge_limits([])
-
-
-@pytest.fixture(scope="module")
-def walks_model(bandai2_dir):
-    people = [
-        [
-            em.read_bvh(bandai2_dir / f"dataset-2_walk_{style}_{p:03d}.bvh")
-            for style in ("exhausted", "normal", "active")
-        ]
-        for p in range(1, 9)
-    ]
-    return train(people, (1.0, 2.0, 3.0))
 
 
 # Walks whose edits bent elbows or knees backwards before the limits (up to 15 and 8 degrees).

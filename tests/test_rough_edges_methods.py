@@ -202,16 +202,7 @@ def test_leg_ik_is_unit_free():
 # --------------------------------------------------------------------------- the intensity estimate
 
 
-@pytest.fixture(scope="module")
-def walks_model(bandai2_dir):
-    """Dataset-2's walks exhausted / normal / active = 1 / 2 / 3, takes 1-8 as people."""
-    from expressive_mocap.exaggeration import train
-
-    people = real_walk_people(bandai2_dir, range(1, 9))
-    return train(people, [1, 2, 3]), people
-
-
-def test_training_walks_are_estimated_near_their_own_intensity(walks_model):
+def test_training_walks_are_estimated_near_their_own_intensity(walks_model, walks_people):
     """Each of the 24 training clips, estimated as exaggerate estimates a motion (its cycles'
     coefficients, mean and bootstrap). Measured per level, mean (standard deviation) over the 8
     takes: 1.07 (0.09), 1.86 (0.08), 3.07 (0.10); largest error 0.25; reading the DOFs' means
@@ -219,7 +210,7 @@ def test_training_walks_are_estimated_near_their_own_intensity(walks_model):
     5's normal walk, 1.76). Before (unweighted least squares): 1.28 (0.02), 1.43 (0.03), 3.29 (0.05)."""
     from expressive_mocap.exaggeration import exaggerate
 
-    model, people = walks_model
+    model, people = walks_model, walks_people
     estimates = np.array(
         [[exaggerate(model, clip, 2.0, lock_feet=False)[1].estimate for clip in person] for person in people]
     )
@@ -243,7 +234,7 @@ def test_the_estimate_is_reported_and_warns_outside_the_trained_range(walks_mode
     at most 1.22), and both the report and a warning say so. Before: a bare number and no warning."""
     from expressive_mocap.exaggeration import exaggerate
 
-    model, _ = walks_model
+    model = walks_model
     run = em.read_bvh(bandai2_dir / "dataset-2_run_active_001.bvh")
     with pytest.warns(UserWarning, match="outside the trained range 1-3.*fits the model poorly"):
         _, report = exaggerate(model, run, 3.0, lock_feet=False)
