@@ -27,12 +27,13 @@ CASES = {
 }
 
 
-def rate(loader, batches: int) -> float:
-    """Frames per second over ``batches`` batches of the loader's first epoch (best of 3)."""
+def rate(passes, batches: int) -> float:
+    """Frames per second over the first ``batches`` batches of ``passes(n)``, the n-th pass over
+    the data (best of 3 passes)."""
     best = 0.0
     for repeat in range(3):
         frames, start = 0, time.perf_counter()
-        for i, batch in enumerate(loader.epoch(repeat)):
+        for i, batch in enumerate(passes(repeat)):
             frames += batch["clip"].shape[0] * LENGTH
             if i + 1 == batches:
                 break
@@ -59,7 +60,7 @@ def main() -> None:
     print("| case | frames/s | batches/s |\n|---|---|---|")
     for name, options in CASES.items():
         loader = window_batches(ds, LENGTH, STRIDE, batch_size=BATCH, kinds=kinds, seed=0, **options)
-        frames = rate(loader, args.batches)
+        frames = rate(loader.epoch, args.batches)
         print(f"| {name} | {frames / 1e6:.2f} M | {frames / (BATCH * LENGTH):.0f} |")
     if args.torch:
         torch_rates(args.dataset, kinds, args.batches)
@@ -79,28 +80,14 @@ def torch_rates(folder: str, kinds: list[str], batches: int) -> None:
             loader = torch.utils.data.DataLoader(
                 dataset, batch_size=256, shuffle=True, num_workers=workers, persistent_workers=workers > 0
             )
-            best = 0.0
-            for _ in range(3):
-                frames, start = 0, time.perf_counter()
-                for i, batch in enumerate(loader):
-                    frames += batch["clip"].shape[0] * LENGTH
-                    if i + 1 == batches:
-                        break
-                best = max(best, frames / (time.perf_counter() - start))
+            best = rate(lambda _, loader=loader: loader, batches)
             print(f"| {name} | {workers} | {best / 1e6:.2f} M |")
         sampler = torch.utils.data.BatchSampler(torch.utils.data.RandomSampler(dataset), BATCH, drop_last=False)
         for workers in (0, 2):
             loader = torch.utils.data.DataLoader(
                 dataset, batch_size=None, sampler=sampler, num_workers=workers, persistent_workers=workers > 0
             )
-            best = 0.0
-            for _ in range(3):
-                frames, start = 0, time.perf_counter()
-                for i, batch in enumerate(loader):
-                    frames += batch["clip"].shape[0] * LENGTH
-                    if i + 1 == batches:
-                        break
-                best = max(best, frames / (time.perf_counter() - start))
+            best = rate(lambda _, loader=loader: loader, batches)
             print(f"| {name}, whole batches (BatchSampler) | {workers} | {best / 1e6:.2f} M |")
 
 
