@@ -174,6 +174,21 @@ def test_resampling_between_frames_is_the_motions_own_resampling(clips, tmp_path
         np.testing.assert_allclose(clip.positions, motion.positions(), atol=2e-3)
 
 
+def test_a_clip_resampled_past_what_a_motion_may_hold_is_that_clips_failure(tmp_path):
+    """Two frames 10^6 s apart at 30 fps would be 3 x 10^7 frames: refused before any is made."""
+    walk = synthetic_walk("bandai", seconds=1.0).motion
+    (tmp_path / "src").mkdir()
+    em.write_bvh(walk, tmp_path / "src" / "walk.bvh")
+    em.write_bvh(
+        em.Motion(walk.skeleton, walk.rotations[:2], walk.translations[:2], 1e6), tmp_path / "src" / "huge.bvh"
+    )
+    summary = run(tmp_path / "src", tmp_path / "ds", keep="positions", fps=30)
+    assert summary.clips_ok == 1 and summary.clips_failed == 1
+    (failure,) = summary.failures
+    assert "huge.bvh" in failure["error"] and "cannot be resampled" in failure["error"]
+    assert load_dataset(tmp_path / "ds").clips[0]["frames"] == walk.n_frames
+
+
 @pytest.mark.real_data
 def test_mirrored_clips_are_skeletons_mirror_with_their_contacts_swapped(clips, world, tmp_path):
     run(clips, tmp_path / "ds", keep="positions,rotations,contacts,features", mirror=True, batch_mb=8.0)

@@ -108,8 +108,8 @@ class Options:
 def resampled(motion: Motion, fps: float) -> Motion:
     """``motion`` at ``fps`` frames a second, from its first frame, as many frames as its duration
     holds: each source frame as it is when ``fps`` divides the source's rate (the same rate: the
-    clip itself; half: every second frame), else slerp for rotations and linear for translations
-    between the two nearest frames."""
+    clip itself; half: every second frame), else :meth:`Motion.resample` (slerp for rotations,
+    linear for translations; a MocapError when that would make more frames than a motion may hold)."""
     ratio = (1.0 / motion.frame_time) / fps  # source frames per output frame
     step = round(ratio)
     if step >= 1 and abs(ratio - step) <= RATE_TOLERANCE * ratio:
@@ -117,11 +117,7 @@ def resampled(motion: Motion, fps: float) -> Motion:
         return Motion(motion.skeleton, motion.rotations[rows], motion.translations[rows], 1.0 / fps)
     if motion.n_frames < 2:
         return Motion(motion.skeleton, motion.rotations, motion.translations, 1.0 / fps)
-    count = int(np.floor((motion.n_frames - 1) / ratio + 0.01)) + 1
-    position = np.minimum(np.arange(count) * ratio, motion.n_frames - 1)
-    rotations = quat.resample(motion.rotations, position)
-    translations = quat.resample(motion.translations, position, rotations=False)
-    return Motion(motion.skeleton, rotations, translations, 1.0 / fps)
+    return motion.resample(fps=fps)
 
 
 def gradient(values: np.ndarray, starts: np.ndarray, frame_time: np.ndarray, difference=np.subtract) -> np.ndarray:

@@ -247,7 +247,11 @@ def decoded(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, opti
             motion = read[k]
             if options.fps is not None:
                 outcomes[k].source_fps = motion.fps
-                motion = resampled(motion, options.fps)
+                try:
+                    motion = resampled(motion, options.fps)
+                except MocapError as error:  # more frames than a motion may hold
+                    outcomes[k].error = f"{batch[k].source}: cannot be resampled: {error}"
+                    continue
             motions.append((k, None, motion))
         if options.mirror and motions:
             try:
