@@ -8,11 +8,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import derive
+from .format import MIRRORED
 from .journal import JournalRecord
 from .sources import Item
 from .work import Outcome
-
-MIRRORED = "@mirrored"  # what a mirror image's name adds to its clip's
 
 # People differ in size by less than this factor; units (cm/inch 2.54, m/cm 100) by more.
 SAME_UNITS_RATIO = 2.0
@@ -153,4 +152,4 @@ def _units_error(item: Item, length: float, skeleton: dict) -> str | None:
     )
 
 
-__all__ = ["MIRRORED", "SAME_UNITS_RATIO", "Collected", "collect"]
+__all__ = ["SAME_UNITS_RATIO", "Collected", "collect"]

@@ -54,6 +54,7 @@ MANIFEST = "manifest.json"
 OFFSETS = "offsets.npy"
 PARTIAL = ".partial"
 LOCK = ".lock"
+MIRRORED = "@mirrored"  # what a mirror image's clip name adds to its clip's (--mirror)
 JOURNAL = "journal.jsonl"  # in .partial: one line per batch written
 RUN = "run.json"  # in .partial: the options of the interrupted run
 MAX_MANIFEST_BYTES = 256 << 20  # ~1 M clips with their failures
@@ -240,6 +241,7 @@ __all__ = [
     "LOCK",
     "MANIFEST",
     "MAX_MANIFEST_BYTES",
+    "MIRRORED",
     "MODEL_KINDS",
     "OFFSETS",
     "OWN_FILES",

@@ -19,9 +19,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..errors import ArgumentError, DatasetError
+from .format import MIRRORED
 
 BANDAI = "dataset-{dataset}_{content}_{style}_{take}"
-MIRRORED = "@mirrored"
 _FIELD = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
 
 
@@ -141,4 +141,4 @@ def _base_names(names) -> list[str]:
     return [base_name(str(n)) for n in names]
 
 
-__all__ = ["BANDAI", "MIRRORED", "Labels", "base_name", "compile_pattern"]
+__all__ = ["BANDAI", "Labels", "base_name", "compile_pattern"]
