@@ -9,6 +9,7 @@ pub mod features;
 pub mod fk;
 pub mod footsteps;
 pub mod format;
+pub mod forms;
 pub mod gait;
 pub mod ik;
 pub mod mlp;

@@ -131,6 +131,12 @@ CORE = {
         ),  # fmt: skip
         ["rotations", "translations", "parents", "legs", "contacts", "guide", "starts", None],
     ),
+    "matrix_columns": (lambda f: (quats(f), 2), ["quats", None]),
+    "clip_gradient": (
+        lambda f: (RNG.normal(size=(f, 6)), np.array([0, f // 2]), np.full(f, 1 / 30)),
+        ["values", "starts", "frame_time"],
+    ),
+    "column_totals": (lambda f: ([RNG.normal(size=(f, 4)).astype(np.float32)] * 2, 4), []),
     "two_bone_ik": (
         lambda f: (RNG.normal(size=(f, 3)), quats(f), quats(f), RNG.normal(size=(f, 3)), *RNG.normal(size=(2, f, 3))),
         ["root", "upper", "lower", "upper_bone", "lower_bone", "target"],

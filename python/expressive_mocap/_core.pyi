@@ -21,7 +21,9 @@ _Float = npt.NDArray[np.float32] | npt.NDArray[np.float64]
 __all__ = [
     "air_time",
     "clip_gait_many",
+    "clip_gradient",
     "clip_pipeline_many",
+    "column_totals",
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
@@ -31,6 +33,7 @@ __all__ = [
     "format_motion_block",
     "forward_kinematics",
     "forward_kinematics_many",
+    "matrix_columns",
     "mlp_forward",
     "num_threads",
     "parse_motion_block",
@@ -163,3 +166,13 @@ def plant_feet(
 ) -> _F64:
     """Local rotations ``[F, J, 4]`` with the feet planted (legs ``[2, 3]``, contacts ``[F, 2]``,
     guide ``[F, 2, 3]``, clip ``starts``, ``blend`` frames of easing)."""
+
+def matrix_columns(quats: _F64, columns: int) -> npt.NDArray[np.float32]:
+    """Unit quaternions ``[N, 4]`` -> float32 rotation matrices ``[N, 9]`` row after row (``columns`` 3)
+    or their first two columns ``[N, 6]`` (2)."""
+
+def clip_gradient(values: _F64, starts: npt.NDArray[np.int64], frame_time: _F64) -> _F64:
+    """Per-clip time derivative of rows ``values [N, C]``; clips begin at ``starts``, ``frame_time [N]``."""
+
+def column_totals(arrays: list[npt.NDArray[np.float32]], width: int) -> tuple[_F64, _F64]:
+    """Float64 sums of the rows of ``arrays`` (each ``[n, width]``) and of their squares."""

@@ -273,6 +273,43 @@ def air_time(contacts, frame_time: float) -> np.ndarray:
     return kernels().air_time(np.ascontiguousarray(contacts, dtype=bool), float(frame_time))
 
 
+def matrix_columns(quats, columns: int) -> np.ndarray:
+    """Unit quaternions ``[..., 4]`` as float32 rotation matrices: ``[..., 9]`` row after row
+    (``columns`` 3) or ``[..., 6]`` their first two columns, column after column (2: the 6D form)."""
+    quats = _array("quats", quats, np.float64)
+    if quats.shape[-1:] != (4,):
+        raise ArgumentError(f"argument `quats`: expected shape [..., 4], got {list(quats.shape)}")
+    flat = kernels().matrix_columns(quats.reshape(-1, 4), int(columns))
+    return flat.reshape(quats.shape[:-1] + flat.shape[1:])
+
+
+def clip_gradient(values, starts, frame_time) -> np.ndarray:
+    """Per clip time derivative of rows ``values [N, ...]`` (clips begin at rows ``starts``, rising
+    from 0; ``frame_time [N]`` each row's clip's seconds a frame), as ``np.gradient`` clip by clip:
+    central differences, one-sided at a clip's ends, zero for a one-row clip."""
+    values = _array("values", values, np.float64)
+    if values.ndim == 0:
+        raise ArgumentError("argument `values`: expected rows [N, ...], got a scalar")
+    flat = values.reshape(len(values), -1)
+    starts = _array("starts", starts, np.int64, "iu")
+    frame_time = _array("frame_time", frame_time, np.float64)
+    return kernels().clip_gradient(flat, starts, frame_time).reshape(values.shape)
+
+
+def column_totals(arrays: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The float64 sums of the rows of ``arrays`` (each ``[n_i, ...]``, one row shape) and of their
+    squares, each shaped like one row: the increments of running normalisation statistics."""
+    if not arrays:
+        raise ArgumentError("argument `arrays`: expected at least one array")
+    shape = arrays[0].shape[1:]
+    if any(np.asarray(a).dtype != np.float32 or a.shape[1:] != shape for a in arrays):
+        raise ArgumentError(f"argument `arrays`: expected float32 arrays of rows shaped {list(shape)}")
+    width = int(np.prod(shape, dtype=np.int64))
+    flat = [np.ascontiguousarray(a).reshape(len(a), width) for a in arrays]
+    sums, squares = kernels().column_totals(flat, width)
+    return sums.reshape(shape), squares.reshape(shape)
+
+
 def dynamic_features(
     points,
     thighs,
@@ -582,7 +619,9 @@ __all__ = [
     "arrays_pipeline_many",
     "channel_layout",
     "clip_gait_many",
+    "clip_gradient",
     "clip_pipeline_many",
+    "column_totals",
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
@@ -592,6 +631,7 @@ __all__ = [
     "format_motion_block",
     "forward_kinematics",
     "forward_kinematics_many",
+    "matrix_columns",
     "mlp_forward",
     "plant_feet",
     "quat_to_euler",

@@ -15,6 +15,7 @@ mod features;
 mod fk;
 mod footsteps;
 mod format;
+mod forms;
 mod gait;
 mod ik;
 mod mlp;
@@ -108,6 +109,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     parse::register(m)?;
     decode::register(m)?;
     format::register(m)?;
+    forms::register(m)?;
     rotations::register(m)?;
     fk::register(m)?;
     footsteps::register(m)?;

@@ -14,10 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import quat, representations
+from .. import ops, quat, representations
 from ..errors import ArgumentError
 from ..heading import HeadingFrame, to_heading, turn_by_yaw
 from ..motion import Motion
+from ..reference.forms import clip_gradient
 
 POSITION_FRAMES = ("world", "root", "heading", "clip")
 DERIVED_KINDS = ("velocities", "accelerations", "root_velocity", "angular_velocities", "heading")
@@ -120,27 +121,6 @@ def resampled(motion: Motion, fps: float) -> Motion:
     return motion.resample(fps=fps)
 
 
-def gradient(values: np.ndarray, starts: np.ndarray, frame_time: np.ndarray, difference=np.subtract) -> np.ndarray:
-    """Per clip ``np.gradient`` of rows ``values [N, ...]`` over time: clips begin at rows
-    ``starts [C]``, ``frame_time [N]`` each row's clip's. ``difference(a, b)`` is ``a - b``
-    (or, for rotations, the rotation vector from ``b`` to ``a``)."""
-    n = len(values)
-    out = np.zeros(values.shape[:1] + difference(values[:1], values[:1]).shape[1:])
-    if n < 2:
-        return out
-    ends = np.append(starts[1:], n)
-    starts, ends = starts[ends > starts], ends[ends > starts]  # a clip of no frames has no rows
-    out[1:-1] = difference(values[2:], values[:-2])
-    scale = 2.0 * frame_time
-    single = ends - starts == 1
-    first, last = starts[~single], ends[~single] - 1
-    out[first] = difference(values[first + 1], values[first])
-    out[last] = difference(values[last], values[last - 1])
-    scale[first], scale[last] = frame_time[first], frame_time[last]
-    out[starts[single]] = 0.0
-    return out / scale.reshape((-1,) + (1,) * (out.ndim - 1))
-
-
 def _rotation_change(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Rotation vectors of ``a b^-1``: the turn from ``b`` to ``a`` in the axes they are written in."""
     return quat.log(quat.mul(a, quat.conjugate(b)))
@@ -166,7 +146,7 @@ def derive(
         form, order = options.form
         out["rotations"] = representations.encode(rotations, form, order, np.float32)
     if rotations is not None and "angular_velocities" in keep:
-        out["angular_velocities"] = gradient(rotations, starts, frame_time, _rotation_change)
+        out["angular_velocities"] = clip_gradient(rotations, starts, frame_time, _rotation_change)
     if positions is not None and options.positions_needed(keep):
         out.update(_positions(keep, options, positions, starts, frame_time, frame, root))
     return {kind: np.asarray(values, dtype=np.float32) for kind, values in out.items()}
@@ -197,36 +177,27 @@ def _positions(
     if "velocities" in keep or "accelerations" in keep:
         # heading: the world's velocity (harmonised axes) turned into each frame's heading
         moving = frame.harmonised(positions) if where == "heading" else stored
-        velocities = gradient(moving, starts, frame_time)
+        velocities = ops.clip_gradient(moving, starts, frame_time)
         if "velocities" in keep:
             out["velocities"] = turn_by_yaw(velocities, -yaw) if where == "heading" else velocities
         if "accelerations" in keep:
-            accelerations = gradient(velocities, starts, frame_time)
+            accelerations = ops.clip_gradient(velocities, starts, frame_time)
             out["accelerations"] = turn_by_yaw(accelerations, -yaw) if where == "heading" else accelerations
     if "heading" in keep:  # what takes any of the frames back to the world's (harmonised) axes
         out["heading"] = np.stack([origin[:, 0], origin[:, 2], yaw], axis=-1)
     if "root_velocity" in keep:
-        hips = gradient(frame.harmonised(positions[:, frame.hips]), starts, frame_time)
+        hips = ops.clip_gradient(frame.harmonised(positions[:, frame.hips]), starts, frame_time)
         out["root_velocity"] = np.concatenate(
-            [turn_by_yaw(hips, -yaw), gradient(yaw, starts, frame_time)[:, None]], axis=-1
+            [turn_by_yaw(hips, -yaw), ops.clip_gradient(yaw, starts, frame_time)[:, None]], axis=-1
         )
     return out
 
 
 def totals(arrays: list[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
-    """``(rows, sums, squares)``: the row count of ``arrays`` (``[n_i, ...]``, one row shape) and
-    the float64 sums of their rows and of their rows' squares ``[...]``, the increments of the
-    running normalisation statistics (:mod:`.stats`). Accumulated in float64 without a float64
-    copy of the rows."""
-    rows = sum(len(a) for a in arrays)
-    shape = arrays[0].shape[1:]
-    first, second = np.zeros(shape), np.zeros(shape)
-    for start in range(0, len(arrays), 64):  # a few MB at a time (see .forms.CHUNK_FRAMES)
-        part = arrays[start : start + 64]
-        flat = (np.concatenate(part) if len(part) > 1 else part[0]).reshape(-1, first.size)
-        first += flat.sum(axis=0, dtype=np.float64).reshape(shape)
-        second += np.einsum("ij,ij->j", flat, flat, dtype=np.float64).reshape(shape)
-    return rows, first, second
+    """``(rows, sums, squares)``: the row count of ``arrays`` (``[n_i, ...]`` float32, one row shape)
+    and the float64 sums of their rows and of their rows' squares ``[...]``, the increments of
+    the running normalisation statistics (:mod:`.stats`)."""
+    return sum(len(a) for a in arrays), *ops.column_totals(arrays)
 
 
-__all__ = ["DERIVED_KINDS", "POSITION_FRAMES", "Options", "derive", "gradient", "resampled", "totals"]
+__all__ = ["DERIVED_KINDS", "POSITION_FRAMES", "Options", "derive", "resampled", "totals"]

@@ -12,6 +12,7 @@ from .decouple import compose_rotations, decouple_rotations
 from .features import dynamic_features
 from .fk import forward_kinematics, forward_kinematics_many
 from .footsteps import air_time, foot_contacts
+from .forms import clip_gradient, column_totals, matrix_columns
 from .gait import clip_gait_many
 from .ik import two_bone_ik
 from .mlp import mlp_forward
@@ -25,7 +26,9 @@ num_threads = 1
 __all__ = [
     "air_time",
     "clip_gait_many",
+    "clip_gradient",
     "clip_pipeline_many",
+    "column_totals",
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
@@ -35,6 +38,7 @@ __all__ = [
     "format_motion_block",
     "forward_kinematics",
     "forward_kinematics_many",
+    "matrix_columns",
     "mlp_forward",
     "num_threads",
     "parse_motion_block",
