@@ -4,7 +4,6 @@ one a single-machine run writes."""
 
 from __future__ import annotations
 
-import asyncio
 import concurrent.futures
 import time
 from collections import deque
@@ -105,6 +104,8 @@ def _wait_for_workers(client) -> None:
 def _result(client, future, batch: list[Item]) -> tuple:
     """A batch's result, waiting while the cluster has workers; an error that says what happened
     (and that the run resumes) when it cannot come."""
+    import asyncio  # here: loaded with Dask, not by every run of preprocess
+
     from distributed import KilledWorker
     from distributed import TimeoutError as DaskTimeout
     from distributed.comm import CommClosedError
