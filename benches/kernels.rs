@@ -1,5 +1,6 @@
-//! Timings of the Rust kernels themselves, without Python: MOTION block parsing, forward
-//! kinematics, dynamic features and MLP inference, on synthetic inputs of realistic size.
+//! Timings of the Rust kernels themselves, without Python: MOTION block parsing, Euler angles
+//! to quaternions, forward kinematics, dynamic features and MLP inference, on synthetic inputs
+//! of realistic size.
 //! Run with `cargo bench --bench kernels`; a plain timing main (stable Rust, no criterion):
 //! each kernel is run a few times and the best and median wall times are printed.
 
@@ -10,6 +11,7 @@ use _core::features::{dynamic_features, FeatureParams};
 use _core::fk::forward_kinematics;
 use _core::mlp::{mlp_forward, Activation, Layer};
 use _core::parse::parse_motion_block;
+use _core::rotations::euler_to_quat;
 
 const FRAMES: usize = 10_000;
 const JOINTS: usize = 25;
@@ -130,6 +132,13 @@ fn main() {
         },
     ];
 
+    // Drawn last so the other kernels' inputs stay as they were. Four times FRAMES x JOINTS
+    // (1M joint-frames, 3M angles): the per-angle sine and cosine dominate.
+    let angles: Vec<f64> = (0..4 * FRAMES * JOINTS * 3)
+        .map(|_| noise.next() * 180.0)
+        .collect();
+    let orders = [[2u8, 0, 1]; JOINTS];
+
     println!(
         "{FRAMES} frames, {JOINTS} joints, best and median of {RUNS} runs, {} rayon threads",
         rayon::current_num_threads()
@@ -143,6 +152,9 @@ fn main() {
             black_box(parse_motion_block(black_box(&block), FRAMES, channels).unwrap());
         },
     );
+    time("euler_to_quat (1M joints)", angles.len(), "angles", || {
+        black_box(euler_to_quat(black_box(&angles), &orders).unwrap());
+    });
     time("forward_kinematics", FRAMES * JOINTS, "joints", || {
         black_box(forward_kinematics(black_box(&rotations), &translations, &parents).unwrap());
     });

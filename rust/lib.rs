@@ -17,6 +17,7 @@ pub mod parse;
 pub mod planting;
 pub mod retarget;
 pub mod rotations;
+pub mod trig;
 pub mod zeroable;
 
 #[cfg(feature = "python")]

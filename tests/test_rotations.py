@@ -67,6 +67,33 @@ def test_rust_matches_numpy_twin():
     np.testing.assert_allclose(_core.quat_to_euler(quats, orders), reference.quat_to_euler(quats, orders), atol=1e-9)
 
 
+@pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
+@pytest.mark.parametrize("order", ORDERS)
+def test_rust_euler_to_quat_matches_scipy_at_large_angles_and_multiples_of_90(order):
+    # The Rust kernel takes sines and cosines of the half-angles in degrees (rust/trig.rs),
+    # reduced exactly: large angles and multiples of 90 are where that could go wrong.
+    from expressive_mocap import _core
+
+    rng = np.random.default_rng(6)
+    angles = np.concatenate(
+        [
+            rng.uniform(-1e4, 1e4, size=(400, 3)),
+            rng.uniform(-180, 180, size=(400, 3)),
+            90.0 * rng.integers(-120, 121, size=(400, 3)),
+            np.where(
+                rng.random((400, 3)) < 0.5,
+                90.0 * rng.integers(-8, 9, size=(400, 3)),
+                rng.uniform(-720, 720, size=(400, 3)),
+            ),
+        ]
+    )
+    orders = np.array([["XYZ".index(axis) for axis in order]], dtype=np.uint8)
+    ours = _core.euler_to_quat(angles[:, None, :], orders)[:, 0]
+    scipy = Rotation.from_euler(order, angles, degrees=True).as_quat()
+    sign = np.where(np.sum(ours * scipy, axis=-1) < 0.0, -1.0, 1.0)[:, None]
+    np.testing.assert_allclose(ours, sign * scipy, rtol=0.0, atol=1e-12)
+
+
 def test_bad_arguments_name_the_argument(backend):
     with pytest.raises(em.errors.ArgumentError, match="angles"):
         em.euler_to_quat(np.zeros((3, 4)), "XYZ")
