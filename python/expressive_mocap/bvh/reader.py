@@ -8,7 +8,6 @@ bytes, by the kernel ``read_motion_blocks`` (Rust, or its NumPy twin). Every pro
 
 from __future__ import annotations
 
-import errno
 import os
 from collections.abc import Iterable
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -16,7 +15,7 @@ from typing import BinaryIO, Union
 
 from .. import ops
 from ..errors import BVHError, MocapError, ParseError
-from ..files import MAX_INPUT_BYTES, open_input, read_input
+from ..files import read_beginning, read_input
 from ..motion import Motion
 from .header import Header, parse_header
 
@@ -56,21 +55,17 @@ def read_header(path: str | os.PathLike) -> tuple[Header, bytes | None]:
     """
     name = str(path)
     try:
-        with open_input(path) as handle:
-            data = handle.read(HEADER_PREFIX)
-            if len(data) == HEADER_PREFIX:  # maybe more: try the header from this beginning
-                size = os.fstat(handle.fileno()).st_size
-                try:
-                    header = parse_header(data, name, size)
-                except BVHError:
-                    header = None
-                # The Frame Time line must have ended inside the beginning: a number cut by the
-                # boundary of those bytes would otherwise be read short.
-                if header is not None and header.block_start < len(data):
-                    return header, None
-                data += handle.read(MAX_INPUT_BYTES + 1 - len(data))
-                if len(data) > MAX_INPUT_BYTES:
-                    raise OSError(errno.EFBIG, f"more than the {MAX_INPUT_BYTES:,} bytes read at most", name)
+        data, size = read_beginning(path, HEADER_PREFIX)
+        if len(data) == HEADER_PREFIX:  # maybe more: try the header from this beginning
+            try:
+                header = parse_header(data, name, size)
+            except BVHError:
+                header = None
+            # The Frame Time line must have ended inside the beginning: a number cut by the
+            # boundary of those bytes would otherwise be read short.
+            if header is not None and header.block_start < len(data):
+                return header, None
+            data = read_input(path)
     except OSError as error:
         raise read_error(name, error) from None
     return parse_header(data, name), data
