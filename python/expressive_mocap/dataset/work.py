@@ -84,8 +84,8 @@ def load_model(model):
 def bone_length(skeleton) -> float:
     """The summed lengths of a skeleton's bones (offsets, End Sites included), in file units:
     what tells a skeleton in metres from the same one in centimetres, whatever its axes."""
-    sites = sum(float(np.linalg.norm(offset)) for _, offset in skeleton.end_sites)
-    return float(np.linalg.norm(skeleton.offsets, axis=1).sum()) + sites
+    sites = np.array([offset for _, offset in skeleton.end_sites], dtype=np.float64).reshape(-1, 3)
+    return float(np.linalg.norm(skeleton.offsets, axis=1).sum() + np.linalg.norm(sites, axis=1).sum())
 
 
 def compute(
