@@ -13,6 +13,8 @@ from ..errors import MocapError
 from ..motion import Motion
 
 __all__ = [
+    "DECOUPLE_SUFFIXES",
+    "DEMO_FILES",
     "PROG",
     "Parser",
     "add_map_option",
@@ -26,6 +28,23 @@ __all__ = [
 ]
 
 PROG = "expressive-mocap"
+
+# The files `decouple -o PREFIX` writes, and every file `demo` writes in its folder: the outputs
+# checked before any work (cli.__init__), named here so checking them loads no command's code.
+DECOUPLE_SUFFIXES = ("_body.bvh", "_expressive.bvh", "_activity.csv")
+DEMO_FILES = (
+    "walk.bvh",
+    "walk_wave.bvh",
+    "walk.png",
+    "walk.gif",
+    "walk_wave_body.bvh",
+    "walk_wave_expressive.bvh",
+    "walk_wave_x0.5.bvh",
+    "walk_wave_x1.5.bvh",
+    "decouple.png",
+    "modulate.png",
+    "decouple.gif",
+)
 
 
 class Parser(argparse.ArgumentParser):

@@ -15,7 +15,18 @@ from ..decoupling.edits import mix
 from ..decoupling.training import train_body_model
 from ..errors import MocapError
 from ..files import atomic_write_all, open_input
-from .common import PROG, add_map_option, default, finite, joint_map, positive, read_all, read_for_model, read_on_model
+from .common import (
+    DECOUPLE_SUFFIXES,
+    PROG,
+    add_map_option,
+    default,
+    finite,
+    joint_map,
+    positive,
+    read_all,
+    read_for_model,
+    read_on_model,
+)
 
 __all__ = [
     "BODY_MODEL_FIX",
@@ -36,7 +47,6 @@ BODY_MODEL_FIX = (
     "the body-mechanics model applies to its own skeleton only; train one on clips of this skeleton "
     "(`expressive-mocap train`), then calibrate it to a session if needed (`calibrate`)"
 )
-DECOUPLE_SUFFIXES = ("_body.bvh", "_expressive.bvh", "_activity.csv")
 
 
 def add_model_options(p, calibrate: bool = True) -> None:

@@ -12,25 +12,10 @@ from .. import __version__, backend
 from ..bvh import read_bvh, write_bvh
 from ..demo import walk_and_wave
 from ..motion import Motion
-from .common import default, positive
+from .common import DEMO_FILES, default, positive
 from .files import cmd_info
 
 __all__ = ["DEMO_FILES", "add_parsers", "cmd_demo"]
-
-# Every file demo writes in its folder (cmd_demo, _demo_decoupling), checked before any work.
-DEMO_FILES = (
-    "walk.bvh",
-    "walk_wave.bvh",
-    "walk.png",
-    "walk.gif",
-    "walk_wave_body.bvh",
-    "walk_wave_expressive.bvh",
-    "walk_wave_x0.5.bvh",
-    "walk_wave_x1.5.bvh",
-    "decouple.png",
-    "modulate.png",
-    "decouple.gif",
-)
 
 
 def add_demo(commands) -> None:
