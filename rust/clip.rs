@@ -11,12 +11,14 @@ use std::io::Read;
 use std::path::Path;
 
 use crate::decode::{read_motion_block, ChannelLayout};
-use crate::error::Result;
+use crate::error::{zeros, KernelError, Result};
 use crate::fk::forward_kinematics;
+use crate::forms::{write_gradient, write_matrix};
 use crate::gait::{clip_gait, BodyScale, FeatureRequest, GaitJoints, GaitParams};
 
 /// What to compute for every clip of one skeleton.
 #[derive(Debug, Clone)]
+#[allow(clippy::struct_excessive_bools)] // one flag per output, named
 pub struct ClipRequest<'a> {
     /// The skeleton's parent indices (-1 for the root), parents before children.
     pub parents: &'a [i64],
@@ -24,8 +26,13 @@ pub struct ClipRequest<'a> {
     pub params: GaitParams,
     /// Keep the world positions `[F, J, 3]`.
     pub positions: bool,
-    /// Keep the local rotations `[F, J, 4]` (x, y, z, w).
+    /// Keep the local rotations: quaternions `[F, J, 4]` (x, y, z, w) when `rotation_columns`
+    /// is 0, else their matrices, the first `rotation_columns` columns (2: the 6D form
+    /// `[F, J, 6]`, column after column; 3: the whole matrix `[F, J, 9]`, row after row).
     pub rotations: bool,
+    pub rotation_columns: usize,
+    /// Keep the world positions' time derivative `[F, J, 3]` (as `forms::clip_gradient`).
+    pub velocities: bool,
     /// One causal feature array `[F, 19]` per request (e.g. a dataset's and a model's).
     pub features: &'a [FeatureRequest],
     /// Keep the offline foot contacts `[F, 2]`.
@@ -48,17 +55,30 @@ pub struct ClipInput<'a> {
 pub struct ClipOutputs {
     pub positions: Option<Vec<f64>>,
     pub rotations: Option<Vec<f64>>,
+    pub velocities: Option<Vec<f64>>,
     pub features: Vec<Vec<f64>>,
     pub contacts: Option<Vec<bool>>,
 }
 
-/// Everything `request` asks for of one clip, as `read_motion_block`, `forward_kinematics` and
-/// `clip_gait` give it (the same numbers, bit for bit).
+/// Everything `request` asks for of one clip, as `read_motion_block`, `forward_kinematics`,
+/// `clip_gait` and the `forms` kernels give it (the same numbers, bit for bit). The stored forms
+/// of model-ready datasets are made here, inside the clip's task, from arrays still in cache:
+/// made after the call, from a batch's arrays, they cost a quarter of a run (copies, and
+/// NumPy glue holding the GIL).
 ///
 /// # Errors
 /// `KernelError::Parse` for a malformed MOTION block (its line counted from the block's first);
-/// `KernelError::Argument` when the layout, parents or roles do not fit together.
+/// `KernelError::Argument` when the layout, parents, roles or rotation columns do not fit.
 pub fn clip_outputs(clip: &ClipInput<'_>, request: &ClipRequest<'_>) -> Result<ClipOutputs> {
+    if ![0, 2, 3].contains(&request.rotation_columns) {
+        return Err(KernelError::argument(
+            "rotation_columns",
+            format!(
+                "expected 0 (quaternions), 2 (6d) or 3 (the whole matrix), got {}",
+                request.rotation_columns
+            ),
+        ));
+    }
     let (rotations, translations) = read_motion_block(clip.block, clip.frames, &clip.layout)?;
     let (_, positions) = forward_kinematics(&rotations, &translations, request.parents)?;
     let joints = request.parents.len();
@@ -89,8 +109,26 @@ pub fn clip_outputs(clip: &ClipInput<'_>, request: &ClipRequest<'_>) -> Result<C
     if contacts_wanted {
         out.contacts = gait(None, true)?.contacts;
     }
+    if request.velocities {
+        let mut velocities = zeros("positions", positions.len())?;
+        write_gradient(&positions, 3 * joints, |_| clip.frame_time, &mut velocities);
+        out.velocities = Some(velocities);
+    }
     out.positions = request.positions.then_some(positions);
-    out.rotations = request.rotations.then_some(rotations);
+    out.rotations = match (request.rotations, request.rotation_columns) {
+        (false, _) => None,
+        (true, 0) => Some(rotations),
+        (true, columns) => {
+            let mut matrices = zeros("rotations", rotations.len() / 4 * 3 * columns)?;
+            for (q, dst) in rotations
+                .chunks_exact(4)
+                .zip(matrices.chunks_exact_mut(3 * columns))
+            {
+                write_matrix(q, dst, |v| v);
+            }
+            Some(matrices)
+        }
+    };
     Ok(out)
 }
 
@@ -274,6 +312,8 @@ mod tests {
             params: PARAMS,
             positions: true,
             rotations: true,
+            rotation_columns: 0,
+            velocities: false,
             features,
             contacts: true,
         }
@@ -339,6 +379,42 @@ mod tests {
                     ..ClipOutputs::default()
                 }
             );
+        });
+    }
+
+    #[test]
+    fn stored_forms_are_the_forms_kernels_of_the_clips_arrays() {
+        with_layout(|layout| {
+            let clip = ClipInput {
+                block: BLOCK,
+                frames: 3,
+                layout,
+                frame_time: 0.25,
+                scale: SCALE,
+            };
+            let plain = clip_outputs(&clip, &request(&[])).unwrap();
+            let (positions, quats) = (plain.positions.unwrap(), plain.rotations.unwrap());
+            let starts = [0_i64];
+            let velocities =
+                crate::forms::clip_gradient(&positions, 6, &starts, &[0.25; 3]).unwrap();
+            for columns in [2, 3] {
+                let formed = ClipRequest {
+                    rotation_columns: columns,
+                    velocities: true,
+                    ..request(&[])
+                };
+                let out = clip_outputs(&clip, &formed).unwrap();
+                let matrices = crate::forms::matrix_columns(&quats, columns).unwrap();
+                let ours: Vec<f32> = out.rotations.unwrap().iter().map(|&v| v as f32).collect();
+                assert_eq!(ours, matrices);
+                assert_eq!(out.velocities.as_ref(), Some(&velocities));
+                assert_eq!(out.positions.as_ref(), Some(&positions));
+            }
+            let odd = ClipRequest {
+                rotation_columns: 1,
+                ..request(&[])
+            };
+            assert!(clip_outputs(&clip, &odd).is_err());
         });
     }
 

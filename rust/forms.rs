@@ -33,18 +33,7 @@ pub fn matrix_columns(quats: &[f64], columns: usize) -> Result<Vec<f32>> {
     }
     let width = 3 * columns;
     let mut out = zeros("quats", quats.len() / 4 * width)?;
-    let one = |(q, dst): (&[f64], &mut [f32])| {
-        let m = matrix(q[0], q[1], q[2], q[3]);
-        if columns == 3 {
-            for (k, value) in dst.iter_mut().enumerate() {
-                *value = m[k / 3][k % 3] as f32;
-            }
-        } else {
-            for (k, value) in dst.iter_mut().enumerate() {
-                *value = m[k % 3][k / 3] as f32; // column after column
-            }
-        }
-    };
+    let one = |(q, dst): (&[f64], &mut [f32])| write_matrix(q, dst, |v| v as f32);
     if quats.len() >= 4 * PARALLEL_MIN_ITEMS {
         quats
             .par_chunks(4)
@@ -55,6 +44,21 @@ pub fn matrix_columns(quats: &[f64], columns: usize) -> Result<Vec<f32>> {
         quats.chunks(4).zip(out.chunks_mut(width)).for_each(one);
     }
     Ok(out)
+}
+
+/// The rotation matrix of one unit quaternion `q` (x, y, z, w) into `dst`: 9 values row after
+/// row, or 6 (its first two columns, column after column), each through `cast`.
+#[inline]
+pub(crate) fn write_matrix<T>(q: &[f64], dst: &mut [T], cast: impl Fn(f64) -> T) {
+    let m = matrix(q[0], q[1], q[2], q[3]);
+    let whole = dst.len() == 9;
+    for (k, value) in dst.iter_mut().enumerate() {
+        *value = cast(if whole {
+            m[k / 3][k % 3]
+        } else {
+            m[k % 3][k / 3]
+        });
+    }
 }
 
 /// The rotation matrix `m[row][col]` of the unit quaternion (x, y, z, w).
@@ -120,21 +124,8 @@ pub fn clip_gradient(
         rest = tail;
     }
     let one = |(start, clip): (usize, &mut [f64])| {
-        let n = clip.len() / width;
-        if n < 2 {
-            return; // zero: a clip of one row does not move
-        }
-        let row = |i: usize| &values[(start + i) * width..(start + i + 1) * width];
-        for (i, dst) in clip.chunks_exact_mut(width).enumerate() {
-            let (ahead, behind, scale) = match i {
-                0 => (row(1), row(0), frame_time[start]),
-                _ if i == n - 1 => (row(i), row(i - 1), frame_time[start + i]),
-                _ => (row(i + 1), row(i - 1), 2.0 * frame_time[start + i]),
-            };
-            for ((d, a), b) in dst.iter_mut().zip(ahead).zip(behind) {
-                *d = (a - b) / scale;
-            }
-        }
+        let rows = start * width..start * width + clip.len();
+        write_gradient(&values[rows], width, |i| frame_time[start + i], clip);
     };
     if values.len() >= PARALLEL_MIN_ITEMS {
         clips.into_par_iter().for_each(one);
@@ -142,6 +133,31 @@ pub fn clip_gradient(
         clips.into_iter().for_each(one);
     }
     Ok(out)
+}
+
+/// The time derivative of one clip's rows `values` `[n, width]` into `out` (as [`clip_gradient`]),
+/// row `i` a frame of `frame_time(i)` seconds.
+pub(crate) fn write_gradient(
+    values: &[f64],
+    width: usize,
+    frame_time: impl Fn(usize) -> f64,
+    out: &mut [f64],
+) {
+    let n = values.len() / width;
+    if n < 2 {
+        return; // zero: a clip of one row does not move
+    }
+    let row = |i: usize| &values[i * width..(i + 1) * width];
+    for (i, dst) in out.chunks_exact_mut(width).enumerate() {
+        let (ahead, behind, scale) = match i {
+            0 => (row(1), row(0), frame_time(0)),
+            _ if i == n - 1 => (row(i), row(i - 1), frame_time(i)),
+            _ => (row(i + 1), row(i - 1), 2.0 * frame_time(i)),
+        };
+        for ((d, a), b) in dst.iter_mut().zip(ahead).zip(behind) {
+            *d = (a - b) / scale;
+        }
+    }
 }
 
 /// The f64 sums of the rows of `arrays` (each `[n_i, width]` f32) and of their squares, column
@@ -218,7 +234,7 @@ mod tests {
         let out = clip_gradient(&values, 1, &[0, 4, 5], &[1.0; 7]).unwrap();
         assert_eq!(out, vec![1.0, 2.0, 4.0, 5.0, 0.0, 3.0, 3.0]);
         let halved = clip_gradient(&values, 1, &[0, 4, 5], &[0.5; 7]).unwrap();
-        assert_eq!(halved[1], 4.0);
+        assert_eq!(halved[..2], [2.0, 4.0]);
         assert!(clip_gradient(&values, 1, &[1, 4], &[1.0; 7]).is_err());
         assert!(clip_gradient(&values, 1, &[0, 5, 4], &[1.0; 7]).is_err());
         assert!(clip_gradient(&values, 1, &[0, 8], &[1.0; 7]).is_err());

@@ -59,7 +59,7 @@ def test_the_numpy_twin_is_the_package_per_clip(walks):
     # The twin is the composition of the per-clip functions the rest of the package uses: the
     # NumPy ones, reading included (a Rust-read Motion's rotations differ from the twin's by up
     # to 2.8e-16, its own sine/cosine; Rust vs twin is the next test's, at 1e-12).
-    for (path, _), (positions, rotations, features, contacts) in zip(walks, run(reference, walks)):
+    for (path, _), (positions, rotations, features, contacts, _) in zip(walks, run(reference, walks)):
         with em.use_backend("numpy"):
             motion = em.read_bvh(path)
             np.testing.assert_allclose(positions, motion.positions(), atol=1e-9)
@@ -96,6 +96,26 @@ def test_rust_matches_its_twin_and_the_kernels_one_by_one(walks, by_path, float3
             np.testing.assert_array_equal(got[1], local)
             np.testing.assert_array_equal(got[2][0], gait[0][0])
             np.testing.assert_array_equal(got[3], gait[0][1])
+
+
+@pytest.mark.parametrize("columns", [2, 3])
+def test_stored_forms_are_the_forms_kernels_of_the_clips_arrays(walks, columns, backend):
+    # The pipeline's 6D / matrix rotations and velocities: the kernels' matrix_columns of its
+    # quaternions and clip_gradient of its positions, bit for bit (float64 first, rounded once).
+    plain = run(ops, walks)
+    clips, parents, joints = zip(*(pipeline_input(path, data) for path, data in walks))
+    formed = ops.PipelineOutputs(
+        positions=True, rotations=True, float32=True, rotation_columns=columns, velocities=True
+    )
+    got = ops.clip_pipeline_many(list(clips), parents[0], joints[0], GAIT, formed)
+    for clip, (positions, quats, *_), (world32, matrices, _, _, velocities) in zip(clips, plain, got):
+        assert matrices.shape == quats.shape[:-1] + (3 * columns,) and matrices.dtype == np.float32
+        np.testing.assert_array_equal(matrices, ops.matrix_columns(quats, columns))
+        frame_time = np.full(len(positions), clip.frame_time)
+        np.testing.assert_array_equal(velocities, ops.clip_gradient(positions, [0], frame_time).astype(np.float32))
+        np.testing.assert_array_equal(world32, positions.astype(np.float32))
+    with pytest.raises(em.ArgumentError, match="rotation_columns"):
+        ops.clip_pipeline_many(list(clips), parents[0], joints[0], GAIT, ops.PipelineOutputs(rotation_columns=1))
 
 
 def test_a_bad_block_and_a_missing_file_are_that_clips_result(walks, tmp_path, backend):

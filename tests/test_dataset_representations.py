@@ -124,6 +124,24 @@ def test_root_and_clip_frames(clips, world, frame, tmp_path):
 
 
 @pytest.mark.real_data
+@pytest.mark.parametrize("form", ["6d", "matrix"])
+def test_the_clip_kernels_forms_are_those_derived_from_a_batch(clips, form, tmp_path):
+    # 6D / matrix rotations and world velocities come from the clip kernels as they are stored;
+    # with accelerations kept they are derived from the batch's quaternions and positions
+    # instead (.derive): the same arrays, bit for bit, and the same statistics.
+    run(clips, tmp_path / "kernels", keep="rotations,velocities", rotations=form)
+    run(clips, tmp_path / "derived", keep="rotations,velocities,accelerations", rotations=form, batch_mb=4.0)
+    kernels, derived = load_dataset(tmp_path / "kernels"), load_dataset(tmp_path / "derived")
+    for kind in ("rotations", "velocities"):
+        np.testing.assert_array_equal(kernels.arrays[kind], derived.arrays[kind])
+        for what in ("mean", "std"):
+            np.testing.assert_allclose(
+                kernels.manifest["stats"][kind][what], derived.manifest["stats"][kind][what], rtol=1e-9, atol=1e-9
+            )
+    assert kernels.manifest["up"] == derived.manifest["up"] == [0, 1, 0]
+
+
+@pytest.mark.real_data
 def test_velocities_integrate_back_and_never_span_two_clips(world):
     for _, rows, dt in per_clip(world):
         p, v = world.positions[rows].astype(np.float64), world.velocities[rows].astype(np.float64)

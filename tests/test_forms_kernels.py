@@ -23,11 +23,10 @@ def test_matrix_columns_are_scipys_matrices_rounded_to_float32(backend):
     whole, six = ops.matrix_columns(q, 3), ops.matrix_columns(q, 2)
     assert whole.dtype == six.dtype == np.float32
     assert whole.shape == (50, 100, 9) and six.shape == (50, 100, 6)
-    # Rust computes in float64 and rounds (half an f32 ulp below 1: 6e-8); the twin computes in float32.
-    tolerance = 6e-8 if backend == "rust" else 3e-7
-    np.testing.assert_allclose(whole.reshape(-1, 9), matrix.reshape(-1, 9), atol=tolerance, rtol=0)
+    # Computed in float64 and rounded once: within half a float32 ulp below 1 (6e-8), and a hair.
+    np.testing.assert_allclose(whole.reshape(-1, 9), matrix.reshape(-1, 9), atol=6e-8, rtol=0)
     first_two = np.concatenate([matrix[:, :, 0], matrix[:, :, 1]], axis=1)  # column after column
-    np.testing.assert_allclose(six.reshape(-1, 6), first_two, atol=tolerance, rtol=0)
+    np.testing.assert_allclose(six.reshape(-1, 6), first_two, atol=6e-8, rtol=0)
 
 
 def per_clip_gradient(values, starts, frame_time):
@@ -85,7 +84,7 @@ def test_the_backends_agree():
                 *ops.column_totals(arrays),
             )
     rust, twin = results["rust"], results["numpy"]
-    np.testing.assert_allclose(rust[0], twin[0], atol=3e-7, rtol=0)  # f64-then-rounded against float32 math
+    np.testing.assert_array_equal(rust[0], twin[0])  # the same formula in float64, rounded once
     np.testing.assert_array_equal(rust[1], twin[1])  # the same differences and divisions
     np.testing.assert_allclose(rust[2], twin[2], rtol=1e-12)  # sums in another order
     np.testing.assert_allclose(rust[3], twin[3], rtol=1e-12)

@@ -133,10 +133,14 @@ def clip_pipeline_many(
     gait: GaitSettings,
     outputs: PipelineOutputs,
     max_bytes: int | None = None,
-) -> list[tuple[_Float | None, _Float | None, list[_Float], npt.NDArray[np.bool_] | None] | ParseError | OSError]:
-    """The whole per-clip work of many clips of one skeleton (file, MOTION block, FK, features, contacts), in parallel;
-    arguments read by attribute (see ``expressive_mocap.ops``). A ``ParseError`` or ``OSError`` in the place of a
-    clip whose block or file cannot be read."""
+) -> list[
+    tuple[_Float | None, _Float | None, list[_Float], npt.NDArray[np.bool_] | None, _Float | None]
+    | ParseError
+    | OSError
+]:
+    """The whole per-clip work of many clips of one skeleton (file, MOTION block, FK, features, contacts, and the stored
+    forms of rotations and velocities), in parallel; arguments read by attribute (see ``expressive_mocap.ops``). A
+    ``ParseError`` or ``OSError`` in the place of a clip whose block or file cannot be read."""
 
 def decouple_rotations(original: _F64, body: _F64, gain: float, exponent: float) -> tuple[_F64, _F64, _F64]:
     """``(E*, B', A)`` of rotations ``original`` and ``body`` ``[F, J, 4]``: filtered expressive rotations, recovered

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -408,13 +408,18 @@ class FeatureRequest:
 
 @dataclass(frozen=True)
 class PipelineOutputs:
-    """What :func:`clip_pipeline_many` keeps of each clip; float arrays in float32 if ``float32``."""
+    """What :func:`clip_pipeline_many` keeps of each clip; float arrays in float32 if ``float32``.
+    ``rotation_columns``: the rotations as quaternions (0) or as their matrices' first two
+    columns (2, the 6D form) or whole matrices (3), as :func:`matrix_columns` gives them;
+    ``velocities``: the world positions' time derivative, as :func:`clip_gradient` gives it."""
 
     positions: bool = False
     rotations: bool = False
     features: tuple[FeatureRequest, ...] = ()
     contacts: bool = False
     float32: bool = False
+    rotation_columns: int = 0
+    velocities: bool = False
 
 
 def clip_pipeline_many(
@@ -429,20 +434,21 @@ def clip_pipeline_many(
     gait joints), clips in parallel with the Rust kernels: reading the file (a path, at most
     ``max_bytes``, default ``files.MAX_INPUT_BYTES``), MOTION block, FK, features, contacts.
     Per clip ``(positions or None, rotations or None, [features per request], contacts or
-    None)``, or the ``ParseError`` / ``OSError`` of a clip whose block / file cannot be read."""
+    None, velocities or None)``, or the ``ParseError`` / ``OSError`` of a clip whose block /
+    file cannot be read."""
     parents = _array("parents", parents, np.int64, "iu")
-    outputs = PipelineOutputs(
-        outputs.positions,
-        outputs.rotations,
-        tuple(
-            FeatureRequest(
-                f.floor, None if f.thigh_reference is None else _array("thigh_reference", f.thigh_reference, np.float64)
-            )
-            for f in outputs.features
-        ),
-        outputs.contacts,
-        outputs.float32,
+    if outputs.rotation_columns not in (0, 2, 3):
+        raise ArgumentError(
+            "argument `rotation_columns`: expected 0 (quaternions), 2 (6d) or 3 (the whole matrix), "
+            f"got {outputs.rotation_columns!r}"
+        )
+    features = tuple(
+        FeatureRequest(
+            f.floor, None if f.thigh_reference is None else _array("thigh_reference", f.thigh_reference, np.float64)
+        )
+        for f in outputs.features
     )
+    outputs = replace(outputs, features=features)
     return kernels().clip_pipeline_many(
         list(clips), parents, [int(r) for r in roles], gait=GaitSettings(*gait), outputs=outputs, max_bytes=max_bytes
     )
@@ -567,12 +573,21 @@ class ClipArrays:
         return len(self.rotations)
 
 
+def stored_rotations(quats: np.ndarray, columns: int) -> np.ndarray:
+    """Local rotations ``[F, J, 4]`` in the form :class:`PipelineOutputs` asks for: as they are
+    (``columns`` 0) or their matrices' first ``columns`` columns, in float64 (as the pipeline's)."""
+    from .reference.forms import matrix_entries  # the twin's formula: the same as the kernel's
+
+    return quats if columns == 0 else matrix_entries(quats, columns)
+
+
 def arrays_pipeline_many(
     clips: Sequence[ClipArrays], parents, roles, gait: GaitSettings, outputs: PipelineOutputs
 ) -> list[tuple]:
     """What :func:`clip_pipeline_many` gives of clips whose frames are arrays already (a
     retargeted clip): FK, features and contacts, the same kernels clips in parallel, per clip
-    ``(positions or None, rotations or None, [features per request], contacts or None)``."""
+    ``(positions or None, rotations or None, [features per request], contacts or None,
+    velocities or None)``."""
     parents = _array("parents", parents, np.int64, "iu")
     local = [(_f64("rotations", c.rotations, 4), _f64("translations", c.translations, 3), parents) for c in clips]
     kinematics = kernels().forward_kinematics_many(local)
@@ -597,11 +612,14 @@ def arrays_pipeline_many(
     return [
         (
             p.astype(dtype, copy=False) if outputs.positions else None,
-            r.astype(dtype, copy=False) if outputs.rotations else None,
+            stored_rotations(r, outputs.rotation_columns).astype(dtype, copy=False) if outputs.rotations else None,
             [f.astype(dtype, copy=False) for f in found],
             contact,
+            clip_gradient(p, [0], np.full(len(p), c.frame_time)).astype(dtype, copy=False)
+            if outputs.velocities
+            else None,
         )
-        for (r, _, _), (_, p), found, contact in zip(local, kinematics, features, contacts)
+        for c, (r, _, _), (_, p), found, contact in zip(clips, local, kinematics, features, contacts)
     ]
 
 

@@ -37,9 +37,8 @@ def _positive(q: np.ndarray) -> np.ndarray:
 
 def encode(quats, kind: str, order: str = "ZXY", dtype=np.float64) -> np.ndarray:
     """Unit quaternions ``[..., 4]`` as ``kind`` ``[..., n]`` (see the module's notes), in
-    ``dtype``: ``np.float32`` gives ``"6d"`` and ``"matrix"`` straight from the
-    :func:`~expressive_mocap.ops.matrix_columns` kernel (the NumPy twin computes in float32, within
-    3e-7 of float64's rounded), the other kinds in float64 then rounded."""
+    ``dtype``: computed in float64 then rounded (``"6d"`` and ``"matrix"`` in float32 straight
+    from the :func:`~expressive_mocap.ops.matrix_columns` kernel)."""
     _kind(kind)
     if kind in ("6d", "matrix") and np.dtype(dtype) == np.float32:
         return ops.matrix_columns(quats, 3 if kind == "matrix" else 2)

@@ -62,6 +62,7 @@ struct Converted {
     rotations: Option<Floats>,
     features: Vec<Floats>,
     contacts: Option<Vec<bool>>,
+    velocities: Option<Floats>,
 }
 
 /// One clip (`expressive_mocap.ops.ClipInput`), read by attribute name: `source` the file's
@@ -91,6 +92,8 @@ struct FeatureArgs<'py> {
 struct OutputArgs<'py> {
     positions: bool,
     rotations: bool,
+    rotation_columns: usize,
+    velocities: bool,
     features: Vec<FeatureArgs<'py>>,
     contacts: bool,
     float32: bool,
@@ -101,11 +104,13 @@ struct OutputArgs<'py> {
 /// `clips`: `ClipArgs`, whose file, when given by path, is read here (a regular file of at most
 /// `max_bytes`, by default `expressive_mocap.files.MAX_INPUT_BYTES`). `parents` [J]; `roles` the
 /// 7 gait joints; `gait` the thresholds of contact detection. Kept per clip (`outputs`): world
-/// `positions` [F, J, 3], local `rotations` [F, J, 4], one causal feature array [F, 19] per
-/// `features` request `(floor or None, thigh_reference [2, 4] or None)`, offline `contacts` bool
-/// [F, 2]; float arrays in float32 when `float32`. Returns per clip `(positions or None,
-/// rotations or None, [features...], contacts or None)`, or a `ParseError` (malformed block) or
-/// `OSError` (unreadable or refused file) instance in its place.
+/// `positions` [F, J, 3], local `rotations` [F, J, 4] (or, with `rotation_columns` 2 or 3, their
+/// matrices' first columns [F, J, 6] or whole matrices [F, J, 9]), one causal feature array
+/// [F, 19] per `features` request `(floor or None, thigh_reference [2, 4] or None)`, offline
+/// `contacts` bool [F, 2], the positions' `velocities` [F, J, 3]; float arrays in float32 when
+/// `float32`. Returns per clip `(positions or None, rotations or None, [features...], contacts or
+/// None, velocities or None)`, or a `ParseError` (malformed block) or `OSError` (unreadable or
+/// refused file) instance in its place.
 #[pyfunction]
 #[pyo3(signature = (clips, parents, roles, gait, outputs, max_bytes=None))]
 #[allow(clippy::too_many_lines)] // one sequence: arguments, parallel work, results
@@ -147,6 +152,8 @@ fn clip_pipeline_many<'py>(
         params: GaitParams::from(&gait),
         positions: outputs.positions,
         rotations: outputs.rotations,
+        rotation_columns: outputs.rotation_columns,
+        velocities: outputs.velocities,
         features: &requests,
         contacts: outputs.contacts,
     };
@@ -196,6 +203,7 @@ fn clip_pipeline_many<'py>(
                 let ClipOutputs {
                     positions,
                     rotations,
+                    velocities,
                     features,
                     contacts,
                 } = clip_outputs(&clip, &request).map_err(Failure::Kernel)?;
@@ -207,11 +215,16 @@ fn clip_pipeline_many<'py>(
                         .map(|v| Floats::new(v, float32))
                         .collect(),
                     contacts,
+                    velocities: velocities.map(|v| Floats::new(v, float32)),
                 })
             })
             .collect()
     });
     let joints = parents.len();
+    let rotation_width = match outputs.rotation_columns {
+        0 => 4,
+        columns => 3 * columns,
+    };
     results
         .into_iter()
         .zip(&jobs)
@@ -224,7 +237,7 @@ fn clip_pipeline_many<'py>(
                     .transpose()?;
                 let rotations = out
                     .rotations
-                    .map(|r| r.into_py(py, Ix3(frames, joints, 4)))
+                    .map(|r| r.into_py(py, Ix3(frames, joints, rotation_width)))
                     .transpose()?;
                 let features = out
                     .features
@@ -235,7 +248,12 @@ fn clip_pipeline_many<'py>(
                     .contacts
                     .map(|c| array(c, (frames, 2)).map(|a| a.into_pyarray(py)))
                     .transpose()?;
-                Ok((positions, rotations, PyList::new(py, features)?, contacts)
+                let velocities = out
+                    .velocities
+                    .map(|v| v.into_py(py, Ix3(frames, joints, 3)))
+                    .transpose()?;
+                let features = PyList::new(py, features)?;
+                Ok((positions, rotations, features, contacts, velocities)
                     .into_pyobject(py)?
                     .into_any()
                     .unbind())

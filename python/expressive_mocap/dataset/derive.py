@@ -22,6 +22,8 @@ from ..reference.forms import clip_gradient
 
 POSITION_FRAMES = ("world", "root", "heading", "clip")
 DERIVED_KINDS = ("velocities", "accelerations", "root_velocity", "angular_velocities", "heading")
+# Rotation forms the clip kernels give as they are, and their matrix columns (0: quaternions).
+KERNEL_COLUMNS = {"quaternion": 0, "6d": 2, "matrix": 3}
 # A resampled clip takes the source's every n-th frame as it is when the rates are this close to n:1
 # (files round the frame time: 0.0333333 s for 30 fps).
 RATE_TOLERANCE = 1e-4
@@ -93,13 +95,21 @@ class Options:
         return "rotations" in keep or "angular_velocities" in keep
 
     def plain(self, keep) -> bool:
-        """Whether the kernels' float32 outputs are stored as they are (today's datasets)."""
+        """Whether the kernels' float32 outputs are stored as they are: positions in the world's
+        frame, rotations as quaternions or matrix columns, velocities of the world positions
+        (the clip kernels make those forms, :class:`~expressive_mocap.ops.PipelineOutputs`);
+        nothing mirrored and no other derived kind (:func:`derive` makes those)."""
         return (
-            self.rotations == "quaternion"
+            self.form[0] in KERNEL_COLUMNS
             and self.positions == "world"
             and not self.mirror
-            and not any(k in keep for k in DERIVED_KINDS)
+            and not any(k in keep for k in DERIVED_KINDS if k != "velocities")
         )
+
+    @property
+    def rotation_columns(self) -> int:
+        """The clip kernels' rotation form for this form (0: quaternions; see :data:`KERNEL_COLUMNS`)."""
+        return KERNEL_COLUMNS.get(self.form[0], 0)
 
     def record(self) -> dict:
         """The options as the manifest records them."""

@@ -21,7 +21,7 @@ def mirror_values(values: dict, result, keep: tuple[str, ...]) -> dict:
     clip's own, left for right (the image's feet are the clip's, swapped)."""
     if isinstance(result, Exception):  # arrays the clip's own kernel read: not expected to fail
         raise result
-    positions, rotations, features, _ = result
+    positions, rotations, features, _, _ = result
     mirrored = {"positions": positions, "rotations": rotations}
     if "features" in keep:
         mirrored["features"] = features[0].astype(np.float32)

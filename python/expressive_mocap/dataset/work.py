@@ -342,7 +342,8 @@ def run_kernels(
     start = time.perf_counter()
     outcomes = prepared.outcomes
     use_model = any(k in MODEL_KINDS for k in keep)
-    plain = options.plain(keep)
+    # The model reads the local rotations as quaternions: then another form is derived from them.
+    plain = options.plain(keep) and not (use_model and options.rotation_columns)
     requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
     kept = []  # (values to update, local rotations, model features) of each clip for the model
     finished = []  # (an outcome of the group, [values]) of each group, for the sums
@@ -353,6 +354,8 @@ def run_kernels(
             features=tuple(ops.FeatureRequest(*r) for r in requests),
             contacts="contacts" in keep,
             float32=plain and not use_model,
+            rotation_columns=options.rotation_columns if plain else 0,
+            velocities=plain and "velocities" in keep,
         )
         gait = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
         if isinstance(group.clips[0], ops.ClipArrays):
@@ -396,17 +399,17 @@ def _finish_clip(
     keep: tuple[str, ...],
     plain: bool = True,
 ) -> bool:
-    """One clip's kernel ``result`` into its outcome: its arrays as stored (but positions and
-    rotations only when ``plain``: else :func:`.forms.derive_group` stores them), or its error. True if
-    it succeeded."""
+    """One clip's kernel ``result`` into its outcome: its arrays as stored (but positions,
+    rotations and velocities only when ``plain``: else :func:`.forms.derive_group` stores them),
+    or its error. True if it succeeded."""
     if isinstance(clip, ops.ClipInput) and isinstance(clip.source, str) and not isinstance(result, OSError):
         # the kernel read the file whole
         outcome.bytes = item.size
     if isinstance(result, Exception):
         outcome.error = str(_clip_error(item, header, result))
         return False
-    positions, rotations, features, contacts = result
-    values = {"positions": positions, "rotations": rotations} if plain else {}
+    positions, rotations, features, contacts, velocities = result
+    values = {"positions": positions, "rotations": rotations, "velocities": velocities} if plain else {}
     values["contacts"] = contacts
     if "features" in keep:
         values["features"] = features[0]

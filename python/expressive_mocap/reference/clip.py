@@ -11,6 +11,7 @@ import numpy as np
 from .. import files
 from ..errors import ArgumentError
 from .fk import forward_kinematics
+from .forms import clip_gradient, matrix_entries
 from .gait import GAIT_ROLES, clip_gait_many
 from .motion_block import read_motion_blocks
 
@@ -20,10 +21,16 @@ def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | No
     ``hips_rest_height``: see ``expressive_mocap.ops.ClipInput``; ``source``: the bytes, or a
     path read here with :func:`~expressive_mocap.files.read_input`: a regular file of at most
     ``max_bytes``, by default ``files.MAX_INPUT_BYTES``): ``(positions [F, J, 3] or None,
-    rotations [F, J, 4] or None, [features [F, 19] per ``outputs.features`` request], contacts
-    bool [F, 2] or None)``, float32 if ``outputs.float32``; a ``ParseError`` or ``OSError`` in
+    rotations [F, J, 4] or None (or their matrices' first ``outputs.rotation_columns`` columns),
+    [features [F, 19] per ``outputs.features`` request], contacts bool [F, 2] or None,
+    velocities [F, J, 3] or None)``, float32 if ``outputs.float32``; a ``ParseError`` or ``OSError`` in
     the place of a clip whose block or file cannot be read (or is refused: not a regular file,
     or over the bound). ``gait``: the four thresholds (``expressive_mocap.ops.GaitSettings``)."""
+    if outputs.rotation_columns not in (0, 2, 3):
+        raise ArgumentError(
+            "argument `rotation_columns`: expected 0 (quaternions), 2 (6d) or 3 (the whole matrix), "
+            f"got {outputs.rotation_columns}"
+        )
     roles = [int(r) for r in roles]
     if len(roles) != 7:
         raise ArgumentError(f"argument `roles`: expected 7 joint indices {GAIT_ROLES}, got {len(roles)}")
@@ -56,12 +63,17 @@ def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | No
             assert features is not None
             wanted.append(features)
         found = clip_gait_many([gait_clip], roles, *thresholds, False, True)[0][1] if outputs.contacts else None
+        velocities = (
+            clip_gradient(world, np.array([0]), np.full(len(world), clip.frame_time)) if outputs.velocities else None
+        )
+        rotations = local if outputs.rotation_columns == 0 else matrix_entries(local, outputs.rotation_columns)
         out.append(
             (
                 world.astype(dtype) if outputs.positions else None,
-                local.astype(dtype) if outputs.rotations else None,
+                rotations.astype(dtype) if outputs.rotations else None,
                 [f.astype(dtype) for f in wanted],
                 found,
+                None if velocities is None else velocities.astype(dtype),
             )
         )
     return out

@@ -36,6 +36,8 @@ fuzz_target!(|data: &[u8]| {
             params,
             positions: u.arbitrary()?,
             rotations: u.arbitrary()?,
+            rotation_columns: u.int_in_range(0..=3)?,
+            velocities: u.arbitrary()?,
             features: &requests,
             contacts: u.arbitrary()?,
         };
