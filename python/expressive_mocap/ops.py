@@ -19,6 +19,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import lru_cache
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -206,8 +207,11 @@ class ChannelLayout:
     offsets: np.ndarray
 
 
+@lru_cache(maxsize=64)
 def channel_layout(skeleton) -> ChannelLayout:
-    """The :class:`ChannelLayout` of a :class:`~expressive_mocap.motion.Skeleton`."""
+    """The :class:`ChannelLayout` of a :class:`~expressive_mocap.motion.Skeleton`. Cached:
+    skeletons are immutable (hashed by identity), and the clips of an archive with one
+    hierarchy share one (the kernels copy the layout's index arrays: nothing writes to them)."""
     rotation_columns, orders, position_columns = skeleton.layout()
     return ChannelLayout(skeleton.n_channels, rotation_columns, orders, position_columns, skeleton.offsets)
 
