@@ -7,19 +7,36 @@ rotates by ``q2`` then ``q1``; an Euler order is three axis indices (0 = X, 1 = 
 written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in degrees.
 """
 
-from .clip import clip_pipeline_many
-from .decouple import compose_rotations, decouple_rotations
-from .features import dynamic_features
-from .fk import forward_kinematics, forward_kinematics_many
-from .footsteps import air_time, foot_contacts
-from .forms import clip_gradient, column_totals, matrix_columns
-from .gait import clip_gait_many
-from .ik import two_bone_ik
-from .mlp import mlp_forward
-from .motion_block import decode_channels, format_motion_block, parse_motion_block, read_motion_blocks
-from .planting import plant_feet
-from .retarget import retarget_transfer
-from .rotations import euler_to_quat, quat_to_euler
+from ..lazy import lazy_exports
+
+# Each twin loads on first use: with the Rust kernels in use, none is needed to run, and importing
+# all of them took a tenth of a command's start-up.
+_TWINS = {
+    "air_time": "footsteps",
+    "clip_gait_many": "gait",
+    "clip_gradient": "forms",
+    "clip_pipeline_many": "clip",
+    "column_totals": "forms",
+    "compose_rotations": "decouple",
+    "decode_channels": "motion_block",
+    "decouple_rotations": "decouple",
+    "dynamic_features": "features",
+    "euler_to_quat": "rotations",
+    "foot_contacts": "footsteps",
+    "format_motion_block": "motion_block",
+    "forward_kinematics": "fk",
+    "forward_kinematics_many": "fk",
+    "matrix_columns": "forms",
+    "mlp_forward": "mlp",
+    "parse_motion_block": "motion_block",
+    "plant_feet": "planting",
+    "quat_to_euler": "rotations",
+    "read_motion_blocks": "motion_block",
+    "retarget_transfer": "retarget",
+    "two_bone_ik": "ik",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _TWINS, globals())
 
 num_threads = 1
 
