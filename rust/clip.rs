@@ -155,6 +155,43 @@ const EFBIG: i32 = 27;
 /// # Errors
 /// `ReadError::Os` when the file cannot be opened or read, `ReadError::Refused` otherwise.
 pub fn read_input(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, ReadError> {
+    let (file, size) = open_checked(path, limit)?;
+    // O_NONBLOCK is left set: it does not change how a regular file is read.
+    let mut data = Vec::with_capacity(usize::try_from(size).unwrap_or(0).saturating_add(1));
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut data)
+        .map_err(ReadError::Os)?;
+    if data.len() as u64 > limit {
+        let message = format!("more than the {} bytes read at most", grouped(limit));
+        return Err(ReadError::Refused {
+            errno: EFBIG,
+            message,
+        });
+    }
+    Ok(data)
+}
+
+/// The first `count` bytes of the regular file at `path` (all of it if shorter) and its size,
+/// the file opened and checked as [`read_input`] does (Python's `files.read_beginning`).
+///
+/// # Errors
+/// As [`read_input`].
+pub fn read_beginning(
+    path: &Path,
+    count: usize,
+    limit: u64,
+) -> std::result::Result<(Vec<u8>, u64), ReadError> {
+    let (file, size) = open_checked(path, limit)?;
+    let mut data = Vec::with_capacity(count.min(usize::try_from(size).unwrap_or(count)));
+    file.take(count as u64)
+        .read_to_end(&mut data)
+        .map_err(ReadError::Os)?;
+    Ok((data, size))
+}
+
+/// The regular file at `path`, opened without blocking, and its size, or why it is refused: not
+/// a regular file (checked on the opened file itself), or larger than `limit`.
+fn open_checked(path: &Path, limit: u64) -> std::result::Result<(File, u64), ReadError> {
     let file = open_nonblocking(path).map_err(|error| open_error(path, error))?;
     let meta = file.metadata().map_err(ReadError::Os)?;
     if !meta.is_file() {
@@ -173,19 +210,7 @@ pub fn read_input(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, ReadE
             message,
         });
     }
-    // O_NONBLOCK is left set: it does not change how a regular file is read.
-    let mut data = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0).saturating_add(1));
-    file.take(limit.saturating_add(1))
-        .read_to_end(&mut data)
-        .map_err(ReadError::Os)?;
-    if data.len() as u64 > limit {
-        let message = format!("more than the {} bytes read at most", grouped(limit));
-        return Err(ReadError::Refused {
-            errno: EFBIG,
-            message,
-        });
-    }
-    Ok(data)
+    Ok((file, meta.len()))
 }
 
 /// The error of a failed open; one of what is neither a regular file nor a folder says what it

@@ -11,6 +11,7 @@ pub mod footsteps;
 pub mod format;
 pub mod forms;
 pub mod gait;
+pub mod heads;
 pub mod ik;
 pub mod mlp;
 pub mod parse;

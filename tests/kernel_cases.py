@@ -96,6 +96,8 @@ CORE = {
         ),
         [],
     ),
+    # The headers of files (this one, twice) read as repeating a header: not BVH, read in full.
+    "repeated_headers": (lambda f: ([__file__] * 2, b"HIERARCHY\nMOTION\n", 3, 64), []),
     "euler_to_quat": (
         lambda f: (RNG.normal(size=(f, 3, 3)), np.tile(np.array([0, 1, 2], np.uint8), (3, 1))),
         ["angles", "orders"],

@@ -7,6 +7,7 @@ Every function releases the GIL. Index and bool arrays are copied first (a write
 another thread during a call has no effect on it); float arrays are read in place, so a write to
 one during a call gives results from a mix of old and new values (see ``expressive_mocap.ops``)."""
 
+import os
 from collections.abc import Sequence
 
 import numpy as np
@@ -40,6 +41,7 @@ __all__ = [
     "plant_feet",
     "quat_to_euler",
     "read_motion_blocks",
+    "repeated_headers",
     "retarget_transfer",
     "two_bone_ik",
 ]
@@ -180,3 +182,9 @@ def clip_gradient(values: _F64, starts: npt.NDArray[np.int64], frame_time: _F64)
 
 def column_totals(arrays: list[npt.NDArray[np.float32]], width: int) -> tuple[_F64, _F64]:
     """Float64 sums of the rows of ``arrays`` (each ``[n, width]``) and of their squares."""
+
+def repeated_headers(
+    paths: Sequence[str | os.PathLike[str]], template: bytes, joints: int, count: int, max_bytes: int | None = None
+) -> list[tuple[int, float, int] | tuple[bytes, int] | OSError]:
+    """Per file, read in parallel from its first ``count`` bytes: ``(frames, frame_time, block_start)`` when it
+    repeats the header ``template``, else ``(first bytes, size)``, or an ``OSError``."""

@@ -458,6 +458,15 @@ def clip_pipeline_many(
     )
 
 
+def repeated_headers(paths: Sequence[str | os.PathLike], template: bytes, joints: int, count: int) -> list:
+    """The headers of files that repeat one already read, ``template`` its bytes through its
+    MOTION line (``joints`` joints), each file read from its first ``count`` bytes, in parallel
+    with the Rust kernels and without the GIL: per path ``(frames, frame_time, block_start)``,
+    or ``(first bytes, size)`` of a file that is anything else (for the full reader), or the
+    ``OSError`` of a file that cannot be read or is refused."""
+    return kernels().repeated_headers([os.fspath(p) for p in paths], bytes(template), int(joints), int(count))
+
+
 # -- inverse kinematics ----------------------------------------------------------------------------
 
 
@@ -658,6 +667,7 @@ __all__ = [
     "plant_feet",
     "quat_to_euler",
     "read_motion_blocks",
+    "repeated_headers",
     "retarget_transfer",
     "two_bone_ik",
 ]

@@ -15,6 +15,7 @@ use crate::clip::{clip_outputs, read_input, ClipInput, ClipOutputs, ClipRequest,
 use crate::error::KernelError;
 use crate::features::N_FEATURES;
 use crate::gait::{BodyScale, FeatureRequest, GaitParams};
+use crate::heads::Head;
 
 /// Where a clip's text is: in memory, or in a file this call reads (inside the parallel work,
 /// so an archive's files are read on every core without the GIL).
@@ -291,7 +292,50 @@ fn os_error(error: &ReadError) -> PyErr {
     }
 }
 
+/// The headers of files that repeat the header `template` (a header's bytes through its MOTION
+/// line, of `joints` joints; `crate::heads`), read in parallel without the GIL from each file's
+/// first `count` bytes (regular files of at most `max_bytes`, by default
+/// `expressive_mocap.files.MAX_INPUT_BYTES`). Per path `(frames, frame_time, block_start)`, or
+/// `(first bytes, size)` of a file to read in full, or an `OSError` instance.
+#[pyfunction]
+#[pyo3(signature = (paths, template, joints, count, max_bytes=None))]
+fn repeated_headers(
+    py: Python<'_>,
+    paths: Vec<PathBuf>,
+    template: &[u8],
+    joints: usize,
+    count: usize,
+    max_bytes: Option<u64>,
+) -> PyResult<Vec<Py<PyAny>>> {
+    let max_bytes = match max_bytes {
+        Some(bound) => bound,
+        None => py
+            .import("expressive_mocap.files")?
+            .getattr("MAX_INPUT_BYTES")?
+            .extract()?,
+    };
+    let heads =
+        py.detach(|| crate::heads::repeated_headers(&paths, count, max_bytes, template, joints));
+    heads
+        .into_iter()
+        .map(|head| {
+            Ok(match head {
+                Head::Repeated(t) => (t.frames, t.frame_time, t.block_start)
+                    .into_pyobject(py)?
+                    .into_any()
+                    .unbind(),
+                Head::Other(data, size) => (PyBytes::new(py, &data), size)
+                    .into_pyobject(py)?
+                    .into_any()
+                    .unbind(),
+                Head::Failed(error) => os_error(&error).into_value(py).into_any(),
+            })
+        })
+        .collect()
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(clip_pipeline_many, m)?)?;
+    m.add_function(wrap_pyfunction!(repeated_headers, m)?)?;
     Ok(())
 }

@@ -10,6 +10,7 @@ bytes (:func:`~expressive_mocap.tokens.shown`).
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -18,7 +19,15 @@ from ..motion import Skeleton
 from ..tokens import finite_number, shown
 from .hierarchy import COUNT_PATTERN, read_hierarchy
 
-__all__ = ["BLOCK_BYTES_PER_JOINT_FRAME", "MAX_HEADER_BYTES", "MIN_JOINT_FRAMES", "Header", "parse_header"]
+__all__ = [
+    "BLOCK_BYTES_PER_JOINT_FRAME",
+    "MAX_HEADER_BYTES",
+    "MIN_JOINT_FRAMES",
+    "Header",
+    "header_template",
+    "parse_header",
+    "repeated_header",
+]
 
 _MOTION = re.compile(rb"^[ \t]*MOTION[ \t]*\r*$", re.MULTILINE | re.IGNORECASE)
 _FRAMES = re.compile(rb"[ \t]*Frames[ \t]*:[ \t]*(\S*)[ \t]*\r*$", re.IGNORECASE)
@@ -132,6 +141,59 @@ def _find_motion_line(data: bytes) -> re.Match | None:
         if end >= len(data):
             return None
         start, end = end - 5, 4 * end  # the next window repeats 5 bytes: a candidate may cross the end
+
+
+# The Python reader's line patterns, in their plainest form (see rust/heads.rs): a token ends
+# at Rust's ASCII whitespace (space, tab, LF, FF, CR).
+_TOKEN = rb"([^ \t\n\x0c\r]*)[ \t]*\r*"
+_FRAMES_LINE = re.compile(rb"Frames:[ \t]*" + _TOKEN)
+_FRAME_TIME_LINE = re.compile(rb"Frame Time:[ \t]*" + _TOKEN)
+_COUNT = re.compile(rb"[0-9]{1,18}")
+_PLAIN = re.compile(rb"[0-9]+(?:\.[0-9]+)?")
+
+
+def repeated_header(data: bytes, size: int, whole: bool, template: bytes, joints: int) -> tuple | None:
+    """``(frames, frame_time, block_start)`` of a file whose first bytes ``data`` (all of it when
+    ``whole``; ``size`` the file's) are ``template`` (a header's bytes through its MOTION line, of
+    ``joints`` joints) then ``Frames:`` and ``Frame Time:`` lines in their plainest form: the file's
+    header is then the template's with these values, as :func:`parse_header` reads it. None for
+    anything else, and for what :func:`~expressive_mocap.bvh.read_header` reads from the whole
+    file or refuses: the full reader then reads it. The kernel ``repeated_headers`` (rust/heads.rs)
+    reads files the same way, in parallel."""
+    if whole or not template or not data.startswith(template):
+        return None
+    bom = 3 if data.startswith(b"\xef\xbb\xbf") else 0
+    if b"\0" in data[len(template) : min(len(data), bom + 4096)]:
+        return None
+    values, position = [], len(template)
+    for pattern in (_FRAMES_LINE, _FRAME_TIME_LINE):
+        end = data.find(b"\n", position)
+        match = pattern.fullmatch(data, position, end) if end >= 0 else None
+        if match is None:
+            return None
+        values.append(match.group(1))
+        position = end + 1
+    frames_text, time_text = values
+    if not (_COUNT.fullmatch(frames_text) and _PLAIN.fullmatch(time_text)):
+        return None
+    frames, frame_time = int(frames_text), float(time_text)
+    if not (math.isfinite(frame_time) and frame_time > 0) or position >= len(data) or size < position:
+        return None
+    if frames * joints > max((size - position) // 3, 1 << 16):
+        return None
+    return frames, frame_time, position
+
+
+def header_template(data: bytes, size: int, header: Header) -> bytes | None:
+    """The bytes of ``header``'s file (its first ``data``, ``size`` its length) through its MOTION
+    line, when the file's own Frames and Frame Time lines read through it as :func:`repeated_header`
+    reads them (so files repeating them have ``header``'s skeleton and line numbers); else None."""
+    motion = _find_motion_line(data)
+    if motion is None or data[motion.end() : motion.end() + 1] != b"\n":
+        return None
+    template = data[: motion.end() + 1]
+    found = repeated_header(data, size, False, template, header.skeleton.n_joints)
+    return template if found == (header.frames, header.frame_time, header.block_start) else None
 
 
 def parse_header(data: bytes, name: str, size: int | None = None) -> Header:

@@ -45,17 +45,18 @@ def _load(source: Source) -> tuple[bytes, str]:
 HEADER_PREFIX = 1 << 14  # bytes read first for a header: hierarchies are a few kilobytes (Bandai 3.4-4 KB)
 
 
-def read_header(path: str | os.PathLike) -> tuple[Header, bytes | None]:
+def read_header(path: str | os.PathLike, beginning: tuple[bytes, int] | None = None) -> tuple[Header, bytes | None]:
     """The header of the BVH file at ``path`` and, only where it needed them, the file's bytes.
 
     The header is parsed from the file's first 16 KB when it fits there (the usual case): the
     caller then reads the MOTION block itself (``preprocess`` does, in Rust, in parallel), and
     ``None`` is returned for the bytes. A header that does not fit, or an error, is taken from the
-    whole file, so the result and any error are those of :func:`read_bvh`. Raises BVHError.
+    whole file, so the result and any error are those of :func:`read_bvh`. ``beginning``: those
+    first bytes and the file's size, when the caller read them already. Raises BVHError.
     """
     name = str(path)
     try:
-        data, size = read_beginning(path, HEADER_PREFIX)
+        data, size = read_beginning(path, HEADER_PREFIX) if beginning is None else beginning
         if len(data) == HEADER_PREFIX:  # maybe more: try the header from this beginning
             try:
                 header = parse_header(data, name, size)

@@ -22,7 +22,8 @@ from pathlib import Path
 from typing import Protocol
 
 from .. import files as inputs
-from ..bvh import parse_header, read_header
+from ..bvh import parse_header, read_error, read_header
+from ..bvh.header import Header
 from ..errors import ArgumentError, BVHError
 
 
@@ -48,15 +49,26 @@ class Item:
     data: bytes | None = None
     refused: str | None = None
 
-    def header(self, outcome: BytesRead):
+    @property
+    def is_file(self) -> bool:
+        """Whether the clip is a file of its own (not an archive's member)."""
+        return self.path is not None and self.data is None and self.member is None and self.refused is None
+
+    def header(self, outcome: BytesRead, known=None):
         """The clip's BVH header and its text for the kernel: the file's path when the header
         came from the file's beginning (the kernel reads the rest), else the bytes. Sets
-        ``outcome.bytes`` to the bytes read so far, also when the header then fails."""
+        ``outcome.bytes`` to the bytes read so far, also when the header then fails. ``known``
+        (a file's): its header, its first bytes and size, or the error reading them, as read
+        ahead for a batch (:func:`~expressive_mocap.dataset.work.headers_ahead`)."""
         outcome.bytes = 0
         if self.refused is not None:
             raise BVHError(self.source, None, f"cannot read the archive member: {self.refused}")
+        if isinstance(known, Header):
+            return known, self.path  # counted once the kernel has read the file
+        if isinstance(known, OSError):
+            raise read_error(str(self.path), known)
         if self.data is None and self.member is None:
-            header, data = read_header(self.path)  # type: ignore[arg-type]
+            header, data = read_header(self.path, known)  # type: ignore[arg-type]
             if data is None:
                 return header, self.path  # counted once the kernel has read the file
             outcome.bytes = len(data)

@@ -14,7 +14,9 @@ import numpy as np
 
 from .. import files as inputs
 from .. import ops
-from ..bvh import block_error, read_error
+from ..bvh import block_error, parse_header, read_error
+from ..bvh.header import Header, header_template
+from ..bvh.reader import HEADER_PREFIX
 from ..decoupling.algebra import decompose_many
 from ..errors import BVHError, MocapError, ModelError
 from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
@@ -118,9 +120,10 @@ def prepare(
     start = time.perf_counter()
     outcomes = [Outcome() for _ in batch]
     by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
+    known = headers_ahead(batch)
     for k, item in enumerate(batch):
         try:
-            header, text = item.header(outcomes[k])
+            header, text = item.header(outcomes[k], known.get(k))
         except BVHError as error:
             outcomes[k].error = str(error)
             continue
@@ -147,6 +150,39 @@ def prepare(
             continue
         groups.append(group)
     return Prepared(outcomes, groups, time.perf_counter() - start)
+
+
+def headers_ahead(batch: list[Item]) -> dict[int, object]:
+    """The headers of the batch's files that repeat one of them, read in one kernel call
+    (``repeated_headers``: in parallel, without the GIL), by index: a Header, or for a file that
+    does not repeat it, its first bytes and size (for :func:`~expressive_mocap.bvh.read_header`),
+    or the OSError reading it. The header repeated is the first file's that holds more than its
+    beginning (a shorter file's header is read with the whole file). Empty when there is none,
+    or when its own lines are not in the plainest form (see :func:`.header.repeated_header`)."""
+    files = [k for k, item in enumerate(batch) if item.is_file]
+    first = next((k for k in files if batch[k].size > HEADER_PREFIX), None)
+    if first is None or len(files) < 2:
+        return {}
+    path = batch[first].path
+    try:
+        data, size = inputs.read_beginning(path, HEADER_PREFIX)  # type: ignore[arg-type]
+        header = parse_header(data, str(path), size)
+    except (OSError, BVHError):
+        return {}  # its own error comes from the full reader, with the others'
+    template = header_template(data, size, header) if len(data) == HEADER_PREFIX else None
+    if template is None:
+        return {}
+    others = [k for k in files if k != first]
+    paths = [str(batch[k].path) for k in others]
+    found = ops.repeated_headers(paths, template, header.skeleton.n_joints, HEADER_PREFIX)
+    known: dict[int, object] = {}
+    for k, result in zip(others, found):
+        if isinstance(result, tuple) and not isinstance(result[0], bytes):
+            frames, frame_time, block_start = result
+            known[k] = Header(header.skeleton, frames, frame_time, block_start, header.block_line)
+        else:
+            known[k] = result
+    return known
 
 
 _CANONICAL_HINT = " (--canonical retargets clips of any humanoid skeleton onto the model's body)"
@@ -431,4 +467,14 @@ def _clip_error(item: Item, header, error: Exception) -> BVHError:
     return block_error(item.source, header, error)
 
 
-__all__ = ["Group", "Outcome", "Prepared", "bone_length", "compute", "load_model", "prepare", "run_kernels"]
+__all__ = [
+    "Group",
+    "Outcome",
+    "Prepared",
+    "bone_length",
+    "compute",
+    "headers_ahead",
+    "load_model",
+    "prepare",
+    "run_kernels",
+]

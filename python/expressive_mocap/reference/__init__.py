@@ -32,6 +32,7 @@ _TWINS = {
     "plant_feet": "planting",
     "quat_to_euler": "rotations",
     "read_motion_blocks": "motion_block",
+    "repeated_headers": "clip",
     "retarget_transfer": "retarget",
     "two_bone_ik": "ik",
 }
@@ -61,6 +62,7 @@ __all__ = [
     "parse_motion_block",
     "plant_feet",
     "read_motion_blocks",
+    "repeated_headers",
     "quat_to_euler",
     "retarget_transfer",
     "two_bone_ik",

@@ -9,6 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .. import files
+from ..bvh.header import repeated_header
 from ..errors import ArgumentError
 from .fk import forward_kinematics
 from .forms import clip_gradient, matrix_entries
@@ -79,6 +80,24 @@ def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | No
     return out
 
 
+def repeated_headers(paths, template: bytes, joints: int, count: int, max_bytes: int | None = None) -> list:
+    """Per file of ``paths`` (regular files of at most ``max_bytes``, by default
+    ``files.MAX_INPUT_BYTES``), read from its first ``count`` bytes: ``(frames, frame_time,
+    block_start)`` when it repeats ``template`` (:func:`repeated_header`), else ``(first bytes,
+    size)`` to read in full, or the ``OSError`` of a file that cannot be read."""
+    out: list = []
+    for path in paths:
+        try:
+            data, size = files.read_beginning(path, count, files.MAX_INPUT_BYTES if max_bytes is None else max_bytes)
+        except OSError as error:
+            out.append(OSError(error.errno, error.strerror) if error.errno is not None else error)
+            continue
+        found = repeated_header(data, size, len(data) < count, template, joints)
+        out.append((data, size) if found is None else found)
+    return out
+
+
 __all__ = [
     "clip_pipeline_many",
+    "repeated_headers",
 ]
