@@ -125,14 +125,7 @@ fn clip_pipeline_many<'py>(
     max_bytes: Option<u64>,
 ) -> PyResult<Vec<Py<PyAny>>> {
     use rayon::prelude::*;
-    // One bound for every reader of BVH text: the package's, unless the caller gives one.
-    let max_bytes = match max_bytes {
-        Some(bound) => bound,
-        None => py
-            .import("expressive_mocap.files")?
-            .getattr("MAX_INPUT_BYTES")?
-            .extract()?,
-    };
+    let max_bytes = input_bound(py, max_bytes)?;
     let float32 = outputs.float32;
     let mut requests = Vec::with_capacity(outputs.features.len());
     for feature in &outputs.features {
@@ -307,13 +300,7 @@ fn repeated_headers(
     count: usize,
     max_bytes: Option<u64>,
 ) -> PyResult<Vec<Py<PyAny>>> {
-    let max_bytes = match max_bytes {
-        Some(bound) => bound,
-        None => py
-            .import("expressive_mocap.files")?
-            .getattr("MAX_INPUT_BYTES")?
-            .extract()?,
-    };
+    let max_bytes = input_bound(py, max_bytes)?;
     let heads =
         py.detach(|| crate::heads::repeated_headers(&paths, count, max_bytes, template, joints));
     heads
@@ -332,6 +319,18 @@ fn repeated_headers(
             })
         })
         .collect()
+}
+
+/// The bound on a file's bytes: the caller's, else the package's (one bound for every reader of
+/// BVH text, `expressive_mocap.files.MAX_INPUT_BYTES`).
+fn input_bound(py: Python<'_>, given: Option<u64>) -> PyResult<u64> {
+    match given {
+        Some(bound) => Ok(bound),
+        None => py
+            .import("expressive_mocap.files")?
+            .getattr("MAX_INPUT_BYTES")?
+            .extract(),
+    }
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
