@@ -157,8 +157,9 @@ def headers_ahead(batch: list[Item]) -> dict[int, object]:
     (``repeated_headers``: in parallel, without the GIL), by index: a Header, or for a file that
     does not repeat it, its first bytes and size (for :func:`~expressive_mocap.bvh.read_header`),
     or the OSError reading it. The header repeated is the first file's that holds more than its
-    beginning (a shorter file's header is read with the whole file). Empty when there is none,
-    or when its own lines are not in the plainest form (see :func:`.header.repeated_header`)."""
+    beginning (a shorter file's header is read with the whole file); its own first bytes are
+    handed on too, so no file is read twice. Empty when there is none, or when its own lines
+    are not in the plainest form (see :func:`.header.repeated_header`)."""
     files = [k for k, item in enumerate(batch) if item.is_file]
     first = next((k for k in files if batch[k].size > HEADER_PREFIX), None)
     if first is None or len(files) < 2:
@@ -175,7 +176,7 @@ def headers_ahead(batch: list[Item]) -> dict[int, object]:
     others = [k for k in files if k != first]
     paths = [str(batch[k].path) for k in others]
     found = ops.repeated_headers(paths, template, header.skeleton.n_joints, HEADER_PREFIX)
-    known: dict[int, object] = {}
+    known: dict[int, object] = {first: (data, size)}
     for k, result in zip(others, found):
         if isinstance(result, tuple) and not isinstance(result[0], bytes):
             frames, frame_time, block_start = result
