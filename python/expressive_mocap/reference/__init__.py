@@ -41,29 +41,4 @@ __getattr__, __dir__ = lazy_exports(__name__, _TWINS, globals())
 
 num_threads = 1
 
-__all__ = [
-    "air_time",
-    "clip_gait_many",
-    "clip_gradient",
-    "clip_pipeline_many",
-    "column_totals",
-    "compose_rotations",
-    "decode_channels",
-    "decouple_rotations",
-    "dynamic_features",
-    "euler_to_quat",
-    "foot_contacts",
-    "format_motion_block",
-    "forward_kinematics",
-    "forward_kinematics_many",
-    "matrix_columns",
-    "mlp_forward",
-    "num_threads",
-    "parse_motion_block",
-    "plant_feet",
-    "read_motion_blocks",
-    "repeated_headers",
-    "quat_to_euler",
-    "retarget_transfer",
-    "two_bone_ik",
-]
+__all__ = [*_TWINS, "num_threads"]
