@@ -60,7 +60,7 @@ def finish(
         "failures": failures,
     }
     atomic_write(partial / MANIFEST, manifest_text(manifest).encode())
-    move_into_place(out)
+    move_into_place(out, manifest)
 
 
 def manifest_text(manifest: dict) -> str:
@@ -77,12 +77,15 @@ def manifest_text(manifest: dict) -> str:
     return "{\n" + ",\n".join(lines) + "\n}\n"
 
 
-def move_into_place(out: Path) -> dict:
+def move_into_place(out: Path, manifest: dict | None = None) -> dict:
     """Rename the finished files of ``out/.partial`` into ``out`` (manifest last), then drop
     .partial; returns the manifest. Safe to repeat after a crash: files already moved are
-    skipped. Only the fixed names of the format move: a manifest cannot name others."""
+    skipped. Only the fixed names of the format move: a manifest cannot name others.
+    ``manifest``: the one just written there, if known (reading it back and checking it again
+    is 8 ms of a 1 s run of 2,900 clips); else it is read."""
     partial = out / PARTIAL
-    manifest = read_manifest(partial / MANIFEST)
+    if manifest is None:
+        manifest = read_manifest(partial / MANIFEST)
     for name in [data_file(k) for k in manifest["kinds"]] + [OFFSETS]:
         if (partial / name).exists():
             os.replace(partial / name, out / name)
