@@ -18,13 +18,18 @@ so every joint's world position is unchanged, to rounding; one skeleton for all,
 originals). Both programs are timed on those files.
 
 Each run is a fresh child process (imports included in its wall time; the call itself is also
-timed inside the child), pybvh-ml and ours alternated round after round; medians.
+timed inside the child), pybvh-ml and ours alternated round after round; medians. Both packages
+are byte-compiled first, as pip leaves an installed wheel: pybvh-ml's modules were, at its
+install, while an editable checkout of ours under PYTHONDONTWRITEBYTECODE (set here) compiled all
+its modules from source at every start, 60 ms of each process.
 Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 """
 
 from __future__ import annotations
 
 import argparse
+import compileall
+import importlib.util
 import json
 import os
 import platform
@@ -144,6 +149,18 @@ print(json.dumps({"call": done - imported, "imports": imported - started, "peak"
 """
 
 
+def byte_compile(*packages) -> dict[str, int]:
+    """Each package's modules compiled to bytecode where it lacks it (as pip does when it installs
+    a wheel), so neither child process compiles source at start; how many were compiled now."""
+    compiled = {}
+    for package in packages:
+        folder = Path(package.__file__).parent
+        stale = [p for p in folder.rglob("*.py") if not Path(importlib.util.cache_from_source(str(p))).exists()]
+        compileall.compile_dir(folder, quiet=1)
+        compiled[package.__name__] = len(stale)
+    return compiled
+
+
 def our_options() -> tuple[list[str], str]:
     """The options of our run that match pybvh-ml's, or the closest this checkout has."""
     help_text = subprocess.run(
@@ -239,6 +256,8 @@ def main() -> None:
 
     ours_options, ours_note = our_options()
     print(f"ours: {' '.join(ours_options)} ({ours_note})")
+    compiled = byte_compile(pybvh_ml, pybvh, em)
+    print(f"modules byte-compiled now (the rest had bytecode): {compiled}")
     times: dict[str, list[dict]] = {"pybvh-ml": [], "ours": []}
     outputs = {"pybvh-ml": args.work / "pybvh_ml.npz", "ours": args.work / "ours"}
     load = os.getloadavg()
@@ -273,6 +292,8 @@ def main() -> None:
         f"against ours on the original: max {check['vs_original']:.2g} cm",
         f"- pybvh-ml: `preprocess_directory(SRC, OUT.npz, {', '.join(f'{k}={v!r}' for k, v in PYBVH_ML.items())})`",
         f"- ours: `expressive-mocap preprocess SRC -o OUT {' '.join(ours_options)} -q` ({ours_note})",
+        "- bytecode: every module of both packages byte-compiled before timing, as pip leaves an installed "
+        f"wheel; compiled by this run (the others already had it): {compiled}",
         "",
         "| program | runs | process wall s | (min-max) | the call s | imports s | peak RSS | output |",
         "|---|---|---|---|---|---|---|---|",
