@@ -9,7 +9,8 @@ markdown:
 2. gait measures of its normal walks, exaggerated to 3 before and after, beside its real active
    walk: arm swing, mean elbow flexion, largest knee flexion, hips vertical range, trunk lean and
    head height, measured on world positions composed here with SciPy from the BVH numbers (not
-   with the package's forward kinematics).
+   with the package's forward kinematics);
+3. the same measures on the real walks of both sessions at each intensity.
 
     PYTHONPATH=python python benches/exaggeration_sessions.py [--development] [--write benches/SESSIONS.md]
 
@@ -193,6 +194,30 @@ def gait_table(model: ExaggerationModel, content: str) -> list[str]:
     return lines + [""]
 
 
+def sessions_table(contents: list[str]) -> list[str]:
+    """The measures on the real walks of both sessions, by intensity: which ones move the same way
+    from normal to active in the training people (dataset-2, 8 takes) and in this session's actor,
+    so which ones a model of the training walks can be expected to move towards this actor's."""
+    folder = DATA / "Bandai-Namco-Research-Motiondataset-2/data"
+    trained = {
+        style: np.array([gait(em.read_bvh(folder / f"dataset-2_walk_{style}_{p:03d}.bvh")) for p in range(1, 9)])
+        for style in ("exhausted", "normal", "active")
+    }
+    session = {content: [gait(clip(content, style)) for style in STYLES] for content in contents}
+    lines = [
+        "| measure | dataset-2 walks, exhausted / normal / active (mean of 8 takes) | takes whose active is "
+        "above their normal | " + " | ".join(f"dataset-1 {c}, tired / normal / active" for c in contents) + " |",
+        "|---|---|---|" + "---|" * len(contents),
+    ]
+    for i, (name, _) in enumerate(MEASURES):
+        digits = 2 if name.startswith("cadence") else 1
+        means = " / ".join(f"{trained[s][:, i].mean():.{digits}f}" for s in ("exhausted", "normal", "active"))
+        above = int(np.sum(trained["active"][:, i] > trained["normal"][:, i]))
+        ours = " | ".join(" / ".join(f"{g[i]:.{digits}f}" for g in session[c]) for c in contents)
+        lines.append(f"| {name} | {means} | {above} of 8 | {ours} |")
+    return lines + [""]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--development", action="store_true", help="leave out dataset-1's forward walks")
@@ -220,6 +245,15 @@ def main() -> None:
     ]
     for content in contents:
         lines += gait_table(model, content)
+    lines += [
+        "## The measures on the real walks of both sessions",
+        "",
+        "Where the training people and this session's actor change a measure in opposite directions from",
+        "normal to active, a model of the training walks cannot move this actor's normal walk towards its",
+        "active one on that measure:",
+        "",
+        *sessions_table(contents),
+    ]
     text = "\n".join(lines)
     print(text)
     if args.write:
