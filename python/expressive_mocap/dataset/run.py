@@ -38,7 +38,7 @@ def preprocess(
     keep: tuple[str, ...] | list[str] | str | None = None,
     model: str | os.PathLike | None = None,
     *,
-    batch_mb: float = 64.0,
+    batch_mb: float = 32.0,
     max_batches: int | None = None,
     model_float32: bool = False,
     cluster=None,
@@ -248,9 +248,9 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
         stopped: list[bool] = []
         flushes: list[Future] = []
         # Clips decoded into arrays in Python (to resample or mirror them) take ~4x the memory of
-        # the Rust pipeline's: a quarter of the batch size keeps the peak where it was (340 MB
-        # against 820 MB for dataset-2 with --mirror, as fast).
-        batches = batched(todo, settings.batch_mb * MB / (4 if settings.shaping.decoded else 1))
+        # the Rust pipeline's: batches of half the size (16 MB of text by default) keep the peak
+        # near the plain run's (dataset-2 with --mirror: 340 MB, against 820 MB at 64 MB, as fast).
+        batches = batched(todo, settings.batch_mb * MB / (2 if settings.shaping.decoded else 1))
         if client is None:
             results = local(batches, settings.max_batches, stopped, settings.keep, settings.body_model,
                             settings.model_float32, _canonical(settings.options), settings.shaping)  # fmt: skip
