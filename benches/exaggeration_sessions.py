@@ -43,7 +43,12 @@ STYLES = ("tired", "normal", "active")
 DEVELOPMENT = ("walk-left", "walk-right", "walk-back")
 HELD_OUT = "walk"
 MEASURES = (
-    ("arm swing (cm)", "hand's range along the facing direction, relative to the hips"),
+    ("arm swing, hand (cm)", "hand's range along the facing direction, relative to the hips"),
+    (
+        "arm swing, shoulder (deg)",
+        "the upper arm's range of angles (5th to 95th percentile) from hanging, forward positive, in the "
+        "plane of the facing and the up axis",
+    ),
     ("elbow flexion (deg)", "mean over frames"),
     ("largest knee flexion (deg)", "95th percentile over frames"),
     ("hips vertical range (cm)", "5th to 95th percentile"),
@@ -111,6 +116,14 @@ def gait(motion: em.Motion) -> np.ndarray:
     swing = np.mean(
         [np.ptp(np.percentile(np.sum((at[f"Hand_{s}"] - at["Hips"]) * forward, 1)[walking], [5, 95])) for s in "LR"]
     )
+    # At the shoulder: the hand's range also shrinks when the elbows bend (a measure of its own).
+    upper_arms = [at[f"LowerArm_{s}"] - at[f"UpperArm_{s}"] for s in "LR"]
+    shoulder = np.mean(
+        [
+            np.ptp(np.percentile(np.degrees(np.arctan2(np.sum(a * forward, 1), -a[:, 1]))[walking], [5, 95]))
+            for a in upper_arms
+        ]
+    )
     elbow = np.mean(
         [_angle(at[f"LowerArm_{s}"] - at[f"UpperArm_{s}"], at[f"Hand_{s}"] - at[f"LowerArm_{s}"]) for s in "LR"], 0
     )
@@ -123,6 +136,7 @@ def gait(motion: em.Motion) -> np.ndarray:
     return np.array(
         [
             swing,
+            shoulder,
             elbow[walking].mean(),
             np.percentile(knee[walking], 95),
             hips,
