@@ -239,7 +239,17 @@ def session_two(data2: Path, model: BodyModel) -> tuple[list[str], dict]:
         )
     every = np.concatenate([np.array(v)[:, 0] for v in idle.values()])
     moving = np.concatenate([np.array(v)[:, 5] for v in idle.values()])
-    summary = {"clips": len(every), "mean": float(every.mean()), "over_3cm": int((every >= 3).sum())}
+    summary = {
+        "clips": len(every),
+        "mean": float(every.mean()),
+        "over_3cm": int((every >= 3).sum()),
+        # per style: idle hand (cm), clips at 3 cm or more, its motion about the shoulder (cm):
+        # original, body mechanics
+        "styles": {
+            style: (a[:, 0].mean(), int((a[:, 0] >= 3).sum()), a[:, 6].mean(), a[:, 7].mean())
+            for style, a in ((style, np.array(v)) for style, v in sorted(idle.items()))
+        },
+    }
     lines += [
         "",
         f"- idle hand over all {len(every)} clips: mean {every.mean():.2f} cm, "
