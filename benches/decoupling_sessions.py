@@ -94,10 +94,11 @@ def frame_mean(motions, model) -> np.ndarray:
     return np.concatenate([expressive_motion(m, model) for m in motions]).mean(axis=0)
 
 
-def gesture_test_split(data2: Path) -> list[Path]:
+def gesture_split(data2: Path) -> tuple[list[Path], list[Path]]:
+    """Dataset-2's one-hand gesture clips, 70/30 by clip (seed 0): ``(training, held out)``."""
     paths = [p for content in ONE_HAND_2 for p in sorted(data2.glob(f"dataset-2_{content}_*.bvh"))]
-    _, test = split_by_group(np.arange(len(paths)), 0.3, 0)
-    return [paths[k] for k in test]
+    train, test = split_by_group(np.arange(len(paths)), 0.3, 0)
+    return [paths[k] for k in train], [paths[k] for k in test]
 
 
 def table(rows: dict[str, np.ndarray], names: tuple[str, ...]) -> str:
@@ -177,7 +178,7 @@ def session_two(data2: Path, model: BodyModel) -> tuple[list[str], dict]:
     # in the original and the prediction (degrees), the idle hand's motion around its mean (cm),
     # and its motion about its shoulder in the original and in the body mechanics (cm)
     idle: dict[str, list] = {}
-    paths = gesture_test_split(data2)
+    _, paths = gesture_split(data2)
     for path, motion in zip(paths, em.read_bvh_many(paths)):
         content, style = path.stem.split("_")[1:3]
         side = ONE_HAND_2[content]
@@ -216,8 +217,8 @@ def session_two(data2: Path, model: BodyModel) -> tuple[list[str], dict]:
         "| idle hand's motion around its mean (cm) | clips at 3 cm or more |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for style, v in sorted(idle.items()):
-        a = np.array(v)
+    per_style = {style: np.array(v) for style, v in sorted(idle.items())}
+    for style, a in per_style.items():
         lines.append(
             f"| {style} | {len(a)} | {a[:, 0].mean():.2f} | {a[:, 0].max():.1f} | {(a[:, 0] >= 3).sum()} "
             f"| {a[:, 1].mean():.0f} | {a[:, 2].mean():.0f} | {a[:, 3].mean():.1f} | {a[:, 4].mean():.1f} "
@@ -231,14 +232,13 @@ def session_two(data2: Path, model: BodyModel) -> tuple[list[str], dict]:
         "| style | original (cm) | body mechanics (cm) | clips at 3 cm or more: original | body mechanics |",
         "|---|---|---|---|---|",
     ]
-    for style, v in sorted(idle.items()):
-        a = np.array(v)
+    for style, a in per_style.items():
         lines.append(
             f"| {style} | {a[:, 6].mean():.2f} | {a[:, 7].mean():.2f} "
             f"| {(a[:, 6] >= 3).sum()} | {(a[:, 7] >= 3).sum()} |"
         )
-    every = np.concatenate([np.array(v)[:, 0] for v in idle.values()])
-    moving = np.concatenate([np.array(v)[:, 5] for v in idle.values()])
+    every = np.concatenate([a[:, 0] for a in per_style.values()])
+    moving = np.concatenate([a[:, 5] for a in per_style.values()])
     summary = {
         "clips": len(every),
         "mean": float(every.mean()),
@@ -247,7 +247,7 @@ def session_two(data2: Path, model: BodyModel) -> tuple[list[str], dict]:
         # original, body mechanics
         "styles": {
             style: (a[:, 0].mean(), int((a[:, 0] >= 3).sum()), a[:, 6].mean(), a[:, 7].mean())
-            for style, a in ((style, np.array(v)) for style, v in sorted(idle.items()))
+            for style, a in per_style.items()
         },
     }
     lines += [

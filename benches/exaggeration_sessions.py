@@ -124,9 +124,7 @@ def gait(motion: em.Motion) -> np.ndarray:
             for a in upper_arms
         ]
     )
-    elbow = np.mean(
-        [_angle(at[f"LowerArm_{s}"] - at[f"UpperArm_{s}"], at[f"Hand_{s}"] - at[f"LowerArm_{s}"]) for s in "LR"], 0
-    )
+    elbow = np.mean([_angle(a, at[f"Hand_{s}"] - at[f"LowerArm_{s}"]) for a, s in zip(upper_arms, "LR")], 0)
     knee = np.mean(
         [_angle(at[f"LowerLeg_{s}"] - at[f"UpperLeg_{s}"], at[f"Foot_{s}"] - at[f"LowerLeg_{s}"]) for s in "LR"], 0
     )

@@ -31,27 +31,22 @@ import shlex
 import time
 from pathlib import Path
 
-import numpy as np
-
 import expressive_mocap as em
-from decoupling_sessions import ONE_HAND_2, session_one, session_two
+from decoupling_sessions import ARM, ONE_HAND_2, gesture_split, session_one, session_two
 from expressive_mocap.decoupling.body_model import BodyModel
-from expressive_mocap.decoupling.training import split_by_group
 from expressive_mocap.skeletons.mirror import mirror
 
 ROOT = Path.home() / ".cache" / "motion-data" / "dataset"
 DATA1 = ROOT / "Bandai-Namco-Research-Motiondataset-1" / "data"
 DATA2 = ROOT / "Bandai-Namco-Research-Motiondataset-2" / "data"
-ARM = ("Shoulder", "UpperArm", "LowerArm", "Hand")
 
 
 def write_clips(folder: Path) -> int:
     """The standing clips (see the module's notes) into ``folder``; how many."""
-    paths = [p for content in ONE_HAND_2 for p in sorted(DATA2.glob(f"dataset-2_{content}_*.bvh"))]
-    train, _ = split_by_group(np.arange(len(paths)), 0.3, 0)  # the split decoupling_sessions.py holds out
+    train, _ = gesture_split(DATA2)  # the other side is what decoupling_sessions.py measures
     folder.mkdir(parents=True, exist_ok=True)
     count = 0
-    for path in (paths[k] for k in train):
+    for path in train:
         content, style = path.stem.split("_")[1:3]
         if style != "normal":
             continue
