@@ -38,13 +38,14 @@ def others(other_dir) -> dict[str, em.Motion]:
 
 
 def test_other_skeletons_are_mapped_without_a_map_file(others):
-    assert len(others) == 6
+    assert len(others) >= 6  # the folder has grown: CMU, Xia-style, the 21-joint walks, ...
     for name, motion in others.items():
         jmap = find_joint_map(motion.skeleton)
         assert set(REQUIRED) <= set(jmap.joints), name
         assert all(f"{s}_{r}" in jmap for s in ("left", "right") for r in ("clavicle", "upper_arm", "forearm", "hand"))
         unmapped = {motion.skeleton.names[j] for j in jmap.unmapped}
-        assert {"LHipJoint", "RHipJoint"} <= unmapped, name  # zero-length joints: reported, not roles
+        hip_joints = {"LHipJoint", "RHipJoint"} & set(motion.skeleton.names)  # CMU's, of zero length
+        assert hip_joints <= unmapped, name  # reported, not roles
         read = read_conventions(motion, jmap)
         assert (read.up, read.facing) == ("+Y", "+Z"), name
     cmu = read_conventions(others["cmu_scaled_131_03.bvh"], find_joint_map(others["cmu_scaled_131_03.bvh"].skeleton))
