@@ -294,7 +294,7 @@ def clip_gradient(values, starts, frame_time) -> np.ndarray:
     values = _array("values", values, np.float64)
     if values.ndim == 0:
         raise ArgumentError("argument `values`: expected rows [N, ...], got a scalar")
-    flat = values.reshape(len(values), -1)
+    flat = values.reshape(len(values), int(np.prod(values.shape[1:])))  # not -1: no rows is fine
     starts = _array("starts", starts, np.int64, "iu")
     frame_time = _array("frame_time", frame_time, np.float64)
     return kernels().clip_gradient(flat, starts, frame_time).reshape(values.shape)

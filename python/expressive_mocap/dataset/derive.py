@@ -171,7 +171,7 @@ def _positions(
     if frame is None and options.heading(keep):
         raise ArgumentError(f"--positions {where} and root_velocity need the skeleton's heading frame")
     turned = where in ("heading", "clip") or "root_velocity" in keep or "heading" in keep
-    yaw = np.unwrap(frame.yaw(positions)) if turned else np.zeros(len(positions))
+    yaw = unwrap_by_clip(frame.yaw(positions), starts) if turned else np.zeros(len(positions))
     origin = frame.origin(positions) if turned else np.zeros((len(positions), 3))
     if where == "world":
         stored = positions
@@ -203,6 +203,16 @@ def _positions(
     return out
 
 
+def unwrap_by_clip(angles: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """``angles`` (radians, clips end to end from rows ``starts``) unwrapped within each clip, each
+    clip's first frame left in [-pi, pi]: as each clip alone would give, whatever comes before it."""
+    unwrapped = np.unwrap(angles)
+    shift = np.zeros(len(starts))  # whole turns carried over from the clips before
+    some = starts < len(angles)  # a clip of no frames has none to shift
+    shift[some] = unwrapped[starts[some]] - angles[starts[some]]
+    return unwrapped - np.repeat(shift, np.diff(np.append(starts, len(angles))))
+
+
 def totals(arrays: list[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
     """``(rows, sums, squares)``: the row count of ``arrays`` (``[n_i, ...]`` float32, one row shape)
     and the float64 sums of their rows and of their rows' squares ``[...]``, the increments of
@@ -210,4 +220,4 @@ def totals(arrays: list[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
     return sum(len(a) for a in arrays), *ops.column_totals(arrays)
 
 
-__all__ = ["DERIVED_KINDS", "POSITION_FRAMES", "Options", "derive", "resampled", "totals"]
+__all__ = ["DERIVED_KINDS", "POSITION_FRAMES", "Options", "derive", "resampled", "totals", "unwrap_by_clip"]

@@ -30,48 +30,72 @@ def mirror_values(values: dict, result, keep: tuple[str, ...]) -> dict:
     return {kind: v for kind, v in mirrored.items() if kind in keep}
 
 
-def heading_frame(group: Group, outcomes: list[Outcome], done: list, keep: tuple[str, ...], options: Options):
-    """The heading frame of a hierarchy whose clips that succeeded are ``done`` (None: no world
-    positions, or no frame found where the kinds kept do not need one; False: not found where
-    they do, and the clips failed), its up axis in each outcome."""
+def heading_frames(group: Group, owners: list[Outcome], done: list, keep: tuple[str, ...], options: Options) -> list:
+    """The heading frame of each clip and mirror image that succeeded, ``done`` (``owners``: the
+    outcome each belongs to), read from its own frames alone, so that a clip's stored values do
+    not depend on which clips share its batch: a HeadingFrame, None (no world positions, or no
+    frame found where the kinds kept do not need one) or False (not found where they do: the
+    clip failed). Each outcome gets its up axis."""
     if not done or done[0][1][0] is None:
-        return None
-    sample = np.concatenate([r[0][:: max(1, len(r[0]) // 8)] for _, r, _ in done[:64]])
-    try:
-        frame = HeadingFrame.of(group.skeleton or group.headers[0].skeleton, sample)
-    except MocapError as error:
-        if not options.heading(keep):
-            return None
-        for outcome in outcomes:
-            if outcome.error is None:
+        return [None] * len(done)
+    skeleton = group.skeleton or group.headers[0].skeleton
+    frames: list = []
+    for outcome, (_, result, _) in zip(owners, done):
+        if outcome.error is not None:  # its clip's frame was not found
+            frames.append(False)
+            continue
+        positions = result[0]
+        try:
+            frame = HeadingFrame.of(skeleton, positions[:: max(1, len(positions) // SAMPLED_FRAMES)])
+        except MocapError as error:
+            if options.heading(keep):
                 outcome.error = f"no heading frame for --positions {options.positions}: {error}"
-        return False
-    for outcome in outcomes:
+            frames.append(False if options.heading(keep) else None)
+            continue
         outcome.up = frame.up
-    return frame
+        frames.append(frame)
+    return frames
 
 
-def derive_group(group: Group, done: list, keep: tuple[str, ...], options: Options, frame) -> None:
+# Frames of a clip its heading frame is read from (evenly spread).
+SAMPLED_FRAMES = 64
+
+
+def derive_group(group: Group, done: list, keep: tuple[str, ...], options: Options, frames: list) -> None:
     """The stored forms (:func:`.derive.derive`) of a hierarchy's clips and mirror images that
-    succeeded, ``done`` ``(values, kernel result, frame time)``, a chunk of clips at a time
+    succeeded, ``done`` ``(values, kernel result, frame time)`` with their heading ``frames``
+    (:func:`heading_frames`; False: skipped), a chunk of clips of one frame at a time
     (:func:`chunks`); each clip's slices into its values."""
     root = int(np.flatnonzero(group.parents < 0)[0])
-    for part in chunks(done, lambda entry: len(entry[1][0] if entry[1][0] is not None else entry[1][1])):
+    kept = [(entry, frame) for entry, frame in zip(done, frames) if frame is not False]
+    for part in chunks(kept, lambda item: _frames_of(item[0]), lambda item: _frame_key(item[1])):
+        frame = part[0][1]
+        part = [entry for entry, _ in part]
         positions = [r[0] for _, r, _ in part] if part[0][1][0] is not None else None
-        frames = np.array([len(r[0] if r[0] is not None else r[1]) for _, r, _ in part])
-        starts = np.concatenate([[0], np.cumsum(frames)[:-1]])
+        counts = np.array([_frames_of(entry) for entry in part])
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
         stored = derive(
             keep,
             options,
             np.concatenate(positions) if positions is not None else None,
             np.concatenate([r[1] for _, r, _ in part]) if part[0][1][1] is not None else None,
             starts,
-            np.repeat([t for _, _, t in part], frames),
+            np.repeat([t for _, _, t in part], counts),
             frame,
             root,
         )
-        for (values, _, _), first, count in zip(part, starts, frames):
+        for (values, _, _), first, count in zip(part, starts, counts):
             values.update({kind: array[first : first + count] for kind, array in stored.items()})
+
+
+def _frames_of(entry) -> int:
+    result = entry[1]
+    return len(result[0] if result[0] is not None else result[1])
+
+
+def _frame_key(frame) -> tuple | None:
+    """What tells two heading frames apart (None for none)."""
+    return None if frame is None else (frame.turn.tobytes(), frame.hips, frame.pairs)
 
 
 # Frames a chunk of clips holds when derived or mirrored together: arrays of a few MB, which the
@@ -80,12 +104,13 @@ def derive_group(group: Group, done: list, keep: tuple[str, ...], options: Optio
 CHUNK_FRAMES = 8192
 
 
-def chunks(items: list, frames) -> list[list]:
-    """``items`` in consecutive runs of about :data:`CHUNK_FRAMES` frames (``frames(item)``) each."""
+def chunks(items: list, frames, key=None) -> list[list]:
+    """``items`` in consecutive runs of about :data:`CHUNK_FRAMES` frames (``frames(item)``) each,
+    and of one ``key(item)`` each, when given."""
     out: list[list] = [[]]
     count = 0
     for item in items:
-        if out[-1] and count + frames(item) > CHUNK_FRAMES:
+        if out[-1] and (count + frames(item) > CHUNK_FRAMES or (key is not None and key(item) != key(out[-1][0]))):
             out.append([])
             count = 0
         out[-1].append(item)
@@ -106,4 +131,4 @@ def add_sums(finished: list, keep: tuple[str, ...]) -> None:
                 carrier.sums[kind] = totals(arrays)
 
 
-__all__ = ["CHUNK_FRAMES", "add_sums", "chunks", "derive_group", "heading_frame", "mirror_values"]
+__all__ = ["CHUNK_FRAMES", "add_sums", "chunks", "derive_group", "heading_frames", "mirror_values"]

@@ -13,7 +13,9 @@ a dataset that has none (:func:`compute_stats`: float64, streaming over rows in 
 parallel merge of per-chunk means and squared deviations, so neither memory nor precision
 depends on the dataset's size).
 
-Channels whose std is under :data:`MIN_STD` get 1.0, so that dividing by it is always safe.
+Channels whose std is under :data:`MIN_STD`, or under :data:`MIN_RELATIVE_STD` of their root mean
+square, get 1.0, so that dividing by it is always safe (and a constant channel reads the same
+whatever the batches: its sums of squares carry rounding of that order).
 """
 
 from __future__ import annotations
@@ -25,6 +27,10 @@ import numpy as np
 from ..errors import ArgumentError
 
 MIN_STD = 1e-8  # a channel whose std is below this is recorded with std 1.0 (dividing stays safe)
+# ... or below this share of its root mean square: float32 values vary that little by rounding
+# only, and the float64 sums of squares a std comes from are not that precise either (a constant
+# channel read 0 or 1e-8 depending on how its clips were batched).
+MIN_RELATIVE_STD = 1e-5
 CHUNK_ROWS = 65536
 
 
@@ -50,10 +56,15 @@ def statistics(total: dict) -> dict:
     for kind, (n, s1, s2) in total.items():
         s1, s2 = np.asarray(s1, dtype=np.float64), np.asarray(s2, dtype=np.float64)
         mean = s1 / max(n, 1)
-        std = np.sqrt(np.maximum(s2 / max(n, 1) - mean * mean, 0.0))
-        std = np.where(std < MIN_STD, 1.0, std)
+        std = _safe(np.sqrt(np.maximum(s2 / max(n, 1) - mean * mean, 0.0)), mean)
         out[kind] = {"mean": mean.tolist(), "std": std.tolist(), "frames": int(n)}
     return out
+
+
+def _safe(std: np.ndarray, mean: np.ndarray) -> np.ndarray:
+    """``std`` with 1.0 for the channels that do not vary (:data:`MIN_STD`, :data:`MIN_RELATIVE_STD`)."""
+    rms = np.sqrt(mean * mean + std * std)
+    return np.where(std < np.maximum(MIN_STD, MIN_RELATIVE_STD * rms), 1.0, std)
 
 
 def float_kinds(dataset) -> list[str]:
@@ -80,8 +91,7 @@ def compute_stats(dataset, kinds: Iterable[str] | None = None, chunk_rows: int =
             mean = mean + delta * (k / total)
             m2 = m2 + chunk_m2 + delta**2 * (n * k / total)
             n = total
-        std = np.sqrt(m2 / n) if n else np.ones_like(mean)
-        std = np.where(std < MIN_STD, 1.0, std)
+        std = _safe(np.sqrt(m2 / n), mean) if n else np.ones_like(mean)
         stats[kind] = {"mean": mean.tolist(), "std": std.tolist(), "frames": n}
     return stats
 
@@ -165,4 +175,13 @@ class Normaliser:
         return f"Normaliser({', '.join(self.mean)})"
 
 
-__all__ = ["MIN_STD", "Normaliser", "as_json", "compute_stats", "float_kinds", "merged", "statistics"]
+__all__ = [
+    "MIN_RELATIVE_STD",
+    "MIN_STD",
+    "Normaliser",
+    "as_json",
+    "compute_stats",
+    "float_kinds",
+    "merged",
+    "statistics",
+]

@@ -24,7 +24,7 @@ from ..motion import Motion, Skeleton
 from ..roles import JointRoles, actor_height, hips_rest_height
 from .derive import Options, resampled
 from .format import MODEL_KINDS
-from .forms import add_sums, chunks, derive_group, heading_frame, mirror_values
+from .forms import add_sums, chunks, derive_group, heading_frames, mirror_values
 from .sources import Item
 
 PLAIN = Options()  # the stored forms of a run without model-ready options
@@ -273,7 +273,6 @@ def decoded(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, opti
     skeletons.mirror.mirror_many`: all of a hierarchy's clips of the batch at once), as
     ``(by_hierarchy, {key: [Motion]})``. A hierarchy that cannot be mirrored fails its clips."""
     from ..skeletons.mirror import mirror_many
-    from ..skeletons.retargeting import Rig
 
     out: dict[tuple, list] = {}
     mirrors: dict[tuple, list] = {}
@@ -296,11 +295,10 @@ def decoded(batch: list[Item], outcomes: list[Outcome], by_hierarchy: dict, opti
             motions.append((k, None, motion))
         if options.mirror and motions:
             try:
-                rig = Rig.of(max((m for _, _, m in motions), key=lambda m: m.n_frames))
                 mirrors[key] = [
                     image
                     for part in chunks([m for _, _, m in motions], lambda m: m.n_frames)
-                    for image in mirror_many(part, rig=rig)
+                    for image in mirror_many(part)
                 ]
             except MocapError as error:
                 for k, _, _ in motions:
@@ -359,10 +357,11 @@ def _group(members: list, needs_roles: bool, use_model: bool, model, mirrors: li
     def scale(s) -> tuple[float, float]:  # without features or contacts the body scale is not used
         return (actor_height(s, roles), hips_rest_height(s, roles)) if roles else (1.0, 1.0)
 
-    if header is None:  # the same skeleton for every clip
-        body = scale(skeleton)
-        clips: list = [ops.ClipArrays(m.rotations, m.translations, m.frame_time, *body) for _, _, m in members]
-        images = [ops.ClipArrays(m.rotations, m.translations, m.frame_time, *body) for m in mirrors]
+    if header is None:  # each clip's own body scale: clips of one hierarchy differ in their offsets
+        clips: list = [
+            ops.ClipArrays(m.rotations, m.translations, m.frame_time, *scale(m.skeleton)) for _, _, m in members
+        ]
+        images = [ops.ClipArrays(m.rotations, m.translations, m.frame_time, *scale(m.skeleton)) for m in mirrors]
     else:
         clips, images = [ops.ClipInput.of(text, h, *scale(h.skeleton)) for _, h, text in members], []
     gait_joints = roles.gait_joints if roles else [0] * 7  # without features or contacts: not used
@@ -408,21 +407,27 @@ def run_kernels(
                 group.clips, group.parents, group.gait_joints, gait, outputs, inputs.MAX_INPUT_BYTES
             )
         done = []  # (values, kernel result, frame time) of each clip and mirror image that succeeded
+        owners = []  # the outcome of each
         for number, (k, header, clip, result) in enumerate(zip(group.indices, group.headers, group.clips, results)):
             if _finish_clip(batch[k], outcomes[k], header, clip, result, keep, plain):
                 done.append((outcomes[k].values, result, clip.frame_time))
+                owners.append(outcomes[k])
                 if group.mirrors:
                     image = results[len(group.clips) + number]
                     outcomes[k].mirrored = mirrored = mirror_values(outcomes[k].values, image, keep)
                     done.append((mirrored, image, clip.frame_time))
-        frame = heading_frame(group, [outcomes[k] for k in group.indices], done, keep, options)
-        if not plain and done and frame is not False:
-            derive_group(group, done, keep, options, frame)
-        if use_model and frame is not False:
-            kept += [(values, result[1], result[2][-1]) for values, result, _ in done]
-        if done:
-            carrier = next(outcomes[k] for k in group.indices if outcomes[k].values is done[0][0])
-            finished.append((carrier, [values for values, _, _ in done]))
+                    owners.append(outcomes[k])
+        frames = heading_frames(group, owners, done, keep, options)
+        if not plain and done:
+            derive_group(group, done, keep, options, frames)
+        if use_model:
+            kept += [
+                (values, result[1], result[2][-1]) for (values, result, _), f in zip(done, frames) if f is not False
+            ]
+        survivors = [values for (values, _, _), owner in zip(done, owners) if owner.error is None]
+        if survivors:
+            carrier = next(owner for owner in owners if owner.error is None)
+            finished.append((carrier, survivors))
     if use_model:
         parts = decompose_many([r for _, r, _ in kept], [f for _, _, f in kept], model, model_float32)
         for (values, _, _), clip_parts in zip(kept, parts):

@@ -21,7 +21,7 @@ from .. import ops, quat
 from ..motion import Motion, Skeleton
 from .jointmap import JointMap
 from .names import label
-from .retargeting import Rig, _turned, reference_pose
+from .retargeting import Rig, _rig_key, _turned, clip_rig, reference_pose
 
 _SIDES = {"left": "right", "right": "left"}
 
@@ -60,20 +60,33 @@ def mirror(motion: Motion, user_map: dict | None = None) -> Motion:
 
 
 def mirror_many(motions: list[Motion], user_map: dict | None = None, rig: Rig | None = None) -> list[Motion]:
-    """Each of ``motions`` (all of one skeleton) mirrored as :func:`mirror` mirrors it, all at
-    once, the skeleton's conventions read from the first. What ``preprocess --mirror`` runs a
-    batch's clips through.
+    """Each of ``motions`` mirrored as :func:`mirror` mirrors it alone (its own skeleton and
+    conventions), the clips that share a rig all at once. What ``preprocess --mirror`` runs a
+    batch's clips through. ``rig``: the rig of every clip, when known.
 
     When each joint's partner hangs from its parent's partner (a left-right symmetric hierarchy:
     every humanoid rig seen), the mirror image is linear in each joint's local values: a new local
     rotation is ``A q B`` of its partner's, ``A`` and ``B`` fixed per joint (from the reference pose
     and the axes), a 4 x 4 matrix applied to the quaternion; a moving joint's translation is a
     fixed 3 x 3 matrix times its partner's. No forward kinematics: a matrix product a joint over all
-    the frames. Other hierarchies go through the world rotations and positions. ``rig``: the
-    skeleton's (:class:`~.retargeting.Rig`), when known."""
+    the frames. Other hierarchies go through the world rotations and positions."""
+    if rig is not None:
+        return _mirror_together(motions, rig)
+    groups: dict[tuple, tuple[Rig, list[int]]] = {}
+    for k, motion in enumerate(motions):
+        own = clip_rig(motion, user_map, twists=False)
+        groups.setdefault(_rig_key(own), (own, []))[1].append(k)
+    out: list = [None] * len(motions)
+    for own, members in groups.values():
+        for k, image in zip(members, _mirror_together([motions[k] for k in members], own)):
+            out[k] = image
+    return out
+
+
+def _mirror_together(motions: list[Motion], rig: Rig) -> list[Motion]:
+    """:func:`mirror_many` of clips of one rig, ``rig``."""
     if not motions:
         return []
-    rig = rig or Rig.of(max(motions, key=lambda m: m.n_frames), user_map)
     skeleton, parents = motions[0].skeleton, motions[0].skeleton.parents
     frames = np.array([m.n_frames for m in motions])
     starts = np.concatenate([[0], np.cumsum(frames)[:-1]])

@@ -280,33 +280,30 @@ def retarget_clips(
     motions: list[Motion], goal: Rig, *, plant_feet: bool = True, user_map: dict | None = None
 ) -> list[tuple[Motion, JointMap]]:
     """Many clips retargeted onto ``goal`` at once, each with the joint map it was read with:
-    clips of one skeleton (same joints and offsets) are done together, their frames end to end
-    in runs of about ``CHUNK_FRAMES``, each with its own floor and contacts; the conventions are
-    read from the first clip of each skeleton. What :func:`retarget_rigs` gives clip by clip, in
-    a fraction of the time for short clips (``preprocess --canonical``)."""
-    groups: dict[tuple, list[int]] = {}
+    each clip is what :func:`retarget_rigs` gives for it alone (its own conventions, twists,
+    floor and contacts, whatever other clips come with it), but clips that agree on all of them
+    (one skeleton, same joints and offsets) are done together, their frames end to end in runs
+    of about ``CHUNK_FRAMES``: a fraction of the time for short clips (``preprocess --canonical``)."""
+    groups: dict[tuple, tuple[Rig, list[int]]] = {}
     for k, motion in enumerate(motions):
-        skeleton = motion.skeleton
-        key = (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), skeleton.channels)
-        groups.setdefault(key, []).append(k)
+        source = clip_rig(motion, user_map)
+        c = source.conventions  # all but how sure each guess is and the rate: those change nothing
+        key = (_rig_key(source), source.untrusted, c.unit, c.metres_per_unit, c.height, c.rest_pose, motion.frame_time)
+        groups.setdefault(key, (source, []))[1].append(k)
     out: list = [None] * len(motions)
-    for members in groups.values():
-        first = motions[members[0]]
-        source = Rig.of(first, user_map)
-        key = _rig_key(source)  # one twist decision for every clip of the skeleton, batch after batch
-        if key not in _ARCHIVE_TWISTS:
-            if len(_ARCHIVE_TWISTS) >= _PLANS_KEPT:
-                _ARCHIVE_TWISTS.pop(next(iter(_ARCHIVE_TWISTS)))
-            _ARCHIVE_TWISTS[key] = source.with_twists(first).untrusted
-        source = source._replace(untrusted=_ARCHIVE_TWISTS[key])
+    for source, members in groups.values():
         for run in _runs(members, motions):
             _retarget_run(run, motions, source, goal, plant_feet, out)
     return out
 
 
-# The untrusted twists of each skeleton met in clips retargeted together (an archive's), read from
-# its first clip: the same for every clip of it, whatever batch it comes in.
-_ARCHIVE_TWISTS: dict = {}
+def clip_rig(motion: Motion, user_map: dict | None = None, *, twists: bool = True) -> Rig:
+    """``motion``'s rig as read from ``motion`` alone (:meth:`Rig.of`, with its untrusted twists
+    unless ``twists`` is False), but for its floor, which each clip's retarget reads for itself."""
+    jmap = find_joint_map(motion.skeleton, user_map)
+    rig = Rig(motion.skeleton, jmap, read_conventions(motion, jmap), 0.0, None)
+    return rig.with_twists(motion) if twists else rig
+
 
 # Frames retargeted together: enough that NumPy's work per call outweighs its overhead, few
 # enough that the intermediate arrays stay in the allocator's reused memory and the caches
