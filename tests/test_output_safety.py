@@ -420,3 +420,35 @@ def test_numeric_options_are_finite_or_a_one_line_usage_error(argv, walk, tmp_pa
 def test_a_level_intensity_must_be_finite(walk, capsys):
     assert main(["rank", "--level", "nan", str(walk), "--level", "2", str(walk)]) == 1
     assert "--level nan: the first value is the intensity, a finite number" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "what"),
+    [
+        (["convert", "{walk}", "-o", "{walk}"], "the input"),
+        (["modulate", "{wave}", "--scale", "2", "-o", "{wave}"], "the input"),
+        (["retarget", "{walk}", "--to", "{wave}", "-o", "{wave}"], "--to"),
+        (["mix", "--body", "{walk}", "--expressive", "{wave}", "-o", "{walk}"], "--body"),
+        (["mix", "--body", "{walk}", "--expressive", "{wave}", "-o", "{link}"], "--expressive"),
+        (["blend", "{walk}", "{wave}", "--body-window", "5:10", "-o", "{hard}"], "the input"),
+    ],
+)
+def test_an_output_that_is_or_resolves_to_an_input_is_refused(argv, what, walk, tmp_path, capsys):
+    """Writing over an input, by its name, a symlink or a hard link to it, is refused before any
+    work with one line naming the input; every input is left as it was."""
+    wave, kept = tmp_path / "wave.bvh", tmp_path / "walk.bvh"
+    em.write_bvh(walk_and_wave(seconds=1.0).waving, wave)
+    kept.write_bytes(walk.read_bytes())
+    (tmp_path / "link.bvh").symlink_to(wave)
+    os.link(wave, tmp_path / "hard.bvh")
+    before = {p: p.read_bytes() for p in (wave, kept)}
+    names = {"walk": kept, "wave": wave, "link": tmp_path / "link.bvh", "hard": tmp_path / "hard.bvh"}
+    assert main([a.format(**names) for a in argv]) == 1
+    err = capsys.readouterr().err.strip()
+    assert (
+        len(err.splitlines()) == 1
+        and "cannot write" in err
+        and f"it is {what}" in err
+        and "choose another output" in err
+    )
+    assert {p: p.read_bytes() for p in before} == before

@@ -114,11 +114,38 @@ def _check_outputs(args) -> None:
                     output_target(path / name)
         else:
             folder = output_target(path).parent  # a symlink to a regular file is written through
+            _refuse_an_input(args, output)
         if not folder.is_dir():
             what = "is not a folder" if folder.exists() else "does not exist"
             raise MocapError(f"cannot write {output}: the folder {folder} {what}")
         if not os.access(folder, os.W_OK):
             raise MocapError(f"cannot write {output}: the folder {folder} is not writable")
+
+
+# Attributes of a command's arguments that are not inputs.
+_NOT_INPUTS = ("output", "plot", "command", "run", "backend")
+_POSITIONAL = ("input", "source", "file", "files", "first", "second")  # the others are named as options
+
+
+def _refuse_an_input(args, output: str) -> None:
+    """Refuse an output that is, or resolves to (a symlink, a hard link), a file the command reads:
+    writing it would replace the input before, or while, it is read."""
+    for name, value in vars(args).items():
+        if name in _NOT_INPUTS:
+            continue
+        for given in value if isinstance(value, list) else [value]:
+            if isinstance(given, (str, os.PathLike)) and os.path.isfile(given) and _same_file(output, given):
+                option = "the input" if name in _POSITIONAL else f"--{name.replace('_', '-')}"
+                raise MocapError(
+                    f"cannot write {output}: it is {option} {given} of this command; choose another output"
+                )
+
+
+def _same_file(a, b) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # a new output: no file yet, so not an input
+        return False
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
