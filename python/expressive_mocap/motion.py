@@ -17,7 +17,7 @@ import numpy as np
 
 from . import ops, quat
 from .errors import MocapError
-from .tokens import shown
+from .tokens import listed, shown
 
 # Euler orders. An order is written as in a BVH CHANNELS line, e.g. "ZXY": intrinsic rotations, the
 # first channel outermost, i.e. R = Rz(a) @ Rx(b) @ Ry(c) (SciPy: Rotation.from_euler("ZXY", [a, b, c],
@@ -171,7 +171,7 @@ class Skeleton:
         try:
             return self.names.index(name)
         except ValueError:
-            raise MocapError(f"no joint named {name!r}; joints are: {', '.join(self.names)}") from None
+            raise MocapError(f"no joint named {shown(str(name))}; joints are: {listed(self.names)}") from None
 
     def rotation_order(self, joint: int) -> str:
         """The joint's Euler order as written (e.g. ``"ZXY"``); axes without a channel follow

@@ -15,6 +15,7 @@ import numpy as np
 
 from .errors import MocapError
 from .motion import Skeleton
+from .tokens import listed
 
 _SIDES = {"left": r"(?:left|l)", "right": r"(?:right|r)"}
 _PARTS = {
@@ -98,7 +99,7 @@ class JointRoles:
             raise MocapError(
                 f"cannot tell which joint is the {'; '.join(problems)}: pass it by name, e.g. "
                 f"JointRoles.find(skeleton, {problems[0].split()[0]}='JointName'); joints are: "
-                f"{', '.join(skeleton.names)}"
+                f"{listed(skeleton.names)}"
             )
         spine = _chain(skeleton, found["hips"], found["head"])
         return cls(

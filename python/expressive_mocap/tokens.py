@@ -46,13 +46,26 @@ def shown(token: str | bytes | bytearray | memoryview) -> str:
     return f"'{text}'" if len(raw) <= SHOWN_BYTES else f"'{text}'... ({len(raw)} bytes)"
 
 
+LISTED_NAMES = 40  # names listed in an error message, the rest counted
+
+
+def listed(names) -> str:
+    """Joint names for an error message: each :func:`shown`, the first :data:`LISTED_NAMES`, then
+    how many more (a 10,000-joint rig must not make a megabyte line)."""
+    names = list(names)
+    out = ", ".join(shown(n)[1:-1] if len(n.encode()) <= SHOWN_BYTES else shown(n) for n in names[:LISTED_NAMES])
+    return out if len(names) <= LISTED_NAMES else f"{out}, ... ({len(names) - LISTED_NAMES} more)"
+
+
 __all__ = [
     "BLANKS",
+    "LISTED_NAMES",
     "NOT_FINITE_BYTES",
     "NUMBER",
     "NUMBER_BYTES",
     "NUMBER_PATTERN",
     "SHOWN_BYTES",
     "finite_number",
+    "listed",
     "shown",
 ]

@@ -8,6 +8,7 @@ import sys
 
 from ..bvh import read_bvh, write_bvh
 from ..errors import MocapError
+from ..tokens import listed
 from .common import PROG, positive
 
 __all__ = ["add_parsers", "cmd_retarget", "cmd_skeleton"]
@@ -96,7 +97,7 @@ def cmd_skeleton(args) -> int:
             shown = ", ".join(joint) if isinstance(joint, list) else joint
             print(f"  {role:<16} {shown:<26} {report['how'].get(role, 'the chain from the hips to the chest')}")
         unmapped = report["unmapped"]
-        print(f"  unmapped ({len(unmapped)}): {', '.join(unmapped) if unmapped else 'none'}")
+        print(f"  unmapped ({len(unmapped)}): {listed(unmapped) if unmapped else 'none'}")
         if report["twists_from_positions"]:
             print(
                 "  twists read from the positions (the rotations twist these bones arbitrarily): "
@@ -156,7 +157,7 @@ def cmd_retarget(args) -> int:
     print(
         f"{args.output}: {out.n_frames} frames at {out.fps:.6g} fps on {args.to}'s skeleton "
         f"({target.skeleton.n_joints} joints); {len(carried)} roles carried"
-        + (f", held at rest: {', '.join(held)}" if held else "")
+        + (f", held at rest: {listed(held)}" if held else "")
         + ("; feet planted" if args.plant_feet else "")
     )
     return 0

@@ -219,13 +219,15 @@ def onto_canonical(
     target, body = canonical_shape(), bone_length(canonical_skeleton())  # every retargeted clip's
     out: dict[tuple, list] = {target: by_hierarchy.pop(target, []), MOVED: []}
     read = _decode_whole(batch, outcomes, [m for members in by_hierarchy.values() for m in members])
+    for k, _ in read:  # on the canonical body, or failed: never a skeleton of the dataset's own
+        outcomes[k].skeleton = None
     try:
         moved = many_onto_canonical([motion for _, motion in read], user_map)
-    except MocapError:  # one skeleton of the batch cannot be mapped: find which, clip by clip
+    except Exception:  # one clip of the batch cannot be retargeted: find which, clip by clip
         moved = [_one_onto_canonical(motion, user_map) for _, motion in read]
     for (k, motion), result in zip(read, as_written(moved, signed)):
-        if isinstance(result, MocapError):
-            outcomes[k].error = f"{batch[k].source}: {result}"
+        if isinstance(result, Exception):
+            outcomes[k].error = f"{batch[k].source}: cannot be retargeted onto the canonical body: {result}"
             continue
         clip, jmap = result
         if not (np.isfinite(clip.rotations).all() and np.isfinite(clip.translations).all()):
@@ -333,12 +335,16 @@ def _decode_whole(batch: list[Item], outcomes: list[Outcome], members: list) -> 
 
 
 def _one_onto_canonical(motion, user_map: dict | None):
+    """The clip on the canonical body, or why not: its own failure, whatever it is (a clip must
+    never stop the run, and the rerun stopped on it again)."""
     from ..skeletons.canonical import onto_canonical as retarget_onto
 
     try:
         return retarget_onto(motion, user_map)
     except MocapError as error:
         return error
+    except Exception as error:  # noqa: BLE001 - a bug's message, as that clip's failure
+        return MocapError(f"{type(error).__name__}: {error}")
 
 
 def _group(members: list, needs_roles: bool, use_model: bool, model, mirrors: list) -> Group | MocapError:

@@ -17,6 +17,7 @@ motion to the package's canonical frame (Y up, facing +Z, metres) and back.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Callable
@@ -27,6 +28,7 @@ from .. import quat
 from ..errors import MocapError
 from ..motion import Motion, Skeleton
 from .jointmap import JointMap
+from .mapcheck import check_posed_map, four_legged
 
 LEG_SHARE_OF_STATURE = 0.491  # thigh + shank (Drillis & Contini 1966)
 TYPICAL_HEIGHT_M = 1.70
@@ -197,7 +199,15 @@ def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
     """The conventions of ``motion`` (see the module's notes)."""
     skeleton = motion.skeleton
     frames = np.unique(np.linspace(0, motion.n_frames - 1, min(motion.n_frames, _SAMPLED_FRAMES)).astype(int))
-    (up, up_sure), (facing, facing_sure) = up_and_facing(skeleton, jmap, motion[frames].positions())
+    positions = motion[frames].positions()
+    check_posed_map(jmap, positions)
+    (up, up_sure), (facing, facing_sure) = up_and_facing(skeleton, jmap, positions)
+    if four_legged(jmap, positions, np.array(AXES[up], dtype=np.float64)):
+        warnings.warn(
+            "this skeleton moves on four legs (its trunk level, its hands as low as its feet, in most frames): "
+            "it was mapped as a human's, front legs as arms; give a joint map file if that is wrong",
+            stacklevel=2,
+        )
     height = stature(skeleton, jmap)
     unit, metres, unit_sure = guess_unit(height)
     kind, kind_sure = rest_pose_kind(skeleton, jmap)

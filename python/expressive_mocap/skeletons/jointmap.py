@@ -23,13 +23,15 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from functools import cache, lru_cache
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MocapError
 from ..motion import Skeleton
+from ..tokens import listed, shown
+from .mapcheck import check_joint_map, check_spine
 from .names import ARM_ROLES, LEG_ROLES, label, words
 
 SIDES = ("left", "right")
@@ -101,8 +103,8 @@ def read_joint_map(path) -> dict[str, object]:
             data = _toml(text)
         else:
             data = json.loads(text)
-    except ValueError as error:
-        raise MocapError(f"{path}: not a valid joint map ({error})") from None
+    except (ValueError, RecursionError) as error:  # RecursionError: nested past Python's stack
+        raise MocapError(f"{path}: not a valid joint map ({_said(error)})") from None
     if not isinstance(data, dict):
         raise MocapError(f"{path}: a joint map is a table of role -> joint name, got {type(data).__name__}")
     out: dict[str, object] = {}
@@ -112,11 +114,15 @@ def read_joint_map(path) -> dict[str, object]:
             if not (isinstance(value, list) and value and all(isinstance(v, str) for v in value)):
                 raise MocapError(f"{path}: 'spine' must be a list of joint names, from the hips up")
         elif role not in ROLES:
-            raise MocapError(f"{path}: unknown role {key!r}; roles are spine, {', '.join(ROLES)}")
+            raise MocapError(f"{path}: unknown role {shown(str(key))}; roles are spine, {', '.join(ROLES)}")
         elif not isinstance(value, str):
-            raise MocapError(f"{path}: role {key!r} must name one joint, got {value!r}")
+            raise MocapError(f"{path}: role {shown(str(key))} must name one joint, got {shown(repr(value))}")
         out[role] = value
     return out
+
+
+def _said(error: Exception) -> str:
+    return "nested too deeply" if isinstance(error, RecursionError) else str(error)
 
 
 def _toml(text: str) -> dict:
@@ -174,7 +180,9 @@ class _Finder:
             self.children[int(self.parents[j])].append(j)
         self.bone = np.linalg.norm(skeleton.offsets, axis=1)
         self.reach = self._reaches()
-        self.scale = float(self.reach.max()) or 1.0
+        if not self.reach.max() > 0:
+            raise MocapError("cannot map the skeleton: every bone has zero length (all its joints at one place)")
+        self.scale = float(self.reach.max())
         self.eps = 1e-6 * self.scale
         self.labels = [label(n) for n in self.names]
         self.pose = skeleton.rest_positions()[0] if pose is None else pose
@@ -211,7 +219,7 @@ class _Finder:
         return MocapError(
             f"cannot tell which joint is the {what}: give it in a joint map file (JSON or TOML, "
             f'role -> joint name, e.g. {{"hips": "pelvis"}}; --map FILE on the command line); joints '
-            f"are: {', '.join(self.names)}"
+            f"are: {listed(self.names)}"
         )
 
     # -- the body's trunk
@@ -305,19 +313,19 @@ class _Finder:
     def _limb_names(self, path: list[int], roles: tuple[str, ...]) -> dict[str, int]:
         """The most joints of ``path`` whose names fit ``roles`` in body order (earliest joints first)."""
 
-        @cache
-        def best(i: int, r: int) -> tuple[int, tuple]:
-            if i == len(path) or r == len(roles):
-                return 0, ()
-            skip_joint = best(i + 1, r)
-            skip_role = best(i, r + 1)
-            options = [skip_joint, skip_role]
-            if roles[r] in self.labels[path[i]].roles:
-                count, pairs = best(i + 1, r + 1)
-                options.append((count + 1, ((roles[r], path[i]),) + pairs))
-            return max(options, key=lambda o: (o[0], -sum(path.index(j) for _, j in o[1])))
-
-        return dict(best(0, 0)[1])
+        # best[i][r]: (roles named, minus the sum of their joints' places, pairs) over path[i:] and
+        # roles[r:], filled from the ends (a loop, not recursion: a chain may be 10,000 joints long).
+        n, m = len(path), len(roles)
+        nothing: tuple[int, int, tuple[tuple[str, int], ...]] = (0, 0, ())
+        best = [[nothing] * (m + 1) for _ in range(n + 1)]
+        for i in range(n - 1, -1, -1):
+            for r in range(m - 1, -1, -1):
+                options = [best[i + 1][r], best[i][r + 1]]  # skip the joint, skip the role
+                if roles[r] in self.labels[path[i]].roles:
+                    count, places, pairs = best[i + 1][r + 1]
+                    options.append((count + 1, places - i, ((roles[r], path[i]),) + pairs))
+                best[i][r] = max(options, key=lambda o: (o[0], o[1]))  # most roles, earliest joints
+        return dict(best[0][0][2])
 
     def _limb(self, start: int, roles: tuple[str, ...], side: str, found: dict, given: dict) -> None:
         path = self._main_path(start)
@@ -365,8 +373,11 @@ class _Finder:
         self.legs = legs
         if "spine" in given:
             spine = list(given["spine"])
+            check_spine(self.skeleton, hips, tuple(spine))
             chest = spine[-1]
             arms_and_neck = self._long(chest)
+            if not arms_and_neck:
+                raise self._fail(f"chest (the spine given ends at {shown(self.names[chest])}, where no neck leaves)")
         else:
             chest, arms_and_neck = self._chest(spine_child, hips)
             spine = _between(self.parents, hips, chest)
@@ -397,6 +408,7 @@ class _Finder:
         if missing:
             raise self._fail(", ".join(m.replace("_", " ") for m in missing))
         how = {role: self.how.get(role, "topology") for role in found}
+        check_joint_map(self.skeleton, found, tuple(spine))
         return JointMap(self.names, found, tuple(spine), how)
 
     def _head(self, neck_branch: int, found: dict, given: dict) -> None:
