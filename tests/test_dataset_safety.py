@@ -401,3 +401,56 @@ def test_a_partial_folder_without_its_run_file(clips, reference, tmp_path):
     with pytest.raises(DatasetError, match="not an unfinished run of ours"):
         run(clips, other)
     assert (other / ".partial" / "notes.txt").read_text() == "mine"
+
+
+def test_a_manifest_nested_past_the_stack_is_refused_and_overwrite_keeps_the_folder(clips, tmp_path, capsys):
+    """A manifest of 100,000 nested lists: load_dataset and `preprocess --overwrite` say in one line
+    that it is not a readable manifest (a RecursionError before), and nothing is deleted."""
+    from expressive_mocap.cli import main
+
+    out = tmp_path / "out"
+    preprocess(clips, out, progress=False)
+    (out / "manifest.json").write_text('{"format": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    before = sorted(p.name for p in out.iterdir())
+    with pytest.raises(DatasetError, match="not a readable dataset manifest"):
+        load_dataset(out)
+    assert main(["preprocess", str(clips), "-o", str(out), "--overwrite", "-q"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a readable dataset manifest" in err[0]
+    assert sorted(p.name for p in out.iterdir()) == before
+
+
+def test_a_dataset_redone_while_it_is_read_is_one_error(reference, tmp_path, monkeypatch):
+    """`--overwrite` deleting the files between load_dataset's checks and its reads: a DatasetError
+    saying so (a bare FileNotFoundError before)."""
+    import expressive_mocap.dataset.reader as reader_module
+
+    copy = tmp_path / "ds"
+    shutil.copytree(reference, copy)
+    checked = reader_module.verify
+
+    def then_deleted(folder, manifest, check_times):
+        checked(folder, manifest, check_times)
+        (folder / "positions.npy").unlink()
+
+    monkeypatch.setattr(reader_module, "verify", then_deleted)
+    with pytest.raises(DatasetError, match="its files changed while it was read .*another run redoing it"):
+        load_dataset(copy, check_times=False)
+
+
+@pytest.mark.parametrize(
+    ("options", "words"),
+    [
+        ({"length": 10**7, "padding": "edge"}, "windows of 10,000,000 frames takes"),
+        ({"length": 10**8, "padding": "edge", "batch_size": 1}, "1 windows of 100,000,000 frames takes"),
+        ({"length": 30, "batch_size": 2.5}, "argument `batch_size`: a positive whole number of windows, got 2.5"),
+        ({"length": 30, "batch_size": True}, "got True"),
+    ],
+)
+def test_batches_that_cannot_be_made_are_refused_up_front(reference, options, words):
+    """A padded window far longer than any clip took 2.6 GB a window and ended in a raw
+    MemoryError; batch_size=2.5 in a raw TypeError."""
+    from expressive_mocap.dataset import window_batches
+
+    with pytest.raises(ArgumentError, match=words):
+        window_batches(load_dataset(reference), **options)

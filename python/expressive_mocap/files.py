@@ -283,7 +283,8 @@ def read_model_file(source: str | os.PathLike | bytes, what: str) -> tuple[dict[
         if not isinstance(meta, dict):
             raise ValueError(f"the metadata is a JSON {type(meta).__name__}, not an object")
     except (zipfile.BadZipFile, EOFError, OSError, KeyError, ValueError, TypeError, RuntimeError, MemoryError) as error:
-        # Damaged zips and arrays raise any of these; a pickled array raises ValueError.
+        # Damaged zips and arrays raise any of these; a pickled array raises ValueError; metadata
+        # nested past Python's stack RecursionError (a RuntimeError).
         raise MocapError(f"{name}: not a readable {what} ({type(error).__name__}: {error})") from None
     return arrays, meta, name
 

@@ -23,6 +23,8 @@ from .labels import Labels
 from .stats import Normaliser, float_kinds
 from .windows import Windows
 
+MAX_BATCH_BYTES = 4 << 30  # of one batch's arrays, float32 (a bound, not a tuning: real batches are MBs)
+
 
 class WindowReader:
     """Reads windows of ``dataset`` (``kinds``: all by default) as batches: :meth:`read`.
@@ -64,6 +66,17 @@ class WindowReader:
         if augment is not None and augment.rotate and undefined:  # fail now, not in the first batch
             raise ArgumentError(f"rotation augmentation is not defined for {', '.join(undefined)}")
 
+    def check_batch(self, count: int) -> None:
+        """Refuse (ArgumentError) a batch of ``count`` windows over :data:`MAX_BATCH_BYTES` in
+        float32: a window far longer than the clips, padded, is a raw MemoryError otherwise."""
+        frame = sum(4 * int(np.prod(array.shape[1:], dtype=np.int64)) for array in self.arrays.values())
+        size = count * self.windows.length * frame
+        if size > MAX_BATCH_BYTES:
+            raise ArgumentError(
+                f"a batch of {count} windows of {self.windows.length:,} frames takes {size / 2**30:,.1f} GiB, more "
+                f"than the {MAX_BATCH_BYTES / 2**30:g} GiB a batch may: a shorter `length` or a smaller `batch_size`"
+            )
+
     def _gather(self, kind: str, array, rows: np.ndarray, frac, speeds: np.ndarray) -> np.ndarray:
         """``array``'s rows ``rows`` (``[B, T]``, or ``[2, B, T]`` mixed at ``frac`` when resampled)."""
         values = array[rows.ravel()].reshape(rows.shape + array.shape[1:])
@@ -77,6 +90,7 @@ class WindowReader:
         (``batch["window"]`` says which is which); ``rng`` draws the augmentation."""
         w, length = self.windows, self.windows.length
         idx = np.asarray(indices, dtype=np.int64)
+        self.check_batch(len(idx))
         idx = idx[np.argsort(w.start[idx], kind="stable")]
         start, end, count = w.start[idx], w.end[idx], len(idx)
         augment = self.augment if self.augment is not None and self.augment.active else None
@@ -99,8 +113,14 @@ class WindowReader:
             rows = start[:, None] + np.stack([base, after])  # [2, B, T]: each half in row order
             valid = np.minimum(length, (remaining - 1) // speeds + 1).astype(np.int64)
         batch: dict = {}
-        for kind, array in self.arrays.items():
-            batch[kind] = self._gather(kind, array, rows, frac, speeds)
+        try:
+            for kind, array in self.arrays.items():
+                batch[kind] = self._gather(kind, array, rows, frac, speeds)
+        except MemoryError:
+            raise ArgumentError(
+                f"a batch of {count} windows of {length:,} frames does not fit in memory: a shorter `length` or a "
+                "smaller `batch_size`"
+            ) from None
         clips = w.clip[idx]
         if self.frame == "window":
             heading = batch.get("heading")
@@ -142,8 +162,9 @@ class Batches:
     def __init__(
         self, reader: WindowReader, batch_size: int = 256, shuffle: bool = True, seed: int = 0, drop_last: bool = False
     ):
-        if batch_size < 1:
-            raise ArgumentError(f"argument `batch_size`: a positive count, got {batch_size}")
+        if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
+            raise ArgumentError(f"argument `batch_size`: a positive whole number of windows, got {batch_size!r}")
+        reader.check_batch(int(batch_size))
         self.reader, self.batch_size, self.shuffle, self.seed, self.drop_last = (
             reader,
             batch_size,
@@ -196,4 +217,4 @@ def window_batches(
     return Batches(reader, batch_size, shuffle, seed, drop_last)
 
 
-__all__ = ["Batches", "WindowReader", "window_batches"]
+__all__ = ["MAX_BATCH_BYTES", "Batches", "WindowReader", "window_batches"]

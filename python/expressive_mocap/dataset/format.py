@@ -80,7 +80,7 @@ def read_manifest(path: Path) -> dict:
         if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_MANIFEST_BYTES:
             raise ValueError("not a regular file of at most 256 MiB")
         manifest = json.loads(path.read_bytes())
-    except (OSError, ValueError) as error:
+    except (OSError, ValueError, RecursionError) as error:  # RecursionError: JSON nested past the stack
         raise DatasetError(f"{path}: not a readable dataset manifest ({error})") from None
     problem = _manifest_problem(manifest)
     if problem:

@@ -66,7 +66,7 @@ def read_journal(path: Path) -> list[JournalRecord]:
             continue
         try:
             entries.append(json.loads(line))
-        except ValueError:
+        except (ValueError, RecursionError):  # a line cut short, or not ours
             break
         good += len(line) + 1
     if good < len(data):

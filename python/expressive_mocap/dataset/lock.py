@@ -86,7 +86,7 @@ def _holder(handle: int) -> str:
     try:
         record = json.loads(os.pread(handle, 4096, 0))
         return f"process {record['pid']} on {record['host']} since {record['since']}: {record['command']}"
-    except (OSError, ValueError, KeyError, TypeError):
+    except (OSError, ValueError, KeyError, TypeError, RecursionError):
         return "a process that has not said which yet"
 
 

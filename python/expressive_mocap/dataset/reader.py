@@ -75,13 +75,19 @@ class Dataset(Sequence):
         self.folder = folder
         self.manifest = read_manifest(path)
         verify(folder, self.manifest, check_times)
-        self.offsets = np.load(folder / OFFSETS)
+        try:
+            self.offsets = np.load(folder / OFFSETS)
+            mode: Literal["r"] | None = "r" if mmap else None
+            self.arrays = {k: np.load(folder / data_file(k), mmap_mode=mode) for k in self.manifest["kinds"]}
+        except (OSError, ValueError) as error:  # changed after the checks: a run redoing it, say
+            raise DatasetError(
+                f"{folder}: its files changed while it was read ({type(error).__name__}: {error}); another run "
+                "redoing it with --overwrite? Read it again once that run is done"
+            ) from None
         self.clips = self.manifest["clips"]
         self.names = [c["name"] for c in self.clips]
         self.failures = self.manifest["failures"]
         self.skeleton = self.manifest["skeleton"]
-        mode: Literal["r"] | None = "r" if mmap else None
-        self.arrays = {k: np.load(folder / data_file(k), mmap_mode=mode) for k in self.manifest["kinds"]}
         self._index = {n: i for i, n in enumerate(self.names)}
 
     @property

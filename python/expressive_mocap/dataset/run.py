@@ -203,10 +203,16 @@ def _resume(partial: Path, options: dict, keep: tuple[str, ...], width: int) -> 
     one of the same options, its data files cut back to its last journaled batch."""
     run_file = partial / RUN
     if run_file.exists():
-        previous = json.loads(run_file.read_text())
-        if previous.get("options") != options:
+        try:
+            previous = json.loads(run_file.read_bytes())
+        except (ValueError, RecursionError) as error:
             raise DatasetError(
-                f"{partial} holds an interrupted run with other options ({previous.get('options')}); "
+                f"{run_file}: not a readable record of an interrupted run ({error}); delete {partial}"
+            ) from None
+        then = previous.get("options") if isinstance(previous, dict) else None
+        if then != options:
+            raise DatasetError(
+                f"{partial} holds an interrupted run with other options ({then}); "
                 f"rerun with those, or delete {partial} to start again"
             )
     else:
