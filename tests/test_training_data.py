@@ -256,6 +256,25 @@ def test_the_manifests_statistics_are_used_when_there(folder, tmp_path):
         normaliser.normalise("contacts", np.zeros((1, 2)))
 
 
+@pytest.mark.parametrize("bad", [float("inf"), 1e-300, float("nan"), 0.0])
+def test_statistics_that_would_not_normalise_are_refused(folder, tmp_path, bad):
+    """A manifest whose std is inf normalised every batch to zeros, one of 1e-300 to inf: refused,
+    naming the kind, the channel and the value."""
+    copy = tmp_path / "ds"
+    copy.mkdir()
+    for f in folder.iterdir():
+        if f.is_file():
+            os.link(f, copy / f.name)
+    manifest = json.loads((copy / "manifest.json").read_text())
+    std = np.ones((22, 3))
+    std[4, 1] = bad
+    manifest["stats"] = {"positions": {"mean": np.zeros((22, 3)).tolist(), "std": std.tolist(), "frames": 1}}
+    (copy / "manifest.json").unlink()
+    (copy / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(ArgumentError, match=r"stats of 'positions': std of channel \(4, 1\) is"):
+        Normaliser.of(load_dataset(copy))
+
+
 # Augmentation
 
 

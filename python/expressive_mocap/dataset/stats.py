@@ -96,6 +96,22 @@ def compute_stats(dataset, kinds: Iterable[str] | None = None, chunk_rows: int =
     return stats
 
 
+_FLOAT32_MAX = float(np.finfo(np.float32).max)  # normalised batches are float32
+
+
+def _check_finite(kind: str, name: str, values: np.ndarray, good: np.ndarray) -> None:
+    """An ArgumentError naming the first channel of ``values`` that is not ``good``: a std of inf
+    normalised every value to 0, and one of 1e-300 to inf."""
+    if not np.all(good):
+        channel = tuple(int(i) for i in np.argwhere(~good)[0])
+        where = f" of channel {channel}" if channel else ""
+        bounds = f"at least {MIN_STD:g} and " if name == "std" else ""
+        raise ArgumentError(
+            f"stats of {kind!r}: {name}{where} is {values[~good].flat[0]!r}; expected {bounds}at most "
+            f"{_FLOAT32_MAX:.3g} in magnitude (statistics edited by hand?)"
+        )
+
+
 class Normaliser:
     """``(x - mean) / std`` per channel of each kind, and back.
 
@@ -112,8 +128,8 @@ class Normaliser:
             mean, std = np.asarray(entry["mean"], dtype=np.float64), np.asarray(entry["std"], dtype=np.float64)
             if mean.shape != std.shape:
                 raise ArgumentError(f"stats of {kind!r}: mean {list(mean.shape)} and std {list(std.shape)} differ")
-            if not np.all(std > 0):
-                raise ArgumentError(f"stats of {kind!r}: a std that is not positive")
+            _check_finite(kind, "mean", mean, np.abs(mean) <= _FLOAT32_MAX)
+            _check_finite(kind, "std", std, (std >= MIN_STD) & (std <= _FLOAT32_MAX))
             self.mean[kind], self.std[kind] = mean, std
             self.frames[kind] = int(entry.get("frames", 0))
         self._cache: dict[tuple[str, np.dtype], tuple[np.ndarray, np.ndarray]] = {}
