@@ -140,3 +140,50 @@ def test_pickles_and_huge_arrays_are_refused_before_loading(kind):
     header = io.BytesIO()
     np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False, "shape": (2**37,)})
     refused(kind, _with_member(data, "bomb.npy", header.getvalue()), f"more than {MAX_MODEL_BYTES} bytes")
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "words"),
+    [
+        ("height", float("nan"), "the actor's height must be a positive length, got nan"),
+        ("height", 0.0, "the actor's height must be a positive length, got 0.0"),
+        ("height", -1.0, "the actor's height must be a positive length, got -1.0"),
+    ],
+)
+def test_an_exaggeration_model_of_no_height_is_refused(field, value, words):
+    arrays, meta = MODELS["exaggeration"]
+    refused("exaggeration", npz(arrays, {**meta, field: value}), words)
+
+
+def test_an_exaggeration_model_of_one_intensity_is_refused():
+    arrays, meta = MODELS["exaggeration"]
+    refused("exaggeration", npz({**arrays, "levels": np.array([2.0, 2.0])}, meta), "two different intensities")
+
+
+@pytest.fixture(scope="module")
+def walk_model():
+    """An exaggeration model of the demo's walks on the Bandai-like skeleton, with its joint map."""
+    from expressive_mocap.demo import loaded_walk
+    from expressive_mocap.exaggeration import train
+
+    return train([[loaded_walk(k) for k in (1.0, 2.0)]], (1.0, 2.0))
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        ({"head": "Hips"}, "'Hips' plays two roles, hips and head"),
+        ({"left_hand": "Nowhere"}, "no joint named 'Nowhere'"),
+        ({"spine": ["Hips"]}, "the spine's joint 'Hips' does not hang below the hips"),
+    ],
+)
+def test_an_exaggeration_model_whose_joint_map_does_not_fit_is_refused(walk_model, change, words):
+    """Its map is how motions of other skeletons reach it: a bad one is the file's error at load,
+    not a traceback (two roles on one joint) or "applies to its own skeleton" (a missing joint)."""
+    bad = ExaggerationModel.load(walk_model.to_bytes())
+    assert bad.joint_map  # found in training
+    bad.joint_map = {**bad.joint_map, **change}
+    with pytest.raises(em.MocapError) as caught:
+        ExaggerationModel.load(bad.to_bytes())
+    message = str(caught.value)
+    assert "its joint map does not fit its own skeleton" in message and words in message, message

@@ -267,7 +267,7 @@ class ExaggerationModel:
         try:
             _check_metadata(meta, name)
             _check_arrays(arrays, meta, name)
-            return cls(
+            model = cls(
                 joint_names=tuple(meta["joint_names"]), dof_names=tuple(meta["dof_names"]),
                 height=float(meta["height"]),
                 hips=int(meta["hips"]), representation=meta["representation"], energy=float(meta["energy"]),
@@ -275,6 +275,8 @@ class ExaggerationModel:
                 **{k: (arrays[k].astype(bool) if k in ("key", "person_key") else arrays[k]) for k in ARRAYS},
                 **{k: arrays[k] for k in TIMING_ARRAYS if k in arrays},
             )  # fmt: skip
+            _check_model(model, name)
+            return model
         except KeyError as error:
             raise ModelError(f"{name}: model file lacks {error}") from None
         except MocapError:
@@ -289,6 +291,24 @@ def _check_metadata(meta: dict[str, Any], name: str) -> None:
             raise ModelError(f"{name}: the metadata's {key} must be a list of names")
     if not isinstance(meta.get("settings", {}), dict):
         raise ModelError(f"{name}: the metadata's settings must be a JSON object")
+
+
+def _check_model(model: ExaggerationModel, name: str) -> None:
+    """What the arrays' shapes cannot tell: an actor of some height, two intensities at least, a
+    joint map that is one body on the model's own skeleton (it is how other skeletons reach it)."""
+    if not (np.isfinite(model.height) and model.height > 0):
+        raise ModelError(f"{name}: the actor's height must be a positive length, got {model.height!r}")
+    if len(np.unique(model.levels)) < 2:
+        raise ModelError(
+            f"{name}: the levels must hold two different intensities at least, got {model.levels.tolist()}"
+        )
+    if model.joint_map:
+        from ..skeletons.jointmap import find_joint_map
+
+        try:
+            find_joint_map(model.body().skeleton, model.joint_map)
+        except MocapError as error:
+            raise ModelError(f"{name}: its joint map does not fit its own skeleton: {error}") from None
 
 
 def _check_arrays(arrays: dict[str, np.ndarray], meta: dict[str, Any], name: str) -> None:
