@@ -5,11 +5,13 @@ one a single-machine run writes."""
 from __future__ import annotations
 
 import concurrent.futures
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
 
 from ..errors import ArgumentError, DatasetError
+from ..tokens import shown
 from .sources import Item
 from .work import PLAIN, Outcome, compute, load_model
 
@@ -33,12 +35,45 @@ def client_for(cluster) -> tuple:
             local.close()
 
         return client, close
-    # Results fetched from the workers themselves: by default a client outside the cluster has
-    # the scheduler relay them, every batch's arrays crossing the network twice (if a worker
-    # cannot be reached from here, Dask falls back to the relay for its results).
-    client = Client(str(cluster), direct_to_workers=True)
+    client = _connect(Client, str(cluster))
     closer: Callable[[], None] = client.close
     return client, closer
+
+
+# Seconds to reach a scheduler, and for each call to it: Dask bounds the TCP connection but not the
+# handshake, so a listener that accepts and never answers hung a run for ever.
+CONNECT_TIMEOUT = 20.0
+CALL_TIMEOUT = 60.0
+
+
+def _connect(client_class, address: str):
+    """A client of the scheduler at ``address``, or a DatasetError saying what was tried. In a
+    daemon thread with a deadline: an unanswered handshake leaves only that thread waiting."""
+    box: dict = {}
+
+    def connect() -> None:
+        try:
+            # Results fetched from the workers themselves: by default a client outside the cluster
+            # has the scheduler relay them, every batch's arrays crossing the network twice (if a
+            # worker cannot be reached from here, Dask falls back to the relay for its results).
+            box["client"] = client_class(address, timeout=CONNECT_TIMEOUT, direct_to_workers=True)
+        except BaseException as error:  # noqa: BLE001 - junk from a listener can raise anything (MemoryError)
+            box["error"] = error
+
+    thread = threading.Thread(target=connect, name="dask-connect", daemon=True)
+    thread.start()
+    thread.join(CONNECT_TIMEOUT + 5.0)
+    if thread.is_alive():
+        raise DatasetError(
+            f"no Dask scheduler answered at {address} within {CONNECT_TIMEOUT + 5.0:.0f} s (something accepts "
+            f"connections there but does not speak Dask's protocol); {_RESUME}"
+        )
+    if "error" in box:
+        error = box["error"]
+        raise DatasetError(
+            f"cannot use a Dask scheduler at {address}: {type(error).__name__}: {shown(str(error))}; {_RESUME}"
+        ) from None
+    return box["client"]
 
 
 _MODELS: dict = {}
@@ -71,7 +106,7 @@ def on_cluster(batches, limit, stopped, client, work) -> Iterator[tuple]:
     worker it was given, stop the run with a :class:`DatasetError` (the batches written so far
     stay: the same command resumes after them)."""
     _wait_for_workers(client)
-    window = 2 * max(1, len(client.scheduler_info().get("workers", {})))
+    window = 2 * max(1, len(_ask(client, client.nthreads)))
     running: deque = deque()
     for count, batch in enumerate(batches):
         if limit is not None and count >= limit:
@@ -126,8 +161,8 @@ def _result(client, future, batch: list[Item]) -> tuple:
         except lost as error:
             raise _lost(client, error) from None
         try:
-            workers = len(client.nthreads())
-        except (*lost, OSError) as error:
+            workers = len(_ask(client, client.nthreads))
+        except (*lost, OSError, DatasetError) as error:
             raise _lost(client, error) from None
         if workers:
             idle_since = None
@@ -139,6 +174,14 @@ def _result(client, future, batch: list[Item]) -> tuple:
                 f"every worker of the Dask cluster at {client.scheduler.address} has gone "
                 f"(none for {WAIT_FOR_WORKERS:.0f} s); {_RESUME}"
             )
+
+
+def _ask(client, call):
+    """``call()`` of the scheduler, at most :data:`CALL_TIMEOUT` seconds."""
+    try:
+        return call(callback_timeout=CALL_TIMEOUT)
+    except TimeoutError:  # asyncio's and Dask's are the builtin one
+        raise DatasetError(f"no answer from the Dask scheduler for {CALL_TIMEOUT:.0f} s") from None
 
 
 def _lost(client, error: BaseException) -> DatasetError:
