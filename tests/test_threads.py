@@ -100,3 +100,53 @@ def test_every_kernel_gives_serial_results_from_concurrent_threads(name):
                 assert got == want
             else:
                 np.testing.assert_array_equal(got, want)
+
+
+def test_the_interpreter_exits_only_once_no_thread_is_in_a_kernel(tmp_path):
+    """A daemon thread still in a kernel when Python finalised came back to a dying interpreter
+    and aborted the process ("FATAL: exception not rethrown", exit 134: 5 runs in 40 of
+    `preprocess --max-batches 1 --fps 24 --mirror --canonical` on dataset-2). Every call through
+    backend.kernels() is counted and the exit waits for it: here a kernel that takes 0.5 s and
+    then leaves a mark, called from a daemon thread as the main thread ends."""
+    import subprocess
+
+    marker = tmp_path / "finished"
+    script = f"""
+import threading, time, types
+from expressive_mocap import backend
+
+def slow_kernel():
+    time.sleep(0.5)
+    with open({str(marker)!r}, "w") as out:
+        out.write("done")
+
+backend._counted = backend._InRust(types.SimpleNamespace(slow_kernel=slow_kernel))
+calling = threading.Event()
+
+def work():
+    calling.set()
+    backend.kernels().slow_kernel()
+
+threading.Thread(target=work, daemon=True).start()
+calling.wait()
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=60)
+    assert done.returncode == 0, done.stderr.decode()
+    assert marker.read_text() == "done"  # the exit waited for the call under way
+
+
+def test_kernel_calls_are_counted_while_they_run():
+    from expressive_mocap import backend
+
+    with em.use_backend("rust"):
+        kernels = backend.kernels()
+        assert kernels.forward_kinematics.__name__ == "forward_kinematics"
+        inside, release = threading.Event(), threading.Event()
+        counted = backend._InRust(type("Fake", (), {"wait": staticmethod(lambda: (inside.set(), release.wait()))}))
+        thread = threading.Thread(target=counted.wait)
+        thread.start()
+        inside.wait()
+        assert not counted.wait_idle(0.05)  # a call under way
+        release.set()
+        assert counted.wait_idle(10)
+        thread.join()

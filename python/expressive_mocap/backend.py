@@ -8,10 +8,14 @@ compiled extension is importable and NumPy otherwise, so the package works witho
 
 from __future__ import annotations
 
+import atexit
 import contextlib
+import functools
 import os
+import threading
 from collections.abc import Iterator
 from types import ModuleType
+from typing import Any, cast
 
 from . import reference
 from .errors import MocapError
@@ -52,7 +56,7 @@ def set_backend(name: str) -> None:
 
 def get_backend() -> str:
     """The backend in use: ``"rust"`` or ``"numpy"``."""
-    return "rust" if kernels() is _core else "numpy"
+    return "numpy" if kernels() is reference else "rust"
 
 
 @contextlib.contextmanager
@@ -79,7 +83,57 @@ def kernels() -> ModuleType:
             f"the Rust backend was requested ({ENV_VAR}={_selected}) but the compiled extension "
             "expressive_mocap._core is not installed; reinstall with `pip install .` or use 'numpy'"
         )
-    return _core
+    return cast(ModuleType, _counted)
+
+
+class _InRust:
+    """The Rust extension's functions, each call counted while it runs: the interpreter's exit
+    waits until none is (:func:`_wait_at_exit`). A daemon thread (the preprocess pipeline's, a
+    user's) still in a kernel when Python finalises would come back to a dying interpreter, which
+    ends it with a forced unwind through Rust frames: the process aborted with "FATAL: exception
+    not rethrown" (exit 134), now and then, after ``preprocess --max-batches``."""
+
+    def __init__(self, module: ModuleType):
+        self._module = module
+        self._running = 0
+        self._idle = threading.Condition()
+
+    def __getattr__(self, name: str) -> Any:
+        value = getattr(self._module, name)
+        if not callable(value) or isinstance(value, type):
+            return value
+
+        @functools.wraps(value)
+        def counted(*args, **kwargs):
+            with self._idle:
+                self._running += 1
+            try:
+                return value(*args, **kwargs)
+            finally:
+                with self._idle:
+                    self._running -= 1
+                    self._idle.notify_all()
+
+        setattr(self, name, counted)  # wrapped once
+        return counted
+
+    def wait_idle(self, timeout: float) -> bool:
+        """Wait until no call is under way (at most ``timeout`` seconds); whether none is."""
+        with self._idle:
+            return self._idle.wait_for(lambda: self._running == 0, timeout)
+
+
+# Seconds the interpreter's exit waits for kernel calls under way (a batch's: 0.1-3 s); bounded,
+# so that a call that never ends cannot keep the process alive.
+EXIT_WAIT = 30.0
+
+_counted = _InRust(_core) if _core is not None else None
+
+
+@atexit.register
+def _wait_at_exit() -> None:
+    if _counted is not None:
+        _counted.wait_idle(EXIT_WAIT)
 
 
 __all__ = [
