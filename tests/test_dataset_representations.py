@@ -22,8 +22,7 @@ from expressive_mocap.errors import ArgumentError, DatasetError
 from expressive_mocap.heading import HeadingFrame, from_heading, turn_by_yaw
 from expressive_mocap.skeletons import find_joint_map, synthetic_walk
 from expressive_mocap.skeletons.conventions import _changed
-from expressive_mocap.skeletons.mirror import _linear, _through_positions, mirror, partners
-from expressive_mocap.skeletons.retargeting import Rig
+from expressive_mocap.skeletons.mirror import _linear, _planes_of, _through_positions, mirror, partners
 from expressive_mocap.skeletons.synthetic import RIGS
 
 ALL = "positions,rotations,contacts,velocities,accelerations,root_velocity,angular_velocities"
@@ -233,7 +232,7 @@ def test_mirrored_clips_are_skeletons_mirror_with_their_contacts_swapped(clips, 
 @pytest.mark.parametrize("rig", RIGS)
 def test_the_linear_mirror_is_the_mirror_through_positions(rig):
     motion = synthetic_walk(rig, wave="left", seconds=1.0).motion
-    rig_of = Rig.of(motion)
+    rig_of = _planes_of([motion])[0]
     partner = partners(motion.skeleton, rig_of.jmap)
     moving = np.zeros((motion.n_frames, motion.skeleton.n_joints), bool)
     moving[:, 0] = moving[:, 1] = True

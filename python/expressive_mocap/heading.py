@@ -21,7 +21,7 @@ import numpy as np
 
 from . import quat
 from .motion import Skeleton
-from .skeletons.conventions import AXES, frame_rotation, up_and_facing
+from .skeletons.conventions import AXES, facing_of, frame_rotation, up_of
 from .skeletons.jointmap import JointMap, find_joint_map
 
 
@@ -43,7 +43,13 @@ class HeadingFrame:
         frames is enough) show its up axis. Raises MocapError when its hips, legs or head are
         not found (:func:`~expressive_mocap.skeletons.jointmap.find_joint_map`)."""
         jmap = jmap or find_joint_map(skeleton)
-        (up, _), (facing, _) = up_and_facing(skeleton, jmap, positions)
+        return cls.for_up(skeleton, up_of(jmap, positions)[0], jmap)
+
+    @classmethod
+    def for_up(cls, skeleton: Skeleton, up: str, jmap: JointMap | None = None) -> HeadingFrame:
+        """The heading frame of ``skeleton`` whose up axis is ``up`` (an axis name, ``"+Y"``)."""
+        jmap = jmap or find_joint_map(skeleton)
+        facing, _ = facing_of(skeleton, jmap, up)
         turn = frame_rotation(up, facing)
         pairs = [("left_upper_leg", "right_upper_leg"), ("left_upper_arm", "right_upper_arm")]
         found = tuple((jmap[a], jmap[b]) for a, b in pairs if a in jmap.joints and b in jmap.joints)

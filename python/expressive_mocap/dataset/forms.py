@@ -10,6 +10,8 @@ import numpy as np
 
 from ..errors import MocapError
 from ..heading import HeadingFrame
+from ..skeletons.conventions import ups_of
+from ..skeletons.jointmap import find_joint_map
 from .derive import Options, derive, totals
 
 if TYPE_CHECKING:
@@ -39,21 +41,22 @@ def heading_frames(group: Group, owners: list[Outcome], done: list, keep: tuple[
     if not done or done[0][1][0] is None:
         return [None] * len(done)
     skeleton = group.skeleton or group.headers[0].skeleton
-    frames: list = []
-    for outcome, (_, result, _) in zip(owners, done):
-        if outcome.error is not None:  # its clip's frame was not found
-            frames.append(False)
-            continue
-        positions = result[0]
-        try:
-            frame = HeadingFrame.of(skeleton, positions[:: max(1, len(positions) // SAMPLED_FRAMES)])
-        except MocapError as error:
+    live = [k for k, outcome in enumerate(owners) if outcome.error is None]
+    frames: list = [False] * len(done)  # False: its clip's frame was not found
+    try:
+        jmap = find_joint_map(skeleton)
+        samples = [done[k][1][0] for k in live]
+        ups = ups_of(jmap, [p[:: max(1, len(p) // SAMPLED_FRAMES)] for p in samples])
+        by_up = {up: HeadingFrame.for_up(skeleton, up, jmap) for up in set(ups)}  # all that differs
+    except MocapError as error:
+        for k in live:
             if options.heading(keep):
-                outcome.error = f"no heading frame for --positions {options.positions}: {error}"
-            frames.append(False if options.heading(keep) else None)
-            continue
-        outcome.up = frame.up
-        frames.append(frame)
+                owners[k].error = f"no heading frame for --positions {options.positions}: {error}"
+            frames[k] = False if options.heading(keep) else None
+        return frames
+    for k, up in zip(live, ups):
+        frames[k] = by_up[up]
+        owners[k].up = by_up[up].up
     return frames
 
 

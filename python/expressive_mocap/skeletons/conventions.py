@@ -179,15 +179,52 @@ def guess_unit(height: float) -> tuple[str, float, float]:
 def up_and_facing(skeleton: Skeleton, jmap: JointMap, positions: np.ndarray) -> tuple[tuple, tuple]:
     """``((up, how sure), (facing, how sure))`` of a skeleton whose posed world positions
     ``[F, J, 3]`` (a sample of frames) are given (see the module's notes)."""
+    up = up_of(jmap, positions)
+    return up, facing_of(skeleton, jmap, up[0])
+
+
+def up_of(jmap: JointMap, positions: np.ndarray) -> tuple[str, float]:
+    """``(up, how sure)``: the axis nearest the mean line from the feet to the head in the posed
+    world positions ``[F, J, 3]``: the one thing of a motion's axes its frames must tell."""
     feet = 0.5 * (positions[:, jmap["left_foot"]] + positions[:, jmap["right_foot"]])
-    head_up = np.mean(positions[:, jmap["head"]] - feet, axis=0)
-    up, up_sure = _nearest_axis(head_up)
-    rest = skeleton.rest_positions()[0]
-    rest_up, _, rest_forward = body_axes(rest, jmap)
-    upright = quat.between(rest_up, np.array(AXES[up], float))
-    forward = quat.rotate(upright, rest_forward)
-    facing, facing_sure = _nearest_axis(forward - np.dot(forward, AXES[up]) * np.array(AXES[up]), exclude=up)
-    return (up, up_sure), (facing, facing_sure)
+    return _nearest_axis(np.mean(positions[:, jmap["head"]] - feet, axis=0))
+
+
+def ups_of(jmap: JointMap, samples: list[np.ndarray]) -> list[str]:
+    """:func:`up_of`'s axis for each of many clips' posed positions ``[F_i, J, 3]``, in a few
+    NumPy calls whatever their number (a clip of no frames reads +X, as :func:`up_of` does)."""
+    if not samples:
+        return []
+    joints = [jmap["head"], jmap["left_foot"], jmap["right_foot"]]
+    counts = np.array([len(s) for s in samples])
+    points = np.concatenate([s[:, joints] for s in samples])  # [sum F_i, 3, 3]
+    lines = points[:, 0] - 0.5 * (points[:, 1] + points[:, 2])
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    sums = np.zeros((len(samples), 3))
+    some = counts > 0
+    sums[some] = np.add.reduceat(lines, starts[some])  # reduceat would give an empty clip the next row
+    means = sums / np.maximum(counts, 1)[:, None]
+    names = list(AXES)
+    return [names[k] for k in np.argmax(means @ np.array([AXES[n] for n in names], float).T, axis=1)]
+
+
+def facing_of(skeleton: Skeleton, jmap: JointMap, up: str) -> tuple[str, float]:
+    """``(facing, how sure)`` of ``skeleton`` whose up axis is ``up``: its rest pose's forward
+    (:func:`body_axes`), turned upright, nearest axis across ``up``. The same for every motion of
+    a skeleton: kept for the skeletons met last."""
+    key = (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), tuple(jmap.joints.items()), up)
+    if key not in _FACINGS:
+        if len(_FACINGS) >= 64:
+            _FACINGS.pop(next(iter(_FACINGS)))
+        rest = skeleton.rest_positions()[0]
+        rest_up, _, rest_forward = body_axes(rest, jmap)
+        upright = quat.between(rest_up, np.array(AXES[up], float))
+        forward = quat.rotate(upright, rest_forward)
+        _FACINGS[key] = _nearest_axis(forward - np.dot(forward, AXES[up]) * np.array(AXES[up]), exclude=up)
+    return _FACINGS[key]
+
+
+_FACINGS: dict = {}
 
 
 def frame_rotation(up: str, facing: str) -> np.ndarray:
@@ -208,9 +245,7 @@ def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
             "it was mapped as a human's, front legs as arms; give a joint map file if that is wrong",
             stacklevel=2,
         )
-    height = stature(skeleton, jmap)
-    unit, metres, unit_sure = guess_unit(height)
-    kind, kind_sure = rest_pose_kind(skeleton, jmap)
+    height, (unit, metres, unit_sure), (kind, kind_sure) = _of_skeleton(skeleton, jmap)
     sure = {
         "up": round(up_sure, 3),
         "facing": round(facing_sure, 3),
@@ -218,6 +253,21 @@ def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
         "rest_pose": round(kind_sure, 3),
     }
     return Conventions(up, facing, unit, metres, height, kind, motion.fps, sure)
+
+
+def _of_skeleton(skeleton: Skeleton, jmap: JointMap) -> tuple:
+    """The conventions a skeleton alone tells: its actor's height, unit and rest pose, kept for the
+    skeletons met last (an archive's clips share a few)."""
+    key = (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), tuple(jmap.joints.items()))
+    if key not in _SKELETONS:
+        if len(_SKELETONS) >= 64:
+            _SKELETONS.pop(next(iter(_SKELETONS)))
+        height = stature(skeleton, jmap)
+        _SKELETONS[key] = (height, guess_unit(height), rest_pose_kind(skeleton, jmap))
+    return _SKELETONS[key]
+
+
+_SKELETONS: dict = {}
 
 
 def to_canonical(motion: Motion, conventions: Conventions) -> Motion:
@@ -273,6 +323,7 @@ __all__ = [
     "UNITS",
     "Conventions",
     "body_axes",
+    "facing_of",
     "frame_rotation",
     "from_canonical",
     "guess_unit",
@@ -281,6 +332,8 @@ __all__ = [
     "stature",
     "to_canonical",
     "up_and_facing",
+    "up_of",
+    "ups_of",
     "upright",
     "upright_and_back",
 ]

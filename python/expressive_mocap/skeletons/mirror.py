@@ -14,14 +14,16 @@ placed at their mirrored positions. Mirroring twice gives the motion back.
 from __future__ import annotations
 
 import re
+from typing import NamedTuple
 
 import numpy as np
 
 from .. import ops, quat
 from ..motion import Motion, Skeleton
-from .jointmap import JointMap
+from .conventions import facing_of, frame_rotation, ups_of
+from .jointmap import JointMap, find_joint_map
 from .names import label
-from .retargeting import Rig, _rig_key, _turned, clip_rig, reference_pose
+from .retargeting import Rig, _turned, reference_pose
 
 _SIDES = {"left": "right", "right": "left"}
 
@@ -71,11 +73,11 @@ def mirror_many(motions: list[Motion], user_map: dict | None = None, rig: Rig | 
     fixed 3 x 3 matrix times its partner's. No forward kinematics: a matrix product a joint over all
     the frames. Other hierarchies go through the world rotations and positions."""
     if rig is not None:
-        return _mirror_together(motions, rig)
-    groups: dict[tuple, tuple[Rig, list[int]]] = {}
-    for k, motion in enumerate(motions):
-        own = clip_rig(motion, user_map, twists=False)
-        groups.setdefault(_rig_key(own), (own, []))[1].append(k)
+        return _mirror_together(motions, _Plane(rig.skeleton, rig.jmap, rig.conventions.rotation()))
+    groups: dict[tuple, tuple[_Plane, list[int]]] = {}
+    for k, own in enumerate(_planes_of(motions, user_map)):
+        key = (own.skeleton.names, own.skeleton.offsets.tobytes(), own.turn.tobytes(), tuple(own.jmap.joints.items()))
+        groups.setdefault(key, (own, []))[1].append(k)
     out: list = [None] * len(motions)
     for own, members in groups.values():
         for k, image in zip(members, _mirror_together([motions[k] for k in members], own)):
@@ -83,7 +85,51 @@ def mirror_many(motions: list[Motion], user_map: dict | None = None, rig: Rig | 
     return out
 
 
-def _mirror_together(motions: list[Motion], rig: Rig) -> list[Motion]:
+class _Plane(NamedTuple):
+    """What mirroring a motion needs of its rig: the skeleton, its joint map, and the turn to the
+    canonical axes (Y up, facing +Z), across whose X the body is reflected."""
+
+    skeleton: Skeleton
+    jmap: JointMap
+    turn: np.ndarray
+
+
+# Frames a clip's up axis is read from, evenly spread (as the conventions read it).
+_SAMPLED_FRAMES = 240
+
+
+def _planes_of(motions: list[Motion], user_map: dict | None = None) -> list[_Plane]:
+    """The :class:`_Plane` of each motion, from that motion alone: its up axis from its frames
+    (:func:`~.conventions.ups_of`), its facing from its skeleton (:func:`~.conventions.facing_of`);
+    one forward kinematics call for the sampled frames of all the clips of one skeleton."""
+    by_skeleton: dict[tuple, list[int]] = {}
+    for k, motion in enumerate(motions):
+        skeleton = motion.skeleton
+        key = (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), skeleton.channels)
+        by_skeleton.setdefault(key, []).append(k)
+    out: list = [None] * len(motions)
+    for members in by_skeleton.values():
+        skeleton = motions[members[0]].skeleton
+        jmap = find_joint_map(skeleton, user_map)
+        picked = [_sampled(motions[k]) for k in members]
+        _, positions = ops.forward_kinematics(
+            np.concatenate([m.rotations[f] for m, f in zip((motions[k] for k in members), picked)]),
+            np.concatenate([m.translations[f] for m, f in zip((motions[k] for k in members), picked)]),
+            skeleton.parents,
+        )
+        samples = np.split(positions, np.cumsum([len(f) for f in picked])[:-1])
+        for k, up in zip(members, ups_of(jmap, samples)):
+            facing, _ = facing_of(skeleton, jmap, up)
+            out[k] = _Plane(motions[k].skeleton, jmap, frame_rotation(up, facing))
+    return out
+
+
+def _sampled(motion: Motion) -> np.ndarray:
+    """The frames of ``motion`` its up axis is read from: at most 240, evenly spread."""
+    return np.unique(np.linspace(0, motion.n_frames - 1, min(motion.n_frames, _SAMPLED_FRAMES)).astype(int))
+
+
+def _mirror_together(motions: list[Motion], rig: _Plane) -> list[Motion]:
     """:func:`mirror_many` of clips of one rig, ``rig``."""
     if not motions:
         return []
@@ -111,12 +157,12 @@ def _mirror_together(motions: list[Motion], rig: Rig) -> list[Motion]:
     ]
 
 
-def _maps(rig: Rig, partner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _maps(rig: _Plane, partner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per joint, the 4 x 4 matrix taking its partner's local rotation to its mirrored one and
     the 3 x 3 matrix taking its partner's translation to its mirrored one ``([J, 4, 4], [J, 3, 3])``
     (see :func:`mirror_many`), each found by mapping the basis through :func:`mirror`'s formulas."""
     skeleton, parents = rig.skeleton, rig.skeleton.parents
-    turn = rig.conventions.rotation()
+    turn = rig.turn
     reference = reference_pose(skeleton)  # world rotations [J, 4], the file's axes
     flip = np.array([-1.0, 1.0, 1.0])
 
@@ -138,7 +184,7 @@ def _maps(rig: Rig, partner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.moveaxis(rotation_maps, 0, -1), np.moveaxis(translation_maps, 0, -1)
 
 
-def _linear(rig: Rig, partner: np.ndarray, rotations, translations, moving) -> tuple[np.ndarray, np.ndarray]:
+def _linear(rig: _Plane, partner: np.ndarray, rotations, translations, moving) -> tuple[np.ndarray, np.ndarray]:
     """:func:`mirror_many` on a left-right symmetric hierarchy: local values mapped joint by joint."""
     rotation_maps, translation_maps = _maps(rig, partner)
     new_rotations = (rotation_maps @ rotations[:, partner, :, None])[..., 0]  # 2x einsum's speed
@@ -149,10 +195,10 @@ def _linear(rig: Rig, partner: np.ndarray, rotations, translations, moving) -> t
     return new_rotations, new_translations
 
 
-def _through_positions(rig: Rig, partner: np.ndarray, rotations, translations, moving) -> tuple:
+def _through_positions(rig: _Plane, partner: np.ndarray, rotations, translations, moving) -> tuple:
     """:func:`mirror_many` on any hierarchy: world rotations and positions reflected, then local again."""
     skeleton, parents = rig.skeleton, rig.skeleton.parents
-    turn = rig.conventions.rotation()
+    turn = rig.turn
     world, positions = ops.forward_kinematics(rotations, translations, parents)
     world = _turned(turn, world)
     positions = quat.rotate(turn, positions)
