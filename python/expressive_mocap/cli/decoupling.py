@@ -11,7 +11,7 @@ import numpy as np
 
 from ..bvh import bvh_bytes, read_bvh, write_bvh
 from ..decoupling.algebra import EXPONENT, GAIN
-from ..decoupling.edits import mix
+from ..decoupling.edits import blend, mix
 from ..decoupling.training import train_body_model
 from ..errors import MocapError
 from ..files import atomic_write_all, open_input
@@ -210,12 +210,16 @@ def add_mix(commands) -> None:
     align, offset = default(mix, "align"), default(mix, "offset")
     p.add_argument(
         "--align",
-        choices=["index", "resample"],
+        choices=["time", "index", "resample"],
         default=align,
-        help=f"Y frame by frame (holding its last frame) or resampled to X's length (default: {align})",
+        help="time: Y resampled to X's frame rate, then frame by frame (holding its last frame); index: frame by "
+        f"frame whatever the rates; resample: stretched to X's length (default: {align})",
     )
     p.add_argument(
-        "--offset", type=int, default=offset, help=f"with --align index: Y frame used at X frame 0 (default {offset})"
+        "--offset",
+        type=int,
+        default=offset,
+        help=f"with --align time or index: Y frame (at X's rate) used at X frame 0 (default {offset})",
     )
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     add_model_options(p)
@@ -246,7 +250,16 @@ def cmd_mix(args) -> int:
     )
     write_bvh(out, args.output)
     print(f"wrote {args.output}: body mechanics of {args.body}, expressiveness of {args.expressive}")
+    _say_resampled(args.expressive, expressive, body, args.align)
     return 0
+
+
+def _say_resampled(path: str, motion, to, align: str) -> None:
+    """The note of what ``--align time`` resampled, if anything."""
+    from ..decoupling.edits import at_rate_of
+
+    if at_rate_of(motion, to, align) is not motion:
+        print(f"  {path} resampled from {motion.fps:.6g} to {to.fps:.6g} fps to play in its own time (--align time)")
 
 
 def _window(text: str) -> tuple[int, int]:
@@ -282,6 +295,12 @@ def add_blend(commands) -> None:
     p.add_argument(
         "--naive", action="store_true", help="blend whole poses over the body window (no decoupling), for comparison"
     )
+    p.add_argument(
+        "--align",
+        choices=["time", "index"],
+        default=default(blend, "align"),
+        help="time: Q resampled to P's frame rate first; index: Q's frames as they are (default: time)",
+    )
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write")
     add_model_options(p)
     add_feet_options(p)
@@ -289,7 +308,7 @@ def add_blend(commands) -> None:
 
 
 def cmd_blend(args) -> int:
-    from ..decoupling.edits import blend, blend_alignment
+    from ..decoupling.edits import blend_alignment
 
     expressive_window = None if args.naive else args.expressive_window or args.body_window
     if args.naive and args.joints:
@@ -298,7 +317,7 @@ def cmd_blend(args) -> int:
         )
     if args.naive:
         first, second = read_bvh(args.first), read_bvh(args.second)
-        out = blend(first, second, None, args.body_window)
+        out = blend(first, second, None, args.body_window, align=args.align)
     else:
         model = body_model(args)
         first, back = read_on_model(args.first, model, BODY_MODEL_FIX, joint_map(args))
@@ -314,11 +333,13 @@ def cmd_blend(args) -> int:
                 args.exponent,
                 joints=args.joints,
                 plant_feet=not args.no_foot_lock,
+                align=args.align,
             )
         )
     write_bvh(out, args.output)
-    a = blend_alignment(first, second, args.body_window, expressive_window)
+    a = blend_alignment(first, second, args.body_window, expressive_window, align=args.align)
     print(f"wrote {args.output}: {out.n_frames} frames")
+    _say_resampled(args.second, second, first, args.align)
     print(
         f"  {args.second} continues the path of {first.skeleton.names[a.joint]} from frame {a.anchor}: "
         f"turned {a.turn:.1f} degrees about the vertical and moved {np.linalg.norm(a.shift):.4g} (file units) "

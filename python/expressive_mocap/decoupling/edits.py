@@ -56,24 +56,40 @@ def _check_same_skeleton(a: Motion, b: Motion, what: str) -> None:
         )
 
 
+ALIGNS = ("time", "index", "resample")
+# Two frame rates this close are one: files round the frame time (0.0333333 s for 30 fps).
+SAME_RATE = 1e-4
+
+
+def at_rate_of(motion: Motion, other: Motion, align: str = "time") -> Motion:
+    """``motion`` at ``other``'s frame rate when ``align`` is ``"time"`` and the rates differ
+    (:meth:`Motion.resample`: slerp for rotations), so that frame ``k`` of each is at the same
+    time; else ``motion`` as it is (``"index"`` pairs frames by number, whatever their rates)."""
+    if align not in ALIGNS:
+        raise ArgumentError(f"align must be one of {', '.join(ALIGNS)}, got {align!r}")
+    if align != "time" or abs(motion.frame_time - other.frame_time) <= SAME_RATE * other.frame_time:
+        return motion
+    return motion.resample(fps=other.fps)
+
+
 def _aligned(rotations: np.ndarray, frames: int, align: str, offset: int) -> np.ndarray:
     """``rotations [F, J, 4]`` on a timeline of ``frames`` frames: frame by frame from ``offset``
     (holding the last frame), or resampled (slerp) to that length."""
-    if align == "index":
+    if align in ("time", "index"):  # "time": the rates were made one (at_rate_of)
         index = np.clip(np.arange(frames) + offset, 0, len(rotations) - 1)
         return rotations[index]
     if align == "resample":
         if len(rotations) < 2 or frames < 2:
             return rotations[np.zeros(frames, dtype=int)]
         return quat.resample(rotations, quat.spanning_positions(len(rotations), frames))
-    raise ArgumentError(f"align must be 'index' or 'resample', got {align!r}")
+    raise ArgumentError(f"align must be one of {', '.join(ALIGNS)}, got {align!r}")
 
 
 def mix(
     body_source: Motion,
     expressive_source: Motion,
     model: BodyMechanicsModel,
-    align: str = "index",
+    align: str = "time",
     offset: int = 0,
     gain: float = GAIN,
     exponent: float = EXPONENT,
@@ -83,13 +99,16 @@ def mix(
 ) -> Motion:
     """The body mechanics (and root trajectory) of ``body_source`` with the expressive component
     of ``expressive_source``: ``E*_Y B'_X``. The expressive source is aligned to the body source
-    frame by frame from ``offset`` (``align="index"``) or resampled to its length (``"resample"``).
+    in time (``align="time"``: resampled to the body source's frame rate, then frame by frame
+    from ``offset``, holding its last frame), frame by frame whatever the rates (``"index"``), or
+    stretched to the body source's length (``"resample"``).
     ``joints``: the joints that take ``expressive_source``'s expression (group names such as
     ``"arms"``, or a mask; default :func:`~expressive_mocap.decoupling.feet.default_mask`); the
     others keep ``body_source``'s rotations exactly. ``plant_feet``: the stance feet kept where
     ``body_source`` has them during its contacts. Elbows and knees are kept within their limits
     (``hinges``), never tighter than either source has them."""
     _check_same_skeleton(body_source, expressive_source, "mix")
+    expressive_source = at_rate_of(expressive_source, body_source, align)
     mask = chosen_joints(joints, body_source, expressive_source)
     body = decompose(body_source, model, gain, exponent)
     expressive = decompose(expressive_source, model, gain, exponent).expressive
@@ -175,8 +194,10 @@ def blend_alignment(
     expressive_window: tuple[int, int] | None = None,
     roles: JointRoles | None = None,
     first_positions: np.ndarray | None = None,
+    align: str = "time",
 ) -> BlendAlignment:
-    """The placement of ``second`` that :func:`blend` uses with these windows."""
+    """The placement of ``second`` that :func:`blend` uses with these windows (and ``align``)."""
+    second = at_rate_of(second, first, align)
     roles = roles or JointRoles.find(first.skeleton)
     start = _second_start(body_window, expressive_window)
     frames = start + second.n_frames
@@ -204,10 +225,13 @@ def blend(
     joints=None,
     plant_feet: bool = True,
     hinges: bool = True,
+    align: str = "time",
 ) -> Motion:
     """Blend from ``first`` to ``second``, body mechanics over ``body_window`` and the expressive
-    component over ``expressive_window`` (output frames ``(start, end)``; slerp with smoothstep
-    weights). ``second`` starts at the earlier window's start. At the start of the body window
+    component over ``expressive_window`` (output frames ``(start, end)``, at ``first``'s frame
+    rate; slerp with smoothstep weights). ``second`` is first resampled to ``first``'s frame rate
+    (``align="time"``; ``"index"`` takes its frames as they are, whatever the rates) and starts at
+    the earlier window's start. At the start of the body window
     (the anchor) it is turned about the vertical to face where ``first`` faces (the facing from the
     upper legs, averaged over a second around the anchor) and moved on the floor plane to where
     ``first``'s path is; both applied to the joint that carries the path (:func:`path_joint`: the
@@ -221,6 +245,9 @@ def blend(
     Elbows and knees are kept within their limits (``hinges``), never tighter than the two motions
     have them."""
     _check_same_skeleton(first, second, "blend")
+    if align == "resample":
+        raise ArgumentError("blend: align must be 'time' or 'index' (a blend keeps each motion's own length)")
+    second = at_rate_of(second, first, align)
     roles = roles or JointRoles.find(first.skeleton)
     start = _second_start(body_window, expressive_window)
     frames = start + second.n_frames
@@ -266,4 +293,4 @@ def blend(
     return out
 
 
-__all__ = ["BlendAlignment", "blend", "blend_alignment", "mix", "modulate"]
+__all__ = ["ALIGNS", "BlendAlignment", "at_rate_of", "blend", "blend_alignment", "mix", "modulate"]
