@@ -62,11 +62,13 @@ pub fn two_bone_ik_one(
     let b = a + rotate(upper, upper_bone);
     let c = b + rotate(lower, lower_bone);
     let (thigh, shin) = (upper_bone.length(), lower_bone.length());
-    // Bounds relative to the chain's length: the same pose in centimetres or metres.
+    // Bounds relative to the chain's length: the same pose in centimetres or metres. Never
+    // straighter than REACH, unless the chain already is: a target where its end is moves nothing.
+    let longest = ((thigh + shin) * REACH).max((c - a).length());
     let reach = clip(
         (target - a).length(),
         (thigh - shin).abs() + 1e-5 * (thigh + shin),
-        (thigh + shin) * REACH,
+        longest,
     );
     let (hip_now, knee_now) = (angle_between(c - a, b - a), angle_between(a - b, c - b));
     let hip_wanted = clip(
@@ -180,6 +182,23 @@ mod tests {
             (end - DVec3::new(0.5, -1.5, 0.2)).length() < 1e-9,
             "{end:?}"
         );
+    }
+
+    #[test]
+    fn a_straight_leg_at_its_own_end_stays_straight() {
+        // Straighter than REACH: bending it to REACH moved a stance knee by 0.56 cm.
+        let bone = DVec3::new(0.0, -1.0, 0.0);
+        let (upper, lower) = two_bone_ik_one(
+            DVec3::ZERO,
+            DQuat::IDENTITY,
+            DQuat::IDENTITY,
+            bone,
+            bone,
+            DVec3::new(0.0, -2.0, 0.0),
+        );
+        let knee = rotate(upper, bone);
+        assert!((knee - bone).length() < 1e-6, "{knee}");
+        assert!((knee + rotate(lower, bone) - DVec3::new(0.0, -2.0, 0.0)).length() < 1e-9);
     }
 
     #[test]

@@ -45,6 +45,20 @@ def test_the_current_end_is_a_fixed_point(leg):
     assert np.degrees(quat.angle(quat.mul(quat.conjugate(lower), new_lower))).max() < 1e-5
 
 
+@pytest.mark.parametrize("knee", [0.0, 0.3, 0.5])
+def test_a_straight_leg_at_its_own_end_is_a_fixed_point(leg, knee, backend):
+    """A leg straighter than REACH allows (``knee`` degrees from straight: a stance leg of real
+    captures) was bent to REACH: a planting that asked each foot to stay where it was moved the
+    knee by 0.56 cm."""
+    upper, _, root = leg
+    straight = np.degrees(np.arctan2(SHIN[2], -SHIN[1]))  # the knee turn that lines the shin up with the thigh
+    lower = quat.mul(upper, quat.about("X", np.full(len(upper), straight + knee)))
+    knee_before, end = chain(upper, lower, root)
+    new_upper, new_lower = two_bone_ik(root, upper, lower, THIGH, SHIN, end)
+    knee_after, _ = chain(new_upper, new_lower, root)
+    assert np.linalg.norm(knee_after - knee_before, axis=1).max() < 1e-4  # 1 micron: acos near straight
+
+
 def test_a_target_out_of_reach_gets_the_stretched_leg_pointing_at_it(leg):
     upper, lower, root = leg
     far = root + np.array([0.0, -200.0, 30.0])

@@ -37,7 +37,9 @@ def two_bone_ik(
         The new world rotations ``(upper, lower)``, each ``[F, 4]``. The chain bends in its own
         current plane (after D. Holden's two-joint IK) and then turns about the root to aim at the
         target; each bone keeps its twist. A target out of reach is approached as closely as
-        ``REACH`` x the chain's length allows (a target nearer than the bones' difference, as that).
+        ``REACH`` x the chain's length allows, or the chain's own reach when it is straighter
+        already (so a target where its end is moves nothing); a target nearer than the bones'
+        difference, as that.
         One kernel call (``two_bone_ik``), frames in parallel.
     """
     return ops.two_bone_ik(root, upper, lower, upper_bone, lower_bone, target)

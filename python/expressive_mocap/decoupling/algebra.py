@@ -95,7 +95,10 @@ class Decomposition:
         return self._with_rotations(quat.mul(self.expressive, mean_body[None]))
 
     def recompose(self, scale: float = 1.0) -> Motion:
-        """``E*^scale * B'``: 1 gives back the original, 0 the body mechanics, 1.5 150% expressiveness."""
+        """``E*^scale * B'``: 1 gives back the original (exactly: its own rotations, not their
+        product's rounding), 0 the body mechanics, 1.5 150% expressiveness."""
+        if scale == 1.0:
+            return self._with_rotations(self.original.rotations.copy())
         return self._with_rotations(compose_rotations(self.expressive, self.body, scale))
 
     def _with_rotations(self, rotations: np.ndarray) -> Motion:

@@ -38,10 +38,10 @@ def _solve(
     b = a + quat.rotate(upper, upper_bone)
     c = b + quat.rotate(lower, lower_bone)
     thigh, shin = np.linalg.norm(upper_bone, axis=-1), np.linalg.norm(lower_bone, axis=-1)
-    # Bounds relative to the chain's length: the same pose in centimetres or metres.
-    reach = np.clip(
-        np.linalg.norm(target - a, axis=1), np.abs(thigh - shin) + 1e-5 * (thigh + shin), (thigh + shin) * REACH
-    )
+    # Bounds relative to the chain's length: the same pose in centimetres or metres. Never
+    # straighter than REACH, unless the chain already is: a target where its end is moves nothing.
+    longest = np.maximum((thigh + shin) * REACH, np.linalg.norm(c - a, axis=1))
+    reach = np.clip(np.linalg.norm(target - a, axis=1), np.abs(thigh - shin) + 1e-5 * (thigh + shin), longest)
     # Angles at the hip (between hip-ankle and thigh) and at the knee, now and wanted.
     hip_now, knee_now = _angle_between(c - a, b - a), _angle_between(a - b, c - b)
     hip_wanted = np.arccos(np.clip((shin**2 - thigh**2 - reach**2) / (-2 * thigh * reach), -1, 1))
