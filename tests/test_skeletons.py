@@ -218,9 +218,16 @@ def test_rotation_helpers_agree_with_scipy():
 
 
 def test_harmonised_bone_directions_agree_across_skeletons(walks):
+    """Every limb bone and the line across the hips point alike on every rig. The neck's bone is
+    turned a little (2.1-5.4 degrees at worst) so that the head sits on the Bandai rig's line from the
+    chest, whatever the two necks' proportions (tests/test_retarget_trunk.py)."""
     reference = bone_directions(walks["bandai"])
+    neck = BONES.index(("neck", "head"))
+    limbs = [k for k in range(len(BONES)) if k != neck]
     for rig in RIGS:
-        assert worst_angle(bone_directions(walks[rig]), reference) < 0.01, rig
+        mine = bone_directions(walks[rig])
+        assert worst_angle(mine[:, limbs], reference[:, limbs]) < 0.01, rig
+        assert worst_angle(mine[:, [neck]], reference[:, [neck]]) < 6.0, rig
 
 
 def test_the_spine_and_shoulders_agree_across_skeletons(walks):

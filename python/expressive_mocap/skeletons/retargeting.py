@@ -12,7 +12,9 @@ world rotations of every joint both maps hold.
 
 Unmapped joints of the target keep their reference pose relative to their mapped ancestor
 (zero-length hip joints, twist bones, fingers), except the extra segments of the spine and the
-neck, which take equal shares of the turn between the mapped joints either end of their chain.
+neck, which take equal shares of the turn between the mapped joints either end of their chain;
+then the lines from the hips to the chest and from the chest to the head are set to the source's
+(:mod:`.trunk`).
 The hips' path is scaled by the ratio of the leg lengths (which also converts the unit), above
 the source's floor and onto the target's. With ``plant_feet``, each foot is held still through
 the source's contacts (the package's contact detector on the source) with two-bone leg IK, eased
@@ -33,6 +35,7 @@ from ..motion import Motion, Skeleton
 from . import twist
 from .conventions import AXES, Conventions, read_conventions
 from .jointmap import JointMap, find_joint_map
+from .trunk import keep_trunk
 
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -400,6 +403,8 @@ def _retarget_frames(
     world, positions = kinematics
     source = source.with_twists(motion, kinematics)
     out = _transfer(motion, source, goal, (_trusted(world, positions, source), positions), floor)
+    into_goal = quat.mul(quat.conjugate(goal.conventions.rotation()), source.conventions.rotation())
+    out = keep_trunk(out, positions, source.jmap, goal.jmap, into_goal)
     if plant_feet:
         from .planting import plant_feet as plant
         from .planting import source_contacts
