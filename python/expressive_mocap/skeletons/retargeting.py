@@ -16,7 +16,9 @@ neck, which take equal shares of the turn between the mapped joints either end o
 then the lines from the hips to the chest and from the chest to the head are set to the source's
 (:mod:`.trunk`).
 The hips' path is scaled by the ratio of the leg lengths (which also converts the unit), above
-the source's floor and onto the target's. With ``plant_feet``, each foot is held still through
+the source's floor and onto the target's, then raised or lowered clip by clip so that the stance
+feet stand on the target's floor; feet are aligned by their flat stance (forward along the floor,
+up), not by their bones. With ``plant_feet``, each foot is held still through
 the source's contacts (the package's contact detector on the source) with two-bone leg IK, eased
 in and out over 3 frames.
 """
@@ -259,6 +261,21 @@ def _role_frame(points: np.ndarray, jmap: JointMap, role: str, other: JointMap) 
     return _orthonormal(line, _UP if _role_of(jmap, role) == "toes" else _FORWARD)
 
 
+def _flat_frame(points: np.ndarray, jmap: JointMap, role: str, other: JointMap) -> np.ndarray:
+    """:func:`_role_frame`, but for a foot or toes (where both maps hold the toes) the frame a
+    foot standing flat has: forward along the floor, up. Each rig's reference pose stands on flat
+    feet, however its ankle sits (a flat Bandai-Namco foot points 40 degrees down to the toe
+    joint, a CMU one 10): carried bone by bone, a flat foot came out toes-up on another rig."""
+    part = _role_of(jmap, role)
+    side = role.split("_", 1)[0]
+    if part in ("foot", "toes") and f"{side}_toes" in jmap and f"{side}_toes" in other:
+        forward = points[jmap[f"{side}_toes"]] - points[jmap[f"{side}_foot"]]
+        forward = forward - _UP * np.dot(forward, _UP)
+        if np.linalg.norm(forward) > 1e-9:
+            return _orthonormal(forward, _UP)
+    return _role_frame(points, jmap, role, other)
+
+
 def alignments(source: Rig, target: Rig) -> dict[str, np.ndarray]:
     """Role -> ``A_r`` (canonical axes), which turns the source joint's world rotation into the
     target's: ``W_t = W_s A_r``. In the two reference poses (:func:`reference_pose`) it takes the
@@ -270,8 +287,8 @@ def alignments(source: Rig, target: Rig) -> dict[str, np.ndarray]:
     for role in source.jmap.joints:
         if role not in target.jmap.joints:
             continue
-        frame_s = _role_frame(points_s, source.jmap, role, target.jmap)
-        frame_t = _role_frame(points_t, target.jmap, role, source.jmap)
+        frame_s = _flat_frame(points_s, source.jmap, role, target.jmap)
+        frame_t = _flat_frame(points_t, target.jmap, role, source.jmap)
         onto = quat.from_matrix(frame_s @ frame_t.T)
         js, jt = source.jmap[role], target.jmap[role]
         out[role] = quat.mul(quat.mul(quat.conjugate(world_s[js]), onto), world_t[jt])
@@ -405,17 +422,43 @@ def _retarget_frames(
     out = _transfer(motion, source, goal, (_trusted(world, positions, source), positions), floor)
     into_goal = quat.mul(quat.conjugate(goal.conventions.rotation()), source.conventions.rotation())
     out = keep_trunk(out, positions, source.jmap, goal.jmap, into_goal)
-    if plant_feet:
-        from .planting import plant_feet as plant
-        from .planting import source_contacts
+    from .planting import plant_feet as plant
+    from .planting import source_contacts
 
-        positions = kinematics[1]
-        turn = source.conventions.rotation()
-        upright = positions if np.array_equal(turn, [0.0, 0.0, 0.0, 1.0]) else quat.rotate(turn, positions)
-        contacts = source_contacts(clips or [motion], source, upright, bounds)
+    turn = source.conventions.rotation()
+    upright = positions if np.array_equal(turn, [0.0, 0.0, 0.0, 1.0]) else quat.rotate(turn, positions)
+    contacts = source_contacts(clips or [motion], source, upright, bounds)
+    out, lift = _stand_on_floor(out, contacts, goal, bounds)
+    if plant_feet:
         feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
-        out = plant(out, goal.jmap, contacts, carried(positions[:, feet], source, goal, floor), starts=bounds)
+        ankles = carried(positions[:, feet], source, goal, floor) + lift[:, None, :]
+        out = plant(out, goal.jmap, contacts, ankles, starts=bounds)
     return out
+
+
+def _stand_on_floor(out: Motion, contacts: np.ndarray, goal: Rig, bounds) -> tuple[Motion, np.ndarray]:
+    """``out`` with its path raised or lowered, clip by clip, so that its stance feet (the lower
+    of each foot's ankle and toe joints through the source's ``contacts``, median over the clip)
+    stand on the target's floor, and that lift ``[F, 3]`` (target axes). The leg lengths' ratio
+    places the hips, but rigs set their ankles at different heights above their soles: a walk of
+    a rig with low-set ankles stood 4-5 cm above the Bandai-Namco floor, one with high-set ankles
+    sank."""
+    jmap, skeleton = goal.jmap, goal.skeleton
+    up = np.array(_axis(goal.conventions.up), float)
+    heights = out.positions() @ up  # [F, J]
+    lowest = []
+    for side in ("left", "right"):
+        joints = [jmap[f"{side}_{part}"] for part in ("foot", "toes") if f"{side}_{part}" in jmap]
+        lowest.append(heights[:, joints].min(axis=1))
+    standing = np.where(contacts, np.stack(lowest, axis=1), np.inf).min(axis=1)  # [F]
+    lift = np.zeros(out.n_frames)
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        stance = standing[a:b][np.isfinite(standing[a:b])]
+        if len(stance):
+            lift[a:b] = goal.floor - np.median(stance)
+    translations = out.translations.copy()
+    translations[:, _path_joint(skeleton, jmap["hips"])] += lift[:, None] * up
+    return Motion(skeleton, out.rotations, translations, out.frame_time), lift[:, None] * up
 
 
 def rest_motion(skeleton: Skeleton) -> Motion:
