@@ -1,0 +1,102 @@
+"""What a viewer sees of walks of other rigs retargeted onto the canonical (Bandai-Namco) body:
+stance feet, the trunk's lines, and a round trip's height.
+
+    python benches/eval_retarget_fidelity.py [--other DIR] [--data DIR]
+
+For each walk of ``DIR`` (the shared folder of files on other rigs), retargeted with
+``onto_canonical(plant_feet=False)``, through the source's own contacts:
+- the stance ankle and toe joint heights (cm) and the foot's pitch (degrees, ankle to toe joint
+  against the floor), beside a dataset-2 walk's own (``dataset-2_walk_normal_001``);
+- the mean and largest angle between the source's and the retarget's hips-to-chest and
+  chest-to-head lines, each in its frame's heading frame;
+- the height of a round trip A -> Bandai -> A against A, in % of A's actor height.
+Positions by forward kinematics; every measure is computed here, not by the package's reports.
+Data: Bandai-Namco-Research-Motiondataset (CC BY-NC 4.0); CMU Graphics Lab Motion Capture
+Database; deep-motion-editing demo files (BSD-2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+import expressive_mocap as em
+from expressive_mocap import quat
+from expressive_mocap.features import foot_contacts
+from expressive_mocap.skeletons.canonical import onto_canonical
+from expressive_mocap.skeletons.conventions import read_conventions, upright
+from expressive_mocap.skeletons.jointmap import find_joint_map
+from expressive_mocap.skeletons.retargeting import retarget
+
+REPO = Path(__file__).resolve().parent.parent
+WALKS = ("m21_walk", "m21_female-walk", "cmu_scaled_131_03", "cmu_01_01", "dme_comp_3d_2")
+
+
+def canonical_points(motion: em.Motion) -> tuple[np.ndarray, dict]:
+    jmap = find_joint_map(motion.skeleton)
+    return quat.rotate(read_conventions(motion, jmap).rotation(), motion.positions()), jmap
+
+
+def stance(motion: em.Motion, contacts: np.ndarray) -> tuple[float, float, float]:
+    points, jmap = canonical_points(motion)
+    rows = []
+    for s, side in enumerate(("left", "right")):
+        ankle, toe = points[:, jmap[f"{side}_foot"]], points[:, jmap[f"{side}_toes"]]
+        line = toe - ankle
+        pitch = np.degrees(np.arctan2(line[:, 1], np.linalg.norm(line[:, [0, 2]], axis=1)))
+        rows.append((ankle[contacts[:, s], 1].mean(), toe[contacts[:, s], 1].mean(), pitch[contacts[:, s]].mean()))
+    ankle, toe, pitch = np.mean(rows, axis=0)
+    return float(ankle), float(toe), float(pitch)
+
+
+def trunk(motion: em.Motion) -> list[np.ndarray]:
+    points, jmap = canonical_points(motion)
+    left = points[:, jmap["left_upper_leg"]] - points[:, jmap["right_upper_leg"]]
+    turn = quat.about("Y", -np.degrees(np.arctan2(-left[:, 2], left[:, 0])))
+    lines = []
+    for a, b in (("hips", "chest"), ("chest", "head")):
+        line = quat.rotate(turn, points[:, jmap[b]] - points[:, jmap[a]])
+        lines.append(line / np.linalg.norm(line, axis=-1, keepdims=True))
+    return lines
+
+
+def apart(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1.0, 1.0)))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--other", type=Path, default=REPO.parent / "shared" / "data" / "other")
+    parser.add_argument("--data", type=Path, default=Path.home() / ".cache" / "motion-data")
+    args = parser.parse_args()
+    found = subprocess.run(
+        [str(REPO.parent / "shared" / "data" / "unpack"), str(args.data)], capture_output=True, text=True, check=True
+    )
+    dataset = Path(found.stdout.strip().splitlines()[-1])
+    bandai = em.read_bvh(dataset / "Bandai-Namco-Research-Motiondataset-2" / "data" / "dataset-2_walk_normal_001.bvh")
+    own = stance(bandai, foot_contacts(bandai))
+    print(f"dataset-2 walk: stance ankle {own[0]:.1f} cm, toe {own[1]:.1f} cm, pitch {own[2]:.1f} deg")
+    print("| walk | ankle cm | toe cm | pitch deg | hips-chest deg (mean/max) | chest-head deg | round trip % |")
+    print("|---|---|---|---|---|---|---|")
+    for name in WALKS:
+        source = em.read_bvh(args.other / f"{name}.bvh")
+        out, _ = onto_canonical(source, plant_feet=False)
+        ankle, toe, pitch = stance(out, foot_contacts(upright(source)))
+        lines = [apart(m, t) for m, t in zip(trunk(out), trunk(source))]
+        back = retarget(retarget(source, bandai, plant_feet=False), source, plant_feet=False)
+        jmap = find_joint_map(source.skeleton)
+        conventions = read_conventions(source, jmap)
+        up = quat.rotate(quat.conjugate(conventions.rotation()), np.array([0.0, 1.0, 0.0]))
+        lift = (back.positions() - source.positions()) @ up
+        trip = 100 * np.abs(lift).mean() / conventions.height
+        print(
+            f"| {name} | {ankle:.1f} | {toe:.1f} | {pitch:.1f} | {lines[0].mean():.1f} / {lines[0].max():.1f} "
+            f"| {lines[1].mean():.1f} / {lines[1].max():.1f} | {trip:.2f} |"
+        )
+
+
+if __name__ == "__main__":
+    main()
