@@ -109,7 +109,7 @@ def read_for_model(path: str, model, fix: str, user_map: dict | None = None) -> 
 
 def read_on_model(
     path: str, model, fix: str, user_map: dict | None = None, change: Callable[[Motion], Motion] | None = None
-) -> tuple[Motion, Callable[[Motion], Motion]]:
+) -> tuple[Motion, Callable[..., Motion]]:
     """A BVH file on the model's skeleton, and how to carry an edit of it back to the file's own
     skeleton (the identity when the file is on the model's skeleton already; otherwise
     :class:`~expressive_mocap.skeletons.canonical.Carried`); ``change`` is applied to the file's
@@ -128,7 +128,9 @@ def read_on_model(
     if carried is None:  # the model's own skeleton: only its axes may differ (a Z-up file)
         from ..skeletons.conventions import upright_and_back
 
-        return upright_and_back(motion)
+        upright, turn_back = upright_and_back(motion)
+        # Its feet were planted on the model's skeleton, which is the file's: nothing to redo.
+        return upright, lambda edited, plant_feet=False: turn_back(edited)
     return carried.body, carried.back
 
 

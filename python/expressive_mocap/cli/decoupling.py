@@ -166,7 +166,9 @@ def cmd_decouple(args) -> int:
     table = io.StringIO()
     np.savetxt(table, parts.activity, fmt="%.5f", delimiter=",", header=",".join(names), comments="")
     files = {}
-    for suffix, part in zip(DECOUPLE_SUFFIXES[:2], (back(parts.body_motion()), back(parts.expressive_motion()))):
+    # The body mechanics stand where the input stands; the expressive part is no stance of its own.
+    body, expressive = back(parts.body_motion(), plant_feet=True), back(parts.expressive_motion())
+    for suffix, part in zip(DECOUPLE_SUFFIXES[:2], (body, expressive)):
         try:
             files[prefix + suffix] = bvh_bytes(part)
         except MocapError as error:
@@ -197,7 +199,8 @@ def cmd_modulate(args) -> int:
 
     model = body_model(args)
     motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, joint_map(args))
-    out = back(modulate(motion, args.scale, model, args.gain, args.exponent, plant_feet=not args.no_foot_lock))
+    edited = modulate(motion, args.scale, model, args.gain, args.exponent, plant_feet=not args.no_foot_lock)
+    out = back(edited, plant_feet=not args.no_foot_lock)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: expressiveness x {args.scale:g}")
     return 0
@@ -246,7 +249,8 @@ def cmd_mix(args) -> int:
             args.exponent,
             joints=args.joints,
             plant_feet=not args.no_foot_lock,
-        )
+        ),
+        plant_feet=not args.no_foot_lock,
     )
     write_bvh(out, args.output)
     print(f"wrote {args.output}: body mechanics of {args.body}, expressiveness of {args.expressive}")

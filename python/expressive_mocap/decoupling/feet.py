@@ -137,7 +137,9 @@ def _between_contacts(contact: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     return before, after, x * x * (3 - 2 * x)
 
 
-def planted(guide: Motion, edited: Motion, roles: JointRoles | None = None) -> tuple[Motion, np.ndarray]:
+def planted(
+    guide: Motion, edited: Motion, roles: JointRoles | None = None, contacts: np.ndarray | None = None
+) -> tuple[Motion, np.ndarray]:
     """``edited`` with each stance foot put back where ``guide`` (the source of the body
     mechanics, on the same timeline, its hips where ``edited`` has them) has it: through each of
     ``guide``'s foot contacts the ankle goes where ``guide``'s is and the foot takes its world
@@ -145,9 +147,10 @@ def planted(guide: Motion, edited: Motion, roles: JointRoles | None = None) -> t
     of the foot's rotation) eases from the one at the end of the first to the one at the start of
     the next, so the swing carries the foot from where the edit would put it to where it lands
     without a jump. Returns it and ``guide``'s contacts ``bool [F, 2]``. A leg whose foot is not
-    two joints below the upper leg is an :class:`~expressive_mocap.errors.ArgumentError`."""
+    two joints below the upper leg is an :class:`~expressive_mocap.errors.ArgumentError`.
+    ``contacts``: ``guide``'s, when known (read Y up: a Z-up file's are read from it upright)."""
     roles = roles or JointRoles.find(guide.skeleton)
-    contacts = foot_contacts(guide, roles)
+    contacts = foot_contacts(guide, roles) if contacts is None else contacts
     parents = guide.skeleton.parents
     world_in, pos_in = guide.fk()
     world_out, pos_out = edited.fk()

@@ -84,24 +84,43 @@ class Carried:
         self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False, kinematics=self._kinematics)
         self._body_kinematics: tuple[np.ndarray, np.ndarray] | None = None  # the body's, once needed
         self._limits: Any = None  # the user's HingeLimits, once needed
+        self._contacts: np.ndarray | None = None  # the user's foot contacts, once needed
 
-    def back(self, edited: Motion, hinges: bool = True) -> Motion:
+    def back(self, edited: Motion, hinges: bool = True, plant_feet: bool = False) -> Motion:
         """``edited`` (an edit of :attr:`body`) as a motion of the user's skeleton. An edit of
         another length (a blend into a second motion) has no frame-by-frame counterpart to turn:
         it is retargeted onto the user's skeleton instead, joints the body lacks at rest. Either
         way (unless ``hinges`` is False) the user's elbows and knees are then kept within their
         limits, about the axes the user's motion bends them about, never tighter than it has them
         itself (:func:`~expressive_mocap.hinges.limit_hinges`): bodies differ, so a limb the edit
-        kept within limits on the body may pass straight on the user's."""
+        kept within limits on the body may pass straight on the user's. ``plant_feet``: then the
+        stance feet are put back where the user's motion has them through its own contacts
+        (:func:`~expressive_mocap.decoupling.feet.planted`, on the user's skeleton: feet planted on
+        the body slid and sank once carried back onto other proportions)."""
         from ..hinges import hinge_limits_for, limit_hinges
 
         out = self._back(edited)
-        if not hinges:
-            return out
         same = out.n_frames == self.original.n_frames
-        if self._limits is None:  # the user's hinge axes, learnt once for every edit carried back
-            self._limits = hinge_limits_for([self.original])
-        return limit_hinges(out, self._limits, (self.original.rotations,) if same else ())[0]
+        if hinges:
+            if self._limits is None:  # the user's hinge axes, learnt once for every edit carried back
+                self._limits = hinge_limits_for([self.original])
+            out = limit_hinges(out, self._limits, (self.original.rotations,) if same else ())[0]
+        return self._planted(out) if plant_feet and same else out
+
+    def _planted(self, out: Motion) -> Motion:
+        """``out`` with its stance feet where the user's motion has them (as it is, on a skeleton
+        whose legs are not two bones from hip to ankle)."""
+        from ..decoupling.feet import planted
+        from ..errors import ArgumentError
+        from ..features import foot_contacts
+        from .conventions import upright
+
+        if self._contacts is None:  # the user's contacts, read once, Y up
+            self._contacts = foot_contacts(upright(self.original))
+        try:
+            return planted(self.original, out, contacts=self._contacts)[0]
+        except ArgumentError:
+            return out
 
     def _back(self, edited: Motion) -> Motion:
         from .. import quat
