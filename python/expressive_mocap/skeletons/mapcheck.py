@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MocapError
+from ..tokens import listed, shown
 from .names import ARM_ROLES, LEG_ROLES
 
 # Each role's nearest role up its chain, in order of preference (the first mapped one).
@@ -45,13 +46,13 @@ def check_joint_map(skeleton, joints: dict[str, int], spine: tuple[int, ...]) ->
     names, parents = skeleton.names, skeleton.parents
 
     def called(role: str) -> str:
-        return f"{role.replace('_', ' ')} {names[joints[role]]!r}"
+        return f"{role.replace('_', ' ')} {shown(names[joints[role]])}"
 
     by_joint: dict[int, str] = {}
     for role, joint in joints.items():
         if joint in by_joint:
             raise _refused(
-                f"{names[joint]!r} plays two roles, {by_joint[joint]} and {role}; each role needs its own joint"
+                f"{shown(names[joint])} plays two roles, {by_joint[joint]} and {role}; each role needs its own joint"
             )
         by_joint[joint] = role
     above = {role: _ancestors(parents, joint) for role, joint in joints.items()}
@@ -65,7 +66,7 @@ def check_joint_map(skeleton, joints: dict[str, int], spine: tuple[int, ...]) ->
     _check_apart(joints, above, called)
     check_spine(skeleton, joints["hips"], spine)
     if spine and joints["chest"] not in spine:
-        raise _refused(f"the spine {[names[j] for j in spine]} does not reach the {called('chest')}")
+        raise _refused(f"the spine ({listed(names[j] for j in spine)}) does not reach the {called('chest')}")
 
 
 def check_spine(skeleton, hips: int, spine: tuple[int, ...]) -> None:
@@ -74,8 +75,10 @@ def check_spine(skeleton, hips: int, spine: tuple[int, ...]) -> None:
     for k, joint in enumerate(spine):
         below = spine[k - 1] if k else hips
         if below not in _ancestors(skeleton.parents, joint):
-            what = "the hips" if below == hips else repr(skeleton.names[below])
-            raise _refused(f"the spine's joint {skeleton.names[joint]!r} does not hang below {what} in the hierarchy")
+            what = "the hips" if below == hips else shown(skeleton.names[below])
+            raise _refused(
+                f"the spine's joint {shown(skeleton.names[joint])} does not hang below {what} in the hierarchy"
+            )
 
 
 def _ancestors(parents, joint: int) -> set[int]:
@@ -116,7 +119,7 @@ def check_posed_map(jmap, positions: np.ndarray) -> None:
     names = jmap.names
 
     def called(role: str) -> str:
-        return f"{role.replace('_', ' ')} {names[joints[role]]!r}"
+        return f"{role.replace('_', ' ')} {shown(names[joints[role]])}"
 
     def mostly(values: np.ndarray) -> bool:
         return bool(np.mean(values) > 0.5)
