@@ -195,3 +195,14 @@ def test_a_humanoid_with_a_toe_chain_of_1500_joints_is_mapped(walk, tmp_path, ca
     assert main(["skeleton", str(path)]) == 0
     out = capsys.readouterr().out
     assert "unmapped (1509): " in out and "... (1469 more)" in out  # a line of 40 names, not 1509
+
+
+def test_clips_of_no_frame_and_one_are_retargeted_without_a_word(walk):
+    """The per-clip readings (conventions, map checks, twists) of a clip with no frame read
+    nothing and warn of nothing (a median of no frames refused it as a body of no height)."""
+    from expressive_mocap.skeletons.canonical import many_onto_canonical
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = many_onto_canonical([walk, walk[:0], walk[:1]])
+    assert [motion.n_frames for motion, _ in out] == [walk.n_frames, 0, 1]

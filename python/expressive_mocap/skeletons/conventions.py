@@ -186,6 +186,8 @@ def up_and_facing(skeleton: Skeleton, jmap: JointMap, positions: np.ndarray) -> 
 def up_of(jmap: JointMap, positions: np.ndarray) -> tuple[str, float]:
     """``(up, how sure)``: the axis nearest the mean line from the feet to the head in the posed
     world positions ``[F, J, 3]``: the one thing of a motion's axes its frames must tell."""
+    if not len(positions):  # no frames: no telling (+X, sure 0, as ups_of reads such a clip)
+        return _nearest_axis(np.zeros(3))
     feet = 0.5 * (positions[:, jmap["left_foot"]] + positions[:, jmap["right_foot"]])
     return _nearest_axis(np.mean(positions[:, jmap["head"]] - feet, axis=0))
 

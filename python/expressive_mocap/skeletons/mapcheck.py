@@ -115,6 +115,8 @@ def check_posed_map(jmap, positions: np.ndarray) -> None:
     X): the feet on the head's side of the hips, the left upper arm on the right upper leg's
     side; and, when the map file gave a side's roles, the toes pointing backwards (left and right
     swapped whole)."""
+    if not len(positions):  # a clip of no frames shows nothing to check
+        return
     joints = jmap.joints
     names = jmap.names
 
@@ -162,7 +164,7 @@ def four_legged(jmap, positions: np.ndarray, up: np.ndarray) -> bool:
     ``up`` ``[3]``): its trunk (hips to chest) within 30 degrees of level and its hands as low as
     its feet (within a fifth of the leg's length)."""
     joints = jmap.joints
-    if not all(f"{side}_hand" in joints for side in ("left", "right")):
+    if not len(positions) or not all(f"{side}_hand" in joints for side in ("left", "right")):
         return False
     trunk = positions[:, joints["chest"]] - positions[:, joints["hips"]]
     level = np.abs(trunk @ up) < 0.5 * np.linalg.norm(trunk, axis=-1)

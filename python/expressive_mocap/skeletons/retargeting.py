@@ -116,13 +116,19 @@ def untrusted_twists_many(motions: list[Motion], rig: Rig, kinematics: list | No
         world = np.concatenate([k[0][f] for k, f in zip(kinematics, picked)])
         positions = np.concatenate([k[1][f] for k, f in zip(kinematics, picked)])
     # Each clip's frames as a row of a [clips, _TWIST_FRAMES] table, NaN past its own.
-    rows = np.repeat(np.arange(len(motions)), [len(f) for f in picked])
+    frames_of = np.array([len(f) for f in picked])
+    rows = np.repeat(np.arange(len(motions)), frames_of)
     columns = np.concatenate([np.arange(len(f)) for f in picked])
 
     def per_clip(values: np.ndarray) -> np.ndarray:
         table = np.full((len(motions), _TWIST_FRAMES), np.nan)
         table[rows, columns] = values
         return table
+
+    def median(table: np.ndarray) -> np.ndarray:  # NaN for a clip with no frame: never far
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return np.nanmedian(table, axis=1)
 
     turn = rig.conventions.rotation()
     world, points = _turned(turn, world), quat.rotate(turn, positions)
@@ -131,7 +137,7 @@ def untrusted_twists_many(motions: list[Motion], rig: Rig, kinematics: list | No
     for role, joint, from_frame in plan.framed:
         seen = quat.mul(quat.from_matrix(_orthonormal(*_frame_vectors(points, jmap, role, jmap))), from_frame)
         off = per_clip(quat.angle(quat.mul(seen, quat.conjugate(world[:, joint]))))
-        for k in np.flatnonzero(np.nanmedian(off, axis=1) > twist.TRUSTED_ELSE):
+        for k in np.flatnonzero(median(off) > twist.TRUSTED_ELSE):
             out[k].add(role)
     forward = twist.chest_forward(points, jmap)
     for role, joint, bone_axis, second_axis in plan.readable:
@@ -139,11 +145,8 @@ def untrusted_twists_many(motions: list[Motion], rig: Rig, kinematics: list | No
         second = quat.rotate(world[:, joint], second_axis)
         angles = np.abs(twist.twist_angles(bone, second, twist.facing(points, jmap, role, bone, forward)))
         telling = twist.telling(points, jmap, role)
-        share = np.nanmean(per_clip(telling.astype(float)), axis=1)
-        told = per_clip(np.where(telling, angles, np.nan))
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # a clip with no telling frame: NaN, not far
-            far = np.nanmedian(told, axis=1) > twist.trusted(role)
+        share = np.bincount(rows, weights=telling, minlength=len(motions)) / np.maximum(frames_of, 1)
+        far = median(per_clip(np.where(telling, angles, np.nan))) > twist.trusted(role)
         for k in np.flatnonzero((share > 0.1) & far):
             out[k].add(role)
     # A limb twisted arbitrarily at one joint is twisted back at the next: read the whole limb.
