@@ -22,7 +22,7 @@ import numpy as np
 
 from . import quat
 from .errors import ArgumentError, MocapError
-from .motion import Motion, Skeleton
+from .motion import Motion, Skeleton, spread_frames
 from .ops import forward_kinematics
 
 # Each hinge (the joint map's role of its middle joint) with its limb: upper, middle, end.
@@ -254,7 +254,7 @@ def hinge_limits_for(motions: Sequence[Motion]) -> HingeLimits:
         return canonical_hinge_limits()
     # The axes from evenly spread frames: a clip's hinges turn about the same lines throughout,
     # and an edit carried back to its skeleton should not cost a pass over every frame.
-    spread = [m[np.unique(np.linspace(0, m.n_frames - 1, min(m.n_frames, _AXIS_FRAMES)).astype(int))] for m in motions]
+    spread = [m[spread_frames(m.n_frames, _AXIS_FRAMES)] for m in motions]
     return learn_hinge_limits(spread, most=NEUTRAL_MOST)
 
 

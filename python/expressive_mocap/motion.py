@@ -232,6 +232,13 @@ class Skeleton:
             _not_finite(factor, "an offset", np.abs(lengths).max(initial=0.0))
         return Skeleton(self.names, self.parents, offsets, self.channels, sites)
 
+    @cached_property
+    def content_key(self) -> tuple:
+        """What tells this skeleton from another, by content (two files of one rig read alike,
+        where the skeletons themselves hash by identity): a key for the caches and groupings of
+        skeletons met across clips."""
+        return (self.names, self.parents.tobytes(), self.offsets.tobytes(), self.channels)
+
     def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
         """World positions of the joints ``[J, 3]`` and End Sites ``[E, 3]`` in the rest pose
         (identity rotations, offsets only); read-only arrays."""
@@ -425,6 +432,12 @@ class Motion:
         return Motion(self.skeleton.with_rotation_order(order), self.rotations, self.translations, self.frame_time)
 
 
+def spread_frames(n_frames: int, count: int) -> np.ndarray:
+    """At most ``count`` frame indices spread evenly over ``n_frames`` frames, first and last
+    included: what a reading over a clip's frames samples."""
+    return np.unique(np.linspace(0, n_frames - 1, min(n_frames, count)).astype(int))
+
+
 __all__ = [
     "AXES",
     "Motion",
@@ -437,4 +450,5 @@ __all__ = [
     "canonical_channels",
     "order_name",
     "rotation_order",
+    "spread_frames",
 ]

@@ -26,7 +26,7 @@ import numpy as np
 
 from .. import quat
 from ..errors import MocapError
-from ..motion import Motion, Skeleton
+from ..motion import Motion, Skeleton, spread_frames
 from .jointmap import JointMap
 from .mapcheck import check_posed_map, four_legged
 
@@ -35,7 +35,7 @@ TYPICAL_HEIGHT_M = 1.70
 # "cmu": the CMU database's own unit, 1/0.45 inch (its ASF files' "length 0.45").
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "cmu": 0.0254 / 0.45}
 AXES = {"+X": (1, 0, 0), "-X": (-1, 0, 0), "+Y": (0, 1, 0), "-Y": (0, -1, 0), "+Z": (0, 0, 1), "-Z": (0, 0, -1)}
-_SAMPLED_FRAMES = 240
+SAMPLED_FRAMES = 240  # frames of a motion its up axis and the map's posed checks are read from
 
 
 @dataclass(frozen=True)
@@ -214,7 +214,7 @@ def facing_of(skeleton: Skeleton, jmap: JointMap, up: str) -> tuple[str, float]:
     """``(facing, how sure)`` of ``skeleton`` whose up axis is ``up``: its rest pose's forward
     (:func:`body_axes`), turned upright, nearest axis across ``up``. The same for every motion of
     a skeleton: kept for the skeletons met last."""
-    key = (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), tuple(jmap.joints.items()), up)
+    key = (skeleton.content_key, tuple(jmap.joints.items()), up)
     if key not in _FACINGS:
         if len(_FACINGS) >= 64:
             _FACINGS.pop(next(iter(_FACINGS)))
@@ -237,8 +237,7 @@ def frame_rotation(up: str, facing: str) -> np.ndarray:
 def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
     """The conventions of ``motion`` (see the module's notes)."""
     skeleton = motion.skeleton
-    frames = np.unique(np.linspace(0, motion.n_frames - 1, min(motion.n_frames, _SAMPLED_FRAMES)).astype(int))
-    positions = motion[frames].positions()
+    positions = motion[spread_frames(motion.n_frames, SAMPLED_FRAMES)].positions()
     check_posed_map(jmap, positions)
     (up, up_sure), (facing, facing_sure) = up_and_facing(skeleton, jmap, positions)
     if four_legged(jmap, positions, np.array(AXES[up], dtype=np.float64)):
@@ -260,7 +259,7 @@ def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
 def _of_skeleton(skeleton: Skeleton, jmap: JointMap) -> tuple:
     """The conventions a skeleton alone tells: its actor's height, unit and rest pose, kept for the
     skeletons met last (an archive's clips share a few)."""
-    key = (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), tuple(jmap.joints.items()))
+    key = (skeleton.content_key, tuple(jmap.joints.items()))
     if key not in _SKELETONS:
         if len(_SKELETONS) >= 64:
             _SKELETONS.pop(next(iter(_SKELETONS)))
@@ -322,6 +321,7 @@ def _changed(motion: Motion, turn: np.ndarray, scale: float) -> Motion:
 
 __all__ = [
     "AXES",
+    "SAMPLED_FRAMES",
     "UNITS",
     "Conventions",
     "body_axes",

@@ -19,8 +19,8 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import ops, quat
-from ..motion import Motion, Skeleton
-from .conventions import facing_of, frame_rotation, ups_of
+from ..motion import Motion, Skeleton, spread_frames
+from .conventions import SAMPLED_FRAMES, facing_of, frame_rotation, ups_of
 from .jointmap import JointMap, find_joint_map
 from .names import label
 from .retargeting import Rig, _turned, reference_pose
@@ -76,7 +76,7 @@ def mirror_many(motions: list[Motion], user_map: dict | None = None, rig: Rig | 
         return _mirror_together(motions, _Plane(rig.skeleton, rig.jmap, rig.conventions.rotation()))
     groups: dict[tuple, tuple[_Plane, list[int]]] = {}
     for k, own in enumerate(_planes_of(motions, user_map)):
-        key = (own.skeleton.names, own.skeleton.offsets.tobytes(), own.turn.tobytes(), tuple(own.jmap.joints.items()))
+        key = (own.skeleton.content_key, own.turn.tobytes(), tuple(own.jmap.joints.items()))
         groups.setdefault(key, (own, []))[1].append(k)
     out: list = [None] * len(motions)
     for own, members in groups.values():
@@ -94,24 +94,18 @@ class _Plane(NamedTuple):
     turn: np.ndarray
 
 
-# Frames a clip's up axis is read from, evenly spread (as the conventions read it).
-_SAMPLED_FRAMES = 240
-
-
 def _planes_of(motions: list[Motion], user_map: dict | None = None) -> list[_Plane]:
     """The :class:`_Plane` of each motion, from that motion alone: its up axis from its frames
     (:func:`~.conventions.ups_of`), its facing from its skeleton (:func:`~.conventions.facing_of`);
     one forward kinematics call for the sampled frames of all the clips of one skeleton."""
     by_skeleton: dict[tuple, list[int]] = {}
     for k, motion in enumerate(motions):
-        skeleton = motion.skeleton
-        key = (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), skeleton.channels)
-        by_skeleton.setdefault(key, []).append(k)
+        by_skeleton.setdefault(motion.skeleton.content_key, []).append(k)
     out: list = [None] * len(motions)
     for members in by_skeleton.values():
         skeleton = motions[members[0]].skeleton
         jmap = find_joint_map(skeleton, user_map)
-        picked = [_sampled(motions[k]) for k in members]
+        picked = [spread_frames(motions[k].n_frames, SAMPLED_FRAMES) for k in members]
         _, positions = ops.forward_kinematics(
             np.concatenate([m.rotations[f] for m, f in zip((motions[k] for k in members), picked)]),
             np.concatenate([m.translations[f] for m, f in zip((motions[k] for k in members), picked)]),
@@ -122,11 +116,6 @@ def _planes_of(motions: list[Motion], user_map: dict | None = None) -> list[_Pla
             facing, _ = facing_of(skeleton, jmap, up)
             out[k] = _Plane(motions[k].skeleton, jmap, frame_rotation(up, facing))
     return out
-
-
-def _sampled(motion: Motion) -> np.ndarray:
-    """The frames of ``motion`` its up axis is read from: at most 240, evenly spread."""
-    return np.unique(np.linspace(0, motion.n_frames - 1, min(motion.n_frames, _SAMPLED_FRAMES)).astype(int))
 
 
 def _mirror_together(motions: list[Motion], rig: _Plane) -> list[Motion]:

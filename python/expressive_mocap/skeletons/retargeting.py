@@ -33,7 +33,7 @@ import numpy as np
 from .. import ops, quat
 from ..errors import MocapError
 from ..features import percentiles_by_clip
-from ..motion import Motion, Skeleton
+from ..motion import Motion, Skeleton, spread_frames
 from . import twist
 from .conventions import AXES, Conventions, read_conventions
 from .jointmap import JointMap, find_joint_map
@@ -104,7 +104,7 @@ def untrusted_twists_many(motions: list[Motion], rig: Rig, kinematics: list | No
     own frames alone, computed together: one forward kinematics call and one pass of the per-frame
     algebra over every clip's sampled frames, then each clip's medians (an archive's short clips
     took 11 ms each one by one)."""
-    picked = [np.unique(np.linspace(0, m.n_frames - 1, min(m.n_frames, _TWIST_FRAMES)).astype(int)) for m in motions]
+    picked = [spread_frames(m.n_frames, _TWIST_FRAMES) for m in motions]
     # A median over evenly spread frames: a clip's is as good.
     if kinematics is None:
         world, positions = ops.forward_kinematics(
@@ -478,7 +478,7 @@ _PLANS_KEPT = 64
 def _rig_key(rig: Rig) -> tuple:
     skeleton, jmap = rig.skeleton, rig.jmap
     turn = rig.conventions.rotation().tobytes()
-    return (skeleton.names, skeleton.parents.tobytes(), skeleton.offsets.tobytes(), turn, tuple(jmap.joints.items()))
+    return (skeleton.content_key, turn, tuple(jmap.joints.items()))
 
 
 def _plan(source: Rig, target: Rig) -> ops.TransferPlan:
