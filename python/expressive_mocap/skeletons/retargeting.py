@@ -25,7 +25,6 @@ in and out over 3 frames.
 
 from __future__ import annotations
 
-import warnings
 from typing import NamedTuple
 
 import numpy as np
@@ -125,10 +124,12 @@ def untrusted_twists_many(motions: list[Motion], rig: Rig, kinematics: list | No
         table[rows, columns] = values
         return table
 
-    def median(table: np.ndarray) -> np.ndarray:  # NaN for a clip with no frame: never far
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            return np.nanmedian(table, axis=1)
+    def median(table: np.ndarray) -> np.ndarray:
+        """Each row's median over its values (np.median's, bit for bit; NaN for a row of none:
+        never far). Sorted, not np.nanmedian: that one is 20x slower on small tables."""
+        counts = np.sum(~np.isnan(table), axis=1)
+        ordered, row = np.sort(table, axis=1), np.arange(len(table))  # NaN sorts last
+        return 0.5 * (ordered[row, np.maximum(counts - 1, 0) // 2] + ordered[row, counts // 2])
 
     turn = rig.conventions.rotation()
     world, points = _turned(turn, world), quat.rotate(turn, positions)

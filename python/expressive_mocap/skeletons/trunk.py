@@ -31,6 +31,10 @@ def keep_trunk(out: Motion, source_points: np.ndarray, source_jmap, target_jmap,
     either map lacks, is left as it is."""
     rotations = out.rotations.copy()
     parents = out.skeleton.parents
+    # One forward kinematics for both chains: the first keeps its end's (the chest's) world
+    # rotation, so everything above it only moves with it, and the second chain's own geometry
+    # (lines, world rotations) is as it was.
+    world, points = ops.forward_kinematics(rotations, out.translations, parents)
     for start_role, end_role in CHAINS:
         if not all(r in m for r in (start_role, end_role) for m in (source_jmap, target_jmap)):
             continue
@@ -39,7 +43,6 @@ def keep_trunk(out: Motion, source_points: np.ndarray, source_jmap, target_jmap,
         if base is None:
             continue
         wanted = quat.rotate(turn, source_points[:, source_jmap[end_role]] - source_points[:, source_jmap[start_role]])
-        world, points = ops.forward_kinematics(rotations, out.translations, parents)
         swing = _swing(points[:, start], points[:, base], points[:, end], wanted)
         parent = parents[base]
         rotations[:, base] = quat.mul(quat.conjugate(world[:, parent]), quat.mul(swing, world[:, base]))
