@@ -185,6 +185,13 @@ def test_heading_is_unwrapped_within_each_clip_only():
     assert np.all(np.abs(np.diff(out[:3])) < np.pi) and np.all(np.abs(np.diff(out[3:])) < np.pi)
     assert np.allclose(out[3:], np.unwrap(angles[3:]))
     assert np.array_equal(unwrap_by_clip(angles, np.array([0, 3, 7])), out)  # a clip of no frames last
+    # Bit for bit each clip's own, after a clip that turned many times (taking the whole turns
+    # back off a run's unwrap changed the last bits of a resumed run's yaw rate).
+    rng = np.random.default_rng(5)
+    spinning = np.angle(np.exp(1j * np.linspace(0.0, 40.0 * np.pi, 500)))
+    wobbling = np.angle(np.exp(1j * (np.pi + np.cumsum(rng.normal(0.0, 0.3, 300)))))
+    together = unwrap_by_clip(np.concatenate([spinning, wobbling]), np.array([0, 500]))
+    assert np.array_equal(together[500:], np.unwrap(wobbling))
 
 
 def test_a_clip_retargeted_with_others_is_retargeted_as_alone():
