@@ -2,10 +2,10 @@
 papers, and never sends its reader to material outside it (the team's planning notes, its
 internal tracker, the folder beside the checkout that holds them).
 
-Tests may read the Bandai-Namco archives from ``../shared/data`` and benchmark scripts may run
-its ``unpack`` script, so tests/ is not checked at all and benches/*.py only for the notes and
-the tracker. docs/data.md says once, in its section on how tests find the data, where the archives
-are looked for.
+Tests may read the Bandai-Namco archives from ``../shared/data`` and the scripts that measure
+(benchmarks, experiments, tools) may run its ``unpack`` script, so tests/ is not checked at all and
+the scripts (``*.py`` of ``SCRIPTS``) only for the notes and the tracker. docs/data.md says once,
+in its section on how tests find the data, where the archives are looked for.
 """
 
 from __future__ import annotations
@@ -33,6 +33,8 @@ SHARED = re.compile(r"\.\./shared\b")
 # Places outside tests/ and benches/*.py that may name it: (file, section heading) -> how many
 # times. None: docs/data.md describes where the tests look without naming the folder.
 SHARED_ALLOWED: dict[tuple[str, str], int] = {}
+# Folders of scripts that read the data, by default from the folder beside the checkout.
+SCRIPTS = ("benches/", "experiments/", "tools/")
 
 
 def tracked_text_files() -> dict[str, str]:
@@ -74,8 +76,8 @@ def test_the_folder_beside_the_checkout_is_named_only_where_the_docs_say_where_t
     seen: dict[tuple[str, str], int] = {}
     found = []
     for name, text in tracked_text_files().items():
-        if name.startswith("benches/") and name.endswith(".py"):
-            continue  # benchmark scripts read the data from there
+        if name.startswith(SCRIPTS) and name.endswith(".py"):
+            continue  # the scripts read the data from there
         for m in SHARED.finditer(text):
             place = (name, section_of(text, m.start()) if name.endswith(".md") else "")
             seen[place] = seen.get(place, 0) + 1
