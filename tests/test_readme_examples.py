@@ -46,6 +46,7 @@ PAGES = [
     "docs/safety.md",
     "docs/methods.md",
     "docs/data.md",
+    "docs/development.md",
 ]
 
 
