@@ -74,6 +74,36 @@ def readme_commands() -> list[str]:
     return [command for page in PAGES for command in page_commands(page)]
 
 
+def python_examples(page: str) -> list[str]:
+    """The ```python blocks of a page."""
+    return re.findall(r"```python\n(.*?)```", (REPO / page).read_text(), re.S)
+
+
+def test_the_readme_python_example_runs_and_prints_what_it_says(tmp_path, monkeypatch, capsys):
+    """The README's Python example, run as written on the demo's walk and wave (no data needed):
+    each `print(...)` prints what the comment on its line says (up to its colon), and the files it
+    writes read back as the demo's 121 frames, the wave's hand moved by the edits."""
+    [example] = python_examples("README.md")
+    assert 8 <= len([line for line in example.splitlines() if line.strip()]) <= 14, "about ten lines"
+    monkeypatch.chdir(tmp_path)
+    exec(compile(example, "README.md (Python example)", "exec"), {"__name__": "readme_example"})
+    prints = [line for line in example.splitlines() if line.startswith("print(")]
+    promised = [line.split("#", 1)[1].split(":")[0].strip() for line in prints]
+    assert capsys.readouterr().out.splitlines() == promised
+    from expressive_mocap.demo import walk_and_wave
+
+    walk, waving = walk_and_wave()
+    hand = waving.skeleton.index("Hand_R")
+    waving_hand = waving.positions()[:, hand]
+    for name, farther in (("wave150.bvh", True), ("no_wave.bvh", False)):
+        edited = em.read_bvh(tmp_path / name)
+        assert edited.n_frames == waving.n_frames == 121 and edited.skeleton.names == waving.skeleton.names
+        # 150%: the hand goes farther from the walk's than the wave takes it; 0%: back near the walk's.
+        off_walk = np.linalg.norm(edited.positions()[:, hand] - walk.positions()[:, hand], axis=1).mean()
+        wave_off_walk = np.linalg.norm(waving_hand - walk.positions()[:, hand], axis=1).mean()
+        assert (off_walk > wave_off_walk) if farther else (off_walk < 0.25 * wave_off_walk), (name, off_walk)
+
+
 def test_every_page_of_the_manual_is_run():
     pages = {"README.md"} | {f"docs/{p.name}" for p in (REPO / "docs").glob("*.md")}
     assert pages == set(PAGES), (
