@@ -1,9 +1,9 @@
 """Coverage-guided fuzzing (atheris, libFuzzer) of the whole BVH reader and of the model loaders.
 
     pip install -e .[fuzz]                                     # atheris
-    nice -n 19 python benches/fuzz_bvh.py bvh CORPUS_DIR -atheris_runs=1000000 -max_len=4096
-    python benches/fuzz_bvh.py bvh --compare CORPUS_DIR -atheris_runs=100000   # Rust and NumPy must agree
-    python benches/fuzz_bvh.py model CORPUS_DIR -atheris_runs=100000          # BodyModel and ExaggerationModel
+    nice -n 19 python tools/fuzz_bvh.py bvh CORPUS_DIR -atheris_runs=1000000 -max_len=4096
+    python tools/fuzz_bvh.py bvh --compare CORPUS_DIR -atheris_runs=100000   # Rust and NumPy must agree
+    python tools/fuzz_bvh.py model CORPUS_DIR -atheris_runs=100000          # BodyModel and ExaggerationModel
 
 Arguments after the target are libFuzzer's (``-atheris_runs``, ``-max_total_time``, ``-seed``,
 ``-timeout``, ``-rss_limit_mb``, corpus folders); an empty corpus folder is first filled with

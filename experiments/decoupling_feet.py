@@ -1,4 +1,4 @@
-"""Stance feet after the decoupling edits: python benches/decoupling_feet.py [--data DIR] [--figure]
+"""Stance feet after the decoupling edits: python experiments/decoupling_feet.py [--data DIR] [--figure]
 
 Every edit runs through the package (shipped body model, no calibration), is written to a BVH
 file and read back by this script's own parser and SciPy forward kinematics (never the
@@ -196,7 +196,7 @@ MODEL = BodyModel.load()
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--data", type=Path, default=DATA)
-    parser.add_argument("--figure", action="store_true", help="also draw benches/figures/feet_modulate.png")
+    parser.add_argument("--figure", action="store_true", help="also draw experiments/figures/feet_modulate.png")
     parser.add_argument("--out", type=Path, default=HERE / "FEET.md")
     args = parser.parse_args()
     start = time.time()
@@ -208,7 +208,7 @@ def main() -> None:
     header = [
         "# Stance feet after the decoupling edits",
         "",
-        "`python benches/decoupling_feet.py` (how it measures: its docstring). Stance-foot speed: mean horizontal",
+        "`python experiments/decoupling_feet.py` (how it measures: its docstring). Stance-foot speed: mean horizontal",
         "speed of the ankles and toes (cm/s) over the frames where the body-mechanics source has the foot down,",
         "measured with an independent BVH reader and SciPy forward kinematics. Ratio: edit / source, per edit.",
         "Fastest foot: the edit's largest ankle or toe speed over the source's (any frame), the largest of the set.",

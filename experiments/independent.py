@@ -1,8 +1,8 @@
-"""An independent BVH reader and forward kinematics for the benches' measurements: the hierarchy
+"""An independent BVH reader and forward kinematics for the experiments' measurements: the hierarchy
 parsed token by token, the MOTION numbers read with NumPy, rotation channels composed
 intrinsically in written order with SciPy (position channels replace the offset components they
 name), parent x child. Never the package's own reader, Euler kernels or FK, which are what the
-benches measure.
+experiments measure.
 
     from independent import read_fk
     fk = read_fk(path)   # fk.names, fk.rotations (a SciPy Rotation per joint), fk.positions [F, J, 3], fk.frame_time

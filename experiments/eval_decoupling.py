@@ -1,4 +1,4 @@
-"""Real-data evaluation of decoupling: python benches/eval_decoupling.py [--model M] [--data DIR]
+"""Real-data evaluation of decoupling: python experiments/eval_decoupling.py [--model M] [--data DIR]
 
 Mean activity per joint (0: body mechanics only, 1: fully expressive) for
 - dataset-2 neutral walks/runs of the model's TEST split (never trained on) vs dataset-2
@@ -6,7 +6,7 @@ Mean activity per joint (0: body mechanics only, 1: fully expressive) for
 - dataset-1, a capture session the model never saw: neutral `walk_normal`/`run_normal` vs
   `bye`/`byebye`/`call`/`guide`/`respond` gestures, without and with calibration on that
   session's neutral clips (calibration clips are kept out of the evaluated ones).
-Writes benches/DECOUPLING.md and pictures into benches/figures/.
+Writes experiments/DECOUPLING.md and pictures into experiments/figures/.
 
 Data: Bandai-Namco-Research-Motiondataset 1 and 2 (Bandai Namco Research Inc., 2022;
 Kobayashi et al., arXiv:2306.08861), CC BY-NC 4.0.
@@ -172,7 +172,7 @@ def main() -> None:
         "# Decoupling on real data",
         "",
         f"- date: {time.strftime('%Y-%m-%d %H:%M')}; model: "
-        f"{args.model or 'the shipped model'}; command: `python benches/eval_decoupling.py`",
+        f"{args.model or 'the shipped model'}; command: `python experiments/eval_decoupling.py`",
         "- data: Bandai-Namco-Research-Motiondataset 1 and 2 (Bandai Namco "
         "Research Inc., 2022; Kobayashi et al., arXiv:2306.08861), CC BY-NC 4.0.",
         "- mean activity index per joint (0: body mechanics only, 1: fully expressive); bold from 0.3 up.",

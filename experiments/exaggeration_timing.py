@@ -1,7 +1,7 @@
 """Timing as part of intensity, measured on real walks with independent code.
 
 Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0): the walks model of
-benches/exaggeration_experiment.py (takes 1-8 of `exhausted` < `normal` < `active` as people,
+experiments/exaggeration_experiment.py (takes 1-8 of `exhausted` < `normal` < `active` as people,
 intensities 1 < 2 < 3). Every held-out `normal` walk (takes 9-24, in no person) is exaggerated
 to `active` (k = 3, its current intensity estimated) with and without timing, written to BVH and
 read back here with a separate reader (NumPy text parsing, SciPy Euler rotations, own forward
@@ -10,9 +10,9 @@ between its first and last footstrike over the time between them), cadence (foot
 feet per second) and stance-foot speed (the ankles' mean horizontal speed while below a
 contact height) are compared with the real `active` takes 9-32 (held out too).
 
-Writes benches/EXAGGERATION_TIMING.md and benches/figures/exaggeration_timing.png. Run:
+Writes experiments/EXAGGERATION_TIMING.md and experiments/figures/exaggeration_timing.png. Run:
 
-    PYTHONPATH=python python benches/exaggeration_timing.py [DATA_DIR]
+    PYTHONPATH=python python experiments/exaggeration_timing.py [DATA_DIR]
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ class Clip:
 
 
 def read_clip(path: Path) -> Clip:
-    """Joint names and world positions of a BVH file (the benches' own reader and SciPy FK)."""
+    """Joint names and world positions of a BVH file (the experiments' own reader and SciPy FK)."""
     fk = read_fk(path)
     return Clip(fk.names, fk.positions, fk.frame_time)
 
@@ -153,7 +153,7 @@ def main() -> None:
         "files the package writes: speed = the hips' horizontal travel between the first and last footstrike over "
         "the time between them (cm/s); cadence = footstrikes of both feet per second; stance-foot speed = the "
         f"ankles' mean horizontal speed while below {CONTACT:.0%} of their height range (cm/s).",
-        "Produced by `PYTHONPATH=python python benches/exaggeration_timing.py`.",
+        "Produced by `PYTHONPATH=python python experiments/exaggeration_timing.py`.",
         "",
         "The model's timing at each trained level (the people's means, followed level to level): cycle "
         f"duration {' / '.join(f'{np.exp(v):.3f}' for v in model.timing_mappings[0])} s, travel per cycle "  # type: ignore[index]

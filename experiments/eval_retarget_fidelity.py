@@ -1,7 +1,7 @@
 """What a viewer sees of walks of other rigs retargeted onto the canonical (Bandai-Namco) body:
 stance feet, the trunk's lines, and a round trip's height.
 
-    python benches/eval_retarget_fidelity.py [--other DIR] [--data DIR]
+    python experiments/eval_retarget_fidelity.py [--other DIR] [--data DIR]
 
 For each walk of ``DIR`` (the shared folder of files on other rigs), retargeted with
 ``onto_canonical(plant_feet=False)``, through the source's own contacts:
@@ -11,6 +11,7 @@ For each walk of ``DIR`` (the shared folder of files on other rigs), retargeted 
   chest-to-head lines, each in its frame's heading frame;
 - the height of a round trip A -> Bandai -> A against A, in % of A's actor height.
 Positions by forward kinematics; every measure is computed here, not by the package's reports.
+Prints the table; the recorded runs, before and after, are in experiments/RETARGET_FIDELITY.md.
 Data: Bandai-Namco-Research-Motiondataset (CC BY-NC 4.0); CMU Graphics Lab Motion Capture
 Database; deep-motion-editing demo files (BSD-2).
 """

@@ -1,7 +1,7 @@
-"""Write the shipped model's card: python benches/model_card.py
+"""Write the shipped model's card: python tools/model_card.py
 
 Reads the model's own report and settings (python/expressive_mocap/data/body_model.npz) and
-the hidden-size sweep (benches/sweep_autoencoder.json, from sweep_autoencoder.py), and writes
+the hidden-size sweep (experiments/sweep_autoencoder.json, from experiments/sweep_autoencoder.py), and writes
 python/expressive_mocap/data/MODEL_CARD.md beside the model.
 """
 
@@ -12,8 +12,9 @@ from pathlib import Path
 
 from expressive_mocap.decoupling.body_model import BodyModel
 
-HERE = Path(__file__).resolve().parent
-CARD = HERE.parent / "python" / "expressive_mocap" / "data" / "MODEL_CARD.md"
+REPO = Path(__file__).resolve().parent.parent
+CARD = REPO / "python" / "expressive_mocap" / "data" / "MODEL_CARD.md"
+SWEEP = REPO / "experiments" / "sweep_autoencoder.json"  # written by experiments/sweep_autoencoder.py
 PAPER = {
     "autoencoder": "0.0131",
     "regression": "0.037",
@@ -47,7 +48,7 @@ def main() -> None:
         for key, label in stages
         if key in r
     )
-    sweep_file = HERE / "sweep_autoencoder.json"
+    sweep_file = SWEEP
     sweep = ""
     if sweep_file.exists():
         results = json.loads(sweep_file.read_text())
@@ -58,8 +59,9 @@ def main() -> None:
         )
         sweep = (
             "\n## Autoencoder size\n\nThe same neutral clips and split, each autoencoder trained on the neutral "
-            "training clips only (`python benches/sweep_autoencoder.py`; the shipped one also learned 40,000 frames "
-            "of every kind of clip, which costs it some accuracy on neutral poses: 1.33e-4 against 0.94e-4):\n\n| "
+            "training clips only (`python experiments/sweep_autoencoder.py`; the shipped one also learned "
+            "40,000 frames of every kind of clip, which costs it some accuracy on neutral poses: 1.33e-4 against "
+            "0.94e-4):\n\n| "
             "hidden units | train MSE | test MSE | test variance explained | paper (CMU) |\n|---|---|---|---|---|\n"
             + sweep
             + "\n"
@@ -120,11 +122,11 @@ already scores {r["mean_pose"]["test_mse"]:.3g}.
 ```
 (the `{{...}}` is the shell's brace expansion: the four neutral contents in that order, each sorted;
 the split depends on that order and on `--seed 0`). The model was trained before `train` stored
-the feature range: `python benches/shipped_feature_range.py` added it, from the same clips and
-split. Then `python benches/sweep_autoencoder.py`, `python benches/model_card.py` (this card),
-`python benches/eval_decoupling.py` (activity on real clips, benches/DECOUPLING.md) and
-`python benches/decoupling_sessions.py --held-out --out SESSIONS.md` (another session, and the
-idle arm of one-hand gestures: benches/SESSIONS.md).
+the feature range: `python tools/shipped_feature_range.py` added it, from the same clips and
+split. Then `python experiments/sweep_autoencoder.py`, `python tools/model_card.py` (this card),
+`python experiments/eval_decoupling.py` (activity on real clips, experiments/DECOUPLING.md) and
+`python experiments/decoupling_sessions.py --held-out --out SESSIONS.md` (another session, and the
+idle arm of one-hand gestures: experiments/SESSIONS.md).
 """
     CARD.write_text(card)
     print(card)

@@ -5,9 +5,9 @@ The dataset has no actor label, so takes stand in for people: "person" p (p = 1.
 each style (walk_exhausted_00p, walk_normal_00p, walk_active_00p). A held-out 'normal' walk (take
 12, in no person) is exaggerated beyond 'active' and diminished below 'exhausted'.
 
-Writes benches/EXAGGERATION.md and benches/figures/exaggeration_*.png. Run:
+Writes experiments/EXAGGERATION.md and experiments/figures/exaggeration_*.png. Run:
 
-    PYTHONPATH=python python benches/exaggeration_experiment.py [DATA_DIR]
+    PYTHONPATH=python python experiments/exaggeration_experiment.py [DATA_DIR]
 """
 
 from __future__ import annotations
@@ -102,13 +102,13 @@ def elbow_flexion(motion: em.Motion) -> np.ndarray:
 
 def readings_checked(people, default) -> list[str]:
     """The subsection on the readings of the paper measured as alternatives
-    (benches/exaggeration_variants.py), the cycles taken, and the union's pivotal DOFs."""
+    (experiments/exaggeration_variants.py), the cycles taken, and the union's pivotal DOFs."""
     import exaggeration_variants as variants
 
     lines = [
         "### Readings checked against the paper",
         "",
-        "Each row reads one step differently (`benches/exaggeration_variants.py` patches that one "
+        "Each row reads one step differently (`experiments/exaggeration_variants.py` patches that one "
         "piece; the package is unchanged) and reruns the whole validation. Per person: share of DOFs "
         "swapped and ratio (random / best same-size in brackets); union: DOFs swapped, ratio over DOFs "
         "and over joint positions; warp: leave-one-person-out mean over DOFs (positions). Each is "
@@ -226,7 +226,7 @@ def main() -> None:
         "where a row says otherwise, and except one choice: every cycle of a clip is used (its "
         "mean is the performance, predictability is measured over every cycle; `cycle = all`), "
         "where the paper takes one (`cycle = middle`, measured beside it throughout).",
-        "Produced by `PYTHONPATH=python python benches/exaggeration_experiment.py`.",
+        "Produced by `PYTHONPATH=python python experiments/exaggeration_experiment.py`.",
         "",
     ]
     models = {}

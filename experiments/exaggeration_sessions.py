@@ -12,7 +12,7 @@ markdown:
    with the package's forward kinematics);
 3. the same measures on the real walks of both sessions at each intensity.
 
-    PYTHONPATH=python python benches/exaggeration_sessions.py [--development] [--write benches/SESSIONS.md]
+    PYTHONPATH=python python experiments/exaggeration_sessions.py [--development] [--write experiments/SESSIONS.md]
 
 ``--development`` leaves out dataset-1's forward walks (``dataset-1_walk_{style}_001.bvh``), the
 clips the method was not tuned on (walk-left, walk-right and walk-back were used).
@@ -76,7 +76,7 @@ def clip(content: str, style: str) -> em.Motion:
 
 
 def world_positions(motion: em.Motion) -> np.ndarray:
-    """``[F, J, 3]``: the motion written as BVH and read back by the benches' own reader and
+    """``[F, J, 3]``: the motion written as BVH and read back by the experiments' own reader and
     SciPy FK (:mod:`independent`)."""
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "motion.bvh"
@@ -242,8 +242,8 @@ def main() -> None:
         "",
         "Model: Bandai-Namco-Research-Motiondataset-2 walks (CC BY-NC 4.0), exhausted / normal / active = 1 / 2 / 3,",
         "takes 1-8 as people; applied to Bandai-Namco-Research-Motiondataset-1 clips (another session and actor,",
-        "CC BY-NC 4.0). Produced by `PYTHONPATH=python python benches/exaggeration_sessions.py --write",
-        "benches/EXAGGERATION_SESSIONS.md`. Tuned on",
+        "CC BY-NC 4.0). Produced by `PYTHONPATH=python python experiments/exaggeration_sessions.py --write",
+        "experiments/EXAGGERATION_SESSIONS.md`. Tuned on",
         "walk-left, walk-right, walk-back; the forward walks (`walk`) were measured only at the end.",
         "",
         "## Estimated current intensity (k +- uncertainty (r fit residual); (!) a warning)",

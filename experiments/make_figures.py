@@ -1,4 +1,4 @@
-"""Redraw the README's pictures: python benches/make_figures.py [--data DIR]
+"""Redraw the README's pictures: python experiments/make_figures.py [--data DIR]
 
 The real-clip pictures use the Bandai-Namco-Research-Motiondataset (CC BY-NC 4.0), unpacked
 from ../shared/data with its `unpack` script when --data is not given.

@@ -1,4 +1,4 @@
-"""Give the shipped model its feature range: python benches/shipped_feature_range.py [--data DIR]
+"""Give the shipped model its feature range: python tools/shipped_feature_range.py [--data DIR]
 
 `train` stores the range of features a body model trusts its network with (the lowest and
 highest of its training clips' features; inputs are clipped into it). The shipped model was trained

@@ -1,11 +1,11 @@
 """An experiment on the idle-arm leak: the body-mechanics network trained with standing clips too.
 
-    python benches/standing_neutral.py --write-clips DIR
-    python benches/standing_neutral.py --model NAME=FILE [--model NAME=FILE ...] [--out STANDING.md]
+    python experiments/standing_neutral.py --write-clips DIR
+    python experiments/standing_neutral.py --model NAME=FILE [--model NAME=FILE ...] [--out STANDING.md]
 
 The shipped network learned its neutral poses from locomotion only, where moving hips come with
 swinging arms; in energetic one-hand gestures the hips move with each wave, and the network
-predicts the idle arm moving more than the actor's does (benches/SESSIONS.md). Dataset-2 has no
+predicts the idle arm moving more than the actor's does (experiments/SESSIONS.md). Dataset-2 has no
 neutral standing clip, so ``--write-clips`` makes some: each normal-style one-hand gesture of the
 training side of the 70/30 split by clip (seed 0; the held-out side is what decoupling_sessions.py
 measures), its gesturing arm (shoulder to hand) replaced by the mirror image of its idle arm, so
@@ -105,7 +105,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write-clips", type=Path, metavar="DIR", help="write the standing clips into DIR")
     parser.add_argument("--model", action="append", default=[], metavar="NAME=FILE", help="a model file to measure")
-    parser.add_argument("--out", help="markdown file written into benches/ (default: print only)")
+    parser.add_argument("--out", help="markdown file written into experiments/ (default: print only)")
     args = parser.parse_args()
     if args.write_clips:
         print(f"{write_clips(args.write_clips)} standing clips written into {args.write_clips}")
@@ -118,7 +118,7 @@ def main() -> None:
         [
             "# Experiment: the body-mechanics network trained with standing clips too",
             "",
-            f"- date: {time.strftime('%Y-%m-%d %H:%M')}; command: `python benches/standing_neutral.py "
+            f"- date: {time.strftime('%Y-%m-%d %H:%M')}; command: `python experiments/standing_neutral.py "
             + " ".join(f"--model {shlex.quote(m)}" for m in args.model)
             + "` (how the clips and models were made: its docstring)",
             "- data: Bandai-Namco-Research-Motiondataset 1 and 2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0",

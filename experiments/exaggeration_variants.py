@@ -1,11 +1,11 @@
 """Readings of the paper (Davis & Kannappan) that the defaults could have taken differently, each
 measured with the full validation table on the Bandai-Namco dataset-2 walks (CC BY-NC 4.0;
-the same people and intensities as benches/exaggeration_experiment.py). Prints one line per
-variant and cycle choice; benches/exaggeration_experiment.py writes the same measurements into
-benches/EXAGGERATION.md ("Readings checked against the paper").
+the same people and intensities as experiments/exaggeration_experiment.py). Prints one line per
+variant and cycle choice; experiments/exaggeration_experiment.py writes the same measurements into
+experiments/EXAGGERATION.md ("Readings checked against the paper").
 
-    PYTHONPATH=python python benches/exaggeration_variants.py [DATA_DIR] [VARIANT ...]
-    PYTHONPATH=python python benches/exaggeration_variants.py [DATA_DIR] --cycles all middle 0 -2
+    PYTHONPATH=python python experiments/exaggeration_variants.py [DATA_DIR] [VARIANT ...]
+    PYTHONPATH=python python experiments/exaggeration_variants.py [DATA_DIR] --cycles all middle 0 -2
 
 Each variant swaps one piece of the module for the alternative reading (monkeypatched here, the
 package is unchanged) and runs train, swap_test, leave_one_out and rank_agreement as the

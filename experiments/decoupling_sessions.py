@@ -1,5 +1,5 @@
 """Expressive hand motion across capture sessions and onto the idle arm:
-python benches/decoupling_sessions.py [--data DIR] [--out NAME.md] [--held-out]
+python experiments/decoupling_sessions.py [--data DIR] [--out NAME.md] [--held-out]
 
 "Hand motion" of a clip = mean over frames of the world distance between a joint's position at
 modulation 0 (body mechanics only) and 1 (the original), positions from an independent SciPy
@@ -278,7 +278,7 @@ def idle_figure(data2: Path, model: BodyModel) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", help="folder holding Bandai-Namco-Research-Motiondataset-{1,2}")
-    parser.add_argument("--out", help="markdown file written into benches/ (default: print only)")
+    parser.add_argument("--out", help="markdown file written into experiments/ (default: print only)")
     parser.add_argument("--held-out", action="store_true", help="also measure dataset-1's forward walks")
     args = parser.parse_args()
     started = time.time()
@@ -302,7 +302,7 @@ def main() -> None:
         one += [f"### {label}", "", *lines]
         lines, _ = session_two(data2, model)
         two += [f"### {label}", "", *lines]
-    command = f"python benches/decoupling_sessions.py{' --held-out' if args.held_out else ''}"
+    command = f"python experiments/decoupling_sessions.py{' --held-out' if args.held_out else ''}"
     report = [
         "# Expressive hand motion across sessions and onto the idle arm",
         "",

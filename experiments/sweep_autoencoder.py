@@ -1,5 +1,5 @@
 """Autoencoder MSE against hidden size (the paper's 300/150/50/15) on the shipped model's data:
-python benches/sweep_autoencoder.py [--data DIR] [--max-iter N]
+python experiments/sweep_autoencoder.py [--data DIR] [--max-iter N]
 
 Poses of the dataset-2 neutral locomotion clips (the shipped model's training set, its
 representation and its 70/30 split by clip). Data: Bandai-Namco-Research-Motiondataset-2,

@@ -1,4 +1,4 @@
-"""The methods on real files of other skeletons and sources: python benches/eval_other_sources.py
+"""The methods on real files of other skeletons and sources: python experiments/eval_other_sources.py
 
 Runs the commands a user would, with no map file, on the CMU clip (subject 131 via bvh11, 31
 joints, 120 fps) and the four Xia-style walks (deep-motion-editing's style-transfer results, 31
@@ -14,7 +14,7 @@ no neutral walk):
 - `mix` of a dataset-2 left-hand wave onto a Xia-style walk and onto the CMU clip: how high the
   left hand rises, and pictures.
 
-Writes benches/OTHER_SOURCES.md and benches/figures/other_*.png. Data: Bandai-Namco-Research-
+Writes experiments/OTHER_SOURCES.md and experiments/figures/other_*.png. Data: Bandai-Namco-Research-
 Motiondataset 2 (CC BY-NC 4.0); CMU Graphics Lab Motion Capture Database (via bvh11, MIT);
 deep-motion-editing demo files (BSD-2).
 """
@@ -56,7 +56,7 @@ def run(*argv: str) -> str:
 
 
 def world_positions(path: Path) -> tuple[np.ndarray, list[str]]:
-    """World joint positions ``[F, J, 3]`` and joint names of a BVH file, by the benches' own
+    """World joint positions ``[F, J, 3]`` and joint names of a BVH file, by the experiments' own
     reader and SciPy FK (:mod:`independent`)."""
     fk = read_fk(path)
     return fk.positions, fk.names
@@ -127,7 +127,7 @@ def main() -> None:
     d2, other = Path(args.data) / "Bandai-Namco-Research-Motiondataset-2" / "data", Path(args.other)
     start = time.perf_counter()
     lines = ["# The methods on real files of other skeletons and sources", ""]
-    lines.append(f"- date: {time.strftime('%Y-%m-%d %H:%M')}; command: `python benches/eval_other_sources.py`")
+    lines.append(f"- date: {time.strftime('%Y-%m-%d %H:%M')}; command: `python experiments/eval_other_sources.py`")
     lines.append(
         "- data: CMU Graphics Lab Motion Capture Database, subject 131 (via bvh11, MIT); deep-motion-editing "
         "style-transfer demo results (BSD-2); Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0). No map file."

@@ -1,12 +1,12 @@
 """How much neutral locomotion a useful body-mechanics model needs: test MSE against the number of
-training clips. python benches/neutral_data_needed.py [--max-iter N] [--sizes 2,4,...]
+training clips. python experiments/neutral_data_needed.py [--max-iter N] [--sizes 2,4,...]
 
 Dataset-2's 145 neutral locomotion clips (walk, walk-turn-left/right, run; style normal) are split
 once by clip (seed 0, 30% of the frames held out); models are trained with
 `train_body_model` (its own 70/30 split inside the clips given, no unlabelled clips) on the first n of
 the remaining clips, shuffled with a fixed seed, and every model is scored on the same held-out
 clips: pose MSE of the network and of the mean training pose (the baseline a model must beat).
-Writes benches/NEUTRAL_DATA.md. Data: Bandai-Namco-Research-Motiondataset-2, CC BY-NC 4.0.
+Writes experiments/NEUTRAL_DATA.md. Data: Bandai-Namco-Research-Motiondataset-2, CC BY-NC 4.0.
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def main() -> None:
     lines = [
         "# How much neutral data a body-mechanics model needs",
         "",
-        f"`python benches/neutral_data_needed.py --max-iter {args.max_iter} --sizes {args.sizes}`"
+        f"`python experiments/neutral_data_needed.py --max-iter {args.max_iter} --sizes {args.sizes}`"
         f" ({time.strftime('%Y-%m-%d')}). Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0),",
         f"its {len(paths)} neutral locomotion clips; {len(test)} held "
         "out (30% of the frames by clip, seed 0), models trained",
