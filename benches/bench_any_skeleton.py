@@ -7,9 +7,12 @@ Xia-style file's (31 joints), then, in one run, rounds alternating:
   command does it: on the model's skeleton directly, or through the canonical body
   (``Carried``: retarget onto it, the model, the edit carried back);
 - `exaggerate` to 3 with a model ranked on dataset-2's walks, foot locking on.
-Medians of the rounds; Rust kernels. Writes the section "Models on other skeletons" of
-benches/RESULTS.md. Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0); CMU Graphics Lab
-Motion Capture Database (via bvh11); deep-motion-editing demo files (BSD-2).
+Medians of the rounds; Rust kernels. Each edit's output is checked first (benches/harness.py; a
+failed check raises): the input's joints and frames (exaggeration retimes: some frames), finite
+values, unit rotations. Writes the section "Models on other skeletons" of benches/RESULTS.md
+(``--out``: another file).
+Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0); CMU Graphics Lab Motion Capture
+Database (via bvh11); deep-motion-editing demo files (BSD-2).
 """
 
 from __future__ import annotations
@@ -27,7 +30,8 @@ from expressive_mocap.decoupling import BodyModel, decompose
 from expressive_mocap.exaggeration import exaggerate, train
 from expressive_mocap.skeletons import retarget
 from expressive_mocap.skeletons.canonical import carried_for
-from results import write_section
+from harness import check, check_close, check_equal, median, timed
+from results import RESULTS, write_section
 
 HERE = Path(__file__).resolve().parent
 FRAMES = 1000
@@ -50,11 +54,25 @@ def through(model, motion: em.Motion, edit):
     return carried.back(edit(carried.body))
 
 
+def check_edit(edited: em.Motion, motion: em.Motion, what: str, retimed: bool) -> None:
+    """An edit of ``motion``: its joints, its frames (some frames when the edit changes the timing),
+    finite values, unit rotations."""
+    check_equal(edited.skeleton.names, motion.skeleton.names, f"{what}: joints")
+    if retimed:
+        check(edited.n_frames > 0, f"{what}: no frames")
+    else:
+        check_equal(edited.n_frames, motion.n_frames, f"{what}: frames")
+    check(np.isfinite(edited.translations).all(), f"{what}: translations not finite")
+    norms = np.linalg.norm(edited.rotations, axis=-1)
+    check_close(norms, np.ones_like(norms), f"{what}: rotation norms", atol=1e-9)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=str(Path.home() / ".cache" / "motion-data" / "dataset"))
     parser.add_argument("--other", default=str(HERE.parent.parent / "shared" / "data" / "other"))
     parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument("--out", type=Path, default=RESULTS, help="write the section into this file")
     args = parser.parse_args()
     warnings.simplefilter("ignore")  # estimates outside the trained range: not what is timed
     d2, other = Path(args.data) / "Bandai-Namco-Research-Motiondataset-2" / "data", Path(args.other)
@@ -76,15 +94,14 @@ def main() -> None:
     }
     times: dict = {(job, name): [] for job in jobs for name in motions}
     with em.use_backend("rust"):
-        for model, edit in jobs.values():
-            for motion in motions.values():
-                through(model, motion, edit)  # warm: plans, caches
+        for job, (model, edit) in jobs.items():
+            for name, motion in motions.items():
+                # Also the warm-up (plans, caches). Exaggeration changes the timing too: other frame counts.
+                check_edit(through(model, motion, edit), motion, f"{job}, {name}", job.startswith("exaggerate"))
         for _ in range(args.rounds):
             for job, (model, edit) in jobs.items():
                 for name, motion in motions.items():
-                    start = time.perf_counter()
-                    through(model, motion, edit)
-                    times[job, name].append(time.perf_counter() - start)
+                    times[job, name].append(timed(through, model, motion, edit)[0])
     lines = [
         f"`python benches/bench_any_skeleton.py --rounds {args.rounds}` on {time.strftime('%Y-%m-%d')}, "
         f"{platform.machine()}, Python {platform.python_version()}, Rust kernels; median of {args.rounds} "
@@ -96,9 +113,9 @@ def main() -> None:
         "|---|---|---|---|",
     ]
     for job in jobs:
-        base = np.median(times[job, next(iter(motions))])
+        base = median(times[job, next(iter(motions))])
         for name in motions:
-            t = np.median(times[job, name])
+            t = median(times[job, name])
             lines.append(f"| {job} | {name} | {1000 * t:.1f} | {t / base:.2f}x |")
     lines += [
         "",
@@ -106,7 +123,7 @@ def main() -> None:
     ]
     text = "\n".join(lines)
     print(text)
-    write_section("Models on other skeletons", text)
+    write_section("Models on other skeletons", text, args.out)
 
 
 if __name__ == "__main__":

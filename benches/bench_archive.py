@@ -15,6 +15,12 @@ Measures, in one run (machines here drift by +-30 %, so only ratios taken in the
 5. a table on stdout and its own section of ``benches/RESULTS.md`` (the others kept), with the
    targets marked pass / fail.
 
+Checked before any time is reported (benches/harness.py; a failed check raises): every clip read,
+the per-file loop equal to ``read_bvh_many``, the NumPy twin's rotations within 1e-12 and
+translations within 1e-9 of Rust's, FK positions of every backend and API within 1e-9 (file units)
+and rotations within 1e-12 of Rust's ``m.fk()``, the SciPy reference's positions within 1e-9 on the
+spot-check clips, and every child run of ours holding every joint-frame.
+
 Data: Bandai-Namco-Research-Motiondataset (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 The repository never contains it (see docs/data.md): ``--data DIR``, else the ``unpack``
 script of ``../shared/data`` next to the checkout.
@@ -37,14 +43,29 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 import expressive_mocap as em
+from harness import (
+    check,
+    check_close,
+    check_equal,
+    clock,
+    commit,
+    cpu_name,
+    log,
+    median,
+    memory_gib,
+    peak_rss,
+    ratio_median,
+    rotated,
+    timed,
+)
 from results import write_section  # benches/results.py: this script rewrites only its own section
 
 REPO = Path(__file__).resolve().parent.parent
@@ -58,11 +79,9 @@ CITATION = (
 PEERS = ("pymotion", "bvhio", "pybvh")
 PEER_LABEL = {"pymotion": "upc-pymotion 0.3.4", "bvhio": "bvhio 1.5.4", "pybvh": "pybvh 0.9.0"}
 MB = 1e6
-
-
-def log(message: str) -> None:
-    # Progress goes to stderr so a child's stdout stays one JSON line.
-    print(message, file=sys.stderr, flush=True)
+# Rust against the NumPy twin and the SciPy reference (file units: cm): measured 4.4e-16 on the
+# rotations, 0 on the translations and 1.7e-13 on the FK positions over the whole archive.
+ROTATION_TOL, POSITION_TOL = 1e-12, 1e-9
 
 
 def progress(items, desc: str):
@@ -89,25 +108,14 @@ def find_data(folder: str | None) -> Path:
 
 
 def machine() -> dict:
-    cpu = next(
-        (line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")),
-        platform.processor(),
-    )
-    mem_kb = next(int(line.split()[1]) for line in open("/proc/meminfo") if line.startswith("MemTotal"))
-    try:
-        commit = subprocess.run(
-            ["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True
-        ).stdout.strip()
-    except OSError:
-        commit = "?"
     return {
-        "cpu": cpu,
+        "cpu": cpu_name(),
         "cores": os.cpu_count(),
-        "ram_gib": mem_kb / 2**20,
+        "ram_gib": memory_gib(),
         "python": platform.python_version(),
         "numpy": np.__version__,
         "package": (
-            f"expressive-mocap {em.__version__} ({commit}), Rust "
+            f"expressive-mocap {em.__version__} ({commit(REPO)}), Rust "
             f"threads: {getattr(em.backend._core, 'num_threads', '?')}"
         ),
     }
@@ -126,14 +134,6 @@ def package_fingerprint() -> str:
 
 
 # ----------------------------------------------------------------------------- our measurements
-
-
-def timed(fn, *args):
-    """(seconds, result) of one call; collect garbage first so one stage's litter is not billed to the next."""
-    gc.collect()
-    start = time.perf_counter()
-    result = fn(*args)
-    return time.perf_counter() - start, result
 
 
 def read_bytes(paths):
@@ -199,11 +199,11 @@ def reader_breakdown(paths) -> tuple[list, str]:
             stack = local.__dict__.setdefault("stack", [])
             key = (label, stack[-1] if stack else None)
             stack.append(label)
-            t0 = time.perf_counter()
+            t0 = clock()
             try:
                 return fn(*a, **kw)
             finally:
-                spent[key] = spent.get(key, 0.0) + time.perf_counter() - t0
+                spent[key] = spent.get(key, 0.0) + clock() - t0
                 stack.pop()
 
         return timed_fn
@@ -213,7 +213,7 @@ def reader_breakdown(paths) -> tuple[list, str]:
     try:
         for owner, name, fn in saved:
             setattr(owner, name, wrap(fn, labels[name]))
-        total, _ = timed(read_rust_many, paths)
+        total, _ = timed(read_rust_many, paths, collect=True)
     finally:
         for owner, name, fn in saved:
             setattr(owner, name, fn)
@@ -246,10 +246,12 @@ def reader_breakdown(paths) -> tuple[list, str]:
             from concurrent.futures import ThreadPoolExecutor
 
             with em.use_backend("rust"):
-                fused, _ = timed(core.read_motion_blocks, captured[fused_label][0])
+                fused, _ = timed(core.read_motion_blocks, captured[fused_label][0], collect=True)
                 # One block a call; the kernel releases the GIL, so the threads run in parallel.
                 with ThreadPoolExecutor(core.num_threads) as pool:
-                    parse_only, _ = timed(lambda: list(pool.map(lambda b: core.parse_motion_block(*b), blocks)))
+                    parse_only, _ = timed(
+                        lambda: list(pool.map(lambda b: core.parse_motion_block(*b), blocks)), collect=True
+                    )
             size = sum(len(b[0]) - b[1] for b in blocks)
             rows.append(
                 (
@@ -351,13 +353,6 @@ def convert_for_pybvh(paths, folder: Path) -> list:
 # ----------------------------------------------------------------------------- child processes
 
 
-def peak_rss() -> int:
-    """This process's RSS high-water mark in bytes (VmHWM). Not ``ru_maxrss``: on Linux that
-    survives exec, so a child would report the (large) parent's peak from before the exec."""
-    with open("/proc/self/status") as status:
-        return next(int(line.split()[1]) * 1024 for line in status if line.startswith("VmHWM:"))
-
-
 def child_main(kind: str, paths_file: str) -> None:
     """One end-to-end run (read every clip, then FK of every clip) in a fresh process, so its
     RSS high-water mark belongs to that run alone. Prints one JSON line."""
@@ -372,10 +367,10 @@ def child_main(kind: str, paths_file: str) -> None:
     result: dict = {"kind": kind}
     if kind in ("rust", "numpy", "rust-read"):
         backend = "numpy" if kind == "numpy" else "rust"
-        r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+        r0, t0 = resource.getrusage(resource.RUSAGE_SELF), clock()
         with em.use_backend(backend):
             motions = em.read_bvh_many(progress(paths, f"{kind}: read"))
-        r1, t1 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+        r1, t1 = resource.getrusage(resource.RUSAGE_SELF), clock()
         # CPU and page faults of a first read in a fresh process: all its memory is new.
         result.update(
             read_user_s=r1.ru_utime - r0.ru_utime,
@@ -383,7 +378,7 @@ def child_main(kind: str, paths_file: str) -> None:
             read_minflt=r1.ru_minflt - r0.ru_minflt,
         )
         fk = [] if kind == "rust-read" else fk_many(motions, backend) if HAS_FK_MANY else fk_all(motions, backend)
-        t2 = time.perf_counter()
+        t2 = clock()
         result.update(read_s=t1 - t0, fk_s=t2 - t1, kept="motions and FK outputs" if fk else "motions")
         result["joint_frames"] = sum(m.n_frames * m.skeleton.n_joints for m in motions)
     else:
@@ -392,11 +387,11 @@ def child_main(kind: str, paths_file: str) -> None:
         read_s = fk_s = 0.0
         kept = []
         for p in progress(paths, f"{kind}"):
-            t0 = time.perf_counter()
+            t0 = clock()
             loaded = peer_read(kind, p)
-            t1 = time.perf_counter()
+            t1 = clock()
             kept.append(peer_positions(kind, loaded, names))
-            t2 = time.perf_counter()
+            t2 = clock()
             read_s += t1 - t0
             fk_s += t2 - t1
             del loaded
@@ -426,8 +421,27 @@ def run_child(kind: str, paths_file: str) -> dict | None:
 # ----------------------------------------------------------------------------- measurements
 
 
+def same_motions(motions, reference, what: str, exact: bool = False) -> None:
+    """``motions`` hold the clips of ``reference`` (Rust ``read_bvh_many``): the same count, joints
+    and frames, rotations and translations equal (``exact``) or within the tolerances."""
+    check_equal(len(motions), len(reference), f"{what}: clips read")
+    rot_tol, pos_tol = (0.0, 0.0) if exact else (ROTATION_TOL, POSITION_TOL)
+    for k, (m, ref) in enumerate(zip(motions, reference)):
+        check_close(m.rotations, ref.rotations, f"{what}: rotations of clip {k}", atol=rot_tol)
+        check_close(m.translations, ref.translations, f"{what}: translations of clip {k}", atol=pos_tol)
+
+
+def same_fk(outputs, reference, what: str) -> None:
+    """FK ``outputs`` (world rotations, positions per clip) within the tolerances of ``reference``."""
+    check_equal(len(outputs), len(reference), f"{what}: clips")
+    for k, ((rot, pos), (ref_rot, ref_pos)) in enumerate(zip(outputs, reference)):
+        check_close(rot, ref_rot, f"{what}: world rotations of clip {k}", atol=ROTATION_TOL)
+        check_close(pos, ref_pos, f"{what}: world positions of clip {k}", atol=POSITION_TOL)
+
+
 def measure_read_and_fk(paths, rounds: int) -> tuple[dict, list]:
-    """Rounds of read and FK, the implementations' order rotated each round (drift hits all)."""
+    """Rounds of read and FK, the implementations' order rotated each round (drift hits all). In
+    the first round every output is checked against Rust's (``read_bvh_many``, ``m.fk()``)."""
     times: dict[str, list] = {
         k: []
         for k in (
@@ -443,27 +457,34 @@ def measure_read_and_fk(paths, rounds: int) -> tuple[dict, list]:
     }
     motions = None
     for r in range(rounds):
-        order = ["floor", "rust_many", "rust_loop", "numpy_read"]
-        order = order[r % 4 :] + order[: r % 4]
-        for step in order:
+        # Round 0 starts with the floor, then rust_many: the reference of the checks.
+        for step in rotated(["floor", "rust_many", "rust_loop", "numpy_read"], r):
             if step == "floor":
-                times["floor"].append(timed(read_bytes, paths)[0])
+                times["floor"].append(timed(read_bytes, paths, collect=True)[0])
                 continue
             fn = {"rust_many": read_rust_many, "rust_loop": read_rust_loop, "numpy_read": read_numpy}[step]
             motions_step = None
-            seconds, motions_step = timed(fn, paths)
+            seconds, motions_step = timed(fn, paths, collect=True)
             times[step].append(seconds)
             if step == "rust_many":
                 motions = motions_step
+                check_equal(len(motions), len(paths), "clips read by read_bvh_many")
+            elif r == 0:
+                same_motions(motions_step, motions, step, exact=step == "rust_loop")
             del motions_step
-        # FK on the motions just read by read_bvh_many; outputs dropped right away.
+        # FK on the motions just read by read_bvh_many; outputs dropped right away (round 0: after the checks).
         fk_order = ["rust_fk", "numpy_fk"] + (["rust_fk_many", "numpy_fk_many"] if HAS_FK_MANY else [])
-        fk_order = fk_order[r % len(fk_order) :] + fk_order[: r % len(fk_order)]
-        for step in fk_order:
+        reference = None
+        for step in rotated(fk_order, r):
             fn = fk_many if step.endswith("_many") else fk_all
-            seconds, out = timed(fn, motions, step.split("_")[0])
+            seconds, out = timed(fn, motions, step.split("_")[0], collect=True)
             times[step].append(seconds)
+            if r == 0 and step == "rust_fk":
+                reference = out
+            elif r == 0:
+                same_fk(out, reference, step)
             del out
+        del reference
         log(f"round {r + 1}/{rounds}: " + ", ".join(f"{k} {v[-1]:.3f}s" for k, v in times.items() if v))
     return times, motions
 
@@ -498,6 +519,8 @@ def spot_check(paths, converted, peers) -> list:
             " (on the rotation-only converted clips, vs ours on them)" if name == "pybvh" else ""
         )
         rows.append((label, max(errors)))
+    for label, error in rows[:2]:  # ours against the independent reference and the twin; peers are only shown
+        check(error <= POSITION_TOL, f"spot check: {label} is {error:.2g} cm from ours (more than {POSITION_TOL:g})")
     return [
         (label, err, f"{len(picks)} clips: " + ", ".join(Path(paths[i]).stem.replace("dataset-2_", "") for i in picks))
         for label, err in rows
@@ -584,6 +607,14 @@ def measure_end_to_end(paths_file: str, conv_file: str | None, peers) -> dict:
     return {"runs": runs, "ratios": {k: v for k, v in ratios.items() if v is not None}, "failed": failed}
 
 
+def check_end_to_end(e2e: dict, joint_frames: int) -> None:
+    """Every child run of ours read and posed every joint-frame of the clips it was given (the
+    converted clips keep every joint and frame)."""
+    for key in ("rust-read", "rust", "numpy", "rust-converted"):
+        for result in e2e["runs"].get(key, []):
+            check_equal(result["joint_frames"], joint_frames, f"end-to-end run {key}: joint-frames")
+
+
 # ----------------------------------------------------------------------------- report
 
 
@@ -593,39 +624,84 @@ def md_table(headers, rows) -> str:
     return "\n".join(lines)
 
 
-def med(values):
-    return statistics.median(values) if values else float("nan")
+def command_line() -> str:
+    """How this script was called, from the repository root."""
+    return " ".join(["python", os.path.relpath(sys.argv[0], REPO)] + sys.argv[1:])
 
 
-def ratio_median(num, den):
-    """Median of per-round ratios: each ratio from runs of the same round."""
-    return med([a / b for a, b in zip(num, den)])
+@dataclass
+class Run:
+    """What one run measured, for :func:`report`.
+
+    ``stats``: clips, bytes, frames, joint_frames and decoded (bytes of the float64 arrays) of the
+    clips; ``times``: seconds of each round per step (:func:`measure_read_and_fk`); ``breakdown``
+    and ``profile_text``: :func:`reader_breakdown`; ``e2e``: :func:`measure_end_to_end` (None when
+    not run); ``checks``: :func:`spot_check`; ``conv_stats``: seconds and bytes of the clips
+    converted for pybvh (None without it)."""
+
+    limit: int | None
+    rounds: int
+    peers: list[str]
+    info: dict
+    stats: dict
+    times: dict[str, list[float]]
+    breakdown: list
+    profile_text: str
+    e2e: dict | None
+    checks: list
+    conv_stats: dict | None
+    started: datetime.datetime
+    elapsed: float
+    command: str = field(default_factory=command_line)
+
+    @property
+    def full(self) -> bool:
+        return self.limit is None
+
+    @property
+    def t(self) -> dict[str, float]:
+        """The median seconds of each step."""
+        return {k: median(v) for k, v in self.times.items()}
+
+    @property
+    def runs(self) -> dict[str, list[dict]]:
+        return self.e2e["runs"] if self.e2e else {}
+
+    @property
+    def ratios(self) -> dict[str, float]:
+        return self.e2e["ratios"] if self.e2e else {}
+
+    def child_median(self, key: str, field: str) -> float:
+        return median(x[field] for x in self.runs.get(key, []))
+
+    def faster(self, numpy_key: str, rust_key: str) -> str:
+        return f"{ratio_median(self.times[numpy_key], self.times[rust_key]):.1f}x faster than the NumPy twin"
 
 
-def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_stats, started, elapsed) -> str:
-    n_bytes, frames, joint_frames, decoded = stats["bytes"], stats["frames"], stats["joint_frames"], stats["decoded"]
-    full = args.limit is None
-    t = {k: med(v) for k, v in times.items()}
-    runs = e2e["runs"] if e2e else {}
-    ratios = e2e["ratios"] if e2e else {}
+def report(run: Run) -> str:
+    """The section of benches/RESULTS.md: the run's setting, then one part per measurement."""
+    out = header(run)
+    out += read_part(run)
+    out += fk_part(run)
+    out += end_to_end_part(run)
+    out += spot_check_part(run)
+    out += breakdown_part(run)
+    out += targets_part(run)
+    return "\n".join(out)
 
-    def child_median(key, field):
-        return med([x[field] for x in runs.get(key, [])])
 
-    def rate_row(label, seconds, nb=n_bytes, fr=frames, vs=""):
-        return [label, f"{seconds:.3f}", f"{nb / MB / seconds:.0f}", f"{fr / seconds / 1e3:.0f} k", vs]
-
-    command = " ".join(["python", os.path.relpath(sys.argv[0], REPO)] + sys.argv[1:])
+def header(run: Run) -> list[str]:
+    info, stats = run.info, run.stats
     out = [
-        f"- date: {started:%Y-%m-%d %H:%M} (the run took {elapsed / 60:.1f} min)",
+        f"- date: {run.started:%Y-%m-%d %H:%M} (the run took {run.elapsed / 60:.1f} min)",
         f"- machine: {info['cpu']}, {info['cores']} cores, {info['ram_gib']:.1f} "
         f"GiB RAM; Python {info['python']}, NumPy {info['numpy']}",
         f"- package: {info['package']}",
-        f"- command: `{command}`",
-        f"- data: {stats['clips']} clips, {n_bytes / MB:.1f} MB, "
-        f"{frames:,} frames, {joint_frames / 1e6:.2f} M joint-frames"
-        + ("" if full else f" (first {args.limit} clips only: targets not judged)"),
-        f"- method: {args.rounds} rounds of read / FK in one process, the order rotated each round (times: medians; "
+        f"- command: `{run.command}`",
+        f"- data: {stats['clips']} clips, {stats['bytes'] / MB:.1f} MB, "
+        f"{stats['frames']:,} frames, {stats['joint_frames'] / 1e6:.2f} M joint-frames"
+        + ("" if run.full else f" (first {run.limit} clips only: targets not judged)"),
+        f"- method: {run.rounds} rounds of read / FK in one process, the order rotated each round (times: medians; "
         "ratios: medians of same-round ratios); end-to-end runs each in a fresh child process, ours right before "
         "and after every other implementation; page cache warm; peers single-threaded, ours on 2 threads",
         f"- {CITATION}\n",
@@ -635,65 +711,74 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
             "**Warning: the package's files changed during this run "
             "(rebuilt or edited): the figures mix versions; run again.**\n"
         )
-    if e2e and e2e["failed"]:
-        out.append(f"**Child runs that failed (see stderr): {', '.join(e2e['failed'])}.**\n")
+    if run.e2e and run.e2e["failed"]:
+        out.append(f"**Child runs that failed (see stderr): {', '.join(run.e2e['failed'])}.**\n")
+    return out
 
-    out.append("### 1. Read: parse + Euler->quaternion, every clip into memory\n")
+
+def rate_row(run: Run, label: str, seconds: float, nb: int | None = None, vs: str = "") -> list[str]:
+    nb = run.stats["bytes"] if nb is None else nb
+    frames = run.stats["frames"]
+    return [label, f"{seconds:.3f}", f"{nb / MB / seconds:.0f}", f"{frames / seconds / 1e3:.0f} k", vs]
+
+
+def read_part(run: Run) -> list[str]:
+    t, runs = run.t, run.runs
     rows = [
-        rate_row("reading the bytes only: the floor", t["floor"]),
-        rate_row(
-            "**ours, Rust: `read_bvh_many`**",
-            t["rust_many"],
-            vs=f"{ratio_median(times['numpy_read'], times['rust_many']):.1f}x faster than the NumPy twin",
-        ),
-        rate_row(
-            "ours, Rust: `read_bvh` per file",
-            t["rust_loop"],
-            vs=f"{ratio_median(times['numpy_read'], times['rust_loop']):.1f}x faster than the NumPy twin",
-        ),
-        rate_row("ours, NumPy twin backend: `read_bvh_many`", t["numpy_read"], vs="1.0x"),
+        rate_row(run, "reading the bytes only: the floor", t["floor"]),
+        rate_row(run, "**ours, Rust: `read_bvh_many`**", t["rust_many"], vs=run.faster("numpy_read", "rust_many")),
+        rate_row(run, "ours, Rust: `read_bvh` per file", t["rust_loop"], vs=run.faster("numpy_read", "rust_loop")),
+        rate_row(run, "ours, NumPy twin backend: `read_bvh_many`", t["numpy_read"], vs="1.0x"),
     ]
     if "rust" in runs:
         cpu = (
-            f"user {child_median('rust', 'read_user_s'):.1f} s + sys {child_median('rust', 'read_sys_s'):.1f} "
-            f"s CPU, {child_median('rust', 'read_minflt') / 1e3:.0f} k page faults"
+            f"user {run.child_median('rust', 'read_user_s'):.1f} s + sys {run.child_median('rust', 'read_sys_s'):.1f} "
+            f"s CPU, {run.child_median('rust', 'read_minflt') / 1e3:.0f} k page faults"
         )
         rows.append(
             rate_row(
+                run,
                 f"ours, Rust: `read_bvh_many`, first call in a fresh process ({len(runs['rust'])} runs)",
-                child_median("rust", "read_s"),
+                run.child_median("rust", "read_s"),
                 vs=cpu,
             )
         )
-    for name in args.peers:
+    for name in run.peers:
         if name not in runs:
             continue
         r = runs[name][0]
         if name == "pybvh" and "rust-converted" in runs:
-            ours = child_median("rust-converted", "read_s")
+            ours = run.child_median("rust-converted", "read_s")
             rows.append(
                 rate_row(
+                    run,
                     f"{PEER_LABEL[name]} `read_bvh_file`, converted clips (1 run)",
                     r["read_s"],
-                    nb=conv_stats["bytes"],
+                    nb=run.conv_stats["bytes"],
                     vs=f"{r['read_s'] / ours:.1f}x ours' time ({ours:.2f} s on the same files, fresh process)",
                 )
             )
         elif "rust" in runs:
-            ours = child_median("rust", "read_s")
+            ours = run.child_median("rust", "read_s")
             rows.append(
                 rate_row(
+                    run,
                     f"{PEER_LABEL[name]} load (1 run)",
                     r["read_s"],
                     vs=f"{r['read_s'] / ours:.1f}x ours' time in a fresh process",
                 )
             )
-    out.append(md_table(["implementation", "wall s", "MB/s", "frames/s", "ratio / notes"], rows) + "\n")
+    return [
+        "### 1. Read: parse + Euler->quaternion, every clip into memory\n",
+        md_table(["implementation", "wall s", "MB/s", "frames/s", "ratio / notes"], rows) + "\n",
+    ]
 
-    out.append("### 2. Forward kinematics of every frame of every clip (same loaded motions)\n")
+
+def fk_part(run: Run) -> list[str]:
+    t, runs, times = run.t, run.runs, run.times
 
     def fk_row(label, key, vs=""):
-        return [label, f"{t[key]:.3f}", f"{joint_frames / t[key] / 1e6:.1f} M", vs]
+        return [label, f"{t[key]:.3f}", f"{run.stats['joint_frames'] / t[key] / 1e6:.1f} M", vs]
 
     rows = []
     if times["rust_fk_many"]:
@@ -701,23 +786,17 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
             fk_row(
                 "**ours, Rust: `em.forward_kinematics_many(motions)`**",
                 "rust_fk_many",
-                f"{ratio_median(times['numpy_fk_many'], times['rust_fk_many']):.1f}x faster than the NumPy twin",
+                run.faster("numpy_fk_many", "rust_fk_many"),
             )
         )
-    rows.append(
-        fk_row(
-            "ours, Rust: `m.fk()` per clip",
-            "rust_fk",
-            f"{ratio_median(times['numpy_fk'], times['rust_fk']):.1f}x faster than the NumPy twin",
-        )
-    )
+    rows.append(fk_row("ours, Rust: `m.fk()` per clip", "rust_fk", run.faster("numpy_fk", "rust_fk")))
     if times["numpy_fk_many"]:
         rows.append(fk_row("ours, NumPy twin: `em.forward_kinematics_many(motions)`", "numpy_fk_many", "1.0x"))
     rows.append(fk_row("ours, NumPy twin: `m.fk()` per clip", "numpy_fk", "1.0x"))
-    for name in args.peers:
+    for name in run.peers:
         key = "rust-converted" if name == "pybvh" else "rust"
         if name in runs and key in runs:
-            r, ours = runs[name][0], child_median(key, "fk_s")
+            r, ours = runs[name][0], run.child_median(key, "fk_s")
             rows.append(
                 [
                     f"{PEER_LABEL[name]}{', converted clips' if name == 'pybvh' else ''} (1 run)",
@@ -726,107 +805,107 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
                     f"{r['fk_s'] / ours:.0f}x ours' time in a fresh process",
                 ]
             )
-    out.append(md_table(["implementation", "wall s", "joint-frames/s", "ratio"], rows) + "\n")
+    return [
+        "### 2. Forward kinematics of every frame of every clip (same loaded motions)\n",
+        md_table(["implementation", "wall s", "joint-frames/s", "ratio"], rows) + "\n",
+    ]
 
-    if runs:
-        out.append("### 3. End to end (read + FK), each run in a fresh process; peak memory\n")
-        base = min(x["baseline_rss"] for results in runs.values() for x in results)
-        out.append(
-            "Decoded float64 arrays (rotations F*J*4*8 + translations F*J*3*8 bytes): "
-            f"**{decoded / MB:.0f} MB**. Peak = the child's RSS high-water mark, `VmHWM` from "
-            "/proc/self/status (`ru_maxrss` would report the parent's peak, which survives "
-            f"exec), interpreter and imports included (about {base / MB:.0f} MB before reading).\n"
-        )
-        labels = {
-            "rust-read": "ours, Rust, read only (keeps the motions)",
-            "rust": "**ours, Rust**: `read_bvh_many` + "
-            + ("`forward_kinematics_many`" if HAS_FK_MANY else "`m.fk()`")
-            + " (keeps motions and FK outputs)",
-            "numpy": "ours, NumPy twin (keeps motions and FK outputs)",
-            "rust-converted": "ours, Rust, converted clips (keeps motions and FK outputs)",
-        }
-        rows = []
-        for key, results in runs.items():
-            label = (
-                labels.get(key)
-                or f"{PEER_LABEL[key]}{', converted clips' if key == 'pybvh' else ''} (keeps positions only)"
-            )
-            peak = max(x["peak_rss"] for x in results)
-            rows.append(
-                [
-                    label,
-                    len(results),
-                    f"{child_median(key, 'total_s'):.2f}",
-                    f"{ratios[key]:.1f}x" if key in ratios else "",
-                    f"{peak / MB:.0f} MB",
-                    f"{peak / decoded:.2f}x",
-                ]
-            )
-        out.append(
-            md_table(
-                [
-                    "implementation",
-                    "runs",
-                    "read+FK s",
-                    "time / ours' (neighbouring runs)",
-                    "peak RSS",
-                    "peak / decoded",
-                ],
-                rows,
-            )
-            + "\n"
-        )
-        if conv_stats:
-            out.append(
-                "pybvh cannot read the Bandai files (it rejects position channels on non-root joints), so "
-                "every clip was converted once, with our writer, to a rotation-only file (non-root joints "
-                f"keep only their three rotation channels; 6 decimals): {conv_stats['bytes'] / MB:.1f} MB in "
-                f"{conv_stats['seconds']:.1f} s. pybvh and ours were timed on those same converted files.\n"
-            )
 
-    if checks:
-        out.append("### 4. Correctness spot check: world positions against ours (cm)\n")
-        out.append(
-            md_table(["implementation", "max abs difference", "clips"], [[a, f"{b:.1e}", c] for a, b, c in checks])
-            + "\n"
-        )
+END_TO_END_LABELS = {
+    "rust-read": "ours, Rust, read only (keeps the motions)",
+    "rust": "**ours, Rust**: `read_bvh_many` + "
+    + ("`forward_kinematics_many`" if HAS_FK_MANY else "`m.fk()`")
+    + " (keeps motions and FK outputs)",
+    "numpy": "ours, NumPy twin (keeps motions and FK outputs)",
+    "rust-converted": "ours, Rust, converted clips (keeps motions and FK outputs)",
+}
 
-    if breakdown:
-        out.append("### 5. Where our reader's time goes (one `read_bvh_many` call, Rust backend, warm process)\n")
-        whole = breakdown[0][1]
-        out.append(
-            md_table(
-                ["step", "s", "share of the call"],
-                [
-                    [
-                        label.replace("  ", "&nbsp;&nbsp;&nbsp;"),
-                        f"{v:.3f}",
-                        "" if label.startswith(("split", "  parsing", "  the rest")) else f"{v / whole:.0%}",
-                    ]
-                    for label, v in breakdown
-                ],
-            )
-            + "\n"
-        )
-        out.append(
-            "cProfile of one more call (profiling inflates the Python parts):\n\n```\n"
-            + "\n".join(line.rstrip() for line in profile_text.strip().splitlines() if line.strip())[:4000]
-            + "\n```\n"
-        )
 
+def end_to_end_part(run: Run) -> list[str]:
+    runs, ratios, decoded = run.runs, run.ratios, run.stats["decoded"]
+    if not runs:
+        return []
+    base = min(x["baseline_rss"] for results in runs.values() for x in results)
+    out = [
+        "### 3. End to end (read + FK), each run in a fresh process; peak memory\n",
+        "Decoded float64 arrays (rotations F*J*4*8 + translations F*J*3*8 bytes): "
+        f"**{decoded / MB:.0f} MB**. Peak = the child's RSS high-water mark, `VmHWM` from "
+        "/proc/self/status (`ru_maxrss` would report the parent's peak, which survives "
+        f"exec), interpreter and imports included (about {base / MB:.0f} MB before reading).\n",
+    ]
+    rows = []
+    for key, results in runs.items():
+        label = (
+            END_TO_END_LABELS.get(key)
+            or f"{PEER_LABEL[key]}{', converted clips' if key == 'pybvh' else ''} (keeps positions only)"
+        )
+        peak = max(x["peak_rss"] for x in results)
+        rows.append(
+            [
+                label,
+                len(results),
+                f"{run.child_median(key, 'total_s'):.2f}",
+                f"{ratios[key]:.1f}x" if key in ratios else "",
+                f"{peak / MB:.0f} MB",
+                f"{peak / decoded:.2f}x",
+            ]
+        )
+    headers = ["implementation", "runs", "read+FK s", "time / ours' (neighbouring runs)", "peak RSS", "peak / decoded"]
+    out.append(md_table(headers, rows) + "\n")
+    if run.conv_stats:
+        out.append(
+            "pybvh cannot read the Bandai files (it rejects position channels on non-root joints), so "
+            "every clip was converted once, with our writer, to a rotation-only file (non-root joints "
+            f"keep only their three rotation channels; 6 decimals): {run.conv_stats['bytes'] / MB:.1f} MB in "
+            f"{run.conv_stats['seconds']:.1f} s. pybvh and ours were timed on those same converted files.\n"
+        )
+    return out
+
+
+def spot_check_part(run: Run) -> list[str]:
+    if not run.checks:
+        return []
+    rows = [[a, f"{b:.1e}", c] for a, b, c in run.checks]
+    return [
+        "### 4. Correctness spot check: world positions against ours (cm)\n",
+        md_table(["implementation", "max abs difference", "clips"], rows) + "\n",
+    ]
+
+
+def breakdown_part(run: Run) -> list[str]:
+    if not run.breakdown:
+        return []
+    whole = run.breakdown[0][1]
+    rows = [
+        [
+            label.replace("  ", "&nbsp;&nbsp;&nbsp;"),
+            f"{v:.3f}",
+            "" if label.startswith(("split", "  parsing", "  the rest")) else f"{v / whole:.0%}",
+        ]
+        for label, v in run.breakdown
+    ]
+    profile = "\n".join(line.rstrip() for line in run.profile_text.strip().splitlines() if line.strip())
+    return [
+        "### 5. Where our reader's time goes (one `read_bvh_many` call, Rust backend, warm process)\n",
+        md_table(["step", "s", "share of the call"], rows) + "\n",
+        "cProfile of one more call (profiling inflates the Python parts):\n\n```\n" + profile[:4000] + "\n```\n",
+    ]
+
+
+def verdict(run: Run, value, goal_met: bool) -> str:
+    if not run.full:
+        return "n/a (partial run)"
+    if value is None:
+        return "not measured"
+    return "**pass**" if goal_met else "**FAIL**"
+
+
+def targets_part(run: Run) -> list[str]:
+    t, times, runs, ratios, decoded = run.t, run.times, run.runs, run.ratios, run.stats["decoded"]
     targets = []
 
     def target(name, value, goal_met, shown):
-        verdict = (
-            "n/a (partial run)"
-            if not full
-            else "not measured"
-            if value is None
-            else "**pass**"
-            if goal_met
-            else "**FAIL**"
-        )
-        targets.append([name, shown, verdict])
+        targets.append([name, shown, verdict(run, value, goal_met)])
 
     target(
         "read the whole archive < 1.5 s (`read_bvh_many`, warm process)",
@@ -835,7 +914,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         f"{t['rust_many']:.2f} s",
     )
     if "rust" in runs:
-        v = child_median("rust", "read_s")
+        v = run.child_median("rust", "read_s")
         target("... the same, first call in a fresh process", v, v < 1.5, f"{v:.2f} s")
     fk_key, fk_api = (
         ("rust_fk_many", "`forward_kinematics_many`") if times["rust_fk_many"] else ("rust_fk", "`m.fk()` per clip")
@@ -871,9 +950,7 @@ def report(args, info, stats, times, breakdown, profile_text, e2e, checks, conv_
         targets.append(
             ["(info) peak memory of read + FK, FK outputs kept too", f"{peak / MB:.0f} MB = {peak / decoded:.2f}x", ""]
         )
-    out.append("### Targets we set\n")
-    out.append(md_table(["target", "measured", "result"], targets) + "\n")
-    return "\n".join(out)
+    return ["### Targets we set\n", md_table(["target", "measured", "result"], targets) + "\n"]
 
 
 # ----------------------------------------------------------------------------- main
@@ -905,7 +982,7 @@ def main() -> None:
         parser.error(f"unknown peers {sorted(unknown)}; choose from {', '.join(PEERS)}")
     if not em.rust_available():
         raise SystemExit("the Rust extension is not built: pip install . (from the repository root)")
-    started, t_start = datetime.datetime.now(), time.perf_counter()
+    started, t_start = datetime.datetime.now(), clock()
     info = machine()
     fingerprint = package_fingerprint()
     folder = find_data(args.data)
@@ -930,9 +1007,8 @@ def main() -> None:
 
         converted, conv_stats, conv_file = None, None, None
         if "pybvh" in args.peers:
-            t0 = time.perf_counter()
-            converted = convert_for_pybvh(paths, work)
-            conv_stats = {"seconds": time.perf_counter() - t0, "bytes": read_bytes(converted)}  # also warms their cache
+            seconds, converted = timed(convert_for_pybvh, paths, work)
+            conv_stats = {"seconds": seconds, "bytes": read_bytes(converted)}  # also warms their cache
             conv_file = str(work / "converted.json")
             Path(conv_file).write_text(json.dumps(converted))
         paths_file = str(work / "paths.json")
@@ -941,25 +1017,29 @@ def main() -> None:
         log("correctness spot check ...")
         checks = spot_check(paths, converted, args.peers)
         e2e = measure_end_to_end(paths_file, conv_file, args.peers)
+        check_end_to_end(e2e, stats["joint_frames"])
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
     if package_fingerprint() != fingerprint:
         info["changed"] = True
         log("WARNING: the package's files changed during the run: the figures mix versions")
-    text = report(
-        args,
-        info,
-        stats,
-        times,
-        breakdown,
-        profile_text,
-        e2e,
-        checks,
-        conv_stats,
-        started,
-        time.perf_counter() - t_start,
+    run = Run(
+        limit=args.limit,
+        rounds=args.rounds,
+        peers=args.peers,
+        info=info,
+        stats=stats,
+        times=times,
+        breakdown=breakdown,
+        profile_text=profile_text,
+        e2e=e2e,
+        checks=checks,
+        conv_stats=conv_stats,
+        started=started,
+        elapsed=clock() - t_start,
     )
+    text = report(run)
     print(text)
     write_section(TITLE, text, args.out)
     log(f"wrote the section {TITLE!r} of {args.out}")

@@ -8,7 +8,9 @@ says to start them on each machine), then runs the command on dataset-2 alone an
 fresh child process (wall time of the process, Dask already running; medians). Also counts the
 bytes that crossed the loopback interface during each cluster run (other traffic on it counts
 too; each byte is seen once sent and once received, halved here). On one machine the workers
-share the command's cores: this measures the cost of the transfers, not a speed-up.
+share the command's cores: this measures the cost of the transfers, not a speed-up. Each run's
+dataset is checked before its time counts (benches/harness.py; a failed check raises): every clip
+of ``--data``, and the same frames in every run.
 Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 """
 
@@ -26,7 +28,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from bench_pybvh_ml import DATA, commit, machine, memory_gib
+from bench_pybvh_ml import DATA
+from harness import Stopwatch, check_equal, commit, cpu_name, memory_gib, rotated
 
 RESULTS = Path(__file__).parent / "RESULTS.md"
 SECTION = "Preprocessing on a Dask scheduler and workers: `benches/bench_cluster.py`"
@@ -94,16 +97,23 @@ def stop(processes: list[subprocess.Popen]) -> None:
 
 
 def run(data: Path, out: Path, options: list[str]) -> dict:
+    """One preprocess run in a child process: wall, the child's peak RSS, bytes over loopback, and
+    the clips and frames of its dataset (checked: every clip of ``data``)."""
+    from expressive_mocap.dataset import load_dataset
+
     shutil.rmtree(out, ignore_errors=True)
-    before, started = loopback_bytes(), time.perf_counter()
-    result = subprocess.run(
-        [sys.executable, "-c", CHILD, str(data), "-o", str(out), *options], capture_output=True, text=True
-    )
-    wall = time.perf_counter() - started
+    before = loopback_bytes()
+    with Stopwatch() as watch:
+        result = subprocess.run(
+            [sys.executable, "-c", CHILD, str(data), "-o", str(out), *options], capture_output=True, text=True
+        )
     if result.returncode != 0:
         raise SystemExit(f"preprocess {' '.join(options)} failed:\n{result.stderr[-3000:]}")
     peak = int(result.stdout.strip().splitlines()[-1])
-    return {"wall": wall, "peak": peak, "moved": (loopback_bytes() - before) / 2}
+    moved = (loopback_bytes() - before) / 2
+    dataset = load_dataset(out)
+    check_equal(len(dataset.names), len(list(data.glob("*.bvh"))), f"clips written by `{' '.join(options)}`")
+    return {"wall": watch.seconds, "peak": peak, "moved": moved, "frames": int(dataset.offsets[-1])}
 
 
 def main() -> None:
@@ -124,22 +134,23 @@ def main() -> None:
         f"scheduler + {args.workers} workers, `--model`": ["--model", "--dask", address],
     }
     times: dict[str, list[dict]] = {name: [] for name in configs}
-    started = time.perf_counter()
+    watch = Stopwatch()
     try:
         for round_ in range(args.rounds):
-            names = list(configs)
-            for name in names[round_ % len(names) :] + names[: round_ % len(names)]:
+            for name in rotated(list(configs), round_):
                 times[name].append(run(args.data, work / "out", configs[name]))
                 print(f"round {round_ + 1}: {name}: {times[name][-1]['wall']:.2f} s", flush=True)
     finally:
         stop(processes)
+    frames = {r["frames"] for records in times.values() for r in records}
+    check_equal(len(frames), 1, f"distinct frame counts of the runs {sorted(frames)}")
     size = sum(p.stat().st_size for p in (work / "out").iterdir()) / 1e6
     shutil.rmtree(work, ignore_errors=True)
     clips = len(list(args.data.glob("*.bvh")))
     mb = sum(p.stat().st_size for p in args.data.glob("*.bvh")) / 1e6
     lines = [
-        f"- date: {time.strftime('%Y-%m-%d %H:%M')} (the run took {(time.perf_counter() - started) / 60:.1f} min)",
-        f"- machine: {machine()}, {os.cpu_count()} cores, {memory_gib():.1f} GiB RAM; commit {commit()}; load "
+        f"- date: {time.strftime('%Y-%m-%d %H:%M')} (the run took {watch.elapsed() / 60:.1f} min)",
+        f"- machine: {cpu_name()}, {os.cpu_count()} cores, {memory_gib():.1f} GiB RAM; commit {commit()}; load "
         f"average at the start {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}, at the end "
         f"{', '.join(f'{x:.1f}' for x in os.getloadavg())}",
         f"- command: `python benches/bench_cluster.py --workers {args.workers} --rounds {args.rounds} "

@@ -6,6 +6,9 @@
 Times, on motions already in memory: the kernels alone (foot contacts + features, inputs
 prepared once) and the public ``dynamic_features`` (FK, roles and defaults included), per
 backend, alternating; prints the best round of each. Only ratios taken in one run count.
+Checked first (benches/harness.py; a failed check raises): the Rust kernels' foot contacts equal
+the NumPy twin's and their features, and the public ``dynamic_features`` of both backends, agree
+within 1e-12 on every clip.
 Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 """
 
@@ -13,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +26,9 @@ from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_archive import find_data  # noqa: E402
+from harness import Best, check_close, check_equal  # noqa: E402
+
+FEATURE_TOL = 1e-12  # Rust against the NumPy twin (8.8e-15 measured on the walks)
 
 
 def kernel_inputs(motion: em.Motion) -> tuple:
@@ -56,15 +61,30 @@ def main() -> None:
     prepared = [kernel_inputs(m) for m in motions]
     print(f"{len(paths)} clips ({args.pattern}), {frames} frames, {_core.num_threads} threads")
 
-    def kernels(module):
+    def kernels(module, kept=None):
         for feet, points, thighs, ref, dt, height, hips in prepared:
             contacts = module.foot_contacts(feet, dt, 0.0, 0.05 * height, 0.5 * height, 3, True)
-            module.dynamic_features(points, thighs, contacts, ref, dt, height, hips, 0.0, 10)
+            values = module.dynamic_features(points, thighs, contacts, ref, dt, height, hips, 0.0, 10)
+            if kept is not None:
+                kept.append((contacts, values))
+        return kept
 
-    def public(name):
+    def public(name, kept=None):
         with em.use_backend(name):
             for motion in motions:
-                features.dynamic_features(motion)
+                values = features.dynamic_features(motion)
+                if kept is not None:
+                    kept.append(values)
+        return kept
+
+    rust, twin = kernels(_core, []), kernels(reference, [])
+    check_equal(len(rust), len(paths), "clips through the kernels")
+    for k, ((contacts, values), (twin_contacts, twin_values)) in enumerate(zip(rust, twin)):
+        check_close(contacts, twin_contacts, f"foot contacts of clip {k}")
+        check_close(values, twin_values, f"kernel features of clip {k}", atol=FEATURE_TOL)
+    for k, (values, twin_values) in enumerate(zip(public("rust", []), public("numpy", []))):
+        check_close(values, twin_values, f"dynamic_features of clip {k}", atol=FEATURE_TOL)
+    del rust, twin
 
     cases = {
         "kernels, Rust": lambda: kernels(_core),
@@ -72,12 +92,10 @@ def main() -> None:
         "dynamic_features, Rust": lambda: public("rust"),
         "dynamic_features, NumPy": lambda: public("numpy"),
     }
-    best = {label: float("inf") for label in cases}
+    best = Best()
     for _ in range(args.rounds):
         for label, run in cases.items():
-            start = time.perf_counter()
-            run()
-            best[label] = min(best[label], time.perf_counter() - start)
+            best.time(label, run)
     for label, seconds in best.items():
         print(f"{label:26s} {seconds * 1e3:8.1f} ms  {frames / seconds / 1e6:6.2f} M frames/s")
     print(

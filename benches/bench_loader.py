@@ -4,15 +4,19 @@ Shuffled 64-frame windows (stride 16), batches of 256, from a memory-mapped data
 whole dataset-2 archive preprocessed with ``--keep positions,rotations,contacts``), through
 :class:`~expressive_mocap.dataset.Batches` in this process: plain, normalised, and with each
 augmentation. Frames delivered = windows x 64. The page cache is warmed by a first pass, so the
-figures are of the loader, not of the disk.
+figures are of the loader, not of the disk. Each repeat's first batch is checked once its time is
+taken (benches/harness.py; a failed check raises): some windows, every kind asked for, 64 frames a
+window, finite values.
 """
 
 from __future__ import annotations
 
 import argparse
-import time
+
+import numpy as np
 
 from expressive_mocap.dataset import Augment, load_dataset, window_batches
+from harness import check, check_equal, clock
 
 LENGTH, STRIDE, BATCH = 64, 16, 256  # frames a window, frames between windows, windows a batch
 
@@ -27,17 +31,29 @@ CASES = {
 }
 
 
-def rate(passes, batches: int) -> float:
+def check_batch(batch, kinds: list[str], what: str) -> None:
+    """One delivered batch (NumPy arrays or tensors): some windows, each kind ``[B, LENGTH, ...]``, finite."""
+    check(batch is not None, f"{what}: no batch delivered")
+    windows = int(batch["clip"].shape[0])
+    check(0 < windows <= BATCH, f"{what}: {windows} windows in a batch")
+    for kind in kinds:
+        check_equal(tuple(batch[kind].shape[:2]), (windows, LENGTH), f"{what}: shape of {kind}")
+        check(np.isfinite(np.asarray(batch[kind])).all(), f"{what}: {kind} not finite")
+
+
+def rate(passes, batches: int, kinds: list[str], what: str) -> float:
     """Frames per second over the first ``batches`` batches of ``passes(n)``, the n-th pass over
-    the data (best of 3 passes)."""
+    the data (best of 3 passes); each pass's first batch checked after its time is taken."""
     best = 0.0
     for repeat in range(3):
-        frames, start = 0, time.perf_counter()
+        frames, first, start = 0, None, clock()
         for i, batch in enumerate(passes(repeat)):
+            first = batch if first is None else first
             frames += batch["clip"].shape[0] * LENGTH
             if i + 1 == batches:
                 break
-        best = max(best, frames / (time.perf_counter() - start))
+        best = max(best, frames / (clock() - start))
+        check_batch(first, kinds, what)
     return best
 
 
@@ -60,7 +76,7 @@ def main() -> None:
     print("| case | frames/s | batches/s |\n|---|---|---|")
     for name, options in CASES.items():
         loader = window_batches(ds, LENGTH, STRIDE, batch_size=BATCH, kinds=kinds, seed=0, **options)
-        frames = rate(loader.epoch, args.batches)
+        frames = rate(loader.epoch, args.batches, kinds, name)
         print(f"| {name} | {frames / 1e6:.2f} M | {frames / (BATCH * LENGTH):.0f} |")
     if args.torch:
         torch_rates(args.dataset, kinds, args.batches)
@@ -80,14 +96,14 @@ def torch_rates(folder: str, kinds: list[str], batches: int) -> None:
             loader = torch.utils.data.DataLoader(
                 dataset, batch_size=256, shuffle=True, num_workers=workers, persistent_workers=workers > 0
             )
-            best = rate(lambda _, loader=loader: loader, batches)
+            best = rate(lambda _, loader=loader: loader, batches, kinds, f"torch, {name}")
             print(f"| {name} | {workers} | {best / 1e6:.2f} M |")
         sampler = torch.utils.data.BatchSampler(torch.utils.data.RandomSampler(dataset), BATCH, drop_last=False)
         for workers in (0, 2):
             loader = torch.utils.data.DataLoader(
                 dataset, batch_size=None, sampler=sampler, num_workers=workers, persistent_workers=workers > 0
             )
-            best = rate(lambda _, loader=loader: loader, batches)
+            best = rate(lambda _, loader=loader: loader, batches, kinds, f"torch, {name}, BatchSampler")
             print(f"| {name}, whole batches (BatchSampler) | {workers} | {best / 1e6:.2f} M |")
 
 

@@ -13,6 +13,8 @@ round by round (machines here drift by +-30 %: compare within a run):
 - the same without ``--mirror``, and with ``--fps 15`` instead, for where the time goes.
 
 The load average at the start and end is reported: other jobs on the machine slow every figure.
+Each run's dataset is checked before its time counts (benches/harness.py; a failed check raises):
+it holds every clip of ``--data`` (twice with ``--mirror``: each and its mirror image).
 
 Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 The repository never contains it.
@@ -28,10 +30,10 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from bench_preprocess import DEFAULT_DATA, machine
+from harness import Stopwatch, check_equal, rotated
 from results import write_section  # benches/results.py: this script rewrites only its own section
 
 REPO = Path(__file__).resolve().parent.parent
@@ -48,16 +50,21 @@ TARGET_S = 5.0
 
 
 def run_once(data: Path, args: list[str], out: Path) -> tuple[float, int, int]:
-    """(wall seconds, peak RSS bytes, output bytes) of one preprocess run in a child process."""
+    """(wall seconds, peak RSS bytes, output bytes) of one preprocess run in a child process, its
+    dataset checked to hold every clip (and every mirror image with ``--mirror``)."""
+    from expressive_mocap.dataset import load_dataset
+
     shutil.rmtree(out, ignore_errors=True)
     command = [sys.executable, "-m", "expressive_mocap.cli", "preprocess", str(data), "-o", str(out), "-q", *args]
     env = {**os.environ, "PYTHONPATH": str(REPO / "python")}
-    start = time.perf_counter()
-    child = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL)
-    _, status, usage = os.wait4(child.pid, 0)
-    seconds = time.perf_counter() - start
+    with Stopwatch() as watch:
+        child = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL)
+        _, status, usage = os.wait4(child.pid, 0)
+    seconds = watch.seconds
     if status != 0:
         raise SystemExit(f"{' '.join(command)} failed with status {status}")
+    clips = len(list(data.glob("*.bvh"))) * (2 if "--mirror" in args else 1)
+    check_equal(len(load_dataset(out).names), clips, f"clips in the dataset of `{' '.join(args) or '(defaults)'}`")
     size = sum(p.stat().st_size for p in out.iterdir() if p.is_file())
     return seconds, usage.ru_maxrss * 1024, size
 
@@ -75,7 +82,7 @@ def main() -> None:
     names = list(CONFIGS)
     with tempfile.TemporaryDirectory(prefix="bench-model-ready-") as scratch:
         for round_number in range(args.rounds):
-            for name in names[round_number % len(names) :] + names[: round_number % len(names)]:
+            for name in rotated(names, round_number):
                 seconds, peak, size = run_once(args.data, CONFIGS[name], Path(scratch) / "out")
                 times[name].append(seconds)
                 peaks[name], sizes[name] = max(peaks[name], peak), size

@@ -19,7 +19,9 @@ by +-30 %, so compare within a run):
   cluster's start-up is in the time; peak RSS is the client's only);
 - the folder with the NumPy twins (``EXPRESSIVE_MOCAP_BACKEND=numpy``; one round, it is slow).
 
-A section with the figures, the machine and the date is appended to ``--out``.
+A section with the figures, the machine and the date is appended to ``--out``. Checked before it
+is written (benches/harness.py; a failed check raises): every run read every clip with no failure
+and wrote the same number of frames, and the kernels alone decoded, posed and measured every clip.
 
 Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 The repository never contains it.
@@ -37,10 +39,11 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
+from harness import Best, Stopwatch, check, check_equal, clock, commit, cpu_name, log, memory_gib, peak_rss, rotated
 from results import write_section  # benches/results.py: this script rewrites only its own section
 
 REPO = Path(__file__).resolve().parent.parent
@@ -68,35 +71,24 @@ CONFIGS = {
 }
 
 
-def log(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
-
-
-def peak_rss() -> int:
-    """This process's RSS high-water mark in bytes (VmHWM; ru_maxrss would survive exec)."""
-    with open("/proc/self/status") as status:
-        return next(int(line.split()[1]) * 1024 for line in status if line.startswith("VmHWM:"))
-
-
 def child(src: str, out: str, model: str | None) -> None:
     """One preprocess run; prints one JSON line."""
     import expressive_mocap as em
     from expressive_mocap.dataset import preprocess
 
-    start = time.perf_counter()
-    summary = preprocess(
-        src,
-        out,
-        model="" if model else None,
-        model_float32=model == "float32",
-        progress=False,
-        cluster=os.environ.get("BENCH_CLUSTER"),
-    )
-    wall = time.perf_counter() - start
+    with Stopwatch() as watch:
+        summary = preprocess(
+            src,
+            out,
+            model="" if model else None,
+            model_float32=model == "float32",
+            progress=False,
+            cluster=os.environ.get("BENCH_CLUSTER"),
+        )
     print(
         json.dumps(
             {
-                "wall": wall,
+                "wall": watch.seconds,
                 "headers": summary.headers_s,
                 "kernels": summary.kernels_s,
                 "write": summary.write_s,
@@ -116,7 +108,8 @@ def kernels_child(folder: str) -> None:
     """The pipeline's kernel step alone (``clip_pipeline_many`` on every clip: reading the files,
     MOTION blocks, FK, features, contacts; headers prepared beforehand), and where its time goes:
     the same work split into the kernels it fuses (reading the files, parsing and decoding the
-    MOTION blocks, FK, features and contacts), each timed on its own. Best of 3; one JSON line."""
+    MOTION blocks, FK, features and contacts), each timed on its own. Best of 3; one JSON line.
+    Checked: every clip read, decoded, posed and measured, with its frames."""
     from expressive_mocap import ops
     from expressive_mocap.backend import kernels
     from expressive_mocap.dataset import format as fmt
@@ -127,27 +120,26 @@ def kernels_child(folder: str) -> None:
     prepared = work.prepare(items, fmt.DEFAULT_KEEP, None)
     (group,) = prepared.groups  # dataset-2: one hierarchy
     core = kernels()
-    best: dict[str, float] = {}
-
-    def timed(name, work):
-        start = time.perf_counter()
-        result = work()
-        best[name] = min(best.get(name, float("inf")), time.perf_counter() - start)
-        return result
-
+    best = Best()
+    clips = len(group.clips)
     for _ in range(3):
-        timed("kernels", lambda: work.run_kernels(items, prepared, fmt.DEFAULT_KEEP, None, False))
-        texts = timed("read", lambda: [Path(clip.source).read_bytes() for clip in group.clips])
+        best.time("kernels", lambda: work.run_kernels(items, prepared, fmt.DEFAULT_KEEP, None, False))
+        texts = best.time("read", lambda: [Path(clip.source).read_bytes() for clip in group.clips])
+        check_equal(len(texts), clips, "kernels alone: files read")
         blocks = [ops.MotionBlock(text, clip.start, clip.frames, clip.layout) for text, clip in zip(texts, group.clips)]
-        decoded = timed("parse", lambda blocks=blocks: core.read_motion_blocks(blocks))
-        posed = timed(
+        decoded = best.time("parse", lambda blocks=blocks: core.read_motion_blocks(blocks))
+        check_equal(
+            [len(r) for r, _ in decoded], [clip.frames for clip in group.clips], "kernels alone: frames decoded"
+        )
+        posed = best.time(
             "fk", lambda decoded=decoded: core.forward_kinematics_many([(r, t, group.parents) for r, t in decoded])
         )
+        check_equal([len(p) for _, p in posed], [clip.frames for clip in group.clips], "kernels alone: frames posed")
         gait = [
             (world, local, clip.frame_time, clip.height, clip.hips_rest_height)
             for (_, world), (local, _), clip in zip(posed, decoded, group.clips)
         ]
-        timed(
+        measured = best.time(
             "gait",
             lambda gait=gait: core.clip_gait_many(
                 gait,
@@ -161,6 +153,7 @@ def kernels_child(folder: str) -> None:
                 0.0,
             ),
         )
+        check_equal(len(measured), clips, "kernels alone: clips measured")
     print(json.dumps(best))
 
 
@@ -179,7 +172,9 @@ def run_kernels_child(folder: Path, cores: int | None) -> dict:
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
-def run_child(name: str, sources: dict, work: Path) -> dict:
+def run_child(name: str, sources: dict, work: Path, clips: int) -> dict:
+    """One configuration's run in a child process: its figures, checked to have read every one of
+    the ``clips`` clips with no failure."""
     kind, env, model, cores = CONFIGS[name]
     out = work / "out"
     shutil.rmtree(out, ignore_errors=True)
@@ -192,6 +187,7 @@ def run_child(name: str, sources: dict, work: Path) -> dict:
     if result.returncode != 0:
         raise SystemExit(f"{name}: the child failed:\n{result.stderr}")
     figures = json.loads(result.stdout.strip().splitlines()[-1])
+    check_equal((figures["clips"], figures["failed"]), (clips, 0), f"{name}: clips written and failed")
     figures["out_bytes"] = sum(p.stat().st_size for p in out.iterdir())
     shutil.rmtree(out, ignore_errors=True)
     log(
@@ -202,20 +198,13 @@ def run_child(name: str, sources: dict, work: Path) -> dict:
 
 
 def machine() -> str:
-    cpu = next(
-        (line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")),
-        platform.processor(),
-    )
-    mem = next(int(line.split()[1]) for line in open("/proc/meminfo") if line.startswith("MemTotal")) / 2**20
     load = os.getloadavg()
-    commit = subprocess.run(
-        ["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True
-    ).stdout.strip()
     import numpy
 
     return (
-        f"{cpu}, {os.cpu_count()} cores, {mem:.1f} GiB RAM; Python {platform.python_version()}, NumPy "
-        f"{numpy.__version__}; commit {commit}; load average at the start {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}"
+        f"{cpu_name()}, {os.cpu_count()} cores, {memory_gib():.1f} GiB RAM; Python {platform.python_version()}, "
+        f"NumPy {numpy.__version__}; commit {commit(REPO)}; load average at the start {load[0]:.1f}, "
+        f"{load[1]:.1f}, {load[2]:.1f}"
     )
 
 
@@ -244,7 +233,7 @@ def main() -> None:
     if args.child_kernels:
         return kernels_child(args.child_kernels)
 
-    started, t0 = datetime.datetime.now(), time.perf_counter()
+    started, t0 = datetime.datetime.now(), clock()
     info = machine()
     data = Path(args.data)
     paths = sorted(data.glob("*.bvh"))
@@ -263,98 +252,141 @@ def main() -> None:
         for p in paths:  # warm the page cache
             p.read_bytes()
         log(f"{len(paths)} clips, {size / MB:.1f} MB; making the zip ...")
-        z0 = time.perf_counter()
-        with zipfile.ZipFile(work / "clips.zip", "w", zipfile.ZIP_DEFLATED) as archive:
+        with Stopwatch() as zipping, zipfile.ZipFile(work / "clips.zip", "w", zipfile.ZIP_DEFLATED) as archive:
             for p in paths:
                 archive.write(p, p.name)
-        zip_seconds, zip_size = time.perf_counter() - z0, (work / "clips.zip").stat().st_size
+        zip_seconds, zip_size = zipping.seconds, (work / "clips.zip").stat().st_size
         sources = {"folder": folder, "zip": work / "clips.zip"}
 
         runs: dict[str, list] = {name: [] for name in CONFIGS}
         rust = [n for n in CONFIGS if "NumPy" not in n]
         for r in range(args.rounds):
-            for name in rust[r % len(rust) :] + rust[: r % len(rust)]:  # rotate the order each round
-                runs[name].append(run_child(name, sources, work))
+            for name in rotated(rust, r):  # rotate the order each round
+                runs[name].append(run_child(name, sources, work, len(paths)))
         if not args.no_numpy:
-            runs["folder, NumPy twins, 2 cores"].append(run_child("folder, NumPy twins, 2 cores", sources, work))
+            numpy_run = run_child("folder, NumPy twins, 2 cores", sources, work, len(paths))
+            runs["folder, NumPy twins, 2 cores"].append(numpy_run)
         ceiling = {cores: run_kernels_child(folder, cores) for cores in (1, None)}
         log(f"kernels alone: {ceiling}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    text = report(args, info, started, time.perf_counter() - t0, len(paths), size, zip_size, zip_seconds, runs, ceiling)
+    frames = {r["frames"] for rs in runs.values() for r in rs}
+    check(len(frames) == 1, f"the configurations wrote different numbers of frames: {sorted(frames)}")
+    run = Run(
+        limit=args.limit,
+        rounds=args.rounds,
+        info=info,
+        started=started,
+        seconds=clock() - t0,
+        clips=len(paths),
+        size=size,
+        zip_size=zip_size,
+        zip_seconds=zip_seconds,
+        runs=runs,
+        ceiling=ceiling,
+    )
+    text = report(run)
     print(text)
     write_section(TITLE, text, args.out)
     log(f"wrote the section {TITLE!r} of {args.out}")
 
 
-def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, runs, ceiling) -> str:
-    med = lambda name, key: statistics.median(r[key] for r in runs[name])  # noqa: E731
-    frames = next(r["frames"] for rs in runs.values() for r in rs)
-    lines = [
-        f"- date: {started:%Y-%m-%d %H:%M} (the run took {seconds / 60:.1f} min)",
-        f"- machine: {info}",
-        f"- command: `python benches/bench_preprocess.py{' --limit ' + str(args.limit) if args.limit else ''}`; "
-        f"{args.rounds} rounds of the Rust configurations, order rotated each round, each run a fresh child "
+@dataclass
+class Run:
+    """What one run measured, for :func:`report`: ``info`` the machine's line, ``seconds`` the
+    whole run's, ``clips``, ``size`` (bytes), the zip's size and seconds, ``runs`` each
+    configuration's child figures, ``ceiling`` the kernels alone on 1 core (key 1) and all (None)."""
+
+    limit: int | None
+    rounds: int
+    info: str
+    started: datetime.datetime
+    seconds: float
+    clips: int
+    size: int
+    zip_size: int
+    zip_seconds: float
+    runs: dict[str, list[dict]]
+    ceiling: dict
+
+    @property
+    def frames(self) -> int:
+        return next(r["frames"] for rs in self.runs.values() for r in rs)
+
+    def med(self, name: str, key: str) -> float:
+        return statistics.median(r[key] for r in self.runs[name])
+
+
+def report(run: Run) -> str:
+    """The section of benches/RESULTS.md: the setting, one row per configuration, the targets and
+    the scaling ceiling."""
+    return "\n".join(header(run) + table(run) + targets(run) + ceiling(run)) + "\n"
+
+
+def header(run: Run) -> list[str]:
+    return [
+        f"- date: {run.started:%Y-%m-%d %H:%M} (the run took {run.seconds / 60:.1f} min)",
+        f"- machine: {run.info}",
+        f"- command: `python benches/bench_preprocess.py{' --limit ' + str(run.limit) if run.limit else ''}`; "
+        f"{run.rounds} rounds of the Rust configurations, order rotated each round, each run a fresh child "
         "process (times: medians)",
         f"- load average at the end: {', '.join(f'{x:.1f}' for x in os.getloadavg())} "
         "(other jobs on the machine slow every figure alike)",
-        f"- data: {clips} clips, {size / MB:.1f} MB, {frames:,} frames; the zip: "
-        f"{zip_size / MB:.1f} MB deflated, made in {zip_seconds:.1f} s (not timed below)",
+        f"- data: {run.clips} clips, {run.size / MB:.1f} MB, {run.frames:,} frames; the zip: "
+        f"{run.zip_size / MB:.1f} MB deflated, made in {run.zip_seconds:.1f} s (not timed below)",
         "- each run: parse + FK + dynamic features + foot contacts (+ the decomposition with --model) + "
         "writing the dataset (positions, features, contacts[, activity]) to a local folder; page cache warm",
         f"- {CITATION}",
+    ]
+
+
+def table(run: Run) -> list[str]:
+    lines = [
         "",
         "| configuration | runs | wall s | MB/s | frames/s | headers s | kernels s | writing s | peak RSS | output |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for name, rs in runs.items():
+    for name, rs in run.runs.items():
         if not rs:
             continue
-        wall = med(name, "wall")
+        wall = run.med(name, "wall")
         lines.append(
-            f"| {name} | {len(rs)} | {wall:.2f} | {size / MB / wall:.0f} | {frames / wall / 1e3:.0f} "
-            f"k | {med(name, 'headers'):.2f} | {med(name, 'kernels'):.2f} | {med(name, 'write'):.2f} "
+            f"| {name} | {len(rs)} | {wall:.2f} | {run.size / MB / wall:.0f} | {run.frames / wall / 1e3:.0f} "
+            f"k | {run.med(name, 'headers'):.2f} | {run.med(name, 'kernels'):.2f} | {run.med(name, 'write'):.2f} "
             f"| {max(r['peak'] for r in rs) / MB:.0f} MB | {rs[0]['out_bytes'] / MB:.0f} MB |"
         )
-    folder = med("folder, Rust, 2 cores", "wall")
-    targets = [
-        ("folder < 3 s", folder, folder < 3, f"{folder:.2f} s"),
-        (
-            "zip < 5 s",
-            med("zip, Rust, 2 cores", "wall"),
-            med("zip, Rust, 2 cores", "wall") < 5,
-            f"{med('zip, Rust, 2 cores', 'wall'):.2f} s",
-        ),
-        (
-            "with --model < 5 s",
-            None,
-            med("folder + --model, Rust, 2 cores", "wall") < 5,
-            f"{med('folder + --model, Rust, 2 cores', 'wall'):.2f} s",
-        ),
-        (
-            "... with --model --model-float32",
-            None,
-            med("folder + --model --model-float32, Rust, 2 cores", "wall") < 5,
-            f"{med('folder + --model --model-float32, Rust, 2 cores', 'wall'):.2f} s",
-        ),
-    ]
-    if runs["folder, NumPy twins, 2 cores"]:
-        ratio = runs["folder, NumPy twins, 2 cores"][0]["wall"] / folder
-        targets.append((">= 10x the NumPy path", None, ratio >= 10, f"{ratio:.1f}x"))
-    peak = max(r["peak"] for rs in runs.values() for r in rs)
-    targets.append(("peak memory < 2 GB", None, peak < 2e9, f"{peak / MB:.0f} MB (largest of all runs)"))
-    one = med("folder, Rust, 1 core", "wall")
-    targets.append(
+    return lines
+
+
+def targets(run: Run) -> list[str]:
+    folder = run.med("folder, Rust, 2 cores", "wall")
+    found = [("folder < 3 s", folder < 3, f"{folder:.2f} s")]
+    for goal, name in (
+        ("zip < 5 s", "zip, Rust, 2 cores"),
+        ("with --model < 5 s", "folder + --model, Rust, 2 cores"),
+        ("... with --model --model-float32", "folder + --model --model-float32, Rust, 2 cores"),
+    ):
+        wall = run.med(name, "wall")
+        found.append((goal, wall < 5, f"{wall:.2f} s"))
+    if run.runs["folder, NumPy twins, 2 cores"]:
+        ratio = run.runs["folder, NumPy twins, 2 cores"][0]["wall"] / folder
+        found.append((">= 10x the NumPy path", ratio >= 10, f"{ratio:.1f}x"))
+    peak = max(r["peak"] for rs in run.runs.values() for r in rs)
+    found.append(("peak memory < 2 GB", peak < 2e9, f"{peak / MB:.0f} MB (largest of all runs)"))
+    one = run.med("folder, Rust, 1 core", "wall")
+    found.append(
         (
             "near-linear 1 -> 2 workers (>= 1.7x)",
-            None,
             one / folder >= 1.7,
             f"{one / folder:.2f}x faster on 2 cores than on 1 ({one:.2f} s -> {folder:.2f} s)",
         )
     )
-    lines += ["", "| target | measured | result |", "|---|---|---|"]
-    lines += [f"| {t} | {shown} | {'**pass**' if ok else '**FAIL**'} |" for t, _, ok, shown in targets]
-    one_core, all_cores = ceiling[1], ceiling[None]
+    lines = ["", "| target | measured | result |", "|---|---|---|"]
+    return lines + [f"| {goal} | {shown} | {'**pass**' if ok else '**FAIL**'} |" for goal, ok, shown in found]
+
+
+def ceiling(run: Run) -> list[str]:
+    one_core, all_cores = run.ceiling[1], run.ceiling[None]
     parts = ", ".join(
         f"{label} {one_core[key]:.2f} s -> {all_cores[key]:.2f} s"
         for key, label in (
@@ -364,7 +396,7 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
             ("gait", "features and contacts"),
         )
     )
-    lines += [
+    return [
         "",
         "The scaling ceiling on this machine, same run: the pipeline's kernel step alone "
         "(`clip_pipeline_many` on every clip, headers read beforehand; best of 3), 1 core -> 2 cores: "
@@ -372,7 +404,6 @@ def report(args, info, started, seconds, clips, size, zip_size, zip_seconds, run
         f"({one_core['kernels'] / all_cores['kernels']:.2f}x). Where its time goes (the kernels it fuses, each "
         f"called on its own on every clip, their intermediates kept between calls; 1 core -> 2 cores): {parts}.",
     ]
-    return "\n".join(lines) + "\n"
 
 
 if __name__ == "__main__":

@@ -21,7 +21,10 @@ Each run is a fresh child process (imports included in its wall time; the call i
 timed inside the child), pybvh-ml and ours alternated round after round; medians. Both packages
 are byte-compiled first, as pip leaves an installed wheel: pybvh-ml's modules were, at its
 install, while an editable checkout of ours under PYTHONDONTWRITEBYTECODE (set here) compiled all
-its modules from source at every start, 60 ms of each process.
+its modules from source at every start, 60 ms of each process. Checked before the figures are
+written (benches/harness.py; a failed check raises): pybvh's world positions of a converted clip
+within 1e-3 cm of ours on the original (the conversion writes 6 decimals), and both datasets
+holding every clip and the same frames.
 Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 """
 
@@ -44,12 +47,14 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
+from harness import Stopwatch, check, check_equal, commit, cpu_name, memory_gib, rotated
 
 DATA = Path.home() / ".cache" / "motion-data" / "dataset" / "Bandai-Namco-Research-Motiondataset-2" / "data"
 RESULTS = Path(__file__).parent / "RESULTS.md"
 SECTION = "Preprocessing against pybvh-ml: `benches/bench_pybvh_ml.py`"
 ROTATION_CHANNELS = ("Zrotation", "Xrotation", "Yrotation")
 ROOT_CHANNELS = ("Xposition", "Yposition", "Zposition", *ROTATION_CHANNELS)
+SANITY_CM = 1e-3  # pybvh on a converted clip against ours on the original: 2e-06 cm recorded
 
 
 # ----------------------------------------------------------------------------- the converted files
@@ -98,13 +103,13 @@ def convert(paths: list[Path], folder: Path) -> dict:
         return json.loads(done.read_text())
     shutil.rmtree(folder, ignore_errors=True)
     folder.mkdir(parents=True)
-    started = time.perf_counter()
-    rest = rest_of(em.read_bvh(paths[0]))
-    for path in paths:
-        em.write_bvh(for_pybvh_ml(em.read_bvh(path), rest), folder / path.name, decimals=6)
+    with Stopwatch() as watch:
+        rest = rest_of(em.read_bvh(paths[0]))
+        for path in paths:
+            em.write_bvh(for_pybvh_ml(em.read_bvh(path), rest), folder / path.name, decimals=6)
     record = {
         "clips": len(paths),
-        "seconds": time.perf_counter() - started,
+        "seconds": watch.seconds,
         "mb": sum(p.stat().st_size for p in folder.glob("*.bvh")) / 1e6,
     }
     done.write_text(json.dumps(record))
@@ -185,13 +190,13 @@ PYBVH_ML = {
 def run(kind: str, src: Path, out: Path, options) -> dict:
     if out.exists():
         shutil.rmtree(out) if out.is_dir() else out.unlink()
-    started = time.perf_counter()
-    result = subprocess.run(
-        [sys.executable, "-c", CHILD, kind, str(src), str(out), json.dumps(options)],
-        capture_output=True,
-        text=True,
-    )
-    wall = time.perf_counter() - started
+    with Stopwatch() as watch:
+        result = subprocess.run(
+            [sys.executable, "-c", CHILD, kind, str(src), str(out), json.dumps(options)],
+            capture_output=True,
+            text=True,
+        )
+    wall = watch.seconds
     if result.returncode != 0:
         raise SystemExit(f"{kind} failed:\n{result.stderr[-3000:]}")
     record = json.loads(result.stdout.strip().splitlines()[-1])
@@ -215,24 +220,6 @@ def check_outputs(ours: Path, theirs: Path, same_kinds: bool) -> dict:
     return record
 
 
-def machine() -> str:
-    with open("/proc/cpuinfo") as cpuinfo:
-        names = [line.split(":", 1)[1].strip() for line in cpuinfo if line.startswith("model name")]
-    return names[0] if names else platform.processor() or platform.machine()
-
-
-def memory_gib() -> float:
-    with open("/proc/meminfo") as meminfo:
-        return next(int(line.split()[1]) for line in meminfo if line.startswith("MemTotal")) / 2**20
-
-
-def commit() -> str:
-    here = Path(__file__).parent
-    return subprocess.run(
-        ["git", "-C", str(here), "describe", "--always", "--dirty"], capture_output=True, text=True
-    ).stdout.strip()
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", type=Path, default=DATA)
@@ -250,9 +237,11 @@ def main() -> None:
     conversion = convert(paths, converted)
     print(f"converted {conversion['clips']} clips ({conversion['mb']:.1f} MB) in {conversion['seconds']:.1f} s")
     middle = paths[len(paths) // 2]  # not the clip the rest pose comes from
-    check = sanity(middle, converted / middle.name)
-    print(f"sanity, {check['clip']}: pybvh vs ours {check['vs_original']:.2g} cm (original file), "
-          f"{check['vs_converted']:.2g} cm (converted)")  # fmt: skip
+    sane = sanity(middle, converted / middle.name)
+    print(f"sanity, {sane['clip']}: pybvh vs ours {sane['vs_original']:.2g} cm (original file), "
+          f"{sane['vs_converted']:.2g} cm (converted)")  # fmt: skip
+    for key in ("vs_original", "vs_converted"):
+        check(sane[key] <= SANITY_CM, f"sanity {key}: pybvh {sane[key]:.2g} cm from ours (over {SANITY_CM:g})")
 
     ours_options, ours_note = our_options()
     print(f"ours: {' '.join(ours_options)} ({ours_note})")
@@ -261,15 +250,17 @@ def main() -> None:
     times: dict[str, list[dict]] = {"pybvh-ml": [], "ours": []}
     outputs = {"pybvh-ml": args.work / "pybvh_ml.npz", "ours": args.work / "ours"}
     load = os.getloadavg()
-    started = time.perf_counter()
+    watch = Stopwatch()
     for round_ in range(args.rounds):
-        order = ["pybvh-ml", "ours"] if round_ % 2 == 0 else ["ours", "pybvh-ml"]
-        for kind in order:
+        for kind in rotated(["pybvh-ml", "ours"], round_):
             options = PYBVH_ML if kind == "pybvh-ml" else ours_options
             times[kind].append(run(kind, converted, outputs[kind], options))
             print(f"round {round_ + 1}: {kind:8s} {times[kind][-1]['wall']:.2f} s")
-    elapsed = time.perf_counter() - started
+    elapsed = watch.elapsed()
     outputs_check = check_outputs(outputs["ours"], outputs["pybvh-ml"], ours_note == "same kinds")
+    check_equal(outputs_check["clips"], (len(paths), len(paths)), "clips in ours' and pybvh-ml's datasets")
+    ours_frames, their_frames = outputs_check["frames"]
+    check_equal(ours_frames, their_frames, "frames in ours' dataset against pybvh-ml's")
     median = {k: {f: statistics.median(r[f] for r in v) for f in v[0]} for k, v in times.items()}
     ratio_wall = median["pybvh-ml"]["wall"] / median["ours"]["wall"]
     ratio_call = median["pybvh-ml"]["call"] / median["ours"]["call"]
@@ -278,7 +269,7 @@ def main() -> None:
     frames = outputs_check["frames"][0]
     lines = [
         f"- date: {time.strftime('%Y-%m-%d %H:%M')} (the run took {elapsed / 60:.1f} min, conversion aside)",
-        f"- machine: {machine()}, {os.cpu_count()} cores, {memory_gib():.1f} GiB RAM; commit {commit()}; Python "
+        f"- machine: {cpu_name()}, {os.cpu_count()} cores, {memory_gib():.1f} GiB RAM; commit {commit()}; Python "
         f"{platform.python_version()}, NumPy {np.__version__}; pybvh-ml {pybvh_ml.__version__}, pybvh "
         f"{pybvh.__version__}, expressive-mocap {em.__version__}; load average at the start "
         f"{load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}, at the end {', '.join(f'{x:.1f}' for x in os.getloadavg())}",
@@ -288,8 +279,8 @@ def main() -> None:
         f"- data: {len(paths)} clips of dataset-2, {frames:,} frames, converted once with our writer "
         f"({conversion['mb']:.1f} MB, {conversion['seconds']:.1f} s, not timed; see the script's docstring); "
         "Bandai-Namco-Research-Motiondataset (Bandai Namco Research Inc., 2022), CC BY-NC 4.0",
-        f"- sanity: world positions of {check['clip']} ({check['frames']} frames), pybvh on the converted file "
-        f"against ours on the original: max {check['vs_original']:.2g} cm",
+        f"- sanity: world positions of {sane['clip']} ({sane['frames']} frames), pybvh on the converted file "
+        f"against ours on the original: max {sane['vs_original']:.2g} cm",
         f"- pybvh-ml: `preprocess_directory(SRC, OUT.npz, {', '.join(f'{k}={v!r}' for k, v in PYBVH_ML.items())})`",
         f"- ours: `expressive-mocap preprocess SRC -o OUT {' '.join(ours_options)} -q` ({ours_note})",
         "- bytecode: every module of both packages byte-compiled before timing, as pip leaves an installed "

@@ -12,12 +12,16 @@ the speed of retargeting, and mixed-skeleton preprocessing against the one-skele
 2. **Retargeting a 1,000-frame clip**: the CMU file's first 1,000 frames onto the Bandai
    skeleton and a 1,000-frame Bandai walk onto the CMU skeleton, with and without planted feet,
    with the Rust kernels and with the NumPy twins (FK, the pose transfer, contacts, leg IK and
-   planting are kernels; the rest is NumPy either way). Median of 15 calls after a warm-up.
+   planting are kernels; the rest is NumPy either way). Median of 15 calls after a warm-up; the
+   Rust output's world positions are first checked within 1e-6 (file units) of the twins'.
 3. **Mixed preprocessing.** ``--clips`` dataset-2 clips (every k-th, sorted) preprocessed as
    they are (one skeleton, the default path), and the same clips with every second one
    retargeted onto the CMU skeleton beforehand (a mixed archive) with ``--canonical``, which puts
    those back onto the canonical body; each run a fresh process, the two alternated ``--rounds``
-   times. Speed in frames a second of input.
+   times. Speed in frames a second of input; every run must have written every clip.
+
+Every check raises (benches/harness.py) before a figure is written: a clip with no joint map, a
+retarget whose two backends disagree, a preprocessing run that lost a clip.
 
 Data: Bandai-Namco-Research-Motiondataset 1 and 2 (Bandai Namco Research Inc., 2022), CC BY-NC
 4.0; the CMU Graphics Lab Motion Capture Database (subject 131, via bvh11, MIT); deep-motion-
@@ -31,11 +35,9 @@ import datetime
 import json
 import os
 import platform
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +45,7 @@ import numpy as np
 import expressive_mocap as em
 from expressive_mocap.backend import use_backend
 from expressive_mocap.skeletons import find_joint_map, retarget
+from harness import Stopwatch, check_close, check_equal, log, median, repeat
 from results import write_section  # benches/results.py: this script rewrites only its own section
 
 REPO = Path(__file__).resolve().parent.parent
@@ -50,10 +53,7 @@ TITLE = "Any skeleton: maps, round trips, retargeting, mixed archives"
 CACHE = Path.home() / ".cache" / "motion-data" / "dataset"
 _LIMB = [("upper_leg", "lower_leg"), ("lower_leg", "foot"), ("clavicle", "upper_arm"), ("upper_arm", "forearm")]
 BONES = [(f"{s}_{a}", f"{s}_{b}") for s in ("left", "right") for a, b in _LIMB] + [("neck", "head")]
-
-
-def log(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
+POSITION_TOL = 1e-6  # file units: Rust against the NumPy twins (planted feet: 4e-8 cm measured)
 
 
 def directions(motion: em.Motion) -> np.ndarray:
@@ -72,7 +72,7 @@ def maps_and_round_trips(data: Path, other: Path) -> list[str]:
     bandai = sorted((data / "Bandai-Namco-Research-Motiondataset-1" / "data").glob("*.bvh"))
     bandai += sorted((data / "Bandai-Namco-Research-Motiondataset-2" / "data").glob("*.bvh"))
     a_bandai = em.read_bvh(bandai[0])
-    worst, mapped, frames, started = 0.0, 0, 0, time.perf_counter()
+    worst, mapped, frames, watch = 0.0, 0, 0, Stopwatch()
     for k, path in enumerate(bandai):
         motion = em.read_bvh(path)
         find_joint_map(motion.skeleton)  # raises if not found
@@ -82,7 +82,7 @@ def maps_and_round_trips(data: Path, other: Path) -> list[str]:
         frames += motion.n_frames
         if k % 500 == 0:
             log(f"  {k}/{len(bandai)} clips, worst so far {worst:.2g} degrees")
-    seconds = time.perf_counter() - started
+    seconds = watch.elapsed()
     lines = [
         f"- Bandai-Namco clips mapped with no map file: {mapped} of {len(bandai)} (both datasets); round trip "
         f"onto the CMU skeleton and back, largest mapped-bone error **{worst:.2g} degrees** "
@@ -103,13 +103,18 @@ def maps_and_round_trips(data: Path, other: Path) -> list[str]:
 
 
 def timed(function, repeats: int = 15) -> float:
-    function()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times) * 1000
+    """Milliseconds: the median of ``repeats`` calls after one warm-up."""
+    return median(repeat(function, repeats, warmup=1)) * 1000
+
+
+def same_retarget(source: em.Motion, target: em.Motion, plant: bool, what: str) -> None:
+    """The Rust kernels' retarget has the twins' frames and world positions (within POSITION_TOL)."""
+    out = {}
+    for backend in ("rust", "numpy"):
+        with use_backend(backend):
+            out[backend] = retarget(source, target, plant_feet=plant)
+    check_equal(out["rust"].n_frames, source.n_frames, f"{what}: frames")
+    check_close(out["rust"].positions(), out["numpy"].positions(), f"{what}: world positions", atol=POSITION_TOL)
 
 
 def retarget_speed(data: Path, other: Path) -> list[str]:
@@ -127,6 +132,7 @@ def retarget_speed(data: Path, other: Path) -> list[str]:
     lines = ["| clip | feet | Rust kernels (ms) | NumPy twins (ms) |", "|---|---|---|---|"]
     for name, (source, target) in cases.items():
         for plant in (True, False):
+            same_retarget(source, target, plant, f"{name}, {'planted' if plant else 'as carried'}")
             row = []
             for backend in ("rust", "numpy"):
                 with use_backend(backend):
@@ -176,10 +182,10 @@ def mixed_preprocessing(data: Path, other: Path, clips: int, rounds: int) -> lis
                     capture_output=True, text=True, check=True, env=env,
                 )  # fmt: skip
                 report = json.loads(result.stdout)
-                assert report["failed"] == 0 and report["ok"] == len(paths), report
+                check_equal((report["ok"], report["failed"]), (len(paths), 0), f"{name}: clips written, failed")
                 runs[name].append(report["seconds"])
             log(f"  round {r + 1}: " + ", ".join(f"{k} {v[-1]:.2f} s" for k, v in runs.items()))
-    base = statistics.median(runs["one skeleton"])
+    base = median(runs["one skeleton"])
     lines = [
         f"{len(paths)} dataset-2 clips ({frames:,} frames); the mixed archive has every second clip on the CMU "
         f"skeleton (31 joints, metres, 3-channel ZYX joints). Median of {rounds} fresh processes each:",
@@ -188,8 +194,8 @@ def mixed_preprocessing(data: Path, other: Path, clips: int, rounds: int) -> lis
         "|---|---|---|---|",
     ]
     for name, seconds in runs.items():
-        median = statistics.median(seconds)
-        lines.append(f"| {name} | {median:.2f} | {frames / median:,.0f} | {base / median:.2f}x |")
+        middle = median(seconds)
+        lines.append(f"| {name} | {middle:.2f} | {frames / middle:,.0f} | {base / middle:.2f}x |")
     return lines
 
 

@@ -4,16 +4,19 @@ in clips of 75, 19 features, D = 80 pose values, H = 300, every stage (and the p
     PYTHONPATH=python python benches/bench_train.py [--clips 667] [--frames 75] [--max-iter 400]
 
 Poses are ``tanh(X A) B`` plus noise on a 6-D manifold (as in tests/test_train.py), so the MSE
-figures say the optimiser works, not how well real poses are predicted.
+figures say the optimiser works, not how well real poses are predicted. Checked before the total
+is printed (benches/harness.py; a failed check raises): every row in the train/test split, and the
+network's test MSE finite and below the mean pose's.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
-import time
 
 from expressive_mocap.decoupling.training import synthetic_data, train_stacked_network
+from harness import check, check_equal, timed
 
 
 def main() -> None:
@@ -28,8 +31,8 @@ def main() -> None:
         f"{len(X)} rows, {X.shape[1]} features, D = {P.shape[1]}, H = "
         f"{args.hidden}, max_iter {args.max_iter} a stage, {os.cpu_count()} cpus"
     )
-    start = time.perf_counter()
-    train_stacked_network(
+    seconds, (_, report) = timed(
+        train_stacked_network,
         X,
         P,
         groups,
@@ -38,7 +41,11 @@ def main() -> None:
         max_iter=args.max_iter,
         log=lambda line: print(line, flush=True),
     )
-    print(f"total {time.perf_counter() - start:.0f} s")  # the report above comes from the training log
+    split = report["split"]
+    check_equal(split["train_rows"] + split["test_rows"], len(X), "rows in the train/test split")
+    network, baseline = report["fine_tuned"]["test_mse"], report["mean_pose"]["test_mse"]
+    check(math.isfinite(network) and network < baseline, f"test MSE {network:.4g}: not below the mean pose's")
+    print(f"total {seconds:.0f} s")  # the report above comes from the training log
 
 
 if __name__ == "__main__":

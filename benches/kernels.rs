@@ -2,12 +2,18 @@
 //! to quaternions, forward kinematics, dynamic features and MLP inference, on synthetic inputs
 //! of realistic size.
 //! Run with `cargo bench --bench kernels`; a plain timing main (stable Rust, no criterion):
-//! each kernel is run a few times and the best and median wall times are printed.
+//! each kernel is run a few times and the best and median wall times are printed. Every
+//! kernel's output is checked before any time is printed (a failed check panics): the numbers
+//! parsed back within 1e-6 of those written with 6 decimals, unit quaternions equal to the
+//! product of the three axis rotations, FK of two frames against a plain composition, finite
+//! features, and the network's first row against a plain f64 evaluation.
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use _core::features::{dynamic_features, FeatureParams};
+use glam::{DQuat, DVec3};
+
+use _core::features::{dynamic_features, FeatureParams, N_FEATURES};
 use _core::fk::forward_kinematics;
 use _core::mlp::{mlp_forward, Activation, Layer};
 use _core::parse::parse_motion_block;
@@ -40,6 +46,19 @@ fn unit_quats(noise: &mut Noise, count: usize) -> Vec<f64> {
     out
 }
 
+/// Stop the bench when a kernel's output is wrong: no figure for a wrong result.
+fn check(ok: bool, what: &str) {
+    assert!(ok, "check failed: {what}");
+}
+
+fn quat(v: &[f64]) -> DQuat {
+    DQuat::from_xyzw(v[0], v[1], v[2], v[3])
+}
+
+fn vec3(v: &[f64]) -> DVec3 {
+    DVec3::new(v[0], v[1], v[2])
+}
+
 fn time(name: &str, work: usize, unit: &str, mut run: impl FnMut()) {
     let mut times: Vec<Duration> = (0..RUNS)
         .map(|_| {
@@ -61,11 +80,12 @@ fn time(name: &str, work: usize, unit: &str, mut run: impl FnMut()) {
 fn main() {
     let mut noise = Noise(7);
     let channels = 3 + 3 * JOINTS;
+    let written: Vec<f64> = (0..FRAMES * channels)
+        .map(|_| noise.next() * 180.0)
+        .collect();
     let mut text = String::new();
-    for _ in 0..FRAMES {
-        let line: Vec<String> = (0..channels)
-            .map(|_| format!("{:.6}", noise.next() * 180.0))
-            .collect();
+    for row in written.chunks(channels) {
+        let line: Vec<String> = row.iter().map(|v| format!("{v:.6}")).collect();
         text.push_str(&line.join(" "));
         text.push('\n');
     }
@@ -139,6 +159,24 @@ fn main() {
         .collect();
     let orders = [[2u8, 0, 1]; JOINTS];
 
+    check_outputs(&Inputs {
+        block: &block,
+        written: &written,
+        channels,
+        angles: &angles,
+        orders: &orders,
+        rotations: &rotations,
+        translations: &translations,
+        parents: &parents,
+        points: &points,
+        thighs: &thighs,
+        contacts: &contacts,
+        reference: &reference,
+        params: &params,
+        x: &x,
+        layers: &layers,
+    });
+
     println!(
         "{FRAMES} frames, {JOINTS} joints, best and median of {RUNS} runs, {} rayon threads",
         rayon::current_num_threads()
@@ -166,4 +204,121 @@ fn main() {
     time("mlp_forward (f32, 19-256-256-100)", FRAMES, "rows", || {
         black_box(mlp_forward(black_box(&x), FRAMES, &layers).unwrap());
     });
+}
+
+/// Every kernel's input, for [`check_outputs`].
+struct Inputs<'a> {
+    block: &'a [u8],
+    written: &'a [f64],
+    channels: usize,
+    angles: &'a [f64],
+    orders: &'a [[u8; 3]],
+    rotations: &'a [f64],
+    translations: &'a [f64],
+    parents: &'a [i64],
+    points: &'a [f64],
+    thighs: &'a [f64],
+    contacts: &'a [bool],
+    reference: &'a [f64],
+    params: &'a FeatureParams,
+    x: &'a [f32],
+    layers: &'a [Layer<'a, f32>],
+}
+
+/// Each kernel's output against what it must be, before anything is timed.
+fn check_outputs(i: &Inputs) {
+    let parsed = parse_motion_block(i.block, FRAMES, i.channels).unwrap();
+    check(
+        parsed.len() == i.written.len(),
+        "parse_motion_block: value count",
+    );
+    check(
+        parsed
+            .iter()
+            .zip(i.written)
+            .all(|(p, w)| (p - w).abs() <= 1e-6),
+        "parse_motion_block: values within 1e-6 of those written",
+    );
+
+    let quats = euler_to_quat(i.angles, i.orders).unwrap();
+    check(
+        quats.len() == i.angles.len() / 3 * 4,
+        "euler_to_quat: quaternion count",
+    );
+    let axes = [DVec3::X, DVec3::Y, DVec3::Z];
+    for (k, (q, a)) in quats.chunks(4).zip(i.angles.chunks(3)).enumerate() {
+        let order = i.orders[k % i.orders.len()];
+        let want = (0..3).fold(DQuat::IDENTITY, |acc, n| {
+            acc * DQuat::from_axis_angle(axes[usize::from(order[n])], a[n].to_radians())
+        });
+        check(
+            (quat(q).dot(want).abs() - 1.0).abs() <= 1e-12
+                && (quat(q).length() - 1.0).abs() <= 1e-12,
+            "euler_to_quat: unit quaternions equal to the axis rotations' product",
+        );
+    }
+
+    let (world_rot, world_pos) =
+        forward_kinematics(i.rotations, i.translations, i.parents).unwrap();
+    check(
+        world_rot.len() == FRAMES * JOINTS * 4 && world_pos.len() == FRAMES * JOINTS * 3,
+        "forward_kinematics: output sizes",
+    );
+    for f in [0, FRAMES - 1] {
+        let (mut rot, mut pos) = (DQuat::IDENTITY, DVec3::ZERO);
+        for j in 0..JOINTS {
+            let at = f * JOINTS + j;
+            // The chain: each joint's parent is the one before it, joint 0 the root.
+            pos = if j == 0 {
+                vec3(&i.translations[3 * at..])
+            } else {
+                pos + rot * vec3(&i.translations[3 * at..])
+            };
+            rot = if j == 0 {
+                quat(&i.rotations[4 * at..])
+            } else {
+                rot * quat(&i.rotations[4 * at..])
+            };
+            check(
+                (quat(&world_rot[4 * at..]).dot(rot).abs() - 1.0).abs() <= 1e-12
+                    && (vec3(&world_pos[3 * at..]) - pos).length() <= 1e-9,
+                "forward_kinematics: world rotations and positions of a plain composition",
+            );
+        }
+    }
+
+    let features = dynamic_features(i.points, i.thighs, i.contacts, i.reference, i.params).unwrap();
+    check(
+        features.len() == FRAMES * N_FEATURES && features.iter().all(|v| v.is_finite()),
+        "dynamic_features: 19 finite features a frame",
+    );
+
+    let outputs = i.layers.last().unwrap().outputs;
+    let net = mlp_forward(i.x, FRAMES, i.layers).unwrap();
+    check(net.len() == FRAMES * outputs, "mlp_forward: output size");
+    let mut row: Vec<f64> = i.x[..i.layers[0].inputs]
+        .iter()
+        .map(|&v| f64::from(v))
+        .collect();
+    for layer in i.layers {
+        row = (0..layer.outputs)
+            .map(|o| {
+                let sum = f64::from(layer.bias[o])
+                    + (0..layer.inputs)
+                        .map(|n| row[n] * f64::from(layer.weights[n * layer.outputs + o]))
+                        .sum::<f64>();
+                match layer.activation {
+                    Activation::Tanh => sum.tanh(),
+                    Activation::Linear => sum,
+                }
+            })
+            .collect();
+    }
+    check(
+        net[..outputs]
+            .iter()
+            .zip(&row)
+            .all(|(&got, want)| (f64::from(got) - want).abs() <= 1e-3),
+        "mlp_forward: the first row within 1e-3 of a plain f64 evaluation",
+    );
 }
