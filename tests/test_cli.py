@@ -133,7 +133,7 @@ def test_positions_csv_is_csv_and_other_extensions_are_refused(tmp_path, mixed_p
 
 
 def test_decouple_output_ending_in_bvh_is_a_prefix(tmp_path, capsys):
-    from expressive_mocap.demo import walk_and_wave
+    from expressive_mocap.procedural import walk_and_wave
 
     em.write_bvh(walk_and_wave(seconds=1.0).waving, tmp_path / "wave.bvh")
     assert main(["decouple", str(tmp_path / "wave.bvh"), "-o", str(tmp_path / "out.bvh")]) == 0

@@ -10,7 +10,7 @@ import expressive_mocap as em
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
-from expressive_mocap.demo import walk_and_wave
+from expressive_mocap.procedural import walk_and_wave
 
 ARM = ["UpperArm_R", "LowerArm_R", "Hand_R"]
 

@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import files as em_io
+from expressive_mocap._utils import files as em_io
 from expressive_mocap.cli import build_parser, main
-from expressive_mocap.demo import loaded_walk, procedural_walk, walk_and_wave
+from expressive_mocap.procedural import loaded_walk, procedural_walk, walk_and_wave
 
 
 @pytest.fixture(scope="module")
@@ -230,7 +230,7 @@ def test_an_output_that_is_not_a_regular_file_is_refused_before_any_work(
     import stat
 
     import expressive_mocap.dataset as preprocess
-    import expressive_mocap.demo as demo
+    import expressive_mocap.procedural as demo
     from expressive_mocap.cli import common, data, decoupling, exaggeration, files
     from expressive_mocap.cli import demo as cli_demo
 
@@ -262,7 +262,7 @@ def test_an_output_that_is_not_a_regular_file_is_refused_before_any_work(
 
 
 def test_demo_checks_every_file_it_will_write_in_an_existing_folder(tmp_path, capsys, monkeypatch):
-    import expressive_mocap.demo as demo
+    import expressive_mocap.procedural as demo
 
     (tmp_path / "demo").mkdir()
     os.mkfifo(tmp_path / "demo" / "decouple.gif")  # the last file demo writes

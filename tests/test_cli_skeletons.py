@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap.body import find_joint_map
 from expressive_mocap.cli import main
-from expressive_mocap.skeletons import find_joint_map, synthetic_walk
+from expressive_mocap.skeletons import synthetic_walk
 
 
 @pytest.fixture(scope="module")

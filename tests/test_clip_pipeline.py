@@ -13,10 +13,10 @@ from hypothesis import strategies as st
 
 import expressive_mocap as em
 from expressive_mocap import bvh, ops, reference
+from expressive_mocap.body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from expressive_mocap.body.roles import JointRoles, actor_height, hips_rest_height
 from expressive_mocap.bvh import header as bvh_header
-from expressive_mocap.demo import procedural_walk
-from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
-from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
+from expressive_mocap.procedural import procedural_walk
 
 GAIT = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
 

@@ -16,14 +16,14 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
+from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.dataset.derive import resampled, unwrap_by_clip
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.motion import Motion
+from expressive_mocap.procedural import procedural_walk
+from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons import synthetic_walk
 from expressive_mocap.skeletons.canonical import many_onto_canonical, onto_canonical
-from expressive_mocap.skeletons.jointmap import find_joint_map
 from expressive_mocap.skeletons.mirror import mirror, mirror_many
 
 FORMS = ("quaternion", "6d", "matrix", "axis-angle", "euler:XYZ")

@@ -15,13 +15,14 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from expressive_mocap import representations
+from expressive_mocap.body import find_joint_map
+from expressive_mocap.body.conventions import _changed
 from expressive_mocap.cli import main
-from expressive_mocap.dataset import load_dataset, preprocess
+from expressive_mocap.dataset import load_dataset, preprocess, representations
+from expressive_mocap.dataset.heading import HeadingFrame, from_heading, turn_by_yaw
 from expressive_mocap.errors import ArgumentError, DatasetError
-from expressive_mocap.heading import HeadingFrame, from_heading, turn_by_yaw
-from expressive_mocap.skeletons import find_joint_map, synthetic_walk
-from expressive_mocap.skeletons.conventions import _changed
+from expressive_mocap.rotations import quat
+from expressive_mocap.skeletons import synthetic_walk
 from expressive_mocap.skeletons.mirror import _linear, _planes_of, _through_positions, mirror, partners
 from expressive_mocap.skeletons.synthetic import RIGS
 
@@ -274,7 +275,7 @@ def test_a_resume_with_other_shaping_options_is_refused(clips, tmp_path, changed
 
 def test_a_z_up_file_gives_the_same_heading_arrays(tmp_path):
     walk = synthetic_walk("bandai", seconds=2.0).motion
-    z_up = _changed(walk, em.quat.about("X", 90.0), 1.0)  # Y up -> Z up
+    z_up = _changed(walk, quat.about("X", 90.0), 1.0)  # Y up -> Z up
     for name, motion in (("y", walk), ("z", z_up)):
         (tmp_path / name).mkdir()
         em.write_bvh(motion, tmp_path / name / "walk.bvh")

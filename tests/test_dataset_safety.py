@@ -20,8 +20,8 @@ import expressive_mocap as em
 import expressive_mocap.dataset.finish as finish_module
 import expressive_mocap.dataset.npy as npy_module
 from expressive_mocap.dataset import load_dataset, preprocess
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import ArgumentError, DatasetError
+from expressive_mocap.procedural import procedural_walk
 
 # Child processes import the package the tests import: the installed one in CI, not the sources.
 PACKAGE_ROOT = str(Path(em.__file__).resolve().parent.parent)

@@ -7,11 +7,12 @@ from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap import decoupling as dc
-from expressive_mocap import quat, reference
+from expressive_mocap import reference
 from expressive_mocap.decoupling import edits
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import ArgumentError
 from expressive_mocap.ops import compose_rotations, decouple_rotations
+from expressive_mocap.procedural import procedural_walk
+from expressive_mocap.rotations import quat
 
 
 class SmoothingModel:

@@ -7,14 +7,15 @@ import pytest
 
 import expressive_mocap as em
 from conftest import bvh_values, scipy_positions
+from expressive_mocap.body.canonical import canonical_skeleton
+from expressive_mocap.body.contacts import foot_contacts
+from expressive_mocap.body.roles import JointRoles
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling import BodyModel
 from expressive_mocap.decoupling.edits import blend, mix, modulate
 from expressive_mocap.decoupling.feet import default_mask, joint_mask
 from expressive_mocap.errors import ArgumentError
-from expressive_mocap.features import foot_contacts
-from expressive_mocap.roles import JointRoles
-from expressive_mocap.skeletons.canonical import canonical_skeleton
+from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons.synthetic import synthetic_skeleton
 
 LEGS = ["UpperLeg_L", "LowerLeg_L", "Foot_L", "Toes_L", "UpperLeg_R", "LowerLeg_R", "Foot_R", "Toes_R"]
@@ -103,8 +104,8 @@ def test_mixing_the_arms_only_leaves_every_other_joint_bit_for_bit(clips, model)
     np.testing.assert_array_equal(out.translations, walk.translations)
     # ... and the arms do take the wave's expression: the right arm moves off the walk's.
     forearm = walk.skeleton.index("LowerArm_R")
-    turn = em.quat.mul(out.rotations[:, forearm], em.quat.conjugate(walk.rotations[:, forearm]))
-    assert np.degrees(em.quat.angle(turn)).max() > 30
+    turn = quat.mul(out.rotations[:, forearm], quat.conjugate(walk.rotations[:, forearm]))
+    assert np.degrees(quat.angle(turn)).max() > 30
 
 
 def test_by_default_a_standing_clips_legs_are_not_laid_on_a_walk(clips, model):
@@ -182,14 +183,14 @@ def test_planted_puts_the_stance_feet_back_and_eases_the_swing():
     """On the demo's walk (no data needed): bend both knees (bones lie along X) and turn a foot;
     through the contacts the ankles and feet are the walk's again, and the swing gets no jump."""
     from expressive_mocap.decoupling.feet import planted
-    from expressive_mocap.demo import procedural_walk
+    from expressive_mocap.procedural import procedural_walk
 
     walk = procedural_walk(seconds=3.0)
     skeleton = walk.skeleton
     rotations = walk.rotations.copy()
     for name, axis, degrees in (("LowerLeg_L", "Z", 25.0), ("LowerLeg_R", "Z", -15.0), ("Foot_L", "Y", 20.0)):
         j = skeleton.index(name)
-        rotations[:, j] = em.quat.mul(rotations[:, j], em.quat.about(axis, degrees)[None])
+        rotations[:, j] = quat.mul(rotations[:, j], quat.about(axis, degrees)[None])
     edited = em.Motion(skeleton, rotations, walk.translations, walk.frame_time)
     out, contacts = planted(walk, edited)
     world_in, pos_in = walk.fk()
@@ -215,7 +216,7 @@ def test_an_edit_that_changes_nothing_changes_nothing(model, tmp_path):
     rotations, and the feet, planted where the input has them, stay (planting bent a straight
     stance leg: a knee moved 0.56 cm on a standing wave). A scale a hair from 1 moves nothing a
     viewer could see."""
-    from expressive_mocap.demo import walk_and_wave
+    from expressive_mocap.procedural import walk_and_wave
 
     wave = walk_and_wave(seconds=2.0).waving
     assert np.array_equal(modulate(wave, 1.0, model).rotations, wave.rotations)

@@ -6,18 +6,12 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
-from expressive_mocap.demo import (
-    BANDAI_CHANNELS,
-    WAVE_RAISE,
-    bandai_like_skeleton,
-    procedural_walk,
-    strides_per_second,
-    walk_and_wave,
-)
-from expressive_mocap.features import cadence, contact_intervals, foot_contacts, footstrikes
-from expressive_mocap.quat import mean_rotation
-from expressive_mocap.roles import JointRoles
+from expressive_mocap.body.canonical import BANDAI_CHANNELS, bandai_like_skeleton
+from expressive_mocap.body.contacts import cadence, contact_intervals, foot_contacts, footstrikes
+from expressive_mocap.body.roles import JointRoles
+from expressive_mocap.procedural import WAVE_RAISE, procedural_walk, strides_per_second, walk_and_wave
+from expressive_mocap.rotations import quat
+from expressive_mocap.rotations.quat import mean_rotation
 
 BANDAI_NAMES = (
     "joint_Root", "Hips", "Spine", "Chest", "Neck", "Head",

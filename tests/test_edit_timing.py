@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling import BodyModel
 from expressive_mocap.decoupling.edits import at_rate_of, blend, mix
-from expressive_mocap.demo import procedural_walk, walk_and_wave
 from expressive_mocap.errors import ArgumentError
-from expressive_mocap.skeletons.jointmap import find_joint_map
+from expressive_mocap.procedural import procedural_walk, walk_and_wave
 
 
 @pytest.fixture(scope="module")

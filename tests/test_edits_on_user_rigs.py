@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
+from expressive_mocap.body.contacts import foot_contacts
+from expressive_mocap.body.conventions import read_conventions, upright
+from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.cli import main
-from expressive_mocap.demo import walk_and_wave
-from expressive_mocap.features import foot_contacts
+from expressive_mocap.procedural import walk_and_wave
+from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons import synthetic_walk
-from expressive_mocap.skeletons.conventions import read_conventions, upright
-from expressive_mocap.skeletons.jointmap import find_joint_map
 
 
 def feet(edited: em.Motion, source: em.Motion) -> tuple[float, float, float]:

@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
-from expressive_mocap.demo import LOADED_JOINTS, loaded_walk, procedural_walk
+from expressive_mocap.body import contacts
 from expressive_mocap.errors import ArgumentError, ClipError, ModelError
 from expressive_mocap.exaggeration import (
     Cycle,
@@ -22,6 +21,8 @@ from expressive_mocap.exaggeration import (
     to_cycle_timing,
     train,
 )
+from expressive_mocap.procedural import LOADED_JOINTS, loaded_walk, procedural_walk
+from expressive_mocap.rotations import quat
 
 LEVELS = [1.0, 2.0, 3.0]
 
@@ -61,7 +62,7 @@ def test_cycles_are_footstrike_to_footstrike_of_one_foot_and_follow_each_other()
     assert len(cycles) >= 3
     assert len({c.foot for c in cycles}) == 1
     assert all(a.end == b.start for a, b in zip(cycles[:-1], cycles[1:]))
-    strikes = em.features.footstrikes(em.foot_contacts(motion))
+    strikes = contacts.footstrikes(em.foot_contacts(motion))
     ends = set(strikes[strikes[:, 1] == cycles[0].foot, 0].tolist())
     assert all(c.start in ends and c.end in ends for c in cycles)
 

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
 from expressive_mocap.errors import ArgumentError, ModelError
 from expressive_mocap.exaggeration import exaggerate
+from expressive_mocap.rotations import quat
 
 # A posture: joints held turned by a constant 10 degrees in their parent's frame throughout, the
 # turns chosen so that each moved the estimate the same way when it read the DOFs' means.

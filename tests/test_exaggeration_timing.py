@@ -8,10 +8,10 @@ import pytest
 
 import expressive_mocap as em
 from conftest import scipy_positions
-from expressive_mocap.demo import loaded_walk, procedural_walk
 from expressive_mocap.errors import ModelError
 from expressive_mocap.exaggeration import ExaggerationModel, exaggerate, timing_validation, train
 from expressive_mocap.exaggeration.model import TIMING_ARRAYS
+from expressive_mocap.procedural import loaded_walk, procedural_walk
 
 LEVELS = [1.0, 2.0, 3.0]
 SPEEDS = (1.0, 1.2, 1.4)  # m/s: the procedural walk's cadence and stride grow with its speed
@@ -149,9 +149,9 @@ def test_a_retimed_edit_carries_back_onto_another_skeleton(speed_model, tmp_path
     """A game-rig walk exaggerated with a model of the Bandai skeleton: the edit, retimed, is laid
     back frame for frame on the input retimed alike, so joints the model lacks (fingers, here
     curled) keep their rotations instead of being retargeted to rest."""
-    from expressive_mocap import quat
     from expressive_mocap.cli import main
     from expressive_mocap.exaggeration.timing import retime_like
+    from expressive_mocap.rotations import quat
     from expressive_mocap.skeletons import retarget, synthetic_walk
     from expressive_mocap.skeletons.canonical import carried_for
 

@@ -7,11 +7,14 @@ from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from conftest import stick_walker
-from expressive_mocap import ops, quat, reference
-from expressive_mocap.demo import bandai_like_skeleton, procedural_walk
-from expressive_mocap.features import FEATURE_NAMES, default_floor, dynamic_features
-from expressive_mocap.quat import mean_rotation
-from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
+from expressive_mocap import ops, reference
+from expressive_mocap.body.canonical import bandai_like_skeleton
+from expressive_mocap.body.contacts import default_floor
+from expressive_mocap.body.roles import JointRoles, actor_height, hips_rest_height
+from expressive_mocap.decoupling.features import FEATURE_NAMES, dynamic_features
+from expressive_mocap.procedural import procedural_walk
+from expressive_mocap.rotations import quat
+from expressive_mocap.rotations.quat import mean_rotation
 
 ATOL = 1e-9  # Rust vs NumPy and invariances, on features of order 1 (measured ~1e-15)
 V, V_MEAN, CONTACT, AIR, H, THIGHS = slice(0, 3), slice(3, 6), slice(6, 8), slice(8, 10), 10, slice(11, 19)
@@ -402,7 +405,7 @@ def test_gait_many_asks_only_for_what_is_wanted_and_names_bad_input(backend):
 
 
 def test_percentiles_by_clip_are_numpys_clip_by_clip():
-    from expressive_mocap.features import percentiles_by_clip
+    from expressive_mocap.body.contacts import percentiles_by_clip
 
     rng = np.random.default_rng(5)
     for trial in range(60):

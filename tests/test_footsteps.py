@@ -9,10 +9,19 @@ import pytest
 
 import expressive_mocap as em
 from conftest import stick_walker
-from expressive_mocap import features, ops, reference
+from expressive_mocap import ops, reference
+from expressive_mocap.body import contacts
+from expressive_mocap.body.contacts import (
+    ContactInterval,
+    air_time,
+    cadence,
+    contact_intervals,
+    foot_contacts,
+    footstrikes,
+)
 from expressive_mocap.cli import main
-from expressive_mocap.demo import procedural_walk
-from expressive_mocap.features import ContactInterval, air_time, cadence, contact_intervals, foot_contacts, footstrikes
+from expressive_mocap.decoupling import features
+from expressive_mocap.procedural import procedural_walk
 
 STYLES = ["normal", "active", "exhausted", "elderly", "feminine", "masculine", "youthful"]
 
@@ -249,11 +258,6 @@ def test_footsteps_help_reads_well(capsys):
         assert words in out
 
 
-def test_features_module_exports():
-    assert set(features.__all__) >= {
-        "dynamic_features",
-        "foot_contacts",
-        "air_time",
-        "contact_intervals",
-        "FEATURE_NAMES",
-    }
+def test_contacts_and_features_module_exports():
+    assert set(contacts.__all__) >= {"foot_contacts", "air_time", "contact_intervals"}
+    assert set(features.__all__) >= {"dynamic_features", "FEATURE_NAMES"}

@@ -14,13 +14,13 @@ import pytest
 
 import expressive_mocap as em
 from conftest import bvh_values, scipy_fk
-from expressive_mocap import quat
+from expressive_mocap.body.hinges import canonical_hinge_limits, learn_hinge_limits, limit_hinges
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.edits import blend, mix, modulate
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import ArgumentError
 from expressive_mocap.exaggeration import exaggerate
-from expressive_mocap.hinges import canonical_hinge_limits, learn_hinge_limits, limit_hinges
+from expressive_mocap.procedural import procedural_walk
+from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons.canonical import carried_for
 from expressive_mocap.skeletons.synthetic import synthetic_walk
 

@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap.body.conventions import read_conventions
+from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.cli import main
 from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.errors import MocapError
 from expressive_mocap.motion import Motion, Skeleton
 from expressive_mocap.skeletons import synthetic_walk
-from expressive_mocap.skeletons.conventions import read_conventions
-from expressive_mocap.skeletons.jointmap import find_joint_map
 
 
 def reshaped(motion: Motion, offsets: np.ndarray) -> Motion:

@@ -1,10 +1,10 @@
-"""Two-bone IK (expressive_mocap.ik): hand-checkable legs."""
+"""Two-bone IK (expressive_mocap.body.ik): hand-checkable legs."""
 
 import numpy as np
 import pytest
 
-from expressive_mocap import quat
-from expressive_mocap.ik import REACH, two_bone_ik
+from expressive_mocap.body.ik import REACH, two_bone_ik
+from expressive_mocap.rotations import quat
 
 THIGH = np.array([0.0, -40.0, 0.0])
 SHIN = np.array([0.0, -38.0, 2.0])

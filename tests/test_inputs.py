@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import files as em_io
+from expressive_mocap._utils import files as em_io
 from expressive_mocap.bvh import read_header
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling.body_model import BodyModel

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap.body.conventions import read_conventions
+from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.cli import main
 from expressive_mocap.errors import MocapError
 from expressive_mocap.skeletons import synthetic_walk
-from expressive_mocap.skeletons.conventions import read_conventions
-from expressive_mocap.skeletons.jointmap import find_joint_map
 from expressive_mocap.skeletons.synthetic import RIGS
 
 ARM = ("Shoulder", "Arm", "ForeArm", "Hand")
@@ -84,7 +84,7 @@ def test_a_map_that_puts_the_feet_above_the_hips_is_refused(cmu_walk):
     the feet above the hips are checked on a motion turned over, its map found by names."""
     flipped = cmu_walk.positions() * np.array([1.0, -1.0, 1.0])
     jmap = find_joint_map(cmu_walk.skeleton)
-    from expressive_mocap.skeletons.mapcheck import check_posed_map
+    from expressive_mocap.body.mapcheck import check_posed_map
 
     check_posed_map(jmap, cmu_walk.positions())  # upright: fine
     swap_head = dict(jmap.joints, head=jmap["left_toes"])
@@ -93,7 +93,7 @@ def test_a_map_that_puts_the_feet_above_the_hips_is_refused(cmu_walk):
 
 
 def test_legs_hanging_from_the_chest_and_limbs_crossing_sides_are_refused(cmu_walk):
-    from expressive_mocap.skeletons.mapcheck import check_joint_map
+    from expressive_mocap.body.mapcheck import check_joint_map
 
     skeleton, jmap = cmu_walk.skeleton, find_joint_map(cmu_walk.skeleton)
     arms_as_legs = dict(jmap.joints)

@@ -10,6 +10,7 @@ import expressive_mocap as em
 from conftest import BACKENDS
 from expressive_mocap import ops as k
 from expressive_mocap import reference
+from expressive_mocap.body import contacts as foot_contacts
 from kernel_cases import CORE, RNG, contacts_args, features_args, layout, mlp_args, quats
 
 # Each public wrapper: a function of (frames, joints) giving its arguments, and the arrays'
@@ -258,4 +259,4 @@ def test_rust_functions_refuse_bad_scalars_and_absurd_shapes(name, args, argumen
 def test_air_time_refuses_what_is_not_flags(contacts, backend):
     # Text would have been cast to bool: "x" and "" silently True and False.
     with pytest.raises(em.MocapError, match="`contacts`"):
-        em.features.air_time(contacts, 0.1)
+        foot_contacts.air_time(contacts, 0.1)

@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
-from expressive_mocap.features import foot_contacts
-from expressive_mocap.skeletons import find_joint_map, synthetic_walk
-from expressive_mocap.skeletons.conventions import read_conventions
+from expressive_mocap.body import find_joint_map
+from expressive_mocap.body.contacts import foot_contacts
+from expressive_mocap.body.conventions import read_conventions
+from expressive_mocap.rotations import quat
+from expressive_mocap.skeletons import synthetic_walk
 from expressive_mocap.skeletons.mirror import mirror, partners
 from expressive_mocap.skeletons.synthetic import RIGS
 

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.streaming import StreamingDecoupler
 from expressive_mocap.decoupling.training import train_body_model
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import ModelError
+from expressive_mocap.procedural import procedural_walk
+from expressive_mocap.rotations import quat
 
 
 @pytest.fixture(scope="module")

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap._utils.files import MAX_MODEL_BYTES
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.exaggeration import ExaggerationModel
-from expressive_mocap.files import MAX_MODEL_BYTES
 from model_files import npz, small_models
 
 MODELS = small_models()
@@ -163,8 +163,8 @@ def test_an_exaggeration_model_of_one_intensity_is_refused():
 @pytest.fixture(scope="module")
 def walk_model():
     """An exaggeration model of the demo's walks on the Bandai-like skeleton, with its joint map."""
-    from expressive_mocap.demo import loaded_walk
     from expressive_mocap.exaggeration import train
+    from expressive_mocap.procedural import loaded_walk
 
     return train([[loaded_walk(k) for k in (1.0, 2.0)]], (1.0, 2.0))
 

@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import files as em_io
+from expressive_mocap._utils import files as em_io
 from expressive_mocap.cli import main
-from expressive_mocap.demo import walk_and_wave
 from expressive_mocap.errors import MocapError
+from expressive_mocap.procedural import walk_and_wave
 
 needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="making a device node (mknod) needs root")
 

@@ -29,8 +29,9 @@ HAMMER = textwrap.dedent(
     """
     import json, sys, threading, time
     import numpy as np
-    from expressive_mocap import _core, bvh, demo, ops, roles as R
-    from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+    from expressive_mocap import _core, bvh, ops, procedural
+    from expressive_mocap.body import roles as R
+    from expressive_mocap.body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 
     GAIT = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
 
@@ -50,7 +51,7 @@ HAMMER = textwrap.dedent(
         )
 
     def pipeline():
-        data = bvh.bvh_bytes(demo.procedural_walk(seconds=4.0))
+        data = bvh.bvh_bytes(procedural.procedural_walk(seconds=4.0))
         header = bvh.parse_header(data, "walk")
         skeleton = header.skeleton
         roles = R.JointRoles.find(skeleton)

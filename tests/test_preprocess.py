@@ -22,8 +22,8 @@ from expressive_mocap.cli import main
 from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import DatasetError
+from expressive_mocap.procedural import procedural_walk
 
 BROKEN = b"HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 2 Xposition\n}\n"
 KEEP = "positions,rotations,features,contacts,activity,body,expressive"

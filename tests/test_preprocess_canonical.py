@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap.body.canonical import canonical_skeleton
 from expressive_mocap.cli import main
 from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.skeletons import synthetic_walk
-from expressive_mocap.skeletons.canonical import canonical_skeleton
 
 RIGS = ("bandai", "smpl", "game", "mixamo")
 

@@ -14,8 +14,8 @@ import pytest
 import expressive_mocap as em
 import expressive_mocap.dataset.cluster as cluster_module
 from expressive_mocap.dataset import load_dataset, preprocess
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import DatasetError
+from expressive_mocap.procedural import procedural_walk
 
 pytest.importorskip("distributed", reason="the [distributed] extra (Dask) is not installed")
 

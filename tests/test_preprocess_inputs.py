@@ -23,11 +23,11 @@ import pytest
 import expressive_mocap as em
 import expressive_mocap.dataset.sources as sources_module
 import expressive_mocap.dataset.work as work_module
-from expressive_mocap import files as em_io
 from expressive_mocap import ops
+from expressive_mocap._utils import files as em_io
 from expressive_mocap.cli import main
 from expressive_mocap.dataset import load_dataset, preprocess
-from expressive_mocap.demo import procedural_walk
+from expressive_mocap.procedural import procedural_walk
 from test_clip_pipeline import GAIT, pipeline_input
 from test_inputs import _returns_within
 

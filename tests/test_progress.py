@@ -2,7 +2,7 @@
 
 import io
 
-from expressive_mocap.progress import Progress, line_log
+from expressive_mocap._utils.progress import Progress, line_log
 
 
 class Terminal(io.StringIO):

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from expressive_mocap import quat
+from expressive_mocap.rotations import quat
 
 
 def random_rotations(rng, shape):

@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
+from expressive_mocap.body.contacts import foot_contacts
+from expressive_mocap.body.roles import JointRoles, actor_height
 from expressive_mocap.cli import main
-from expressive_mocap.features import foot_contacts
-from expressive_mocap.roles import JointRoles, actor_height
 
 REPO = Path(__file__).resolve().parent.parent
 BANDAI_ACTOR_CM = 140.9  # the Bandai skeleton's actor height: 5 cm a frame is relative to it

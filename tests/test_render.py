@@ -12,10 +12,10 @@ import pytest
 from PIL import Image
 
 import expressive_mocap as em
-from expressive_mocap import quat
-from expressive_mocap import render as render_module
 from expressive_mocap.cli import main
-from expressive_mocap.demo import procedural_walk
+from expressive_mocap.procedural import procedural_walk
+from expressive_mocap.rotations import quat
+from expressive_mocap.viz import render as render_module
 
 CMU = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "other" / "cmu_scaled_131_03.bvh"
 

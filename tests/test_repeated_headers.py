@@ -13,8 +13,8 @@ from expressive_mocap.bvh.header import Header
 from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.dataset import work as work_module
 from expressive_mocap.dataset.sources import open_source
-from expressive_mocap.demo import procedural_walk
 from expressive_mocap.errors import BVHError
+from expressive_mocap.procedural import procedural_walk
 
 
 @pytest.fixture(scope="module")
@@ -98,9 +98,9 @@ def test_a_preprocess_run_is_the_same_with_and_without_reading_ahead(folder, tmp
 @pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built: nothing to compare")
 def test_the_kernel_and_its_twin_read_the_same_and_refuse_the_same(folder, tmp_path):
     from expressive_mocap import ops
+    from expressive_mocap._utils.files import read_beginning
     from expressive_mocap.bvh.header import header_template, parse_header
     from expressive_mocap.bvh.reader import HEADER_PREFIX
-    from expressive_mocap.files import read_beginning
 
     data, size = read_beginning(folder / "a_first.bvh", HEADER_PREFIX)
     header = parse_header(data, "a_first", size)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
-from expressive_mocap import quat
-from expressive_mocap import representations as rep
+from expressive_mocap.dataset import representations as rep
 from expressive_mocap.errors import ArgumentError
+from expressive_mocap.rotations import quat
 
 
 @pytest.fixture(scope="module")

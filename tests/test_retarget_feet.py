@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap.features import foot_contacts
+from expressive_mocap.body.contacts import foot_contacts
+from expressive_mocap.body.conventions import read_conventions, upright
+from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.motion import Motion
 from expressive_mocap.skeletons import synthetic_walk
 from expressive_mocap.skeletons.canonical import onto_canonical
-from expressive_mocap.skeletons.conventions import read_conventions, upright
-from expressive_mocap.skeletons.jointmap import find_joint_map
 from expressive_mocap.skeletons.retargeting import retarget
 
 
@@ -26,7 +26,7 @@ def stance(motion: Motion, contacts: np.ndarray | None = None) -> np.ndarray:
     """(ankle height, toe joint height, foot pitch in degrees) averaged over both feet's contacts
     (``contacts``: the motion's own by default), in its canonical axes (Y up, file units)."""
     jmap = find_joint_map(motion.skeleton)
-    from expressive_mocap import quat
+    from expressive_mocap.rotations import quat
 
     points = quat.rotate(read_conventions(motion, jmap).rotation(), motion.positions())
     contacts = foot_contacts(motion) if contacts is None else contacts

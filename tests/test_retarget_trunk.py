@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
-from expressive_mocap.demo import procedural_walk
+from expressive_mocap.body.conventions import read_conventions
+from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.motion import Motion
+from expressive_mocap.procedural import procedural_walk
+from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons import synthetic_walk
 from expressive_mocap.skeletons.canonical import onto_canonical
-from expressive_mocap.skeletons.conventions import read_conventions
-from expressive_mocap.skeletons.jointmap import find_joint_map
 from expressive_mocap.skeletons.retargeting import retarget
 
 

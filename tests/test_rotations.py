@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from expressive_mocap import reference
-from expressive_mocap.motion import ORDERS
+from expressive_mocap.rotations.orders import ORDERS
 
 ATOL = 1e-12  # float64 arithmetic, a few dozen operations
 
@@ -106,7 +106,7 @@ def test_bad_arguments_name_the_argument(backend):
 
 
 def test_rotation_vectors_agree_with_scipy_and_round_trip():
-    from expressive_mocap import quat
+    from expressive_mocap.rotations import quat
 
     q = Rotation.random(500, random_state=11).as_quat()
     q[:5] = [0.0, 0.0, 0.0, 1.0]  # identity: the small-angle branch

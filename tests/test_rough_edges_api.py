@@ -15,7 +15,7 @@ import expressive_mocap as em
 from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
-from expressive_mocap.demo import procedural_walk
+from expressive_mocap.procedural import procedural_walk
 
 PYTHON = Path(em.__file__).resolve().parent.parent  # the package the tests import (installed in CI)
 

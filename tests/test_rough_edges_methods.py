@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap import quat
+from expressive_mocap.body.roles import JointRoles, facing_yaw
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.edits import blend
-from expressive_mocap.roles import JointRoles, facing_yaw
+from expressive_mocap.rotations import quat
 
 WALK, WAVE = "dataset-2_walk_normal_001.bvh", "dataset-2_wave-right-hand_normal_001.bvh"
 
@@ -156,7 +156,8 @@ def test_exaggeration_is_unit_free(bandai2_dir, clips_cm_and_m):
 def test_decoupling_and_features_are_unit_free(clips_cm_and_m, body_model):
     """Each method of the decoupling part, on the same clips in centimetres and in metres."""
     from expressive_mocap import decoupling as dc
-    from expressive_mocap.features import dynamic_features, foot_contacts
+    from expressive_mocap.body.contacts import foot_contacts
+    from expressive_mocap.decoupling.features import dynamic_features
 
     (walk, wave), (walk_m, wave_m) = clips_cm_and_m
     assert_same_up_to_scale(
@@ -189,7 +190,7 @@ def test_decoupling_and_features_are_unit_free(clips_cm_and_m, body_model):
 def test_leg_ik_is_unit_free():
     """Two-bone IK with a target nearer than the bones' difference gives the same pose in any
     units. Before: that bound was 1e-3 file units, 1 mm in metres but 0.01 mm in centimetres."""
-    from expressive_mocap.ik import two_bone_ik
+    from expressive_mocap.body.ik import two_bone_ik
 
     identity = np.tile([0.0, 0.0, 0.0, 1.0], (1, 1))
     thigh, shin = np.array([0.0, -45.0, 0.0]), np.array([0.0, -40.0, 0.0])

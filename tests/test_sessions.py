@@ -9,12 +9,12 @@ import pytest
 
 import expressive_mocap as em
 from conftest import scipy_positions
-from expressive_mocap import quat
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling.algebra import GAIN, decompose, split
 from expressive_mocap.decoupling.body_model import BodyModel
-from expressive_mocap.demo import walk_and_wave
 from expressive_mocap.errors import ModelError
+from expressive_mocap.procedural import walk_and_wave
+from expressive_mocap.rotations import quat
 
 
 @pytest.fixture(scope="module")

@@ -5,10 +5,10 @@ model was trained (python/expressive_mocap/data/MODEL_CARD.md)."""
 import numpy as np
 import pytest
 
-from expressive_mocap import quat
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
-from expressive_mocap.demo import walk_and_wave
+from expressive_mocap.procedural import walk_and_wave
+from expressive_mocap.rotations import quat
 
 ARM = ["UpperArm_R", "LowerArm_R", "Hand_R"]
 

@@ -13,15 +13,17 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from expressive_mocap import quat
-from expressive_mocap.features import foot_contacts
-from expressive_mocap.roles import JointRoles
-from expressive_mocap.skeletons import conventions as conv
+from expressive_mocap.body import conventions as conv
+from expressive_mocap.body.contacts import foot_contacts
+from expressive_mocap.body.jointmap import find_joint_map, read_joint_map
+from expressive_mocap.body.names import label
+from expressive_mocap.body.roles import JointRoles
+from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons.canonical import canonical_rig
-from expressive_mocap.skeletons.jointmap import find_joint_map, read_joint_map
-from expressive_mocap.skeletons.names import label
-from expressive_mocap.skeletons.retargeting import Rig, _leg, retarget, retarget_rigs
+from expressive_mocap.skeletons.retargeting import retarget, retarget_rigs
+from expressive_mocap.skeletons.rig import Rig, _leg
 from expressive_mocap.skeletons.synthetic import RIGS, synthetic_walk
+from expressive_mocap.skeletons.transfer import with_twists
 
 # The bones whose world direction a retarget must carry: each from a mapped joint to the next
 # one out (with joints the map leaves out held still between them), and the line across the hips.
@@ -307,7 +309,7 @@ def test_planted_feet_move_no_faster_than_the_sources(walks):
 
 
 def test_z_up_files_are_drawn_upright(walks):
-    from expressive_mocap.render import project
+    from expressive_mocap.viz.render import project
 
     flat, _ = project(walks["smpl"])  # metres, Z up
     # The figure stands, its waving hand overhead (1.82 m); lying flat it would span under 0.5 m.
@@ -344,7 +346,7 @@ def test_clips_retargeted_together_are_those_retargeted_one_by_one(walks):
 @pytest.mark.skipif(not em.rust_available(), reason="the Rust extension is not built")
 def test_the_transfer_kernel_and_its_twin_agree_on_every_pair_of_rigs(walks):
     from expressive_mocap import _core, reference
-    from expressive_mocap.skeletons.retargeting import _plan
+    from expressive_mocap.skeletons.transfer import _plan
 
     rigs = {name: Rig.of(motion) for name, motion in walks.items()}
     for a, b in itertools.permutations(RIGS, 2):
@@ -485,8 +487,8 @@ def test_arbitrary_twists_are_read_from_the_positions():
     limbs = ["LeftUpLeg", "RightUpLeg", "LeftArm", "RightArm"]
     twisted = _twisted(clean, limbs, 120.0)
     np.testing.assert_allclose(twisted.positions(), clean.positions(), atol=1e-9)
-    assert Rig.of(clean).with_twists(clean).untrusted == frozenset()
-    found = Rig.of(twisted).with_twists(twisted).untrusted
+    assert with_twists(Rig.of(clean), clean).untrusted == frozenset()
+    found = with_twists(Rig.of(twisted), twisted).untrusted
     assert {"left_upper_leg", "right_upper_leg", "left_upper_arm", "right_upper_arm"} <= found, found
     body = canonical_rig()
     ours, theirs = (retarget_rigs(m, Rig.of(m), body, plant_feet=False) for m in (twisted, clean))

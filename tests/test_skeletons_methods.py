@@ -8,12 +8,14 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap.body import find_joint_map
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling import BodyModel, decompose, modulate
-from expressive_mocap.demo import loaded_walk
-from expressive_mocap.skeletons import find_joint_map, retarget, synthetic_walk
+from expressive_mocap.procedural import loaded_walk
+from expressive_mocap.skeletons import retarget, synthetic_walk
 from expressive_mocap.skeletons.canonical import Carried, canonical_rig
-from expressive_mocap.skeletons.retargeting import Rig, retarget_rigs
+from expressive_mocap.skeletons.retargeting import retarget_rigs
+from expressive_mocap.skeletons.rig import Rig
 
 _LIMB = [("upper_arm", "forearm"), ("forearm", "hand"), ("upper_leg", "lower_leg"), ("clavicle", "upper_arm")]
 BONES = [(f"{s}_{a}", f"{s}_{b}") for s in ("left", "right") for a, b in _LIMB]
@@ -190,7 +192,7 @@ def test_a_model_trained_on_another_skeleton_exaggerates_a_bandai_walk(tmp_path)
 def test_carrying_through_a_body_in_other_axes():
     """The body a motion is carried through may have axes of its own (a Z-up model body facing
     -Y): an edit there comes back onto the user's skeleton as retargeting it would put it."""
-    from expressive_mocap import quat
+    from expressive_mocap.rotations import quat
 
     game, smpl = synthetic_walk("game").motion, synthetic_walk("smpl").motion
     carried = Carried(game, None, Rig.of(smpl))
@@ -221,8 +223,8 @@ def test_the_streaming_decoupler_takes_another_skeleton():
     model's body (with the rig read from the first frame and the floor at 0, as a stream reads
     them; to 1e-9), its body mechanics come back on the rig's own joints, and the wave is found on
     the waving arm."""
-    from expressive_mocap import quat
     from expressive_mocap.decoupling import StreamingDecoupler
+    from expressive_mocap.rotations import quat
     from test_model import _FixedFloor
 
     model = BodyModel.load()

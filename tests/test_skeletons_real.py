@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap.skeletons.conventions import read_conventions
-from expressive_mocap.skeletons.jointmap import REQUIRED, find_joint_map
+from expressive_mocap.body.conventions import read_conventions
+from expressive_mocap.body.jointmap import REQUIRED, find_joint_map
 from expressive_mocap.skeletons.retargeting import retarget
 
 pytestmark = pytest.mark.real_data
@@ -99,8 +99,8 @@ def test_the_cmu_clip_on_the_canonical_body_twists_its_bones_as_bandai_captures_
     degrees; measured 4-25), so the shipped model reads its legs and spine as body mechanics
     (activity under 0.5; measured 0.01-0.41). Before the twists were aligned through each body's
     reference pose: 55-174 degrees off, activity 1.0 on the spine and the right leg."""
-    from expressive_mocap import quat
     from expressive_mocap.decoupling import BodyModel, decompose
+    from expressive_mocap.rotations import quat
     from expressive_mocap.skeletons.canonical import onto_canonical
 
     walk = em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh")
@@ -121,9 +121,11 @@ def test_the_xia_style_walks_twisted_arbitrarily_are_read_from_their_positions(o
     have every child at the joint. Read from the positions instead, their walks' spine and thighs
     are body mechanics to the shipped model (mean activity over the four walks under 0.35;
     measured 0.01-0.28). Taken from the rotations: 1.0 on every one."""
+    from expressive_mocap.body.canonical import canonical_skeleton
     from expressive_mocap.decoupling import BodyModel, decompose
-    from expressive_mocap.skeletons.canonical import canonical_skeleton, onto_canonical
-    from expressive_mocap.skeletons.retargeting import Rig
+    from expressive_mocap.skeletons.canonical import onto_canonical
+    from expressive_mocap.skeletons.rig import Rig
+    from expressive_mocap.skeletons.transfer import with_twists
 
     names = canonical_skeleton().names
     joints = [names.index(n) for n in ("Spine", "Chest", "UpperLeg_L", "UpperLeg_R")]
@@ -131,12 +133,12 @@ def test_the_xia_style_walks_twisted_arbitrarily_are_read_from_their_positions(o
     model = BodyModel.load(None)
     activity = []
     for walk in walks:
-        assert {"hips", "chest", "left_upper_leg", "left_upper_arm"} <= Rig.of(walk).with_twists(walk).untrusted
+        assert {"hips", "chest", "left_upper_leg", "left_upper_arm"} <= with_twists(Rig.of(walk), walk).untrusted
         body, _ = onto_canonical(walk, plant_feet=False)
         activity.append(decompose(body, model).activity[:, joints].mean(axis=0))
     assert np.mean(activity, axis=0).max() < 0.35, np.mean(activity, axis=0)
     cmu = others["cmu_scaled_131_03.bvh"]
-    assert Rig.of(cmu).with_twists(cmu).untrusted == frozenset()  # a real capture's twists stand
+    assert with_twists(Rig.of(cmu), cmu).untrusted == frozenset()  # a real capture's twists stand
 
 
 def test_skeleton_reports_the_twists_read_from_positions(other_dir, capsys):

@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from expressive_mocap import quat
 from expressive_mocap.dataset import (
     Augment,
     Labels,
@@ -26,9 +25,10 @@ from expressive_mocap.dataset import (
     window_batches,
 )
 from expressive_mocap.dataset.augment import rotate_window_kinds
+from expressive_mocap.dataset.representations import KINDS as FORMS
+from expressive_mocap.dataset.representations import encode
 from expressive_mocap.errors import ArgumentError, DatasetError
-from expressive_mocap.representations import KINDS as FORMS
-from expressive_mocap.representations import encode
+from expressive_mocap.rotations import quat
 from training_clips import training_dataset
 
 

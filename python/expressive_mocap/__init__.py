@@ -4,15 +4,16 @@ Quaternions are x, y, z, w; arrays are float64 ``[F, J, ...]`` (frames, joints);
 lengths are in the file's units. See docs/bvh.md for the conventions table.
 """
 
+from ._utils.lazy import lazy_exports
 from .backend import get_backend, rust_available, set_backend, use_backend
+from .body.contacts import contact_intervals, foot_contacts
+from .body.roles import JointRoles, actor_height
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
+from .decoupling.features import FEATURE_NAMES, dynamic_features, gait_many
 from .decoupling.network import Mlp
 from .errors import ArgumentError, BVHError, ClipError, DatasetError, MocapError, ModelError, ParseError
-from .features import FEATURE_NAMES, contact_intervals, dynamic_features, foot_contacts, gait_many
-from .lazy import lazy_exports
 from .motion import Motion, Skeleton
 from .ops import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
-from .roles import JointRoles, actor_height
 
 __version__ = "0.1.0"
 

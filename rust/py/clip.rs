@@ -103,7 +103,7 @@ struct OutputArgs<'py> {
 /// The whole per-clip work of many clips of one skeleton: MOTION block, FK, features, contacts.
 ///
 /// `clips`: `ClipArgs`, whose file, when given by path, is read here (a regular file of at most
-/// `max_bytes`, by default `expressive_mocap.files.MAX_INPUT_BYTES`). `parents` [J]; `roles` the
+/// `max_bytes`, by default `expressive_mocap._utils.files.MAX_INPUT_BYTES`). `parents` [J]; `roles` the
 /// 7 gait joints; `gait` the thresholds of contact detection. Kept per clip (`outputs`): world
 /// `positions` [F, J, 3], local `rotations` [F, J, 4] (or, with `rotation_columns` 2 or 3, their
 /// matrices' first columns [F, J, 6] or whole matrices [F, J, 9]), one causal feature array
@@ -288,7 +288,7 @@ fn os_error(error: &ReadError) -> PyErr {
 /// The headers of files that repeat the header `template` (a header's bytes through its MOTION
 /// line, of `joints` joints; `crate::heads`), read in parallel without the GIL from each file's
 /// first `count` bytes (regular files of at most `max_bytes`, by default
-/// `expressive_mocap.files.MAX_INPUT_BYTES`). Per path `(frames, frame_time, block_start)`, or
+/// `expressive_mocap._utils.files.MAX_INPUT_BYTES`). Per path `(frames, frame_time, block_start)`, or
 /// `(first bytes, size)` of a file to read in full, or an `OSError` instance.
 #[pyfunction]
 #[pyo3(signature = (paths, template, joints, count, max_bytes=None))]
@@ -322,12 +322,12 @@ fn repeated_headers(
 }
 
 /// The bound on a file's bytes: the caller's, else the package's (one bound for every reader of
-/// BVH text, `expressive_mocap.files.MAX_INPUT_BYTES`).
+/// BVH text, `expressive_mocap._utils.files.MAX_INPUT_BYTES`).
 fn input_bound(py: Python<'_>, given: Option<u64>) -> PyResult<u64> {
     match given {
         Some(bound) => Ok(bound),
         None => py
-            .import("expressive_mocap.files")?
+            .import("expressive_mocap._utils.files")?
             .getattr("MAX_INPUT_BYTES")?
             .extract(),
     }

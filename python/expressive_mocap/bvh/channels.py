@@ -10,11 +10,15 @@ that replace the components of the joint's rest offset.
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .. import ops
-from ..motion import AXES, ROTATION_CHANNELS, Skeleton, axes_of, rotation_order
+from ..rotations.orders import AXES, ROTATION_CHANNELS, axes_of, rotation_order
+
+if TYPE_CHECKING:  # the Skeleton's methods use this module
+    from ..motion import Skeleton
 
 __all__ = ["decode", "encode", "layout"]
 

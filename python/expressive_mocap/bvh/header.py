@@ -4,8 +4,8 @@ number block starts.
 
 Text is UTF-8, with or without a byte-order mark; lines end in LF or CRLF (CR-only files, from
 classic Mac OS, are refused with how to convert them). Numbers follow one grammar, header and
-MOTION block alike (:mod:`expressive_mocap.tokens`), and tokens echoed in errors are cut to 40
-bytes (:func:`~expressive_mocap.tokens.shown`).
+MOTION block alike (:mod:`expressive_mocap._utils.tokens`), and tokens echoed in errors are cut to 40
+bytes (:func:`~expressive_mocap._utils.tokens.shown`).
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import math
 import re
 from dataclasses import dataclass
 
+from .._utils.tokens import finite_number, shown
 from ..errors import BVHError
 from ..motion import Skeleton
-from ..tokens import finite_number, shown
 from .hierarchy import COUNT_PATTERN, read_hierarchy
 
 __all__ = [

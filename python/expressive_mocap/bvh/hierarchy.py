@@ -9,9 +9,10 @@ from typing import cast
 
 import numpy as np
 
+from .._utils.tokens import NUMBER_PATTERN, finite_number, shown
 from ..errors import BVHError, MocapError
-from ..motion import POSITION_CHANNELS, ROTATION_CHANNELS, Skeleton, canonical_channels
-from ..tokens import NUMBER_PATTERN, finite_number, shown
+from ..motion import Skeleton
+from ..rotations.orders import POSITION_CHANNELS, ROTATION_CHANNELS, canonical_channels
 
 __all__ = ["MAX_CHANNELS", "MAX_JOINTS", "read_hierarchy"]
 

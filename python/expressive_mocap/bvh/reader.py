@@ -14,8 +14,8 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from typing import BinaryIO, Union
 
 from .. import ops
+from .._utils.files import read_beginning, read_input
 from ..errors import BVHError, MocapError, ParseError
-from ..files import read_beginning, read_input
 from ..motion import Motion
 from .header import Header, parse_header
 

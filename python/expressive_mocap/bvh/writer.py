@@ -8,8 +8,8 @@ from functools import lru_cache
 import numpy as np
 
 from .. import ops
+from .._utils.files import atomic_write
 from ..errors import MocapError
-from ..files import atomic_write
 from ..motion import Motion, Skeleton
 from .channels import encode
 
@@ -86,7 +86,7 @@ def bvh_bytes(motion: Motion, decimals: int | None = None) -> bytes:
 
 def write_bvh(motion: Motion, path: str | os.PathLike, decimals: int | None = None) -> None:
     """Write ``motion`` as a BVH file at ``path``, atomically (a complete file or none; see
-    :func:`expressive_mocap.files.atomic_write_all` for what ``path`` may be). A non-finite value
+    :func:`expressive_mocap._utils.files.atomic_write_all` for what ``path`` may be). A non-finite value
     is refused, naming ``path``, the frame and the channel, before anything is written.
 
     See :func:`bvh_bytes` for ``decimals``.

@@ -17,8 +17,8 @@ import warnings
 from pathlib import Path
 
 from .. import __version__, backend
+from .._utils.files import file_kind, is_standard_output, output_target
 from ..errors import MocapError
-from ..files import file_kind, is_standard_output, output_target
 from .common import DECOUPLE_SUFFIXES, DEMO_FILES, PROG, Parser
 
 __all__ = ["COMMANDS", "DEMO_FILES", "PROG", "build_parser", "main"]
@@ -93,7 +93,7 @@ def _output_paths(args) -> list[str]:
 def _check_outputs(args) -> None:
     """Refuse, before any work, an output whose folder is missing or unwritable, or that is
     anything but a regular file or a new one (a folder, FIFO, socket, device, or a symlink to
-    one: :func:`expressive_mocap.files.output_target`): files go where they are asked to (``-o``,
+    one: :func:`expressive_mocap._utils.files.output_target`): files go where they are asked to (``-o``,
     ``--plot``), never next to an input, and the folders of ``demo`` and ``preprocess`` are
     created only inside an existing one. ``-`` is standard output for the commands that stream."""
     for output in _output_paths(args):

@@ -94,7 +94,7 @@ def add_map_option(p) -> None:
 
 def joint_map(args) -> dict | None:
     """The joint map of ``--map``, if given."""
-    from ..skeletons import read_joint_map
+    from ..body import read_joint_map
 
     path = getattr(args, "map", None)
     return read_joint_map(path) if path else None
@@ -126,7 +126,7 @@ def read_on_model(
             raise MocapError(f"{path}: {refused}: {fix} ({error})") from None
         raise
     if carried is None:  # the model's own skeleton: only its axes may differ (a Z-up file)
-        from ..skeletons.conventions import upright_and_back
+        from ..body.conventions import upright_and_back
 
         upright, turn_back = upright_and_back(motion)
         # Its feet were planted on the model's skeleton, which is the file's: nothing to redo.
@@ -136,7 +136,7 @@ def read_on_model(
 
 def read_all(paths: list[str], what: str, quiet: bool = False) -> list[Motion]:
     """BVH files read one after the other, with a progress bar on stderr (see progress.Progress)."""
-    from ..progress import Progress
+    from .._utils.progress import Progress
 
     with Progress(len(paths), f"reading {what}", "files", enabled=bool(paths) and not quiet) as bar:
         motions = []

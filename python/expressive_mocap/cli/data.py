@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..body.contacts import HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from ..bvh import read_bvh
 from ..dataset import preprocess
 from ..errors import MocapError
-from ..features import HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from .common import default, finite, positive
 
 __all__ = ["add_parsers", "cmd_footsteps", "cmd_preprocess"]
@@ -53,13 +53,13 @@ def add_footsteps(commands) -> None:
 
 
 def cmd_footsteps(args) -> int:
-    from ..features import cadence, contact_intervals, default_floor, foot_contacts, footstrikes
-    from ..roles import JointRoles, actor_height
-    from ..skeletons.conventions import upright
+    from ..body.contacts import cadence, contact_intervals, default_floor, foot_contacts, footstrikes
+    from ..body.conventions import upright
+    from ..body.roles import JointRoles, actor_height
 
     motion = upright(read_bvh(args.file))  # contacts are read along Y: a Z-up file is turned first
     if args.map:
-        from ..skeletons import find_joint_map
+        from ..body import find_joint_map
 
         roles = JointRoles.from_map(motion.skeleton, find_joint_map(motion.skeleton, _joint_map(args.map)))
     else:
@@ -96,7 +96,7 @@ def cmd_footsteps(args) -> int:
     rate = f"cadence {steps_per_second:.2f} steps/s" if np.isfinite(steps_per_second) else "cadence: too few steps"
     print(f"summary: {len(strikes)} steps ({left} left, {len(strikes) - left} right), {rate}")
     if args.plot:
-        from ..render import plot_contacts
+        from ..viz.render import plot_contacts
 
         title = f"{Path(args.file).name}: foot contacts ({len(strikes)} steps, {rate})"
         plot_contacts(contacts, dt, args.plot, title=title)
@@ -219,7 +219,7 @@ def cmd_preprocess(args) -> int:
 
 
 def _joint_map(path: str | None) -> dict | None:
-    from ..skeletons import read_joint_map
+    from ..body import read_joint_map
 
     return read_joint_map(path) if path else None
 

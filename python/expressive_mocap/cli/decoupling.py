@@ -9,12 +9,12 @@ import sys
 
 import numpy as np
 
+from .._utils.files import atomic_write_all, open_input
 from ..bvh import bvh_bytes, read_bvh, write_bvh
 from ..decoupling.algebra import EXPONENT, GAIN
 from ..decoupling.edits import blend, mix
 from ..decoupling.training import train_body_model
 from ..errors import MocapError
-from ..files import atomic_write_all, open_input
 from .common import (
     DECOUPLE_SUFFIXES,
     PROG,
@@ -394,9 +394,9 @@ def add_train(commands) -> None:
 
 
 def cmd_train(args) -> int:
+    from .._utils.progress import line_log
     from ..decoupling.body_model import poor_fit
     from ..decoupling.training import format_report
-    from ..progress import line_log
 
     neutral = read_all(args.neutral, "neutral clips", args.quiet)
     unlabelled = read_all(args.unlabelled or [], "unlabelled clips", args.quiet)

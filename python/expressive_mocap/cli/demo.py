@@ -10,8 +10,8 @@ import numpy as np
 
 from .. import __version__, backend
 from ..bvh import read_bvh, write_bvh
-from ..demo import walk_and_wave
 from ..motion import Motion
+from ..procedural import walk_and_wave
 from .common import DEMO_FILES, default, positive
 from .files import cmd_info
 
@@ -41,10 +41,10 @@ def add_demo(commands) -> None:
 
 
 def cmd_demo(args) -> int:
-    from ..demo import walk_and_wave
-    from ..features import cadence, foot_contacts, footstrikes
-    from ..render import render
-    from ..roles import JointRoles, actor_height
+    from ..body.contacts import cadence, foot_contacts, footstrikes
+    from ..body.roles import JointRoles, actor_height
+    from ..procedural import walk_and_wave
+    from ..viz.render import render
 
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
@@ -89,7 +89,7 @@ def _demo_decoupling(waving: Motion, arm: list[str], out: Path) -> None:
     """Decouple the waving walk with the shipped model, modulate it, draw both."""
     from ..decoupling.algebra import decompose
     from ..decoupling.body_model import BodyModel
-    from ..render import render
+    from ..viz.render import render
 
     parts = decompose(waving, BodyModel.load())
     names = waving.skeleton.names

@@ -9,11 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .._utils.files import atomic_write, is_standard_output
 from ..bvh import read_bvh, write_bvh
 from ..errors import MocapError
-from ..files import atomic_write, is_standard_output
-from ..motion import ORDERS, Motion
-from ..render import render_animation, render_poses
+from ..motion import Motion
+from ..rotations.orders import ORDERS
+from ..viz.render import render_animation, render_poses
 from .common import PROG, default, joint_map, positive, read_on_model
 from .decoupling import BODY_MODEL_FIX, add_model_options, body_model
 
@@ -173,7 +174,7 @@ def add_render(commands) -> None:
 
 
 def cmd_render(args) -> int:
-    from ..render import render
+    from ..viz.render import render
 
     motions = [read_bvh(path) for path in args.files]
     titles = [Path(p).stem for p in args.files]

@@ -6,9 +6,9 @@ from __future__ import annotations
 import json
 import sys
 
+from .._utils.tokens import listed
 from ..bvh import read_bvh, write_bvh
 from ..errors import MocapError
-from ..tokens import listed
 from .common import PROG, positive
 
 __all__ = ["add_parsers", "cmd_retarget", "cmd_skeleton"]
@@ -23,7 +23,7 @@ def _add_convention_options(p, whose: str = "") -> None:
 
 
 def _map_file(path: str | None) -> dict | None:
-    from ..skeletons import read_joint_map
+    from ..body import read_joint_map
 
     return read_joint_map(path) if path else None
 
@@ -44,8 +44,9 @@ def add_skeleton(commands) -> None:
 
 def describe(path: str, user_map: dict | None, args) -> dict:
     """What ``skeleton`` reports for one file."""
-    from ..skeletons import find_joint_map, read_conventions
-    from ..skeletons.retargeting import Rig, untrusted_twists
+    from ..body import find_joint_map, read_conventions
+    from ..skeletons.rig import Rig
+    from ..skeletons.transfer import untrusted_twists
 
     motion = read_bvh(path)
     jmap = find_joint_map(motion.skeleton, user_map)
@@ -131,7 +132,8 @@ def add_retarget(commands) -> None:
 
 
 def cmd_retarget(args) -> int:
-    from ..skeletons import find_joint_map, read_conventions, retarget
+    from ..body import find_joint_map, read_conventions
+    from ..skeletons import retarget
 
     source_map, target_map = _map_file(args.map), _map_file(args.to_map)
     motion = read_bvh(args.file)

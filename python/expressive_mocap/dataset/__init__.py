@@ -70,7 +70,7 @@ For training (docs/training.md): :mod:`.stats` (:class:`Normaliser`), :mod:`.lab
 (:class:`WindowDataset` for a PyTorch ``DataLoader``).
 """
 
-from ..lazy import lazy_exports
+from .._utils.lazy import lazy_exports
 from .format import KINDS
 from .lock import FolderLock
 from .reader import Clip, Dataset, load_dataset

@@ -36,10 +36,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import quat, representations
 from ..errors import ArgumentError
-from ..representations import decode, encode
+from ..rotations import quat
+from . import representations
 from .frames import turn_headings
+from .representations import decode, encode
 
 VECTOR_KINDS = ("positions", "velocities", "accelerations")  # rotated unless in the heading frame
 ROOT_ROTATION_KINDS = ("rotations",)

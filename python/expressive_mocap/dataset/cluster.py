@@ -10,8 +10,8 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterator
 
+from .._utils.tokens import shown
 from ..errors import ArgumentError, DatasetError
-from ..tokens import shown
 from .sources import Item
 from .work import PLAIN, Outcome, compute, load_model
 

@@ -14,11 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import ops, quat, representations
+from .. import ops
 from ..errors import ArgumentError
-from ..heading import HeadingFrame, to_heading, turn_by_yaw
 from ..motion import Motion
 from ..reference.forms import clip_gradient
+from ..rotations import quat
+from . import representations
+from .heading import HeadingFrame, to_heading, turn_by_yaw
 
 POSITION_FRAMES = ("world", "root", "heading", "clip")
 DERIVED_KINDS = ("velocities", "accelerations", "root_velocity", "angular_velocities", "heading")
@@ -32,7 +34,7 @@ RATE_TOLERANCE = 1e-4
 @dataclass(frozen=True)
 class Options:
     """How the stored arrays are shaped: ``rotations`` (a form of
-    :data:`~expressive_mocap.representations.KINDS`, ``"euler:ORDER"`` for Euler angles),
+    :data:`~expressive_mocap.dataset.representations.KINDS`, ``"euler:ORDER"`` for Euler angles),
     ``positions`` (:data:`POSITION_FRAMES`), ``fps`` (resample every clip first; None: as read)
     and ``mirror`` (store each clip's mirror image after it)."""
 

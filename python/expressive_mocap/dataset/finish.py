@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..features import FEATURE_NAMES
-from ..files import atomic_write
+from .._utils.files import atomic_write
+from ..decoupling.features import FEATURE_NAMES
 from .folder import remove_partial
 from .format import FORMAT, MANIFEST, OFFSETS, PARTIAL, VERSION, data_file, file_record, read_manifest
 from .npy import Kind, write_final_header

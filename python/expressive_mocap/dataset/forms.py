@@ -8,11 +8,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..body.conventions import ups_of
+from ..body.jointmap import find_joint_map
 from ..errors import MocapError
-from ..heading import HeadingFrame
-from ..skeletons.conventions import ups_of
-from ..skeletons.jointmap import find_joint_map
 from .derive import Options, derive, totals
+from .heading import HeadingFrame
 
 if TYPE_CHECKING:
     from .work import Group, Outcome

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ArgumentError
-from ..heading import turn_by_yaw
+from .heading import turn_by_yaw
 
 MOVING_KINDS = ("positions", "velocities", "accelerations")
 STORED_FRAMES = ("heading", "clip")  # the --positions frames a window's frame can be found from

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..decoupling.features import FEATURE_NAMES
 from ..errors import ArgumentError, DatasetError
-from ..features import FEATURE_NAMES
 from .format import data_file
 
 HEADER_BYTES = 128  # room reserved at the start of each data file for its .npy header

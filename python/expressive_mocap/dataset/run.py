@@ -12,10 +12,10 @@ from concurrent.futures import Future
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .._utils.files import atomic_write
+from .._utils.progress import Progress
 from ..backend import get_backend
 from ..errors import ArgumentError, DatasetError
-from ..files import atomic_write
-from ..progress import Progress
 from .cluster import client_for, on_cluster
 from .collect import collect
 from .derive import Options
@@ -69,7 +69,7 @@ def preprocess(
     (:mod:`expressive_mocap.skeletons.canonical`), its own skeleton and joint map recorded in its
     manifest record (``source_skeleton``); without it, one dataset holds one skeleton.
     ``joint_map``: with ``canonical``, role -> joint name for roles the names and topology do not
-    find (:func:`~expressive_mocap.skeletons.read_joint_map`), for every skeleton of the archive.
+    find (:func:`~expressive_mocap.body.read_joint_map`), for every skeleton of the archive.
 
     Model-ready arrays (docs/preprocessing.md, "Model-ready arrays"): ``rotations`` the stored
     form of the rotations (``"quaternion"``, ``"6d"``, ``"matrix"``, ``"axis-angle"``,

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
-from .. import files as inputs
+from .._utils import files as inputs
 from ..bvh import parse_header, read_error, read_header
 from ..bvh.header import Header
 from ..errors import ArgumentError, BVHError

@@ -12,16 +12,16 @@ from functools import lru_cache
 
 import numpy as np
 
-from .. import files as inputs
 from .. import ops
+from .._utils import files as inputs
+from ..body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from ..body.roles import JointRoles, actor_height, hips_rest_height
 from ..bvh import block_error, parse_header, read_error
 from ..bvh.header import Header, header_template
 from ..bvh.reader import HEADER_PREFIX
 from ..decoupling.algebra import decompose_many
 from ..errors import BVHError, MocapError, ModelError
-from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from ..motion import Motion, Skeleton
-from ..roles import JointRoles, actor_height, hips_rest_height
 from .derive import Options, resampled
 from .format import MODEL_KINDS
 from .forms import add_sums, chunks, derive_group, heading_frames, mirror_values
@@ -196,7 +196,7 @@ def _signed_joints(keep: tuple[str, ...], use_model: bool) -> list[int] | None:
         return None
     if "features" not in keep:
         return []
-    from ..skeletons.canonical import canonical_skeleton
+    from ..body.canonical import canonical_skeleton
 
     return JointRoles.find(canonical_skeleton()).gait_joints[1:3]  # left and right upper leg
 
@@ -214,7 +214,8 @@ def onto_canonical(
     BVH text to write and parse again), its own skeleton and joint map kept in its outcome for
     the manifest. ``user_map``: role -> joint name, for every skeleton of the archive.
     ``signed``: the joints whose rotations must keep the text's sign (:func:`as_written`)."""
-    from ..skeletons.canonical import canonical_shape, canonical_skeleton, many_onto_canonical
+    from ..body.canonical import canonical_skeleton
+    from ..skeletons.canonical import canonical_shape, many_onto_canonical
 
     target, body = canonical_shape(), bone_length(canonical_skeleton())  # every retargeted clip's
     out: dict[tuple, list] = {target: by_hierarchy.pop(target, []), MOVED: []}

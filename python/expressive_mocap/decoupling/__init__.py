@@ -8,15 +8,14 @@ the body mechanics a neutral performer would show with the same dynamics.
 - :mod:`.network`: :class:`Mlp`, the dense network inside a body model;
 - :mod:`.training`: training the network (L-BFGS) and a body model from neutral clips;
 - :mod:`.edits`: modulation, source mixing and asynchronous blending;
-- :mod:`.streaming`: :class:`StreamingDecoupler`, one frame at a time.
-
-The dynamic features the model reads live in :mod:`expressive_mocap.features` (shared with
-exaggeration and preprocessing, which use its foot contacts).
+- :mod:`.streaming`: :class:`StreamingDecoupler`, one frame at a time;
+- :mod:`.features`: the dynamic features the model reads (their foot contacts come from
+  :mod:`expressive_mocap.body.contacts`, shared with exaggeration and preprocessing).
 """
 
 from __future__ import annotations
 
-from ..lazy import lazy_exports
+from .._utils.lazy import lazy_exports
 
 # Submodules load on first use: ``import expressive_mocap`` needs only the network.
 _LAZY = {

@@ -21,10 +21,10 @@ from typing import Protocol
 
 import numpy as np
 
-from .. import quat
 from ..errors import ModelError
 from ..motion import Motion
 from ..ops import compose_rotations, decouple_rotations
+from ..rotations import quat
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
 EXPONENT = 4.0  # b

@@ -25,12 +25,13 @@ from importlib import resources
 
 import numpy as np
 
-from .. import quat
+from .._utils.files import atomic_write, check_keys, finite_array, read_model_file
+from ..body.contacts import default_floor
+from ..body.roles import JointRoles
 from ..errors import ArgumentError, ModelError
-from ..features import FEATURE_NAMES, default_floor, dynamic_features
-from ..files import atomic_write, check_keys, finite_array, read_model_file
 from ..motion import Motion, Skeleton
-from ..roles import JointRoles
+from ..rotations import quat
+from .features import FEATURE_NAMES, dynamic_features
 from .network import Mlp
 
 FORMAT = "expressive-mocap body model"

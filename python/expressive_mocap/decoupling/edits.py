@@ -9,12 +9,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import quat
+from ..body.hinges import hinge_limits_for, limit_hinges
+from ..body.roles import JointRoles, facing_yaw, path_joint
 from ..errors import ArgumentError
-from ..hinges import hinge_limits_for, limit_hinges
 from ..motion import Motion
 from ..ops import compose_rotations, forward_kinematics
-from ..roles import JointRoles, facing_yaw, path_joint
+from ..rotations import quat
 from .algebra import EXPONENT, GAIN, BodyMechanicsModel, decompose
 from .feet import chosen_joints, planted
 
@@ -42,7 +42,7 @@ def modulate(
 def _limited(out: Motion, sources: list[Motion], allow: list[np.ndarray], hinges: bool) -> Motion:
     """``out`` with every elbow and knee kept from straight to the most the body shows (plus a
     margin), never tighter than the inputs' rotations ``allow`` (on ``out``'s timeline) have it:
-    the limits of :func:`~expressive_mocap.hinges.hinge_limits_for` the ``sources``."""
+    the limits of :func:`~expressive_mocap.body.hinges.hinge_limits_for` the ``sources``."""
     if not hinges:
         return out
     return limit_hinges(out, hinge_limits_for(sources), allow)[0]

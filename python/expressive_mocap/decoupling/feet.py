@@ -12,14 +12,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import quat
+from ..body.contacts import foot_contacts
+from ..body.ik import two_bone_ik
+from ..body.jointmap import JointMap, find_joint_map
+from ..body.names import ARM_ROLES, LEG_ROLES
+from ..body.roles import JointRoles
 from ..errors import ArgumentError
-from ..features import foot_contacts
-from ..ik import two_bone_ik
 from ..motion import Motion, Skeleton
-from ..roles import JointRoles
-from ..skeletons.jointmap import JointMap, find_joint_map
-from ..skeletons.names import ARM_ROLES, LEG_ROLES
+from ..rotations import quat
 
 JOINT_GROUPS = ("all", "arms", "upper-body", "head", "legs")
 # Both feet on the floor in at least this share of the frames: a clip that stands. Measured on the

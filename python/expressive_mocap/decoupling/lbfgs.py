@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..progress import line_log
+from .._utils.progress import line_log
 
 Log = Callable[[str], None]
 Params = list[tuple[np.ndarray, np.ndarray]]  # per layer (weights [in, out], bias [out])

@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import quat
 from ..motion import Motion
+from ..rotations import quat
 from .algebra import EXPONENT, GAIN, split_from_features
 
 
@@ -20,7 +20,7 @@ class StreamingDecoupler:
     expressive rotations and activity per joint. The floor is given (default 0), not estimated.
 
     A ``skeleton`` other than the model's (any humanoid one; ``joint_map`` as for
-    :func:`~expressive_mocap.skeletons.find_joint_map`) is read from the first frame (its
+    :func:`~expressive_mocap.body.find_joint_map`) is read from the first frame (its
     conventions, and its floor: the lowest foot joint then, instead of ``floor``; its bones'
     twists are taken from the rotations, which one frame cannot judge); each frame is
     retargeted onto the model's body, decoupled there, and its body mechanics carried back onto
@@ -61,7 +61,7 @@ class StreamingDecoupler:
             body, expressive, activity = self._step(frame, self.floor)
             return body, expressive, activity
         from ..skeletons.canonical import Carried
-        from ..skeletons.retargeting import Rig
+        from ..skeletons.rig import Rig
 
         if self._source is None:
             # A live stream's twists are taken from its rotations: one frame cannot tell a capture

@@ -32,12 +32,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .. import quat
+from ..body.roles import JointRoles
 from ..errors import ArgumentError
-from ..features import FEATURE_NAMES
 from ..motion import Motion
-from ..roles import JointRoles
+from ..rotations import quat
 from .body_model import BodyModel, model_features, pose_vectors
+from .features import FEATURE_NAMES
 from .lbfgs import Log, Params, fit_lbfgs, init_params
 from .lbfgs import stderr_log as _stderr
 from .network import Layer, Mlp

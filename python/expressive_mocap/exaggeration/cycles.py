@@ -8,11 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import quat
+from ..body.contacts import foot_contacts, footstrikes
+from ..body.roles import JointRoles, actor_height, facing_yaw
 from ..errors import ArgumentError, MocapError
-from ..features import foot_contacts, footstrikes
 from ..motion import Motion
-from ..roles import JointRoles, actor_height, facing_yaw
+from ..rotations import quat
 from .settings import CYCLE_CHOICES, TRAINING, CycleChoice
 
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import quat
+from ..body.roles import JointRoles
 from ..motion import Skeleton
 from ..ops import euler_to_quat, quat_to_euler
-from ..roles import JointRoles
+from ..rotations import quat
 from .cycles import SampledCycles
 from .settings import TRAINING
 

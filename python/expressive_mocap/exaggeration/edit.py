@@ -10,14 +10,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import quat
+from ..body.contacts import foot_contacts
+from ..body.hinges import HingeReport, limit_hinges
+from ..body.roles import JointRoles, actor_height
 from ..errors import ArgumentError, ModelError
-from ..features import foot_contacts
-from ..hinges import HingeReport, limit_hinges, model_hinge_limits
 from ..motion import Motion
 from ..ops import forward_kinematics
-from ..quat import mean_rotation
-from ..roles import JointRoles, actor_height
+from ..rotations import quat
+from ..rotations.quat import mean_rotation
 from .cycles import Cycle, SampledCycles, find_cycles, frame_yaw, sample_cycles, to_cycle_timing, without_heading
 from .dofs import dofs_to_rotations, rotations_to_dofs, sampled_dofs
 from .estimate import POOR_FIT, IntensityEstimate
@@ -408,7 +408,7 @@ def exaggerate(
     and foot locking holds each stance foot still through its contacts at the new timing.
     ``hinges``: elbows and knees kept from straight to the most the training cycles bend them
     plus a margin, never tighter than the input has them, before the edit is retimed and the feet
-    are locked (:func:`~expressive_mocap.hinges.limit_hinges`; the report's ``hinges``).
+    are locked (:func:`~expressive_mocap.body.hinges.limit_hinges`; the report's ``hinges``).
     Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
     Returns the new motion and an :class:`ExaggerationReport`.
     """
@@ -436,7 +436,7 @@ def exaggerate(
     out = _rebuilt(model, motion, roles, X, new, ref, yaw)
     limited = None
     if hinges:  # before the feet are locked, so that the leg IK bends each knee the right way
-        out, limited = limit_hinges(out, model_hinge_limits(model), allow=(motion.rotations,))
+        out, limited = limit_hinges(out, model.hinge_limits, allow=(motion.rotations,))
     at = _retimed(model, motion, out, roles, cycles, contacts, (k0, float(to)), margin) if timing else None
     held, out, held_contacts = (at.motion, at.edited, at.contacts) if at else (motion, out, contacts)
     correction = residual = lowered = 0.0

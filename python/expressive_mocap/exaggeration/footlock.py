@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import quat
+from ..body.ik import two_bone_ik
+from ..body.roles import JointRoles, actor_height
 from ..errors import ArgumentError
-from ..ik import two_bone_ik
 from ..motion import Motion
 from ..ops import forward_kinematics
-from ..roles import JointRoles, actor_height
+from ..rotations import quat
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 # A leg reaches this share of its length at most: a knee straightened to the last 0.01% would flip.
@@ -54,7 +54,7 @@ def lock_stance_feet(
     For each side, in the frames where the foot's locking weight ``w`` (1 in the contacts
     ``[F, 2]``, eased to 0 over ``blend_frames`` frames either side) is above 0, the ankle's
     target is ``(1 - w) edited + w original`` (world positions) and the foot's world rotation the
-    slerp between the two by ``w``; two-bone IK (:func:`~expressive_mocap.ik.two_bone_ik`) turns
+    slerp between the two by ``w``; two-bone IK (:func:`~expressive_mocap.body.ik.two_bone_ik`) turns
     the upper and lower leg to reach the target, and the foot's local rotation is set to give the
     wanted world rotation. The toe, fixed to the foot, follows. Where a target is beyond the leg's
     reach (the edit raised the hips or spread the legs), the hips are first lowered just enough,

@@ -8,13 +8,16 @@ import json
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
+from .._utils.files import atomic_write, check_keys, finite_array, read_model_file
+from ..body.hinges import HingeLimits, learn_hinge_limits
 from ..errors import MocapError, ModelError
-from ..files import atomic_write, check_keys, finite_array, read_model_file
 from ..motion import Motion
+from .dofs import dofs_to_rotations
 from .estimate import IntensityEstimate, estimate_intensity
 from .fitting import mapped
 from .settings import REPRESENTATIONS, TrainSettings
@@ -114,7 +117,8 @@ class ExaggerationModel:
         """One frame of the model's mean pose (``reference``) on the skeleton it was trained on:
         what a motion of another skeleton is retargeted onto to be exaggerated (every joint
         rotates in its trained Euler order; the root and the hips also move)."""
-        from ..motion import Skeleton, order_name
+        from ..motion import Skeleton
+        from ..rotations.orders import order_name
 
         position = tuple(f"{axis}position" for axis in "XYZ")
         channels = tuple(
@@ -123,6 +127,28 @@ class ExaggerationModel:
         )
         skeleton = Skeleton(self.joint_names, self.parents, self.offsets, channels)
         return Motion(skeleton, self.reference[None], self.offsets[None], 1 / 30)
+
+    @cached_property
+    def hinge_limits(self) -> HingeLimits:
+        """The knee and elbow limits this model learnt: measured on every training cycle it holds
+        (each person's rotations rebuilt from their DOFs) on its own skeleton. Computed once a
+        model (a model is not changed once trained)."""
+        body = self.body()
+        J = body.skeleton.n_joints
+        people = self.cycle_performance[:, 0]
+        rotations = np.concatenate(
+            [
+                dofs_to_rotations(
+                    self.cycle_trajectories[people == p, :, : 3 * J].reshape(-1, 3 * J),
+                    self.person_reference[p],
+                    self.representation,
+                    self.orders,
+                )
+                for p in np.unique(people)
+            ]
+        )
+        translations = np.broadcast_to(body.translations[0], (len(rotations), J, 3))
+        return learn_hinge_limits([Motion(body.skeleton, rotations, translations, body.frame_time)])
 
     def dof_range(self, reference: str = "model") -> tuple[np.ndarray, np.ndarray]:
         """The lowest and highest value ``[D]`` of each DOF over every training sample, measured as
@@ -303,7 +329,7 @@ def _check_model(model: ExaggerationModel, name: str) -> None:
             f"{name}: the levels must hold two different intensities at least, got {model.levels.tolist()}"
         )
     if model.joint_map:
-        from ..skeletons.jointmap import find_joint_map
+        from ..body.jointmap import find_joint_map
 
         try:
             find_joint_map(model.body().skeleton, model.joint_map)

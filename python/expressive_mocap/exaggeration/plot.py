@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..files import atomic_write
+from .._utils.files import atomic_write
 
 if TYPE_CHECKING:
     from .model import ExaggerationModel

@@ -18,10 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import quat
+from ..body.roles import JointRoles, actor_height, path_joint
 from ..motion import Motion
 from ..ops import forward_kinematics
-from ..roles import JointRoles, actor_height, path_joint
+from ..rotations import quat
 from .cycles import Cycle
 
 TIMING_NAMES = ("duration", "travel")

@@ -8,10 +8,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..body.roles import JointRoles, actor_height
 from ..errors import ArgumentError, ClipError, MocapError
 from ..motion import Motion, Skeleton
-from ..quat import mean_rotation
-from ..roles import JointRoles, actor_height
+from ..rotations.quat import mean_rotation
 from .cycles import check_cycle_choice, choose_cycles, sample_cycles
 from .dofs import dof_names, dof_weights, dofs_to_rotations, rotations_to_dofs, sampled_dofs, subtree_weights
 from .fitting import fit
@@ -152,7 +152,7 @@ def train(
     tell (a map file's form); the model records the whole map, by which motions of other skeletons
     reach it. Defaults: :data:`~expressive_mocap.exaggeration.TRAINING`.
     """
-    from ..skeletons.conventions import upright
+    from ..body.conventions import upright
 
     # Cycles, headings and heights are read along Y: a Z-up skeleton's clips are turned upright
     # first, and the model is of the upright skeleton (exaggerate turns a Z-up motion likewise).
@@ -231,7 +231,7 @@ def _recorded_map(skeleton, user_map: dict | None) -> dict:
     """The joint map a model records of its skeleton (``user_map``'s roles, the rest found by names
     and topology), by which motions of other skeletons reach it; {} when the skeleton has none
     and no map was given (the model then takes its own skeleton only)."""
-    from ..skeletons.jointmap import find_joint_map
+    from ..body.jointmap import find_joint_map
 
     try:
         return find_joint_map(skeleton, user_map).as_names()

@@ -9,9 +9,9 @@ from functools import partial
 
 import numpy as np
 
-from .. import quat
 from ..errors import ArgumentError, ModelError
 from ..ops import forward_kinematics
+from ..rotations import quat
 from .dofs import dofs_to_rotations
 from .fitting import fit, mapped
 from .model import ExaggerationModel

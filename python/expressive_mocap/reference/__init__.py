@@ -7,7 +7,7 @@ rotates by ``q2`` then ``q1``; an Euler order is three axis indices (0 = X, 1 = 
 written in a BVH CHANNELS line, intrinsic, first channel outermost; angles in degrees.
 """
 
-from ..lazy import lazy_exports
+from .._utils.lazy import lazy_exports
 
 # Each twin loads on first use: with the Rust kernels in use, none is needed to run, and importing
 # all of them took a tenth of a command's start-up.

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .. import files
+from .._utils import files
 from ..bvh.header import repeated_header
 from ..errors import ArgumentError
 from .fk import forward_kinematics
@@ -20,7 +20,7 @@ from .motion_block import read_motion_blocks
 def clip_pipeline_many(clips, parents, roles, gait, outputs, max_bytes: int | None = None) -> list:
     """Per clip (``source``, ``start``, ``frames``, ``layout``, ``frame_time``, ``height``,
     ``hips_rest_height``: see ``expressive_mocap.ops.ClipInput``; ``source``: the bytes, or a
-    path read here with :func:`~expressive_mocap.files.read_input`: a regular file of at most
+    path read here with :func:`~expressive_mocap._utils.files.read_input`: a regular file of at most
     ``max_bytes``, by default ``files.MAX_INPUT_BYTES``): ``(positions [F, J, 3] or None,
     rotations [F, J, 4] or None (or their matrices' first ``outputs.rotation_columns`` columns),
     [features [F, 19] per ``outputs.features`` request], contacts bool [F, 2] or None,

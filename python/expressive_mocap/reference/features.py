@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import quat
 from ..errors import ArgumentError
+from ..rotations import quat
 from .footsteps import air_time
 
 N_FEATURES = 19

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import quat
 from ..errors import ArgumentError
+from ..rotations import quat
 
 
 def forward_kinematics(

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import quat
 from ..errors import ArgumentError
+from ..rotations import quat
 
 REACH = 0.9999  # of the chain's length: the solver stops short of a fully straight knee
 
@@ -33,7 +33,7 @@ def _solve(
     lower_bone: np.ndarray,
     target: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The solver itself (``expressive_mocap.ik.two_bone_ik`` says what it does)."""
+    """The solver itself (``expressive_mocap.body.ik.two_bone_ik`` says what it does)."""
     a = root
     b = a + quat.rotate(upper, upper_bone)
     c = b + quat.rotate(lower, lower_bone)
@@ -56,7 +56,7 @@ def _solve(
 
 
 def two_bone_ik(root, upper, lower, upper_bone, lower_bone, target) -> tuple[np.ndarray, np.ndarray]:
-    """New world rotations ``(upper, lower)`` ``[F, 4]`` (see ``expressive_mocap.ik.two_bone_ik``);
+    """New world rotations ``(upper, lower)`` ``[F, 4]`` (see ``expressive_mocap.body.ik.two_bone_ik``);
     every argument has a row a frame."""
     frames = len(root)
     for name, value, width in (

@@ -14,11 +14,11 @@ from typing import NoReturn
 
 import numpy as np
 
+from .._utils.tokens import BLANKS, NOT_FINITE_BYTES, NUMBER_BYTES, shown
 from ..errors import ArgumentError, ParseError
-from ..tokens import BLANKS, NOT_FINITE_BYTES, NUMBER_BYTES, shown
 from .rotations import euler_to_quat
 
-# The Rust parser's grammar (expressive_mocap.tokens): numbers separated by ASCII blanks, one
+# The Rust parser's grammar (expressive_mocap._utils.tokens): numbers separated by ASCII blanks, one
 # frame a line. Python's own split() also splits at other control characters, so the twin
 # tokenises with these explicitly to accept and refuse exactly the same files.
 _PLAIN = b"0123456789+-.eE\n" + BLANKS.encode("ascii")

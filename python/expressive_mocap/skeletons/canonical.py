@@ -3,7 +3,7 @@ body-mechanics model, features and contacts tuned on Bandai-Namco captures), so 
 other skeleton is retargeted onto it to be compared with them.
 
 It is the Bandai-Namco dataset-2 skeleton (22 joints, centimetres, Y up, facing +Z, six channels a
-joint in Z X Y order; the demo's, :func:`~expressive_mocap.demo.bandai_like_skeleton`).
+joint in Z X Y order; the demo's, :func:`~expressive_mocap.procedural.bandai_like_skeleton`).
 """
 
 from __future__ import annotations
@@ -13,37 +13,27 @@ from typing import Any
 
 import numpy as np
 
+from ..body.canonical import canonical_shape, canonical_skeleton
+from ..body.conventions import Conventions
+from ..body.jointmap import JointMap, find_joint_map
 from ..errors import MocapError
-from ..motion import Motion, Skeleton
-from .conventions import Conventions
-from .jointmap import JointMap, find_joint_map
-from .retargeting import _IDENTITY, Rig, _mul, _turned, retarget_clips, retarget_rigs
+from ..motion import Motion
+from .retargeting import retarget_clips, retarget_rigs
+from .rig import _IDENTITY, Rig
+from .transfer import _mul, _turned, with_twists
 
 # The toe joint sits 4.35 cm above the floor on a flat foot (measured on dataset-2's walks).
 _TOE_HEIGHT_CM = 4.35
 
 
-def canonical_skeleton() -> Skeleton:
-    """The canonical body's skeleton."""
-    return canonical_rig().skeleton
-
-
 @lru_cache(maxsize=1)
 def canonical_rig() -> Rig:
     """The canonical body with its joint map, conventions and floor."""
-    from ..demo import bandai_like_skeleton
-
-    skeleton = bandai_like_skeleton()
+    skeleton = canonical_skeleton()
     jmap = find_joint_map(skeleton)
     sure = {"up": 1.0, "facing": 1.0, "unit": 1.0, "rest_pose": 1.0}
     conventions = Conventions("+Y", "+Z", "cm", 0.01, 163.07, "other", 30.0, sure)
     return Rig(skeleton, jmap, conventions, _TOE_HEIGHT_CM)
-
-
-def canonical_shape() -> tuple[tuple[str, ...], tuple[int, ...]]:
-    """The canonical skeleton's joint names and parents (what tells a clip already on it)."""
-    skeleton = canonical_skeleton()
-    return tuple(skeleton.names), tuple(int(p) for p in skeleton.parents)
 
 
 def onto_canonical(motion: Motion, user_map: dict | None = None, *, plant_feet: bool = True) -> tuple[Motion, JointMap]:
@@ -77,8 +67,8 @@ class Carried:
         self.original = motion
         self._kinematics = motion.fk()  # read once: by the rig, the retarget and the way back
         # Given: a stream's rig, read from its first frame.
-        self.source = (source or Rig.of(motion, user_map, kinematics=self._kinematics)).with_twists(
-            motion, self._kinematics
+        self.source = with_twists(
+            source or Rig.of(motion, user_map, kinematics=self._kinematics), motion, self._kinematics
         )
         self.target = target or canonical_rig()
         self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False, kinematics=self._kinematics)
@@ -92,12 +82,12 @@ class Carried:
         it is retargeted onto the user's skeleton instead, joints the body lacks at rest. Either
         way (unless ``hinges`` is False) the user's elbows and knees are then kept within their
         limits, about the axes the user's motion bends them about, never tighter than it has them
-        itself (:func:`~expressive_mocap.hinges.limit_hinges`): bodies differ, so a limb the edit
+        itself (:func:`~expressive_mocap.body.hinges.limit_hinges`): bodies differ, so a limb the edit
         kept within limits on the body may pass straight on the user's. ``plant_feet``: then the
         stance feet are put back where the user's motion has them through its own contacts
         (:func:`~expressive_mocap.decoupling.feet.planted`, on the user's skeleton: feet planted on
         the body slid and sank once carried back onto other proportions)."""
-        from ..hinges import hinge_limits_for, limit_hinges
+        from ..body.hinges import hinge_limits_for, limit_hinges
 
         out = self._back(edited)
         same = out.n_frames == self.original.n_frames
@@ -110,10 +100,10 @@ class Carried:
     def _planted(self, out: Motion) -> Motion:
         """``out`` with its stance feet where the user's motion has them (as it is, on a skeleton
         whose legs are not two bones from hip to ankle)."""
+        from ..body.contacts import foot_contacts
+        from ..body.conventions import upright
         from ..decoupling.feet import planted
         from ..errors import ArgumentError
-        from ..features import foot_contacts
-        from .conventions import upright
 
         if self._contacts is None:  # the user's contacts, read once, Y up
             self._contacts = foot_contacts(upright(self.original))
@@ -123,7 +113,7 @@ class Carried:
             return out
 
     def _back(self, edited: Motion) -> Motion:
-        from .. import quat
+        from ..rotations import quat
 
         if edited.n_frames != self.body.n_frames:
             return retarget_rigs(edited, self.target, self.source, plant_feet=False)
@@ -165,7 +155,7 @@ class Carried:
         hips_t, hips_s = self.target.jmap["hips"], self.source.jmap["hips"]
         moved = edited_positions[:, hips_t] - body_positions[:, hips_t]
         if np.abs(moved).max(initial=0.0) > 0:
-            from .retargeting import _leg, _path_joint
+            from .rig import _leg, _path_joint
 
             shift = quat.rotate(turn, moved) * (_leg(self.source) / _leg(self.target))
             mover = _path_joint(skeleton, hips_s)
@@ -197,8 +187,6 @@ def carried_for(motion: Motion, model, user_map: dict | None = None) -> Carried 
 __all__ = [
     "Carried",
     "canonical_rig",
-    "canonical_shape",
-    "canonical_skeleton",
     "carried_for",
     "many_onto_canonical",
     "onto_canonical",

@@ -18,12 +18,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import ops, quat
+from .. import ops
+from ..body.conventions import SAMPLED_FRAMES, facing_of, frame_rotation, ups_of
+from ..body.jointmap import JointMap, find_joint_map
+from ..body.names import label
 from ..motion import Motion, Skeleton, spread_frames
-from .conventions import SAMPLED_FRAMES, facing_of, frame_rotation, ups_of
-from .jointmap import JointMap, find_joint_map
-from .names import label
-from .retargeting import Rig, _turned, reference_pose
+from ..rotations import quat
+from .rig import Rig, reference_pose
+from .transfer import _turned
 
 _SIDES = {"left": "right", "right": "left"}
 

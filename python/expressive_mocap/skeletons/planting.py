@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 
 from .. import ops
-from ..features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from ..body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
+from ..body.jointmap import JointMap
+from ..body.roles import JointRoles, actor_height
 from ..motion import Motion
-from ..roles import JointRoles, actor_height
-from .jointmap import JointMap
 
 BLEND_FRAMES = 3
 
@@ -45,7 +45,7 @@ def plant_feet(
 def source_contacts(clips: list[Motion], rig, upright_positions: np.ndarray, bounds=None) -> np.ndarray:
     """Contacts ``bool [F, 2]`` of ``clips`` (of the rig ``rig``, laid end to end as ``bounds``
     says; None: one clip) from their world positions turned to the canonical axes (Y up, file
-    units), each clip on its own floor: :func:`~expressive_mocap.features.foot_contacts` with its
+    units), each clip on its own floor: :func:`~expressive_mocap.body.contacts.foot_contacts` with its
     defaults, all clips in one kernel call (``clip_gait_many``, clips in parallel)."""
     bounds = [0, len(upright_positions)] if bounds is None else bounds
     skeleton = clips[0].skeleton

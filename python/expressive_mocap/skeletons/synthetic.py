@@ -26,12 +26,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import quat
-from ..demo import procedural_walk
+from ..body.conventions import UNITS, Conventions, _frame_rotation
+from ..body.jointmap import find_joint_map
 from ..motion import Motion, Skeleton
-from .conventions import UNITS, Conventions, _frame_rotation
-from .jointmap import find_joint_map
-from .retargeting import Rig, retarget_rigs
+from ..procedural import procedural_walk
+from ..rotations import quat
+from .retargeting import retarget_rigs
+from .rig import Rig
 
 RIGS = ("bandai", "cmu", "mixamo", "smpl", "game", "lafan")
 
@@ -248,7 +249,7 @@ def synthetic_skeleton(rig: str) -> tuple[Skeleton, Conventions, dict]:
     """The rig's skeleton, the conventions it was built with and its ground-truth joint map
     (role -> joint name)."""
     if rig == "bandai":
-        from ..demo import bandai_like_skeleton
+        from ..body.canonical import bandai_like_skeleton
 
         skeleton = bandai_like_skeleton()
         truth = find_joint_map(skeleton).as_names()

@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import ops, quat
+from .. import ops
 from ..motion import Motion
+from ..rotations import quat
 
 # The trunk's lines kept: (start role, end role).
 CHAINS = (("hips", "chest"), ("chest", "head"))

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import quat
-from .jointmap import JointMap
+from ..body.jointmap import JointMap
+from ..rotations import quat
 
 # A limb's three joints, by the part of each segment.
 _ARM, _LEG = ("upper_arm", "forearm", "hand"), ("upper_leg", "lower_leg", "foot")

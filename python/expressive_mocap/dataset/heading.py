@@ -1,7 +1,7 @@
 """Heading frames: each frame of a motion seen from the body's own place and facing on the floor.
 
 A motion's world is first *harmonised*: turned so that its up axis is +Y and the skeleton's
-facing axis +Z (:func:`~expressive_mocap.skeletons.conventions.up_and_facing`, read from the data).
+facing axis +Z (:func:`~expressive_mocap.body.conventions.up_and_facing`, read from the data).
 A frame's **heading frame** then has its origin on the floor under the hips (the file's ground
 plane, up coordinate 0), Y up, +Z the body's facing projected on the floor and +X the body's left.
 The facing is read from the hips line and the shoulder line (left minus right joint, each
@@ -19,10 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import quat
-from .motion import Skeleton
-from .skeletons.conventions import AXES, facing_of, frame_rotation, up_of
-from .skeletons.jointmap import JointMap, find_joint_map
+from ..body.conventions import AXES, facing_of, frame_rotation, up_of
+from ..body.jointmap import JointMap, find_joint_map
+from ..motion import Skeleton
+from ..rotations import quat
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class HeadingFrame:
     def of(cls, skeleton: Skeleton, positions: np.ndarray, jmap: JointMap | None = None) -> HeadingFrame:
         """The heading frame of ``skeleton`` whose world positions ``[F, J, 3]`` (a sample of
         frames is enough) show its up axis. Raises MocapError when its hips, legs or head are
-        not found (:func:`~expressive_mocap.skeletons.jointmap.find_joint_map`)."""
+        not found (:func:`~expressive_mocap.body.jointmap.find_joint_map`)."""
         jmap = jmap or find_joint_map(skeleton)
         return cls.for_up(skeleton, up_of(jmap, positions)[0], jmap)
 

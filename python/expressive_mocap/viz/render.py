@@ -17,9 +17,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .errors import MocapError
-from .files import atomic_write, output_target
-from .motion import Motion
+from .._utils.files import atomic_write, output_target
+from ..errors import MocapError
+from ..motion import Motion
 
 VIEWS = ("side", "front")
 MARGIN = 0.06  # of the figure's height, around every panel
@@ -31,8 +31,8 @@ def heading(motion: Motion, positions: np.ndarray | None = None) -> np.ndarray:
     first frame to the last, or their facing where they barely travel (the yaw of
     :func:`~expressive_mocap.exaggeration.cycle_heading` over the whole clip); +Z when the
     skeleton's hips and upper legs cannot be told by name."""
-    from .exaggeration import Cycle, cycle_heading
-    from .roles import JointRoles
+    from ..body.roles import JointRoles
+    from ..exaggeration import Cycle, cycle_heading
 
     try:
         roles = JointRoles.find(motion.skeleton)
@@ -61,7 +61,7 @@ def _segments(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
     bones = np.stack([positions[:, parents[children]], positions[:, children]], axis=2)
     sites = [(j, off) for j, off in motion.skeleton.end_sites if np.linalg.norm(off) > 0]
     if sites:
-        from .quat import rotate
+        from ..rotations.quat import rotate
 
         joints = np.array([j for j, _ in sites])
         tips = positions[:, joints] + rotate(world_rot[:, joints], np.array([off for _, off in sites]))
@@ -73,12 +73,12 @@ def project(motion: Motion, view: str = "side") -> tuple[np.ndarray, np.ndarray]
     """The motion as drawn: bone ends ``[F, B, 2, 2]`` (picture x to the right, y up, file
     units) and the horizontal picture position of the hips ``[F]`` (the GIF's camera follows them).
     A file whose data stand along another axis than Y (Z-up SMPL or game rigs) is drawn upright."""
-    from .skeletons.conventions import upright
+    from ..body.conventions import upright
 
     motion = upright(motion)
     bones, positions = _segments(motion)
     axis = _horizontal_axis(heading(motion, positions), view)
-    from .roles import JointRoles
+    from ..body.roles import JointRoles
 
     try:
         hips = JointRoles.find(motion.skeleton).hips
@@ -285,7 +285,7 @@ def render(
     **options,
 ) -> str | None:
     """Render to ``path``: a GIF animation if it ends in ``.gif`` (returns how it plays), otherwise
-    a PNG of poses. ``path`` is checked before drawing (:func:`expressive_mocap.files.output_target`)."""
+    a PNG of poses. ``path`` is checked before drawing (:func:`expressive_mocap._utils.files.output_target`)."""
     output_target(path)
     if str(path).lower().endswith(".gif"):
         return render_animation(motions, path, titles, view, **options)
@@ -317,7 +317,7 @@ def plot_contacts(
     matplotlib.use("Agg")  # files only, no display needed
     import matplotlib.pyplot as plt
 
-    from .features import contact_intervals
+    from ..body.contacts import contact_intervals
 
     contacts = np.asarray(contacts, dtype=bool)
     if contacts.ndim != 2 or contacts.shape[1] != len(labels):

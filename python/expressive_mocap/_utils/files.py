@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MocapError
+from ..errors import MocapError
 
 # The largest BVH file or archive member read (docs/safety.md, "Limits"): 512 MiB of text is over half an
 # hour of a 60-joint skeleton at 120 fps, and decodes to about 1.2 GB of arrays. Checked before

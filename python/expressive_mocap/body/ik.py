@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import ops
+from .. import ops
 
 REACH = 0.9999  # of the chain's length: the solver stops short of a fully straight knee
 

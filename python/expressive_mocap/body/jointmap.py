@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .._utils.tokens import listed, shown
 from ..errors import MocapError
 from ..motion import Skeleton
-from ..tokens import listed, shown
 from .mapcheck import check_joint_map, check_spine
 from .names import ARM_ROLES, LEG_ROLES, label, words
 
@@ -94,7 +94,7 @@ def read_joint_map(path) -> dict[str, object]:
     """A map file: JSON or TOML (by extension; ``.toml`` for TOML), a table of role -> joint
     name, and ``spine`` -> a list of names. Roles are :data:`ROLES` (``shoulder`` is accepted for
     ``clavicle``). Raises :class:`MocapError` naming the file and what was wrong."""
-    from ..files import read_input
+    from .._utils.files import read_input
 
     path = Path(path)
     text = read_input(path).decode("utf-8", errors="replace")

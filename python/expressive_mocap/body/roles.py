@@ -13,9 +13,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from .errors import MocapError
-from .motion import Skeleton
-from .tokens import listed
+from .._utils.tokens import listed
+from ..errors import MocapError
+from ..motion import Skeleton
 
 _SIDES = {"left": r"(?:left|l)", "right": r"(?:right|r)"}
 _PARTS = {
@@ -89,7 +89,7 @@ class JointRoles:
         if problems and not overrides:
             # Names missing or ambiguous (SMPL's "left_foot" is a toe, a rig named j0..jN): the
             # full joint map, which reads the topology too.
-            from .skeletons.jointmap import find_joint_map
+            from .jointmap import find_joint_map
 
             try:
                 return cls.from_map(skeleton, find_joint_map(skeleton))
@@ -113,7 +113,7 @@ class JointRoles:
 
     @classmethod
     def from_map(cls, skeleton: Skeleton, jmap) -> JointRoles:
-        """The roles of a :class:`~expressive_mocap.skeletons.JointMap` (a foot's own joint
+        """The roles of a :class:`~expressive_mocap.body.JointMap` (a foot's own joint
         stands in for toes the map lacks)."""
         toes = tuple(jmap.get(f"{s}_toes") if f"{s}_toes" in jmap else jmap[f"{s}_foot"] for s in ("left", "right"))
         return cls(

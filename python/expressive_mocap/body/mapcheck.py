@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._utils.tokens import listed, shown
 from ..errors import MocapError
-from ..tokens import listed, shown
 from .names import ARM_ROLES, LEG_ROLES
 
 # Each role's nearest role up its chain, in order of preference (the first mapped one).

@@ -24,9 +24,9 @@ from typing import Callable
 
 import numpy as np
 
-from .. import quat
 from ..errors import MocapError
 from ..motion import Motion, Skeleton, spread_frames
+from ..rotations import quat
 from .jointmap import JointMap
 from .mapcheck import check_posed_map, four_legged
 

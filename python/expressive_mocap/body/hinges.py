@@ -13,17 +13,17 @@ plane and its twist.
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from . import quat
-from .errors import ArgumentError, MocapError
-from .motion import Motion, Skeleton, spread_frames
-from .ops import forward_kinematics
+from ..errors import ArgumentError, MocapError
+from ..motion import Motion, Skeleton, spread_frames
+from ..ops import forward_kinematics
+from ..rotations import quat
+from .canonical import canonical_shape, canonical_skeleton
 
 # Each hinge (the joint map's role of its middle joint) with its limb: upper, middle, end.
 LIMBS = {"forearm": ("upper_arm", "forearm", "hand"), "lower_leg": ("upper_leg", "lower_leg", "foot")}
@@ -105,7 +105,7 @@ def _flexion(world: np.ndarray, positions: np.ndarray, hinge: Hinge) -> np.ndarr
 
 def _limbs(skeleton: Skeleton) -> list[tuple[str, int, int, int]]:
     """The hinges the skeleton's joint map knows: (role, upper, middle, end) joint indices."""
-    from .skeletons.jointmap import find_joint_map
+    from .jointmap import find_joint_map
 
     try:
         jmap = find_joint_map(skeleton)
@@ -230,8 +230,6 @@ def limit_hinges(motion: Motion, limits: HingeLimits, allow: Sequence[np.ndarray
 def canonical_hinge_limits() -> HingeLimits:
     """The canonical body's hinge limits: its axes and most flexion measured on the Bandai-Namco
     neutral locomotion (:data:`CANONICAL_AXES`, :data:`NEUTRAL_MOST`), plus :data:`MARGIN`."""
-    from .skeletons.canonical import canonical_skeleton
-
     skeleton = canonical_skeleton()
     names = tuple(skeleton.names)
     hinges = []
@@ -248,52 +246,12 @@ def hinge_limits_for(motions: Sequence[Motion]) -> HingeLimits:
     """The limits for edits of ``motions`` (one skeleton) without a model's own: the canonical
     body's on it, else the axes learnt from the motions themselves with the canonical most
     flexion of each hinge (the same human body) plus the margin."""
-    from .skeletons.canonical import canonical_shape
-
     if tuple(motions[0].skeleton.names) == canonical_shape()[0]:
         return canonical_hinge_limits()
     # The axes from evenly spread frames: a clip's hinges turn about the same lines throughout,
     # and an edit carried back to its skeleton should not cost a pass over every frame.
     spread = [m[spread_frames(m.n_frames, _AXIS_FRAMES)] for m in motions]
     return learn_hinge_limits(spread, most=NEUTRAL_MOST)
-
-
-# Limits of the models seen, by identity (a model is not hashable): exaggerating asks once a clip.
-_MODEL_LIMITS: dict[int, tuple[weakref.ref, HingeLimits]] = {}
-
-
-def model_hinge_limits(model) -> HingeLimits:
-    """The limits an :class:`~expressive_mocap.exaggeration.ExaggerationModel` learnt: measured
-    on every training cycle it holds (each person's rotations rebuilt from their DOFs), on the
-    model's own skeleton. Kept while the model lives (models are not changed once trained)."""
-    key = id(model)
-    seen = _MODEL_LIMITS.get(key)
-    if seen is not None and seen[0]() is model:
-        return seen[1]
-    limits = _model_limits(model)
-    _MODEL_LIMITS[key] = (weakref.ref(model, lambda _: _MODEL_LIMITS.pop(key, None)), limits)
-    return limits
-
-
-def _model_limits(model) -> HingeLimits:
-    from .exaggeration.dofs import dofs_to_rotations
-
-    body = model.body()
-    J = body.skeleton.n_joints
-    people = model.cycle_performance[:, 0]
-    rotations = np.concatenate(
-        [
-            dofs_to_rotations(
-                model.cycle_trajectories[people == p, :, : 3 * J].reshape(-1, 3 * J),
-                model.person_reference[p],
-                model.representation,
-                model.orders,
-            )
-            for p in np.unique(people)
-        ]
-    )
-    translations = np.broadcast_to(body.translations[0], (len(rotations), J, 3))
-    return _learnt(tuple(body.skeleton.names), body.skeleton, rotations, translations, MARGIN, None)
 
 
 __all__ = [
@@ -305,5 +263,4 @@ __all__ = [
     "hinge_limits_for",
     "learn_hinge_limits",
     "limit_hinges",
-    "model_hinge_limits",
 ]

@@ -18,9 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import ops, quat
-from .errors import ArgumentError
-from .reference.forms import matrix_entries
+from .. import ops
+from ..errors import ArgumentError
+from ..reference.forms import matrix_entries
+from ..rotations import quat
 
 KINDS = {"quaternion": 4, "6d": 6, "matrix": 9, "axis-angle": 3, "euler": 3}
 

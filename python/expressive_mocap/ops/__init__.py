@@ -1,0 +1,101 @@
+"""The only code that calls the kernels: one wrapper per kernel family, which checks and
+coerces its arguments (an :class:`~expressive_mocap.errors.ArgumentError` naming the bad one),
+builds the kernel's argument objects (:class:`ChannelLayout`, :class:`MotionBlock`,
+:class:`ClipInput`, :class:`GaitSettings`, :class:`PipelineOutputs`) and calls the backend in
+use: the Rust kernel or its NumPy twin (see :mod:`expressive_mocap.backend`), which take the
+same arguments and raise the same exceptions. Leading batch dimensions are folded into frames.
+
+Arrays written by another thread during a call: the Rust kernels run without the GIL, so
+other Python threads run meanwhile. Index arrays (``parents``, channel columns, gait joints)
+and bool flags are copied before the GIL is released, so a write to them during a call has no
+effect on it: it is computed from the values at the call, or refused with an ArgumentError. Float
+arrays are read in place (copying them would cost as much as some kernels): a write to one
+during a call gives results computed from a mix of its old and new values, and nothing worse
+(no crash, no error). Don't write to a kernel's inputs while it runs if you need its result.
+"""
+
+from __future__ import annotations
+
+from .arrays import (
+    ClipArrays,
+    arrays_pipeline_many,
+    stored_rotations,
+)
+from .bvh_text import (
+    ChannelLayout,
+    MotionBlock,
+    channel_layout,
+    format_motion_block,
+    read_motion_blocks,
+    repeated_headers,
+)
+from .gait import (
+    ClipInput,
+    FeatureRequest,
+    GaitSettings,
+    PipelineOutputs,
+    air_time,
+    clip_gait_many,
+    clip_gradient,
+    clip_pipeline_many,
+    column_totals,
+    dynamic_features,
+    foot_contacts,
+)
+from .mlp import (
+    ACTIVATIONS,
+    mlp_forward,
+)
+from .posing import (
+    TransferPlan,
+    plant_feet,
+    retarget_transfer,
+    two_bone_ik,
+)
+from .rotations import (
+    compose_rotations,
+    decode_channels,
+    decouple_rotations,
+    euler_to_quat,
+    forward_kinematics,
+    forward_kinematics_many,
+    matrix_columns,
+    quat_to_euler,
+)
+
+__all__ = [
+    "ACTIVATIONS",
+    "ChannelLayout",
+    "ClipArrays",
+    "ClipInput",
+    "FeatureRequest",
+    "GaitSettings",
+    "MotionBlock",
+    "PipelineOutputs",
+    "TransferPlan",
+    "air_time",
+    "arrays_pipeline_many",
+    "channel_layout",
+    "clip_gait_many",
+    "clip_gradient",
+    "clip_pipeline_many",
+    "column_totals",
+    "compose_rotations",
+    "decode_channels",
+    "decouple_rotations",
+    "dynamic_features",
+    "euler_to_quat",
+    "foot_contacts",
+    "format_motion_block",
+    "forward_kinematics",
+    "forward_kinematics_many",
+    "matrix_columns",
+    "mlp_forward",
+    "plant_feet",
+    "quat_to_euler",
+    "read_motion_blocks",
+    "repeated_headers",
+    "retarget_transfer",
+    "stored_rotations",
+    "two_bone_ik",
+]

@@ -1,0 +1,120 @@
+"""Wrappers of the rotation kernels: Euler angles to quaternions and back, forward kinematics,
+channel decoding, the decoupling algebra's per-joint products, rotation matrix columns."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..backend import kernels
+from ..errors import ArgumentError
+from ._args import _array, _f64, _frames, _orders
+
+
+def euler_to_quat(angles, orders) -> np.ndarray:
+    """Euler angles ``[..., J, 3]`` in degrees -> unit quaternions ``[..., J, 4]`` (x, y, z, w).
+
+    ``orders``: one order such as ``"ZXY"`` (the BVH channel order, intrinsic, first channel
+    outermost, like SciPy's upper-case orders) or a sequence of ``J`` orders.
+    """
+    angles = _f64("angles", angles, 3)
+    batch = angles.shape[:-2]
+    flat = angles.reshape(-1, *angles.shape[-2:])
+    return kernels().euler_to_quat(flat, _orders(orders, angles.shape[-2])).reshape(*batch, angles.shape[-2], 4)
+
+
+def quat_to_euler(quats, orders) -> np.ndarray:
+    """Unit quaternions ``[..., J, 4]`` (x, y, z, w) -> Euler angles ``[..., J, 3]`` in degrees.
+
+    The middle angle lies in [-90, 90]; at gimbal lock the third angle is 0.
+    """
+    quats = _f64("quats", quats, 4)
+    batch = quats.shape[:-2]
+    flat = quats.reshape(-1, *quats.shape[-2:])
+    return kernels().quat_to_euler(flat, _orders(orders, quats.shape[-2])).reshape(*batch, quats.shape[-2], 3)
+
+
+def forward_kinematics(rotations, translations, parents) -> tuple[np.ndarray, np.ndarray]:
+    """World rotations ``[F, J, 4]`` and positions ``[F, J, 3]`` from local ones.
+
+    ``rotations [F, J, 4]`` (x, y, z, w) and ``translations [F, J, 3]`` are relative to each
+    joint's parent; ``parents [J]`` lists each joint after its parent, roots as -1.
+    """
+    rotations = _f64("rotations", rotations, 4)
+    translations = _f64("translations", translations, 3)
+    parents = _array("parents", parents, np.int64, "iu")
+    if parents.ndim != 1:
+        raise ArgumentError(f"argument `parents`: expected shape [J], got {list(parents.shape)}")
+    return kernels().forward_kinematics(rotations, translations, parents)
+
+
+def forward_kinematics_many(motions) -> list[tuple[np.ndarray, np.ndarray]]:
+    """World rotations and positions of many motions at once (in parallel across motions with
+    the Rust kernels: the way to run FK over an archive of short clips)."""
+    clips = [(m.rotations, m.translations, np.ascontiguousarray(m.skeleton.parents, dtype=np.int64)) for m in motions]
+    return kernels().forward_kinematics_many(clips)
+
+
+def decode_channels(values, rotation_columns, orders, position_columns, offsets) -> tuple[np.ndarray, np.ndarray]:
+    """BVH channel values ``[F, C]`` -> local rotations ``[F, J, 4]`` and translations ``[F, J, 3]``.
+
+    The layout arrays are those of :meth:`Skeleton.layout`; ``offsets [J, 3]`` are the rest offsets.
+    """
+    values = _array("values", values, np.float64)
+    if values.ndim != 2:
+        raise ArgumentError(f"argument `values`: expected shape [F, C], got {list(values.shape)}")
+    rotation_columns = _array("rotation_columns", rotation_columns, np.int64, "iu")
+    orders = _array("orders", orders, np.uint8, "iu")
+    position_columns = _array("position_columns", position_columns, np.int64, "iu")
+    offsets = _array("offsets", offsets, np.float64)
+    joints = len(orders)
+    for name, array in (
+        ("rotation_columns", rotation_columns),
+        ("orders", orders),
+        ("position_columns", position_columns),
+        ("offsets", offsets),
+    ):
+        if array.shape != (joints, 3):
+            raise ArgumentError(
+                f"argument `{name}`: expected shape [{joints}, 3] (one row per joint), got {list(array.shape)}"
+            )
+    return kernels().decode_channels(values, rotation_columns, orders, position_columns, offsets)
+
+
+def decouple_rotations(original, body, gain: float, exponent: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Split local rotations ``original [F, J, 4]`` given body-mechanics rotations ``body``:
+    ``E = O B^-1``; activity ``A = clip((tanh(angle(E)) * gain)^exponent, 0, 1)`` ``[F, J]``;
+    filtered expressive component ``E* = E^A``; recovered body mechanics ``B' = E*^-1 O``.
+    Returns ``(E*, B', A)``; ``E* * B' = O`` exactly. ``gain`` and ``exponent`` have no default
+    here: the package's are ``decouple.GAIN`` and ``decouple.EXPONENT``, passed by its callers."""
+    original, body = _f64("original", original, 4), _f64("body", body, 4)
+    batch = original.shape[:-1]
+    e, b, a = kernels().decouple_rotations(_frames(original), _frames(body), float(gain), float(exponent))
+    return e.reshape(original.shape), b.reshape(original.shape), a.reshape(batch)
+
+
+def compose_rotations(expressive, body, scale: float = 1.0) -> np.ndarray:
+    """``expressive^scale * body`` for rotations ``[F, J, 4]`` (modulation of expressiveness)."""
+    expressive, body = _f64("expressive", expressive, 4), _f64("body", body, 4)
+    return kernels().compose_rotations(_frames(expressive), _frames(body), float(scale)).reshape(body.shape)
+
+
+def matrix_columns(quats, columns: int) -> np.ndarray:
+    """Unit quaternions ``[..., 4]`` as float32 rotation matrices: ``[..., 9]`` row after row
+    (``columns`` 3) or ``[..., 6]`` their first two columns, column after column (2: the 6D form)."""
+    quats = _array("quats", quats, np.float64)
+    if quats.shape[-1:] != (4,):
+        raise ArgumentError(f"argument `quats`: expected shape [..., 4], got {list(quats.shape)}")
+    flat = kernels().matrix_columns(quats.reshape(-1, 4), int(columns))
+    return flat.reshape(quats.shape[:-1] + flat.shape[1:])
+
+
+__all__ = [
+    "compose_rotations",
+    "decode_channels",
+    "decouple_rotations",
+    "euler_to_quat",
+    "forward_kinematics",
+    "forward_kinematics_many",
+    "matrix_columns",
+    "quat_to_euler",
+]
