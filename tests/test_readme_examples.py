@@ -90,7 +90,7 @@ def test_the_readme_python_example_runs_and_prints_what_it_says(tmp_path, monkey
     prints = [line for line in example.splitlines() if line.startswith("print(")]
     promised = [line.split("#", 1)[1].split(":")[0].strip() for line in prints]
     assert capsys.readouterr().out.splitlines() == promised
-    from expressive_mocap.demo import walk_and_wave
+    from expressive_mocap.procedural import walk_and_wave
 
     walk, waving = walk_and_wave()
     hand = waving.skeleton.index("Hand_R")
