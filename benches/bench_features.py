@@ -21,8 +21,9 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
-from expressive_mocap import features, reference
-from expressive_mocap.roles import JointRoles, actor_height, hips_rest_height
+from expressive_mocap import reference
+from expressive_mocap.body.roles import JointRoles, actor_height, hips_rest_height
+from expressive_mocap.decoupling import features
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_archive import find_data  # noqa: E402

@@ -112,9 +112,9 @@ def kernels_child(folder: str) -> None:
     Checked: every clip read, decoded, posed and measured, with its frames."""
     from expressive_mocap import ops
     from expressive_mocap.backend import kernels
+    from expressive_mocap.body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
     from expressive_mocap.dataset import format as fmt
     from expressive_mocap.dataset import sources, work
-    from expressive_mocap.features import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 
     items = sources.open_source(folder).items
     prepared = work.prepare(items, fmt.DEFAULT_KEEP, None)

@@ -44,7 +44,8 @@ import numpy as np
 
 import expressive_mocap as em
 from expressive_mocap.backend import use_backend
-from expressive_mocap.skeletons import find_joint_map, retarget
+from expressive_mocap.body import find_joint_map
+from expressive_mocap.skeletons import retarget
 from harness import Stopwatch, check_close, check_equal, log, median, repeat
 from results import write_section  # benches/results.py: this script rewrites only its own section
 

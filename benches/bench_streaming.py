@@ -13,7 +13,7 @@ import numpy as np
 import expressive_mocap as em
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.streaming import StreamingDecoupler
-from expressive_mocap.demo import walk_and_wave
+from expressive_mocap.procedural import walk_and_wave
 from harness import check_close, check_equal, timed
 
 TOLERANCE = 1e-12  # Rust against the twins: 2.5e-14 measured

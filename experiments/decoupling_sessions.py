@@ -35,11 +35,11 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from expressive_mocap import quat
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.training import split_by_group
-from expressive_mocap.render import render
+from expressive_mocap.rotations import quat
+from expressive_mocap.viz.render import render
 
 HERE = Path(__file__).resolve().parent
 JOINTS = [

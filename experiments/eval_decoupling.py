@@ -25,7 +25,7 @@ import expressive_mocap as em
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.training import split_by_group
-from expressive_mocap.render import render
+from expressive_mocap.viz.render import render
 
 HERE = Path(__file__).resolve().parent
 NEUTRAL_CONTENTS = (

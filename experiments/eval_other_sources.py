@@ -31,9 +31,10 @@ from pathlib import Path
 
 import numpy as np
 
+from expressive_mocap.body import find_joint_map
 from expressive_mocap.bvh import read_bvh, write_bvh
 from expressive_mocap.cli import main as cli
-from expressive_mocap.skeletons import find_joint_map, retarget
+from expressive_mocap.skeletons import retarget
 from independent import read_fk
 
 HERE = Path(__file__).resolve().parent

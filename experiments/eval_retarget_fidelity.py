@@ -25,11 +25,11 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
-from expressive_mocap import quat
-from expressive_mocap.features import foot_contacts
+from expressive_mocap.body.contacts import foot_contacts
+from expressive_mocap.body.conventions import read_conventions, upright
+from expressive_mocap.body.jointmap import find_joint_map
+from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons.canonical import onto_canonical
-from expressive_mocap.skeletons.conventions import read_conventions, upright
-from expressive_mocap.skeletons.jointmap import find_joint_map
 from expressive_mocap.skeletons.retargeting import retarget
 
 REPO = Path(__file__).resolve().parent.parent

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
-from expressive_mocap.demo import procedural_walk
+from expressive_mocap._utils.files import atomic_write
 from expressive_mocap.exaggeration import (
     dof_positions,
     exaggerate,
@@ -39,8 +39,8 @@ from expressive_mocap.exaggeration import (
     validation_table,
 )
 from expressive_mocap.exaggeration.validation import timing_table
-from expressive_mocap.files import atomic_write
-from expressive_mocap.render import render
+from expressive_mocap.procedural import procedural_walk
+from expressive_mocap.viz.render import render
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_DATA = Path.home() / ".cache/motion-data/dataset/Bandai-Namco-Research-Motiondataset-2/data"

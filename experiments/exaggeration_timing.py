@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
+from expressive_mocap._utils.files import atomic_write
 from expressive_mocap.exaggeration import exaggerate, train
-from expressive_mocap.files import atomic_write
 from independent import read_fk
 
 HERE = Path(__file__).resolve().parent

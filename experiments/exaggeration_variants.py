@@ -28,7 +28,7 @@ import numpy as np
 
 import expressive_mocap.exaggeration as ex
 import expressive_mocap.exaggeration.fitting as ex_fit
-from expressive_mocap import quat
+from expressive_mocap.rotations import quat
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from exaggeration_experiment import DEFAULT_DATA, LEVELS, PEOPLE, STYLES, clip  # noqa: E402

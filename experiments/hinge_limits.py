@@ -29,11 +29,11 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
+from expressive_mocap._utils.files import atomic_write
+from expressive_mocap.body.hinges import CANONICAL_AXES, NEUTRAL_MOST
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.edits import blend, mix, modulate
 from expressive_mocap.exaggeration import exaggerate, train
-from expressive_mocap.files import atomic_write
-from expressive_mocap.hinges import CANONICAL_AXES, NEUTRAL_MOST, model_hinge_limits
 from expressive_mocap.skeletons.canonical import carried_for
 from independent import scipy_fk
 
@@ -125,7 +125,7 @@ def neutral_limits(data: Path) -> list[str]:
     rows = [
         f"Measured here over the {len(files)} dataset-2 neutral locomotion clips (`{{walk,walk-turn-left,"
         "walk-turn-right,run}_normal_*`, the shipped body-mechanics model's training data), against the "
-        "constants the package ships for the canonical body (`expressive_mocap.hinges`):",
+        "constants the package ships for the canonical body (`expressive_mocap.body.hinges`):",
         "",
         "| hinge | most flexion here (deg) | shipped | mean axis here (upper joint's frame) | shipped axis |",
         "|---|---|---|---|---|",
@@ -147,7 +147,7 @@ def main() -> None:
     styles = ("exhausted", "normal", "active")
     people = [[em.read_bvh(data / f"dataset-2_walk_{s}_{p:03d}.bvh") for s in styles] for p in range(1, 9)]
     model = train(people, (1.0, 2.0, 3.0))
-    limits = model_hinge_limits(model)
+    limits = model.hinge_limits
     walks = sorted(data.glob("dataset-2_walk_*.bvh"))
     body_model = BodyModel.load()
     wave = em.read_bvh(data / "dataset-2_wave-right-hand_active_001.bvh")

@@ -11,9 +11,9 @@ import subprocess
 from pathlib import Path
 
 import expressive_mocap as em
-from expressive_mocap.demo import walk_and_wave
-from expressive_mocap.features import cadence, foot_contacts
-from expressive_mocap.render import plot_contacts, render
+from expressive_mocap.body.contacts import cadence, foot_contacts
+from expressive_mocap.procedural import walk_and_wave
+from expressive_mocap.viz.render import plot_contacts, render
 
 HERE = Path(__file__).resolve().parent
 
@@ -53,7 +53,8 @@ def main() -> None:
 def skeletons_figure(data: Path, path: Path) -> None:
     """A dataset-2 wave on the CMU and Xia-style skeletons, and the CMU walk on the Bandai one,
     each drawn in metres (the files' units differ)."""
-    from expressive_mocap.skeletons import find_joint_map, read_conventions, retarget, to_canonical
+    from expressive_mocap.body import find_joint_map, read_conventions, to_canonical
+    from expressive_mocap.skeletons import retarget
 
     other = HERE.parent.parent / "shared" / "data" / "other"
     wave = em.read_bvh(data / "dataset-2_wave-left-hand_normal_001.bvh")

@@ -70,7 +70,7 @@ CASES = {
     "not BVH text": (b"hello world\n", 1, "HIERARCHY"),
     "binary file": (bytes(range(256)) * 4, None, "binary"),
     "gzip file": (b"\x1f\x8b\x08\x00" + bytes(100), None, "binary"),
-    # Found by benches/fuzz_bvh.py: the same channel in two spellings escaped as a MocapError.
+    # Found by tools/fuzz_bvh.py: the same channel in two spellings escaped as a MocapError.
     "channel twice in two cases": (
         GOOD.replace(b"Yrotation Zrotation Xrotation", b"Yrotation Zrotation ZROTATION"),
         13,
@@ -106,7 +106,7 @@ def test_bvh_error_is_a_value_error_of_the_package():
 
 
 def test_the_hierarchy_cache_never_accepts_a_broken_hierarchy():
-    # Found by benches/fuzz_bvh.py: after a valid file with a brace glued to its OFFSET, the same
+    # Found by tools/fuzz_bvh.py: after a valid file with a brace glued to its OFFSET, the same
     # hierarchy without that brace was taken from the cache of known shapes and read.
     em.read_bvh(b"HIERARCHY\nROOT a\n{\nOFFSET 0 0 0}\nMOTION\nFrames: 1\nFrame Time: .09\n\n")
     with pytest.raises(em.BVHError, match="never closed"):

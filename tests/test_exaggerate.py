@@ -335,7 +335,7 @@ def test_foot_locking_on_a_real_walk(bandai2_dir):
 
 
 def test_the_issue_targets_on_real_walks(bandai2_dir):
-    """The paper's validation on dataset-2's walks, takes 1-8 as people (benches/EXAGGERATION.md has
+    """The paper's validation on dataset-2's walks, takes 1-8 as people (experiments/EXAGGERATION.md has
     the full tables): the issue's bars for the swap test and the leave-one-person-out warp."""
     from expressive_mocap.exaggeration import leave_one_out
 

@@ -49,7 +49,7 @@ def test_a_valid_file_cut_anywhere(end):
 
 
 def test_a_lone_carriage_return_is_a_blank_for_both_backends():
-    # Found by benches/fuzz_bvh.py --compare: loadtxt (the NumPy twin) ended a line at a lone CR.
+    # Found by tools/fuzz_bvh.py --compare: loadtxt (the NumPy twin) ended a line at a lone CR.
     lines = GOOD.split(b"\n")
     first = lines.index(b"Frame Time: 0.0333333") + 1
     lines[first] = lines[first].replace(b" -78.5", b"\r-78.5")
@@ -59,7 +59,7 @@ def test_a_lone_carriage_return_is_a_blank_for_both_backends():
 
 
 def test_a_bad_first_line_is_named_when_frames_claims_more_than_the_block_holds():
-    # Found by benches/fuzz_bvh.py --compare (the Rust parser said "truncated" at the last line).
+    # Found by tools/fuzz_bvh.py --compare (the Rust parser said "truncated" at the last line).
     data = GOOD[: GOOD.index(b"Frame Time: 0.0333333\n") + 22] + b"1.5 91.0\n2"
     read_or_refuse(data)
     with pytest.raises(em.BVHError, match="expected 27 values"):

@@ -32,7 +32,7 @@ BENT = 25.0  # degrees: a limb bent this far tells its hinge's axis clearly
 MARGIN = 0.1  # the room above the most flexion seen: this share of the range seen
 # The canonical body's hinges as the Bandai-Namco dataset-2 neutral locomotion shows them (CC BY-NC
 # 4.0; the 145 {walk,walk-turn-left,walk-turn-right,run}_normal clips the shipped body-mechanics
-# model learnt from; benches/hinge_limits.py measures them): the most flexion (degrees; the limit
+# model learnt from; experiments/hinge_limits.py measures them): the most flexion (degrees; the limit
 # before the margin, on any skeleton whose own data does not tell it) and the axis in the upper
 # joint's frame (the rest pose's bones lie along X there).
 NEUTRAL_MOST = {"left_forearm": 125.9, "right_forearm": 123.7, "left_lower_leg": 138.5, "right_lower_leg": 137.6}

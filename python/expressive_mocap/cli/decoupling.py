@@ -357,7 +357,7 @@ def add_train(commands) -> None:
         "train",
         help="train a body-mechanics model on neutral clips of one skeleton",
         description="Train a body-mechanics model on neutral clips of one skeleton. How much data: on Bandai-Namco "
-        "locomotion (benches/NEUTRAL_DATA.md) 2 clips (~7 s) gave a model worse than the mean pose, which train "
+        "locomotion (experiments/NEUTRAL_DATA.md) 2 clips (~7 s) gave a model worse than the mean pose, which train "
         "refuses; 4 clips (~16 s) predicted held-out poses with 0.15x the mean pose's error, 16 clips (~70 s) 0.07x, "
         "99 clips (~8 min) 0.05x. Give at least a minute of neutral walking and running, in several clips (the test "
         "split is by clip).",

@@ -214,8 +214,8 @@ def onto_canonical(
     BVH text to write and parse again), its own skeleton and joint map kept in its outcome for
     the manifest. ``user_map``: role -> joint name, for every skeleton of the archive.
     ``signed``: the joints whose rotations must keep the text's sign (:func:`as_written`)."""
-    from ..body.canonical import canonical_skeleton
-    from ..skeletons.canonical import canonical_shape, many_onto_canonical
+    from ..body.canonical import canonical_shape, canonical_skeleton
+    from ..skeletons.canonical import many_onto_canonical
 
     target, body = canonical_shape(), bone_length(canonical_skeleton())  # every retargeted clip's
     out: dict[tuple, list] = {target: by_hierarchy.pop(target, []), MOVED: []}

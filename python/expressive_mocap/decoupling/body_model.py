@@ -41,7 +41,7 @@ DEFAULT_MODEL = "body_model.npz"  # shipped inside the package (python/expressiv
 # Calibration's activity threshold: the NEUTRAL_PERCENTILE-th percentile of a joint's expressive
 # angle over the session's neutral clips is read as NEUTRAL_ANGLE degrees, to which the default
 # activity index gives 0.2 (chosen on dataset-1's neutral locomotion, each clip left out in turn:
-# benches/SESSIONS.md).
+# experiments/SESSIONS.md).
 NEUTRAL_PERCENTILE = 90.0
 NEUTRAL_ANGLE = 20.0
 

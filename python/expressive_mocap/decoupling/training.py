@@ -461,7 +461,7 @@ def feature_range(features: np.ndarray) -> np.ndarray:
     """``[2, 19]``: the range of ``features [N, 19]`` (lowest, highest of each) a body model
     trusts its network with. Clipping inputs into it keeps the network from extrapolating to
     speeds, contacts, air times or hips heights it never saw (a sprint, a crouch; on the shipped
-    model, measured in benches/SESSIONS.md: less expressive motion left in another session's
+    model, measured in experiments/SESSIONS.md: less expressive motion left in another session's
     neutral locomotion). Not narrower (percentiles): standing frames are under 1% of the shipped
     model's walks and runs, and would be read as walking. The thigh rotations keep [-1, 1], all
     a quaternion component can be: the network predicts the thighs from them, so a clipped thigh
