@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -167,3 +168,41 @@ def stick_walker(hips, left_foot, right_foot, fps: float = 30.0, prefix: str = "
     rotations = np.zeros((len(hips), len(names), 4))
     rotations[..., 3] = 1.0
     return em.Motion(skeleton, rotations, translations, 1.0 / fps)
+
+
+def straight_walker(frames=40, velocity=(0.0, 0.0, 140.0), fps=30.0):
+    """Hips 90 cm up moving at a constant ``velocity`` (cm/s), facing +Z, feet on the floor."""
+    t = np.arange(frames)[:, None] / fps
+    hips = np.array([0.0, 90.0, 0.0]) + t * np.array(velocity)
+    feet = hips * [1, 0, 1]
+    return stick_walker(hips, feet + [10, 0, 0], feet - [10, 0, 0], fps=fps)
+
+
+def returns_within(seconds: float, call):
+    """``call()``'s result or exception, failing the test if it has not returned in time (a read
+    of a FIFO blocks until a writer comes)."""
+    outcome: dict = {}
+
+    def run():
+        try:
+            outcome["value"] = call()
+        except BaseException as error:  # handed back to the test
+            outcome["error"] = error
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    assert not thread.is_alive(), f"still blocked after {seconds} s"
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["value"]
+
+
+class FixedFloor:
+    """The model with the floor fixed, as the streaming decoupler uses it."""
+
+    def __init__(self, model, floor):
+        self.model, self.floor = model, floor
+
+    def predict(self, motion):
+        return self.model.predict(motion, floor=self.floor)

@@ -1,7 +1,8 @@
 """Hostile BVH files: small files with absurd claims, and hierarchies at and beyond the reader's
 limits. Run as a script (``python hostile_files.py BACKEND``) it reads each one and prints, as
 JSON, what happened and how much the peak RSS grew while reading it (reset between files).
-``tests/test_limits.py`` runs it in a fresh process; the fuzz harness seeds its corpus with them.
+``tests/bvh/test_reader_limits.py`` runs it in a fresh process; the fuzz harness seeds its corpus
+with them.
 """
 
 from __future__ import annotations

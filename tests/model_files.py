@@ -1,5 +1,5 @@
 """Small valid model files of both kinds, as their arrays and metadata: the base that
-tests/test_model_files.py and tools/fuzz_bvh.py tamper with."""
+tests/utils/test_model_files.py and tools/fuzz_bvh.py tamper with."""
 
 import io
 import json

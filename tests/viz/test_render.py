@@ -17,7 +17,7 @@ from expressive_mocap.procedural import procedural_walk
 from expressive_mocap.rotations import quat
 from expressive_mocap.viz import render as render_module
 
-CMU = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "other" / "cmu_scaled_131_03.bvh"
+CMU = Path(__file__).resolve().parents[3] / "shared" / "data" / "other" / "cmu_scaled_131_03.bvh"
 
 
 @pytest.fixture

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 # Planning notes that live outside the repository, and the internal tracker ("issue 3",
 # "issue #3", "the issue's targets", "this issue", "from the issue"). The notes' METHODS.md is

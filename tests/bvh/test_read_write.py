@@ -1,4 +1,5 @@
-"""BVH reading and writing: every source kind, layouts, round trips, editing operations."""
+"""BVH reading and writing: every source kind, layouts, round trips, editing operations, and
+what write_bvh says when given something other than a Motion."""
 
 import io
 import os
@@ -9,6 +10,9 @@ from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
 from conftest import bvh_values
+from expressive_mocap.decoupling.algebra import decompose
+from expressive_mocap.decoupling.body_model import BodyModel
+from expressive_mocap.procedural import procedural_walk
 
 
 def same_rotation(q1, q2):
@@ -160,3 +164,24 @@ def test_files_sharing_a_hierarchy_shape_keep_their_own_offsets(mixed_path, back
     # A bad number in a cached shape still gets the full parser's error and line.
     with pytest.raises(em.BVHError, match="line 12: expected an OFFSET value"):
         em.read_bvh(text.replace(b"OFFSET 0.0 12.0 0.0", b"OFFSET 0.0 nan 0.0"))
+
+
+# ----------------------------------------------------------------------------- write_bvh
+
+
+def test_write_bvh_of_a_decompositions_array_names_the_call_to_make(tmp_path):
+    walk = procedural_walk(seconds=0.5)
+    parts = decompose(walk, BodyModel.load())
+    # Failed before with AttributeError: 'numpy.ndarray' object has no attribute 'skeleton'.
+    with pytest.raises(em.MocapError) as raised:
+        em.write_bvh(parts.body, tmp_path / "body.bvh")
+    message = str(raised.value)
+    assert "\n" not in message and "needs a Motion" in message and "parts.body_motion()" in message
+    assert f"array {list(parts.body.shape)}" in message
+    with pytest.raises(em.MocapError, match="got a Decomposition"):
+        em.write_bvh(parts, tmp_path / "body.bvh")
+    assert not (tmp_path / "body.bvh").exists()
+    em.write_bvh(parts.body_motion(), tmp_path / "body.bvh")  # the call the message names works
+    np.testing.assert_allclose(
+        em.read_bvh(tmp_path / "body.bvh").positions(), parts.body_motion().positions(), atol=1e-6
+    )

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from conftest import FixedFloor
 from expressive_mocap.body import find_joint_map
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling import BodyModel, decompose, modulate
@@ -225,7 +226,6 @@ def test_the_streaming_decoupler_takes_another_skeleton():
     the waving arm."""
     from expressive_mocap.decoupling import StreamingDecoupler
     from expressive_mocap.rotations import quat
-    from test_model import _FixedFloor
 
     model = BodyModel.load()
     game = synthetic_walk("game", wave="left", seconds=3.0).motion
@@ -233,7 +233,7 @@ def test_the_streaming_decoupler_takes_another_skeleton():
     pushed = [stream.push(game.rotations[f], game.translations[f]) for f in range(game.n_frames)]
     body, expressive, activity = (np.array(x) for x in zip(*pushed))
     carried = Carried(game, source=Rig.of(game[:1])._replace(untrusted=frozenset()))
-    offline = decompose(carried.body, _FixedFloor(model, 0.0))
+    offline = decompose(carried.body, FixedFloor(model, 0.0))
     np.testing.assert_allclose(activity, offline.activity, atol=1e-9)
     assert body.shape == game.rotations.shape
     np.testing.assert_allclose(body, carried.back(offline.body_motion()).rotations, atol=1e-9)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 # The Makefile's checks, in the order `make check` runs them.
 CHECKS = ["setup", "lint", "types", "rust", "test", "test-numpy2"]
 

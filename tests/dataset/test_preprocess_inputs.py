@@ -23,13 +23,13 @@ import pytest
 import expressive_mocap as em
 import expressive_mocap.dataset.sources as sources_module
 import expressive_mocap.dataset.work as work_module
+from conftest import returns_within
 from expressive_mocap import ops
 from expressive_mocap._utils import files as em_io
 from expressive_mocap.cli import main
 from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.procedural import procedural_walk
-from test_clip_pipeline import GAIT, pipeline_input
-from test_inputs import _returns_within
+from pipeline_inputs import GAIT, pipeline_input
 
 POSITIONS = ops.PipelineOutputs(positions=True)
 
@@ -75,7 +75,7 @@ def test_the_kernel_reads_only_regular_files_within_its_bound(walk, tmp_path, ba
     zero.symlink_to("/dev/zero")
     paths = [good, fifo, zero, tmp_path]
     try:
-        results = _returns_within(
+        results = returns_within(
             10,
             lambda: ops.clip_pipeline_many(
                 [dataclasses.replace(clip, source=str(p)) for p in paths],
@@ -117,7 +117,7 @@ def test_a_file_swapped_for_a_fifo_after_its_header_was_read_fails_alone(walk, t
     (tmp_path / "b.bvh").unlink()
     fifo = make_fifo(tmp_path / "b.bvh")
     try:
-        outcomes, _, _ = _returns_within(10, lambda: work_module.run_kernels(batch, prepared, keep, None, False))
+        outcomes, _, _ = returns_within(10, lambda: work_module.run_kernels(batch, prepared, keep, None, False))
     finally:
         release(fifo)
     assert outcomes[0].error is None and outcomes[0].frames == em.read_bvh(tmp_path / "a.bvh").n_frames
@@ -146,7 +146,7 @@ def hostile_folder(tmp_path, walk):
 @pytest.mark.parametrize("pattern", [False, True], ids=["folder", "glob"])
 def test_only_regular_files_are_read_from_a_folder_or_glob(hostile_folder, pattern, tmp_path, walk, backend):
     src = str(hostile_folder / "*.bvh") if pattern else hostile_folder
-    summary = _returns_within(30, lambda: run(src, tmp_path / "ds"))
+    summary = returns_within(30, lambda: run(src, tmp_path / "ds"))
     assert summary.finished and summary.clips_ok == 1 and load_dataset(tmp_path / "ds").names == ["good"]
     found = failures(tmp_path / "ds")
     assert sorted(found) == ["gone", "pipe", "sock", "zero"]
@@ -323,7 +323,7 @@ def test_an_unreadable_zip_directory_or_a_fifo_source_is_a_one_line_error(walk, 
             (path, f"{path}: cannot read the zip archive (BadZipFile: Bad magic number for central directory)"),
             (fifo, f"{fifo}: a FIFO, not a folder, .zip or .tar(.gz/.xz) archive of BVH files"),
         ):
-            code = _returns_within(
+            code = returns_within(
                 20, lambda src=src: main(["preprocess", str(src), "-o", str(tmp_path / f"{src.name}.out"), "-q"])
             )
             assert (code, capsys.readouterr().err) == (1, f"expressive-mocap: error: {message}\n")

@@ -5,37 +5,17 @@ or a read until memory runs out, and so is a file larger than the stated bound."
 from __future__ import annotations
 
 import os
-import threading
 from pathlib import Path
 
 import pytest
 
 import expressive_mocap as em
+from conftest import returns_within
 from expressive_mocap._utils import files as em_io
 from expressive_mocap.bvh import read_header
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.errors import MocapError
-
-
-def _returns_within(seconds: float, call):
-    """``call()``'s result or exception, failing the test if it has not returned in time (a read
-    of a FIFO blocks until a writer comes)."""
-    outcome: dict = {}
-
-    def run():
-        try:
-            outcome["value"] = call()
-        except BaseException as error:  # handed back to the test
-            outcome["error"] = error
-
-    thread = threading.Thread(target=run, daemon=True)
-    thread.start()
-    thread.join(seconds)
-    assert not thread.is_alive(), f"still blocked after {seconds} s"
-    if "error" in outcome:
-        raise outcome["error"]
-    return outcome["value"]
 
 
 @pytest.fixture
@@ -61,7 +41,7 @@ def zero_link(tmp_path) -> Path:
 def test_bvh_reader_refuses_fifo_and_devices(reader, fifo, zero_link, tmp_path):
     for path, kind in ((fifo, "a FIFO"), (zero_link, "a character device"), (tmp_path, "a folder")):
         with pytest.raises(em.BVHError, match=f"{kind}, not a regular file"):
-            _returns_within(10, lambda path=path: reader(path))
+            returns_within(10, lambda path=path: reader(path))
 
 
 @pytest.mark.parametrize("reader", [em.read_bvh, read_header], ids=["read_bvh", "read_header"])
@@ -79,11 +59,11 @@ def test_model_loaders_refuse_fifo_and_devices(fifo, zero_link):
     for path in (fifo, zero_link):
         for load in (BodyModel.load, ExaggerationModel.load):
             with pytest.raises(MocapError, match="not a regular file"):
-                _returns_within(10, lambda load=load, path=path: load(path))
+                returns_within(10, lambda load=load, path=path: load(path))
 
 
 def test_cli_model_fifo_is_one_line_error(fifo, mixed_path, tmp_path, capsys):
-    code = _returns_within(
+    code = returns_within(
         20, lambda: main(["decouple", str(mixed_path), "--model", str(fifo), "-o", str(tmp_path / "out")])
     )
     assert code == 1

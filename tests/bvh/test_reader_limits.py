@@ -14,7 +14,7 @@ import expressive_mocap as em
 from conftest import BACKENDS
 from hostile_files import cases
 
-SCRIPT = Path(__file__).parent / "hostile_files.py"
+SCRIPT = Path(__file__).parents[1] / "hostile_files.py"
 CASES = cases()
 
 

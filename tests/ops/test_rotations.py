@@ -103,18 +103,3 @@ def test_bad_arguments_name_the_argument(backend):
         em.euler_to_quat(np.zeros((1, 2, 3)), ["XYZ"])
     with pytest.raises(em.errors.ArgumentError, match="quats"):
         em.quat_to_euler(np.zeros((1, 2, 3)), "XYZ")
-
-
-def test_rotation_vectors_agree_with_scipy_and_round_trip():
-    from expressive_mocap.rotations import quat
-
-    q = Rotation.random(500, random_state=11).as_quat()
-    q[:5] = [0.0, 0.0, 0.0, 1.0]  # identity: the small-angle branch
-    q[5:10] *= -1.0  # the other hemisphere: the same rotations
-    v = quat.log(q)
-    np.testing.assert_allclose(v, Rotation.from_quat(q).as_rotvec(), atol=1e-12)
-    assert np.all(np.linalg.norm(v, axis=-1) <= np.pi + 1e-12)
-    back = quat.exp(v)
-    np.testing.assert_allclose(np.abs(np.sum(back * q, axis=-1)), 1.0, atol=1e-12)
-    rotvecs = Rotation.from_quat(q).as_rotvec()
-    np.testing.assert_allclose(quat.exp(rotvecs), Rotation.from_rotvec(rotvecs).as_quat(), atol=1e-12)

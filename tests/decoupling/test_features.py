@@ -1,16 +1,16 @@
-"""Joint roles, actor height and the 19 dynamic features: cases by hand, heading invariance,
-causality, Rust/NumPy parity and real Bandai-Namco walks."""
+"""The 19 dynamic features: cases by hand, heading invariance, causality, Rust/NumPy parity and
+real Bandai-Namco walks."""
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from conftest import stick_walker
+from conftest import straight_walker
 from expressive_mocap import ops, reference
 from expressive_mocap.body.canonical import bandai_like_skeleton
 from expressive_mocap.body.contacts import default_floor
-from expressive_mocap.body.roles import JointRoles, actor_height, hips_rest_height
+from expressive_mocap.body.roles import JointRoles, actor_height
 from expressive_mocap.decoupling.features import FEATURE_NAMES, dynamic_features
 from expressive_mocap.procedural import procedural_walk
 from expressive_mocap.rotations import quat
@@ -20,14 +20,6 @@ ATOL = 1e-9  # Rust vs NumPy and invariances, on features of order 1 (measured ~
 V, V_MEAN, CONTACT, AIR, H, THIGHS = slice(0, 3), slice(3, 6), slice(6, 8), slice(8, 10), 10, slice(11, 19)
 
 
-def straight_walker(frames=40, velocity=(0.0, 0.0, 140.0), fps=30.0):
-    """Hips 90 cm up moving at a constant ``velocity`` (cm/s), facing +Z, feet on the floor."""
-    t = np.arange(frames)[:, None] / fps
-    hips = np.array([0.0, 90.0, 0.0]) + t * np.array(velocity)
-    feet = hips * [1, 0, 1]
-    return stick_walker(hips, feet + [10, 0, 0], feet - [10, 0, 0], fps=fps)
-
-
 def turned(motion, degrees, shift=(0.0, 0.0, 0.0)):
     """The same motion turned about the vertical through the origin, then moved by ``shift``."""
     q = quat.about("Y", degrees)
@@ -35,85 +27,6 @@ def turned(motion, degrees, shift=(0.0, 0.0, 0.0)):
     rotations[:, 0] = quat.mul(q, rotations[:, 0])
     translations[:, 0] = quat.rotate(q, translations[:, 0]) + shift
     return em.Motion(motion.skeleton, rotations, translations, motion.frame_time)
-
-
-# -- roles and actor height ---------------------------------------------------------------
-
-
-def test_roles_of_bandai_cmu_and_mixamo_names():
-    bandai = JointRoles.find(bandai_like_skeleton())
-    assert bandai.names(bandai_like_skeleton()) == {
-        "hips": "Hips",
-        "head": "Head",
-        "left_upper_leg": "UpperLeg_L",
-        "right_upper_leg": "UpperLeg_R",
-        "left_foot": "Foot_L",
-        "right_foot": "Foot_R",
-        "left_toe": "Toes_L",
-        "right_toe": "Toes_R",
-    }
-    assert [bandai_like_skeleton().names[j] for j in bandai.spine] == ["Hips", "Spine", "Chest", "Neck", "Head"]
-    walker = straight_walker(frames=2)
-    for prefix in ["", "mixamorig:"]:
-        skeleton = stick_walker(*(walker.positions()[:, j] for j in (0, 4, 7)), prefix=prefix).skeleton
-        roles = JointRoles.find(skeleton)
-        assert (roles.hips, roles.head, roles.spine, roles.upper_legs, roles.feet, roles.toes) == (
-            0,
-            2,
-            (0, 1, 2),
-            (3, 6),
-            (4, 7),
-            (5, 8),
-        )
-
-
-def test_roles_can_be_given_and_missing_ones_are_named(mixed_path):
-    skeleton = bandai_like_skeleton()
-    roles = JointRoles.find(skeleton, left_toe="Foot_L", right_toe=20)
-    assert roles.toes == (16, 20)
-    with pytest.raises(em.MocapError, match="no joint named 'Nope'"):
-        JointRoles.find(skeleton, head="Nope")
-    with pytest.raises(em.MocapError, match="unknown joint role.*left_hand"):
-        JointRoles.find(skeleton, left_hand="Hand_L")
-    with pytest.raises(em.MocapError, match="out of range"):
-        JointRoles.find(skeleton, hips=99)
-    hand_written = em.read_bvh(mixed_path).skeleton
-    with pytest.raises(
-        em.MocapError,
-        match="cannot tell which joint is the left_upper_leg; right_upper_leg; left_foot; left_toe: pass it by name",
-    ) as error:
-        JointRoles.find(hand_written)
-    assert "joints are: mixamorig:Hips, Spine Lower" in str(error.value)
-
-
-def test_two_candidates_for_a_role_are_settled_by_the_topology():
-    skeleton = bandai_like_skeleton()
-    names = list(skeleton.names)
-    names[names.index("Shoulder_L")] = "LeftUpLeg"  # a second left upper leg, on the arm
-    twin = em.Skeleton(tuple(names), skeleton.parents, skeleton.offsets, skeleton.channels)
-    assert twin.names[JointRoles.find(twin).upper_legs[0]] == "UpperLeg_L"
-    with pytest.raises(em.MocapError, match="left_upper_leg \\(several candidates: LeftUpLeg, UpperLeg_L\\)"):
-        JointRoles.find(twin, head="Head")  # roles given: names only, so the clash is reported
-
-
-def test_actor_height_by_hand():
-    skeleton = straight_walker(frames=2).skeleton
-    roles = JointRoles.find(skeleton)
-    assert hips_rest_height(skeleton, roles) == pytest.approx(90.0)
-    assert actor_height(skeleton, roles) == pytest.approx(140.0)
-    # Rest pose hanging from the origin (CMU style): the leg's length stands in for the hips' height.
-    offsets = skeleton.offsets.copy()
-    offsets[0] = 0.0
-    hanging = skeleton.with_offsets(offsets, [])
-    assert hips_rest_height(hanging, roles) == pytest.approx(np.hypot(10, 5) + 80)
-
-
-@pytest.mark.real_data
-def test_bandai_actor_is_141_cm(bandai2_dir):
-    skeleton = em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh").skeleton
-    roles = JointRoles.find(skeleton)
-    assert hips_rest_height(skeleton, roles) == pytest.approx(93.31, abs=0.01)
-    assert actor_height(skeleton) == pytest.approx(140.9, abs=0.1)
 
 
 # -- features by hand ---------------------------------------------------------------------

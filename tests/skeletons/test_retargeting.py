@@ -1,12 +1,11 @@
-"""Any humanoid skeleton, on ground truth: the demo's walk written on synthetic skeletons built
-after six conventions (Bandai, CMU, Mixamo, SMPL, a game rig, LAFAN1), each with the map and
-conventions it was built with. The package must find those on its own, and retargeting between
-every pair must put each mapped bone where the other skeleton's truth has it."""
+"""Retargeting any humanoid skeleton, on ground truth: the demo's walk written on synthetic
+skeletons built after six conventions (Bandai, CMU, Mixamo, SMPL, a game rig, LAFAN1), each with
+the map and conventions it was built with. Retargeting between every pair must put each mapped
+bone where the other skeleton's truth has it."""
 
 from __future__ import annotations
 
 import itertools
-import json
 
 import numpy as np
 import pytest
@@ -15,8 +14,7 @@ from scipy.spatial.transform import Rotation
 import expressive_mocap as em
 from expressive_mocap.body import conventions as conv
 from expressive_mocap.body.contacts import foot_contacts
-from expressive_mocap.body.jointmap import find_joint_map, read_joint_map
-from expressive_mocap.body.names import label
+from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.body.roles import JointRoles
 from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons.canonical import canonical_rig
@@ -54,177 +52,15 @@ def worst_angle(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1, 1))).max())
 
 
-# -- names --------------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize(
-    ("name", "side", "roles"),
-    [
-        ("mixamorig:LeftUpLeg", "left", ("upper_leg",)),
-        ("UpperLeg_L", "left", ("upper_leg",)),
-        ("thigh_r", "right", ("upper_leg",)),
-        ("Bip01 L Thigh", "left", ("upper_leg",)),
-        ("left_shoulder", "left", ("clavicle", "upper_arm")),  # SMPL's upper arm, CMU's clavicle
-        ("right_foot", "right", ("foot", "toes")),  # SMPL's toes
-        ("LHipJoint", "left", ()),  # CMU's zero-length joint
-        ("upperarm_twist_01_l", "left", ()),
-        ("LeftHandIndex1", "left", ()),
-        ("mixamorig:HeadTop_End", "", ()),
-        ("Spine1", "", ("spine",)),
-        ("pelvis", "", ("hips",)),
-        ("lefthand", "left", ("hand",)),
-    ],
-)
-def test_names_say_side_and_part(name, side, roles):
-    found = label(name)
-    assert (found.side, found.roles) == (side, roles)
-
-
-# -- joint maps ---------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("rig", RIGS)
-def test_map_is_found_by_names(walks, rig):
-    truth = synthetic_walk(rig).truth
-    jmap = find_joint_map(walks[rig].skeleton)
-    found = {role: name for role, name in jmap.as_names().items() if role != "spine"}
-    assert found == truth
-    names = walks[rig].skeleton.names
-    unmapped = {names[j] for j in jmap.unmapped}
-    assert unmapped.isdisjoint(truth.values())
-    if rig == "game":  # twist bones are reported, never an error
-        assert {"upperarm_twist_01_l", "thigh_twist_01_r"} <= unmapped
-
-
-@pytest.mark.parametrize("rig", RIGS)
-def test_map_is_found_by_topology_where_names_say_nothing(walks, rig):
-    motion = walks[rig]
-    skeleton = motion.skeleton
-    anonymous = em.Skeleton(
-        tuple(f"j{j}" for j in range(skeleton.n_joints)),
-        skeleton.parents,
-        skeleton.offsets,
-        skeleton.channels,
-        skeleton.end_sites,
-    )
-    jmap = find_joint_map(anonymous, pose=motion.positions()[0])  # the pose tells left from right
-    truth = synthetic_walk(rig).truth
-    found = {role: skeleton.names[j] for role, j in jmap.joints.items()}
-    if rig == "mixamo":  # a head-top joint with rotation channels reads as the head without its name
-        assert found.pop("head") == "mixamorig:HeadTop_End"
-        truth = {k: v for k, v in truth.items() if k != "head"}
-    assert found == truth
-    assert all(how == "topology" for how in jmap.how.values())
-
-
-@pytest.mark.parametrize("suffix", [".json", ".toml"])
-def test_a_map_file_gives_what_names_cannot(tmp_path, suffix):
-    motion = synthetic_walk("game").motion
-    names = list(motion.skeleton.names)
-    renamed = {"thigh_l": "bone_17", "calf_l": "bone_18", "spine_03": "torso_top"}
-    skeleton = em.Skeleton(
-        tuple(renamed.get(n, n) for n in names),
-        motion.skeleton.parents,
-        motion.skeleton.offsets,
-        motion.skeleton.channels,
-        motion.skeleton.end_sites,
-    )
-    path = tmp_path / f"map{suffix}"
-    entries = {"left_upper_leg": "bone_17", "left_lower_leg": "bone_18", "chest": "torso_top"}
-    if suffix == ".json":
-        path.write_text(json.dumps(entries))
-    else:
-        path.write_text("".join(f'{k} = "{v}"\n' for k, v in entries.items()))
-    jmap = find_joint_map(skeleton, read_joint_map(path))
-    assert {r: skeleton.names[jmap[r]] for r in entries} == entries
-    assert all(jmap.how[r] == "map" for r in entries)
-    assert skeleton.names[jmap["left_foot"]] == "foot_l"
-
-
-def test_bad_map_files_are_named(tmp_path):
-    bad = tmp_path / "bad.json"
-    bad.write_text('{"left_elbow": "x"}')
-    with pytest.raises(em.MocapError, match=r"bad.json: unknown role 'left_elbow'"):
-        read_joint_map(bad)
-    bad.write_text("{not json")
-    with pytest.raises(em.MocapError, match=r"bad.json: not a valid joint map"):
-        read_joint_map(bad)
-    bad.write_text('{"hips": "Nope"}')
-    with pytest.raises(em.MocapError, match="no joint named 'Nope'"):
-        find_joint_map(synthetic_walk("lafan").motion.skeleton, read_joint_map(bad))
-
-
-def test_a_skeleton_without_legs_is_refused_with_the_joints_listed():
-    skeleton = em.Skeleton(("a", "b", "c"), [-1, 0, 1], np.eye(3), (("Xrotation",),) * 3)
-    with pytest.raises(em.MocapError, match="cannot tell which joint is the hips.*joints are: a, b, c"):
-        find_joint_map(skeleton)
-
-
-def test_feature_roles_come_from_the_map_where_names_fail(walks):
-    roles = JointRoles.find(walks["smpl"].skeleton)  # SMPL's "left_foot" is a toe
-    names = walks["smpl"].skeleton.names
-    assert [names[j] for j in roles.feet + roles.toes] == ["left_ankle", "right_ankle", "left_foot", "right_foot"]
-
-
-# -- conventions --------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("rig", RIGS)
-def test_conventions_are_read_from_the_data(walks, rig):
-    built = synthetic_walk(rig).conventions
-    read = conv.read_conventions(walks[rig], find_joint_map(walks[rig].skeleton))
-    assert (read.up, read.facing, read.unit, read.rest_pose) == (built.up, built.facing, built.unit, built.rest_pose)
-    assert read.fps == pytest.approx(built.fps)
-    assert read.height * read.metres_per_unit == pytest.approx(1.63, abs=0.05)  # the Bandai actor's legs
-    assert min(read.sure.values()) > 0.4
-
-
-def test_unknown_units_scale_to_a_typical_actor_and_overrides_win(walks):
-    motion = walks["lafan"].scaled(1 / 12)  # a unit of 12 cm: a 13-unit actor in no unit we know
-    jmap = find_joint_map(motion.skeleton)
-    read = conv.read_conventions(motion, jmap)
-    assert read.unit == "unknown" and read.metres_per_unit * read.height == pytest.approx(1.70)
-    given = read.with_overrides(up="z", facing="-y", unit="in")
-    assert (given.up, given.facing, given.unit, given.metres_per_unit) == ("+Z", "-Y", "in", 0.0254)
-    with pytest.raises(em.MocapError, match="must be horizontal"):
-        read.with_overrides(up="Y", facing="-Y")
-
-
-@pytest.mark.parametrize("rig", ["smpl", "game", "cmu"])
-def test_to_canonical_and_back_is_the_identity(walks, rig):
-    motion = walks[rig]
-    read = conv.read_conventions(motion, find_joint_map(motion.skeleton))
-    canonical = conv.to_canonical(motion, read)
-    hips = canonical.positions()[:, find_joint_map(motion.skeleton)["hips"]]
-    assert np.median(hips[:, 1]) == pytest.approx(0.90, abs=0.03)  # Y up, metres
-    assert hips[-1, 2] - hips[0, 2] > 3.0  # walking towards +Z (1.2 m/s for 4 s, carried over)
-    back = conv.from_canonical(canonical, read)
-    np.testing.assert_allclose(back.positions(), motion.positions(), atol=1e-9 / read.metres_per_unit)
-
-
-def test_rotation_helpers_agree_with_scipy():
-    rng = np.random.default_rng(3)
-    rotations = Rotation.random(200, random_state=4)
-    q = quat.from_matrix(rotations.as_matrix())
-    np.testing.assert_allclose(np.abs(np.sum(q * rotations.as_quat(), axis=-1)), 1.0, atol=1e-12)
-    u, v = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
-    turned = quat.rotate(quat.between(u, v), u)
-    np.testing.assert_allclose(
-        turned / np.linalg.norm(turned, axis=1)[:, None], v / np.linalg.norm(v, axis=1)[:, None], atol=1e-12
-    )
-    half = quat.between(np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0]))
-    assert quat.angle(half) == pytest.approx(np.pi)
-
-
 # -- harmonised directions and retargeting ------------------------------------------------------
 
 
 def test_harmonised_bone_directions_agree_across_skeletons(walks):
     """Every limb bone and the line across the hips point alike on every rig. The neck's bone is
     turned a little (2.1-5.4 degrees at worst) so that the head sits on the Bandai rig's line from the
-    chest, whatever the two necks' proportions (tests/test_retarget_trunk.py), and a foot is
+    chest, whatever the two necks' proportions (tests/skeletons/test_trunk.py), and a foot is
     carried from its rig's flat stance rather than by its bone (0.08-0.41 degrees at worst;
-    tests/test_retarget_feet.py)."""
+    tests/skeletons/test_retarget_feet.py)."""
     reference = bone_directions(walks["bandai"])
     neck = BONES.index(("neck", "head"))
     feet = [BONES.index((f"{s}_foot", f"{s}_toes")) for s in ("left", "right")]

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from conftest import FixedFloor
 from expressive_mocap.decoupling.algebra import decompose
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.decoupling.streaming import StreamingDecoupler
@@ -122,19 +123,9 @@ def test_calibration_absorbs_a_constant_offset(model, walks):
 
 def test_streaming_matches_offline_decoupling(model, walks):
     walk = walks[2][:45]
-    offline = decompose(walk, _FixedFloor(model, 0.0))
+    offline = decompose(walk, FixedFloor(model, 0.0))
     stream = StreamingDecoupler(model, walk.skeleton, walk.frame_time, floor=0.0, history=2.0)
     for f in range(walk.n_frames):
         body, expressive, activity = stream.push(walk.rotations[f], walk.translations[f])
         np.testing.assert_allclose(activity, offline.activity[f], atol=1e-9)
         np.testing.assert_allclose(np.abs(np.sum(body * offline.body[f], axis=-1)), 1.0, atol=1e-9)
-
-
-class _FixedFloor:
-    """The model with the floor fixed, as the streaming decoupler uses it."""
-
-    def __init__(self, model, floor):
-        self.model, self.floor = model, floor
-
-    def predict(self, motion):
-        return self.model.predict(motion, floor=self.floor)

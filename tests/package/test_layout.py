@@ -6,7 +6,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parents[1] / "python" / "expressive_mocap"
+PACKAGE = Path(__file__).resolve().parents[2] / "python" / "expressive_mocap"
 MOST_LINES = 500
 
 

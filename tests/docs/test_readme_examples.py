@@ -20,7 +20,7 @@ from expressive_mocap.body.contacts import foot_contacts
 from expressive_mocap.body.roles import JointRoles, actor_height
 from expressive_mocap.cli import main
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 BANDAI_ACTOR_CM = 140.9  # the Bandai skeleton's actor height: 5 cm a frame is relative to it
 PLACEHOLDERS = {
     "walk.bvh": "dataset-2_walk_normal_001.bvh",

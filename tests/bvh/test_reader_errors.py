@@ -113,7 +113,7 @@ def test_the_hierarchy_cache_never_accepts_a_broken_hierarchy():
         em.read_bvh(b"HIERARCHY\nROOT a\n{\nOFFSET 1 0 0\nMOTION\nFrames: 1\nFrame Time: .09\n\n")
 
 
-# Huge claims (10^9 frames, 10^6 joints, ...) and their memory: tests/test_limits.py.
+# Huge claims (10^9 frames, 10^6 joints, ...) and their memory: tests/bvh/test_reader_limits.py.
 
 
 def test_a_deep_hierarchy_is_read_without_recursion(tmp_path):
