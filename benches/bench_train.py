@@ -41,10 +41,14 @@ def main() -> None:
         max_iter=args.max_iter,
         log=lambda line: print(line, flush=True),
     )
-    split = report["split"]
-    check_equal(split["train_rows"] + split["test_rows"], len(X), "rows in the train/test split")
-    network, baseline = report["fine_tuned"]["test_mse"], report["mean_pose"]["test_mse"]
-    check(math.isfinite(network) and network < baseline, f"test MSE {network:.4g}: not below the mean pose's")
+    split, fine_tuned, mean_pose = report.split, report.fine_tuned, report.mean_pose
+    assert split is not None and fine_tuned is not None and mean_pose is not None
+    check_equal((split.train_rows or 0) + (split.test_rows or 0), len(X), "rows in the train/test split")
+    network, baseline = fine_tuned.test_mse, mean_pose.test_mse
+    check(
+        network is not None and baseline is not None and math.isfinite(network) and network < baseline,
+        f"test MSE {network:.4g}: not below the mean pose's",
+    )
     print(f"total {seconds:.0f} s")  # the report above comes from the training log
 
 

@@ -37,10 +37,10 @@ def main() -> None:
     groups = np.concatenate([np.full(m.n_frames, k) for k, m in enumerate(motions)])
     results = sweep_autoencoder(P, groups, max_iter=args.max_iter)
     out = HERE / "sweep_autoencoder.json"
-    out.write_text(json.dumps({str(h): r for h, r in results.items()}, indent=1))
+    out.write_text(json.dumps({str(h): r.to_json() for h, r in results.items()}, indent=1))
     print("| hidden units | train MSE | test MSE | test variance explained |\n|---|---|---|---|")
     for hidden, r in results.items():
-        print(f"| {hidden} | {r['train_mse']:.3g} | {r['test_mse']:.3g} | {r['test_variance_explained']:.4f} |")
+        print(f"| {hidden} | {r.train_mse:.3g} | {r.test_mse:.3g} | {r.test_variance_explained:.4f} |")
     print(f"wrote {out}")
 
 

@@ -36,17 +36,18 @@ def main() -> None:
     r, s = model.report, model.settings
     stages = [
         ("mean_pose", "predict the mean training pose (baseline)"),
-        ("autoencoder", f"denoising autoencoder, {s['hidden']} tanh units"),
-        ("regression", f"regression features -> code, {s['regression_hidden']} tanh units (code units)"),
+        ("autoencoder", f"denoising autoencoder, {s.hidden} tanh units"),
+        ("regression", f"regression features -> code, {s.regression_hidden} tanh units (code units)"),
         ("stack", "stack before fine-tuning"),
         ("fine_tuned", "stack fine-tuned end to end (the shipped network)"),
-        ("plain", f"plain one-hidden-layer network, {s['hidden']} tanh units"),
+        ("plain", f"plain one-hidden-layer network, {s.hidden} tanh units"),
     ]
+    scores = r.stages()
     rows = "\n".join(
-        f"| {label} | {r[key]['train_mse']:.3g} | {r[key]['test_mse']:.3g} "
-        f"| {r[key]['test_variance_explained']:.3f} | {PAPER[key]} |"
+        f"| {label} | {scores[key].train_mse:.3g} | {scores[key].test_mse:.3g} "
+        f"| {scores[key].test_variance_explained:.3f} | {PAPER[key]} |"
         for key, label in stages
-        if key in r
+        if key in scores
     )
     sweep_file = SWEEP
     sweep = ""
@@ -66,7 +67,9 @@ def main() -> None:
             + sweep
             + "\n"
         )
-    split = r["split"]
+    split, mean_pose = r.split, r.mean_pose
+    assert split is not None and mean_pose is not None and split.train_rows is not None
+    assert s.unlabelled_frames is not None, "the shipped model records its training"
     card = f"""# Model card: the shipped body-mechanics model
 
 `expressive_mocap/data/body_model.npz`, loaded by `BodyModel.load()` and used by default by
@@ -85,17 +88,17 @@ Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022
 al., "Motion Capture Dataset for Practical Use of AI-based Motion Editing and Stylization",
 arXiv:2306.08861), licensed **CC BY-NC 4.0**: this model is a derivative of that data and is for
 non-commercial use under the same licence.
-- neutral (supervised) set: `{{walk,walk-turn-left,walk-turn-right,run}}_normal_*`, {s["neutral_clips"]} clips, \
-{s["neutral_frames"]} frames,
-  split 70/30 **by clip**: {split["train_groups"]} training clips ({split["train_rows"]} frames), \
-{split["test_groups"]} test clips ({split["test_rows"]} frames);
-- autoencoder: also {s["unlabelled_frames"]} frames ({s["unlabelled_frames"] - split["train_rows"]} drawn at random \
+- neutral (supervised) set: `{{walk,walk-turn-left,walk-turn-right,run}}_normal_*`, {s.neutral_clips} clips, \
+{s.neutral_frames} frames,
+  split 70/30 **by clip**: {split.train_groups} training clips ({split.train_rows} frames), \
+{split.test_groups} test clips ({split.test_rows} frames);
+- autoencoder: also {s.unlabelled_frames} frames ({s.unlabelled_frames - split.train_rows} drawn at random \
 from all
-  {s["unlabelled_clips"]} dataset-2 clips, gestures included, with the neutral test clips left out, \
+  {s.unlabelled_clips} dataset-2 clips, gestures included, with the neutral test clips left out, \
 plus the neutral training frames).
 
 ## Settings
-{json.dumps(s, indent=1)}
+{json.dumps(s.to_json(), indent=1)}
 
 Training: full-batch L-BFGS (SciPy) on NumPy forward/backward passes; the autoencoder's input
 corrupted by masking 10-30% of values and Gaussian noise; then the regression onto its code; then
@@ -110,7 +113,7 @@ clipped, their pose MSE is 2.112e-4 against 2.123e-4 unclipped (both computed af
 Mean squared error per pose value (quaternion components), train and **test** (held-out clips),
 and the share of the test poses' variance explained. The paper's figures are on CMU data with
 another pose scale, so they are context, not a bar: on this data predicting the mean pose
-already scores {r["mean_pose"]["test_mse"]:.3g}.
+already scores {mean_pose.test_mse:.3g}.
 
 | stage | train MSE | test MSE | test variance explained | paper (CMU) |
 |---|---|---|---|---|

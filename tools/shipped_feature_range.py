@@ -36,12 +36,12 @@ def main() -> None:
     paths = [p for c in NEUTRAL_CONTENTS for p in sorted(data2.glob(f"dataset-2_{c}_normal_*.bvh"))]
     model = BodyModel.load(SHIPPED)
     motions = em.read_bvh_many(paths)
-    if sum(m.n_frames for m in motions) != model.settings["neutral_frames"]:
+    if sum(m.n_frames for m in motions) != model.settings.neutral_frames:
         raise SystemExit("these clips are not the ones the shipped model was trained on")
     features = np.concatenate([model_features(m, model.thigh_reference) for m in motions])
     groups = np.concatenate([np.full(m.n_frames, k) for k, m in enumerate(motions)])
-    train_rows, _ = split_by_group(groups, 0.3, model.settings["seed"])
-    settings = dict(model.settings, feature_range=FEATURE_RANGE)
+    train_rows, _ = split_by_group(groups, 0.3, model.settings.seed or 0)
+    settings = replace(model.settings, feature_range=FEATURE_RANGE)
     replace(model, feature_range=feature_range(features[train_rows]), settings=settings).save(SHIPPED)
     print(f"wrote the feature range of {len(train_rows)} training frames into {SHIPPED}")
 

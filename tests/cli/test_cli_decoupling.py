@@ -155,7 +155,7 @@ def test_train_writes_a_loadable_model(files):
     assert result.returncode == 0, result.stderr
     assert "fine_tuned" in result.stdout and "iteration" not in result.stdout  # progress on stderr
     model = BodyModel.load(out)
-    assert model.settings["hidden"] == 6 and "test_mse" in model.report["fine_tuned"]
+    assert model.settings.hidden == 6 and model.report.fine_tuned.test_mse is not None
 
 
 def test_render_decoupled_and_modulated(files):

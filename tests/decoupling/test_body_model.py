@@ -29,11 +29,12 @@ def model(walks):
 
 
 def test_training_reports_every_stage_and_beats_the_mean_pose(model):
-    report = model.report
-    for stage in ["mean_pose", "autoencoder", "regression", "stack", "fine_tuned", "plain"]:
-        assert np.isfinite(report[stage]["test_mse"]), stage
-    assert report["fine_tuned"]["test_mse"] < report["mean_pose"]["test_mse"]
-    assert report["split"]["train_groups"] >= 1 and report["split"]["test_groups"] >= 1
+    report, stages = model.report, model.report.stages()
+    assert list(stages) == ["mean_pose", "autoencoder", "regression", "stack", "fine_tuned", "plain"]
+    for name, stage in stages.items():
+        assert stage.test_mse is not None and np.isfinite(stage.test_mse), name
+    assert stages["fine_tuned"].test_mse < stages["mean_pose"].test_mse
+    assert report.split is not None and report.split.train_groups >= 1 and report.split.test_groups >= 1
     # Root and hips come from the motion; every other joint is predicted.
     assert model.predicted.tolist() == list(range(2, 22))
 

@@ -72,15 +72,15 @@ def test_stack_beats_the_mean_pose_on_held_out_clips(trained):
     assert isinstance(net, Mlp) and net.shape == (19, 20, 20, 24)
     assert [layer.activation for layer in net.layers] == ["tanh", "tanh", "linear"]
     train_rows, test_rows = train.split_by_group(groups, 0.3, seed=0)
-    assert report["split"]["test_rows"] == len(test_rows)
-    mean_pose = report["mean_pose"]["test_mse"]
-    assert report["fine_tuned"]["test_mse"] < 0.02 * mean_pose
-    assert report["fine_tuned"]["test_variance_explained"] > 0.97
-    assert report["autoencoder"]["test_variance_explained"] > 0.9
-    assert report["fine_tuned"]["test_mse"] <= report["stack"]["test_mse"]
-    assert report["plain"]["test_mse"] < 0.02 * mean_pose
+    assert report.split.test_rows == len(test_rows)
+    mean_pose = report.mean_pose.test_mse
+    assert report.fine_tuned.test_mse < 0.02 * mean_pose
+    assert report.fine_tuned.test_variance_explained > 0.97
+    assert report.autoencoder.test_variance_explained > 0.9
+    assert report.fine_tuned.test_mse <= report.stack.test_mse
+    assert report.plain.test_mse < 0.02 * mean_pose
     # The network takes raw features (normalisation folded in) and scores what the report says.
-    assert np.mean((net(X[test_rows]) - P[test_rows]) ** 2) == pytest.approx(report["fine_tuned"]["test_mse"], rel=1e-9)
+    assert np.mean((net(X[test_rows]) - P[test_rows]) ** 2) == pytest.approx(report.fine_tuned.test_mse, rel=1e-9)
     assert net(X[test_rows].astype(np.float32)).dtype == np.float32
 
 
@@ -91,9 +91,9 @@ def test_training_is_deterministic_under_a_seed():
     net_b, report_b = train.train_stacked_network(X, P, groups, seed=4, **kwargs)
     for la, lb in zip(net_a.layers, net_b.layers):
         np.testing.assert_array_equal(la.weights, lb.weights)
-    assert report_a["fine_tuned"]["test_mse"] == report_b["fine_tuned"]["test_mse"]
+    assert report_a.fine_tuned.test_mse == report_b.fine_tuned.test_mse
     _, report_c = train.train_stacked_network(X, P, groups, seed=5, **kwargs)
-    assert report_c["fine_tuned"]["test_mse"] != report_a["fine_tuned"]["test_mse"]
+    assert report_c.fine_tuned.test_mse != report_a.fine_tuned.test_mse
 
 
 def test_sweep_and_progress_lines():
@@ -101,7 +101,7 @@ def test_sweep_and_progress_lines():
     lines = []
     results = train.sweep_autoencoder(P, groups, hiddens=(12, 2), max_iter=60, rounds=1, log=lines.append)
     assert set(results) == {12, 2}
-    assert results[12]["test_mse"] < results[2]["test_mse"]  # a 2-unit code cannot hold a 6-D manifold
+    assert results[12].test_mse < results[2].test_mse  # a 2-unit code cannot hold a 6-D manifold
     assert any("iteration 50/" in line for line in lines) and any("H=2: train MSE" in line for line in lines)
 
 

@@ -349,7 +349,7 @@ def test_the_issue_targets_on_real_walks(bandai2_dir):
 
 def test_the_cycles_start_at_the_footstrikes_of_the_trained_foot(walk):
     right = train([[loaded_walk(k) for k in LEVELS]], LEVELS, foot=1)
-    assert right.settings["foot"] == 1
+    assert right.settings.foot == 1
     _, report = exaggerate(right, walk, 3.0, current=2.0)
     assert {c.foot for c in report.cycles} == {1} and report.cycles == find_cycles(walk, foot=1)
 

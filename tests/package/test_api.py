@@ -62,4 +62,4 @@ def test_skeleton_and_body_model_print_on_one_line():
     text = repr(model)
     assert "\n" not in text and len(text) < 200, text
     assert "22-joint skeleton" in text and "19-300-300-80" in text
-    assert f"test MSE {model.report['fine_tuned']['test_mse']:.3g}" in text
+    assert f"test MSE {model.report.fine_tuned.test_mse:.3g}" in text

@@ -305,7 +305,7 @@ def cmd_validate(args) -> int:
     swaps = swap_test(model, draws=args.draws, seed=args.seed)
     several = model.trajectories.shape[0] > 1
     warps = leave_one_out(model) if several else []
-    share = model.settings.get("share", default(train, "share"))
+    share = model.settings.share
     ratio = "||swap - heaviest|| / ||lightest - heaviest||"
     print(f"swap test at share {share:g}: {ratio} over DOF trajectories and joint positions")
     print(validation_table(swaps, warps, rank_agreement(model) if several else None))

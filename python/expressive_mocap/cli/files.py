@@ -195,8 +195,7 @@ def cmd_render(args) -> int:
             titles = ["50% expressive", "100% (original)", "150% expressive"]
     if args.start or args.end:
         motions = [m[args.start : args.end] for m in motions]
-    options = {"poses": args.poses} if args.output.lower().endswith(".png") else {"speed": args.speed}
-    played = render(motions, args.output, titles=titles, view=args.view, **options)
+    played = render(motions, args.output, titles=titles, view=args.view, poses=args.poses, speed=args.speed)
     print(f"wrote {args.output}" + (f": {played}" if played else ""))
     return 0
 

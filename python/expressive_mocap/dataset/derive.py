@@ -118,6 +118,37 @@ class Options:
         return {"rotations": self.rotations, "positions": self.positions, "fps": self.fps, "mirror": self.mirror}
 
 
+@dataclass(frozen=True)
+class RunOptions:
+    """Everything a preprocessing run was asked for that its dataset depends on: the kinds kept
+    (``keep``), the body ``model`` (its resolved path, ``"shipped"`` or None) and whether it runs
+    in float32, the ``source``'s canonical path, the kernel ``backend``, whether clips go onto the
+    ``canonical`` body (with the user's ``joint_map``), and how the arrays are shaped
+    (``shaping``). A run resumes, and a finished dataset counts as done, only under the same
+    options; the manifest and an interrupted run's record hold them as :meth:`record`."""
+
+    keep: tuple[str, ...]
+    model: str | None
+    model_float32: bool
+    source: str
+    backend: str
+    canonical: bool = False
+    joint_map: dict | None = None
+    shaping: Options = Options()
+
+    @property
+    def canonical_map(self) -> dict | None:
+        """What the batches' work needs of the canonical options: the joint map (``{}``: none), or
+        None when clips stay on their own skeleton."""
+        return (self.joint_map or {}) if self.canonical else None
+
+    def record(self) -> dict:
+        """The options as the manifest (``options``) and ``run.json`` record them."""
+        return {"keep": list(self.keep), "model": self.model, "model_float32": bool(self.model_float32),
+                "source": self.source, "backend": self.backend, "canonical": bool(self.canonical),
+                "joint_map": self.joint_map or None, **self.shaping.record()}  # fmt: skip
+
+
 def resampled(motion: Motion, fps: float) -> Motion:
     """``motion`` at ``fps`` frames a second, from its first frame, as many frames as its duration
     holds: each source frame as it is when ``fps`` divides the source's rate (the same rate: the
@@ -224,4 +255,6 @@ def totals(arrays: list[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
     return sum(len(a) for a in arrays), *ops.column_totals(arrays)
 
 
-__all__ = ["DERIVED_KINDS", "POSITION_FRAMES", "Options", "derive", "resampled", "totals", "unwrap_by_clip"]
+__all__ = [
+    "DERIVED_KINDS", "POSITION_FRAMES", "Options", "RunOptions", "derive", "resampled", "totals", "unwrap_by_clip",
+]  # fmt: skip

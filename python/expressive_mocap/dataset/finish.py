@@ -14,13 +14,14 @@ import numpy as np
 
 from .._utils.files import atomic_write
 from ..decoupling.features import FEATURE_NAMES
+from .derive import RunOptions
 from .folder import remove_partial
 from .format import FORMAT, MANIFEST, OFFSETS, PARTIAL, VERSION, data_file, file_record, read_manifest
 from .npy import Kind, write_final_header
 
 
 def finish(
-    out: Path, kinds: list[Kind], clips: list, failures: list, skeleton, rows: int, options: dict, extra: dict
+    out: Path, kinds: list[Kind], clips: list, failures: list, skeleton, rows: int, options: RunOptions, extra: dict
 ) -> None:
     """Headers into the data files, offsets and manifest (with each file's size and mtime) into
     .partial, then everything renamed into ``out``, manifest last. ``extra``: the positions'
@@ -39,7 +40,7 @@ def finish(
         "version": VERSION,
         "package_version": __version__,
         "created": datetime.datetime.now().isoformat(timespec="seconds"),
-        "options": options,
+        "options": options.record(),
         "skeleton": skeleton,
         "frames": rows,
         "kinds": {

@@ -18,7 +18,7 @@ from ..backend import get_backend
 from ..errors import ArgumentError, DatasetError
 from .cluster import client_for, on_cluster
 from .collect import collect
-from .derive import Options
+from .derive import Options, RunOptions
 from .finish import finish, move_into_place
 from .folder import finished_manifest, remove_dataset, remove_partial
 from .format import DEFAULT_KEEP, JOURNAL, KINDS, MANIFEST, MODEL_KINDS, PARTIAL, RUN, data_file, verify
@@ -92,9 +92,8 @@ def preprocess(
     body_model = load_model(model) if model is not None else None
     # The source in one canonical form (a resumed run may spell it otherwise: relative, through a link).
     source_path = os.path.realpath(src) if Path(src).exists() else os.path.abspath(src)
-    options = {"keep": list(kept), "model": _model_label(model), "model_float32": bool(model_float32),
-               "source": source_path, "backend": get_backend(), "canonical": bool(canonical),
-               "joint_map": joint_map or None, **shaping.record()}  # fmt: skip
+    options = RunOptions(kept, _model_label(model), bool(model_float32), source_path, get_backend(), bool(canonical),
+                         joint_map or None, shaping)  # fmt: skip
     if joint_map and not canonical:
         raise ArgumentError("a joint map is for retargeting clips onto the canonical body: give canonical=True too")
     settings = _Settings(kept, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress,
@@ -117,18 +116,12 @@ def preprocess(
         source.close()
 
 
-def _canonical(options: dict) -> dict | None:
-    """What the batches' work needs of the canonical options: the joint map (``{}``: none), or
-    None when clips stay on their own skeleton."""
-    return (options["joint_map"] or {}) if options["canonical"] else None
-
-
 @dataclass
 class _Settings:
     """A run's arguments, checked: the kinds kept, the options recorded, the model loaded and as given."""
 
     keep: tuple[str, ...]
-    options: dict
+    options: RunOptions
     body_model: object
     model: str | os.PathLike | None
     model_float32: bool
@@ -174,13 +167,13 @@ def _model_label(model) -> str | None:
     return None if model is None else "shipped" if model == "" else str(Path(model).resolve())
 
 
-def _already_finished(out: Path, manifest: dict, options: dict, started: float) -> Summary:
+def _already_finished(out: Path, manifest: dict, options: RunOptions, started: float) -> Summary:
     """A rerun over a finished dataset never rewrites it. After a run killed between putting its
     manifest in place and removing ``.partial``, the same command finishes the cleanup and says
     what the dataset holds; otherwise redoing it needs ``overwrite``."""
     if not (out / PARTIAL).exists():
         raise DatasetError(f"{out} already holds a finished dataset (manifest.json); use --overwrite to redo it")
-    if manifest.get("options") != options:
+    if manifest.get("options") != options.record():
         raise DatasetError(
             f"{out} holds a finished dataset made with other options ({manifest.get('options')}); "
             "use --overwrite to redo it with these"
@@ -198,7 +191,7 @@ def _summary_of(out: Path, manifest: dict, started: float) -> Summary:
                    seconds=time.perf_counter() - started)  # fmt: skip
 
 
-def _resume(partial: Path, options: dict, keep: tuple[str, ...], width: int) -> _State:
+def _resume(partial: Path, options: RunOptions, keep: tuple[str, ...], width: int) -> _State:
     """The state of the run in ``partial``: a new one (its options recorded), or the interrupted
     one of the same options, its data files cut back to its last journaled batch."""
     run_file = partial / RUN
@@ -210,13 +203,13 @@ def _resume(partial: Path, options: dict, keep: tuple[str, ...], width: int) -> 
                 f"{run_file}: not a readable record of an interrupted run ({error}); delete {partial}"
             ) from None
         then = previous.get("options") if isinstance(previous, dict) else None
-        if then != options:
+        if then != options.record():
             raise DatasetError(
                 f"{partial} holds an interrupted run with other options ({then}); "
                 f"rerun with those, or delete {partial} to start again"
             )
     else:
-        atomic_write(run_file, json.dumps({"options": options}).encode())
+        atomic_write(run_file, json.dumps({"options": options.record()}).encode())
     entries = read_journal(partial / JOURNAL)
     state = _State(partial, Counter(name for e in entries for name in e.items), batches=len(entries))
     state.clips = [c for e in entries for c in e.clips]
@@ -259,10 +252,10 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
         batches = batched(todo, settings.batch_mb * MB / (2 if settings.shaping.decoded else 1))
         if client is None:
             results = local(batches, settings.max_batches, stopped, settings.keep, settings.body_model,
-                            settings.model_float32, _canonical(settings.options), settings.shaping)  # fmt: skip
+                            settings.model_float32, settings.options.canonical_map, settings.shaping)  # fmt: skip
         else:
-            work = (settings.keep, settings.model, settings.model_float32, get_backend(), _canonical(settings.options),
-                    settings.shaping)  # fmt: skip
+            work = (settings.keep, settings.model, settings.model_float32, get_backend(),
+                    settings.options.canonical_map, settings.shaping)  # fmt: skip
             results = on_cluster(batches, settings.max_batches, stopped, client, work)
         for batch, outcomes, headers_s, kernels_s in results:
             record, nbytes, write_s = _write_batch(state, batch, outcomes, settings, syncer, flushes)

@@ -33,6 +33,7 @@ from ..motion import Motion, Skeleton
 from ..rotations import quat
 from .features import FEATURE_NAMES, dynamic_features
 from .network import Mlp
+from .records import BodyModelSettings, TrainingReport
 
 FORMAT = "expressive-mocap body model"
 VERSION = 1
@@ -58,6 +59,9 @@ class BodyModel:
     joint, the angle of the expressive component is divided by it before the activity index
     reads it (at least 1; set by calibration); ``feature_range [2, 19]`` or None:
     the lowest and highest feature values the network is trusted with (inputs are clipped into it).
+    ``settings`` and ``report``: what training was run with and how every stage scored
+    (:class:`~expressive_mocap.decoupling.records.BodyModelSettings`,
+    :class:`~expressive_mocap.decoupling.records.TrainingReport`; fields a file lacks are None).
     """
 
     joint_names: tuple[str, ...]
@@ -65,8 +69,8 @@ class BodyModel:
     hemispheres: np.ndarray
     thigh_reference: np.ndarray
     network: Mlp
-    settings: dict = field(default_factory=dict)
-    report: dict = field(default_factory=dict)
+    settings: BodyModelSettings = field(default_factory=BodyModelSettings)
+    report: TrainingReport = field(default_factory=TrainingReport)
     calibration: np.ndarray | None = None
     feature_range: np.ndarray | None = None
     activity_scale: np.ndarray | None = None
@@ -74,7 +78,7 @@ class BodyModel:
     def __repr__(self) -> str:
         # One line: the dataclass default prints every weight.
         sizes = [self.network.layers[0].weights.shape[0]] + [layer.weights.shape[1] for layer in self.network.layers]
-        mse = self.report.get("fine_tuned", {}).get("test_mse")
+        mse = self.report.fine_tuned.test_mse if self.report.fine_tuned else None
         return (
             f"BodyModel({len(self.joint_names)}-joint skeleton (root {self.joint_names[0]!r}), "
             f"{len(self.predicted)} joints predicted, "
@@ -158,8 +162,8 @@ class BodyModel:
             "version": VERSION,
             "joint_names": list(self.joint_names),
             "feature_names": list(FEATURE_NAMES),
-            "settings": self.settings,
-            "report": self.report,
+            "settings": self.settings.to_json(),
+            "report": self.report.to_json(),
         }
         arrays = {
             "meta": np.array(json.dumps(meta)),
@@ -217,9 +221,8 @@ class BodyModel:
             or len(set(joint_names)) != len(joint_names)
         ):
             raise ModelError(f"{name}: the metadata's joint_names must be a list of distinct joint names")
-        for key in ("settings", "report"):
-            if not isinstance(meta.get(key, {}), dict):
-                raise ModelError(f"{name}: the metadata's {key} must be a JSON object")
+        settings = BodyModelSettings.from_json(meta.get("settings", {}), f"{name}: the metadata's settings")
+        report = TrainingReport.from_json(meta.get("report", {}), f"{name}: the metadata's report")
         predicted = finite_array(arrays, "predicted", name, kinds="iu")
         if (
             predicted.ndim != 1
@@ -265,8 +268,8 @@ class BodyModel:
             hemispheres=finite_array(arrays, "hemispheres", name, (len(predicted), 4), kinds="f"),
             thigh_reference=finite_array(arrays, "thigh_reference", name, (2, 4), kinds="f"),
             network=network,
-            settings=meta.get("settings", {}),
-            report=meta.get("report", {}),
+            settings=settings,
+            report=report,
             calibration=finite_array(arrays, "calibration", name, (len(joint_names), 4), kinds="f")
             if "calibration" in arrays
             else None,
@@ -293,16 +296,17 @@ def _activity_scale(arrays: dict, name: str, n_joints: int) -> np.ndarray | None
     return values
 
 
-def poor_fit(report: dict) -> str | None:
+def poor_fit(report: TrainingReport) -> str | None:
     """Why a trained body-mechanics model is of no use, or None: its network must predict the
     held-out clips' poses better than their mean training pose does (a network trained on too
-    few clips, or for too few iterations, may not)."""
-    final, baseline = report.get("fine_tuned"), report.get("mean_pose")
-    if not final or not baseline or final["test_mse"] < baseline["test_mse"]:
+    few clips, or for too few iterations, may not). None too when the report cannot tell."""
+    final = report.fine_tuned.test_mse if report.fine_tuned else None
+    baseline = report.mean_pose.test_mse if report.mean_pose else None
+    if final is None or baseline is None or final < baseline:
         return None
-    return (
-        f"its held-out pose error {final['test_mse']:.3g} is no better than the mean training pose's "
-        f"{baseline['test_mse']:.3g} (test variance explained {final['test_variance_explained']:.2f})"
+    explained = report.fine_tuned.test_variance_explained if report.fine_tuned else None
+    return f"its held-out pose error {final:.3g} is no better than the mean training pose's {baseline:.3g}" + (
+        f" (test variance explained {explained:.2f})" if explained is not None else ""
     )
 
 

@@ -41,6 +41,7 @@ from .features import FEATURE_NAMES
 from .lbfgs import Log, Params, fit_lbfgs, init_params
 from .lbfgs import stderr_log as _stderr
 from .network import Layer, Mlp
+from .records import BodyModelSettings, Split, StageScores, TrainingReport
 
 # --- splitting ---------------------------------------------------------------------------------
 
@@ -105,11 +106,20 @@ def _scores(predicted: np.ndarray, target: np.ndarray, variance: float) -> dict:
 
 
 def _stage(
-    net: Mlp, x: np.ndarray, y: np.ndarray, train: np.ndarray, test: np.ndarray, variance: float, **extra
-) -> dict:
+    net: Mlp,
+    x: np.ndarray,
+    y: np.ndarray,
+    train: np.ndarray,
+    test: np.ndarray,
+    variance: float,
+    *,
+    seconds: float | None = None,
+    hidden: int | None = None,
+    iterations: int | None = None,
+) -> StageScores:
     """Train and test MSE of ``net`` (run through the kernel backend, as at inference)."""
     tr, te = _scores(net(x[train]), y[train], variance), _scores(net(x[test]), y[test], variance)
-    return {"train_mse": tr["mse"], "test_mse": te["mse"], "test_variance_explained": te["variance_explained"], **extra}
+    return StageScores(tr["mse"], te["mse"], te["variance_explained"], seconds, hidden, iterations)
 
 
 # --- the stages --------------------------------------------------------------------------------
@@ -172,7 +182,7 @@ def train_stacked_network(
     noise: float = 0.1,
     compare_plain: bool = True,
     log: Log | None = _stderr,
-) -> tuple[Mlp, dict]:
+) -> tuple[Mlp, TrainingReport]:
     """Train the stacked body-mechanics network; returns it and a report of every stage.
 
     Args:
@@ -188,10 +198,11 @@ def train_stacked_network(
 
     Returns:
         ``(net, report)``: ``net`` an :class:`Mlp` ``[F] -> R tanh -> H tanh -> [D]`` on raw
-        features; ``report`` a dict with, per stage (``mean_pose``, ``autoencoder``,
-        ``regression`` (in code units), ``stack``, ``fine_tuned``, ``plain``), ``train_mse``,
-        ``test_mse``, ``test_variance_explained`` and ``seconds``; plus ``split`` and
-        ``test_variance`` (the mean per-column variance of the test poses).
+        features; ``report`` a :class:`~expressive_mocap.decoupling.records.TrainingReport`
+        with, per stage (``mean_pose``, ``autoencoder``, ``regression`` (in code units),
+        ``stack``, ``fine_tuned``, ``plain``), ``train_mse``, ``test_mse``,
+        ``test_variance_explained`` and ``seconds``; plus ``split`` and ``test_variance`` (the
+        mean per-column variance of the test poses).
     """
     X, P, groups = np.asarray(X, dtype=np.float64), np.asarray(P, dtype=np.float64), np.asarray(groups)
     if X.ndim != 2 or P.ndim != 2 or len(X) != len(P):
@@ -202,21 +213,13 @@ def train_stacked_network(
         raise ArgumentError(f"argument `groups`: expected shape [{len(X)}], got {list(groups.shape)}")
     train, test = split_by_group(groups, test_fraction, seed)
     variance = float(np.mean(P[test].var(axis=0)))
-    report: dict = {
-        "split": {
-            "train_rows": len(train),
-            "test_rows": len(test),
-            "train_groups": len(np.unique(groups[train])),
-            "test_groups": len(np.unique(groups[test])),
-        },
-        "test_variance": variance,
-    }
+    split = Split(len(train), len(test), len(np.unique(groups[train])), len(np.unique(groups[test])))
+    report: dict[str, StageScores] = {}
     mean_pose = P[train].mean(axis=0)
-    report["mean_pose"] = {
-        "train_mse": float(np.mean((P[train] - mean_pose) ** 2)),
-        "test_mse": float(np.mean((P[test] - mean_pose) ** 2)),
-    }
-    report["mean_pose"]["test_variance_explained"] = 1.0 - report["mean_pose"]["test_mse"] / variance
+    mean_pose_mse = float(np.mean((P[test] - mean_pose) ** 2))
+    report["mean_pose"] = StageScores(
+        float(np.mean((P[train] - mean_pose) ** 2)), mean_pose_mse, 1.0 - mean_pose_mse / variance
+    )
 
     # (a) autoencoder
     start = time.perf_counter()
@@ -287,7 +290,10 @@ def train_stacked_network(
             X[train], P[train], hidden, seed=seed, max_iter=max_iter, weight_decay=weight_decay, log=log
         )
         report["plain"] = _stage(plain, X, P, train, test, variance, seconds=time.perf_counter() - start, hidden=hidden)
-    return net, report
+    return net, TrainingReport(
+        split, variance, report["mean_pose"], report["autoencoder"], report["regression"], report["stack"],
+        report["fine_tuned"], report.get("plain"),
+    )  # fmt: skip
 
 
 def train_plain(
@@ -328,41 +334,34 @@ def sweep_autoencoder(
     seed: int = 0,
     test_fraction: float = 0.3,
     log: Log | None = _stderr,
-    **kwargs,
-) -> dict[int, dict]:
+    max_iter: int = 400,
+    rounds: int = 4,
+    mask: tuple[float, float] = (0.1, 0.3),
+    noise: float = 0.1,
+    weight_decay: float = 1e-6,
+) -> dict[int, StageScores]:
     """Train and test MSE of the autoencoder for each hidden size (the paper's 300/150/50/15),
-    trained on the training split of ``P`` by group. ``kwargs`` go to :func:`train_autoencoder`."""
+    trained on the training split of ``P`` by group. ``max_iter``, ``rounds``, ``mask``, ``noise``
+    and ``weight_decay``: as :func:`train_autoencoder` takes them."""
     P = np.asarray(P, dtype=np.float64)
     train, test = split_by_group(groups, test_fraction, seed)
     variance = float(np.mean(P[test].var(axis=0)))
     results = {}
     for hidden in hiddens:
         start = time.perf_counter()
-        ae = train_autoencoder(P[train], hidden, seed=seed, log=log, **kwargs)
-        results[hidden] = _stage(ae, P, P, train, test, variance, seconds=time.perf_counter() - start)
+        ae = train_autoencoder(
+            P[train], hidden, seed=seed, max_iter=max_iter, rounds=rounds, mask=mask, noise=noise,
+            weight_decay=weight_decay, log=log,
+        )  # fmt: skip
+        results[hidden] = scores = _stage(ae, P, P, train, test, variance, seconds=time.perf_counter() - start)
         if log:
-            log(
-                f"autoencoder H={hidden}: train MSE {results[hidden]['train_mse']:.3g}, "
-                f"test MSE {results[hidden]['test_mse']:.3g}"
-            )
+            log(f"autoencoder H={hidden}: train MSE {scores.train_mse:.3g}, test MSE {scores.test_mse:.3g}")
     return results
 
 
-def format_report(report: dict) -> str:
-    """The report as a small table: one line per stage."""
-    lines = [
-        f"split: {report['split']}, test variance {report['test_variance']:.4g}",
-        f"{'stage':12s} {'train MSE':>10s} {'test MSE':>10s} {'test var. expl.':>15s} {'seconds':>8s}",
-    ]
-    for stage in ("mean_pose", "autoencoder", "regression", "stack", "fine_tuned", "plain"):
-        if stage in report:
-            r = report[stage]
-            lines.append(
-                f"{stage:12s} {r['train_mse']:10.4g} {r['test_mse']:10.4g} "
-                f"{r['test_variance_explained']:15.4f} {r.get('seconds', 0.0):8.1f}"
-            )
-    lines.append("(regression in code units; every other stage in pose units)")
-    return "\n".join(lines)
+def format_report(report: TrainingReport) -> str:
+    """The report as a small table: one line per stage (:meth:`TrainingReport.table`)."""
+    return report.table()
 
 
 def synthetic_data(n_groups: int = 30, frames: int = 50, n_in: int = 19, d: int = 80, latent: int = 6, seed: int = 0):
@@ -430,18 +429,18 @@ def train_body_model(
     network, report = train_stacked_network(
         X, P, groups, extra, hidden, regression_hidden, seed=seed, max_iter=max_iter, log=log
     )
-    settings = {
-        "hidden": hidden,
-        "regression_hidden": regression_hidden,
-        "seed": seed,
-        "max_iter": max_iter,
-        "neutral_clips": len(neutral),
-        "neutral_frames": int(len(X)),
-        "unlabelled_clips": len(unlabelled),
-        "unlabelled_frames": 0 if extra is None else int(len(extra)),
-        "features": "causal; floor = 5th percentile of toe heights; thigh hemisphere = training mean",
-    }
-    settings["feature_range"] = FEATURE_RANGE
+    settings = BodyModelSettings(
+        hidden=hidden,
+        regression_hidden=regression_hidden,
+        seed=seed,
+        max_iter=max_iter,
+        neutral_clips=len(neutral),
+        neutral_frames=int(len(X)),
+        unlabelled_clips=len(unlabelled),
+        unlabelled_frames=0 if extra is None else int(len(extra)),
+        features="causal; floor = 5th percentile of toe heights; thigh hemisphere = training mean",
+        feature_range=FEATURE_RANGE,
+    )
     return BodyModel(
         tuple(skeleton.names),
         predicted,

@@ -23,7 +23,7 @@ from .dofs import dofs_to_rotations, rotations_to_dofs, sampled_dofs
 from .estimate import POOR_FIT, IntensityEstimate
 from .footlock import IDENTITY, lock_stance_feet
 from .model import ExaggerationModel
-from .settings import EDITING, REFERENCES, TRAINING
+from .settings import EDITING, EditSettings, Reference
 from .timing import (
     PREDICTABLE,
     Timing,
@@ -170,13 +170,22 @@ def motion_dofs(
     return np.concatenate([rot, heights[:, None]], axis=1)
 
 
-def _check_arguments(model: ExaggerationModel, motion: Motion, to: float, current: float | None, options: dict) -> None:
+def _check_arguments(
+    model: ExaggerationModel,
+    motion: Motion,
+    to: float,
+    current: float | None,
+    baseline: Motion | None,
+    level: float | None,
+) -> None:
+    """Refuse what :func:`exaggerate` cannot work with (its settings are checked by
+    :class:`EditSettings` itself), naming the argument."""
     if not isinstance(motion, Motion):
         raise ArgumentError(f"argument `motion`: expected a Motion, got {type(motion).__name__}")
     model.check_skeleton(motion)
-    if not np.isfinite(to) or (current is not None and not np.isfinite(current)):
-        raise ArgumentError(f"intensities must be finite numbers, got to={to}, current={current}")
-    baseline, level = options["baseline"], options["baseline_level"]
+    for name, value in (("to", to), ("current", current)):
+        if value is not None and not _finite_number(value):
+            raise ArgumentError(f"argument `{name}`: intensities must be finite numbers, got {value!r}")
     if (baseline is None) != (level is None):
         raise ArgumentError("baseline and baseline_level go together: a clip of the same actor and its known intensity")
     if baseline is not None:
@@ -186,17 +195,16 @@ def _check_arguments(model: ExaggerationModel, motion: Motion, to: float, curren
             model.check_skeleton(baseline)
         except ModelError as error:
             raise ModelError(f"baseline: {error}") from None
-        if not np.isfinite(level):
-            raise ArgumentError(f"baseline_level must be a finite number, got {level}")
-    if options["reference"] not in REFERENCES:
-        raise ArgumentError(f"reference must be 'model' or 'own', got {options['reference']!r}")
+        if not _finite_number(level):
+            raise ArgumentError(f"argument `baseline_level`: baseline_level must be a finite number, got {level!r}")
     if motion.n_frames < 3:
         raise ArgumentError(f"a motion of {motion.n_frames} frames is too short to exaggerate")
-    if not all(np.isfinite(options[n]) and options[n] >= 0 for n in ("margin", "fade", "blend")):
-        raise ArgumentError(
-            "margin, fade and blend must be finite numbers >= 0, got "
-            f"margin={options['margin']}, fade={options['fade']}, blend={options['blend']}"
-        )
+
+
+def _finite_number(value: object) -> bool:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return False
+    return bool(np.isfinite(value))
 
 
 def _clamp(
@@ -329,34 +337,32 @@ def _measure(
     model: ExaggerationModel,
     motion: Motion,
     roles: JointRoles,
-    reference: str,
-    estimate_offsets: bool,
+    edit: EditSettings,
     cycles: Sequence[Cycle] | None = None,
     contacts: np.ndarray | None = None,
 ) -> _Measured:
     if cycles is None:
-        foot = int(model.settings.get("foot", TRAINING.foot))
-        cycles = find_cycles(motion, roles, contacts, foot=foot) or [Cycle(0, motion.n_frames - 1)]
+        cycles = find_cycles(motion, roles, contacts, foot=model.settings.foot) or [Cycle(0, motion.n_frames - 1)]
     cycles = list(cycles)
     yaw = frame_yaw(motion, roles, cycles, motion.positions())
     own = _own_reference(motion, roles, cycles, yaw)
-    ref = model.reference if reference == "model" else own
+    ref = model.reference if edit.reference == "model" else own
     sampled = sample_cycles(motion, roles, cycles, model.basis.shape[0])
     coefficients = _coefficients(model, sampled, ref)
-    same = estimate_offsets or reference == "own"
+    same = edit.estimate_offsets or edit.reference == "own"
     return _Measured(cycles, yaw, ref, coefficients, coefficients if same else _coefficients(model, sampled, own))
 
 
 def _baseline_offsets(
-    model: ExaggerationModel, baseline: Motion, level: float, reference: str, estimate_offsets: bool
+    model: ExaggerationModel, baseline: Motion, level: float, edit: EditSettings
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """What the actor of ``baseline`` (at intensity ``level``) does otherwise than the model at that
     level: the difference of the coefficients the estimate reads ``[D, r]``, and of each DOF's mean
     ``[D]`` as the edit measures it (the shift of the training range); with the intensity the
     baseline is estimated at as it is."""
-    measured = _measure(model, baseline, JointRoles.find(baseline.skeleton), reference, estimate_offsets)
+    measured = _measure(model, baseline, JointRoles.find(baseline.skeleton), edit)
     at_level = model.predict_coefficients(level)
-    as_is = model.estimate(measured.estimated.mean(axis=0), offsets=estimate_offsets).k
+    as_is = model.estimate(measured.estimated.mean(axis=0), offsets=edit.estimate_offsets).k
     shift = (model.basis @ (measured.coefficients.mean(axis=0) - at_level).T).mean(axis=0)
     return measured.estimated.mean(axis=0) - at_level, shift, as_is
 
@@ -369,7 +375,7 @@ def exaggerate(
     *,
     current: float | None = None,
     cycles: Sequence[Cycle] | None = None,
-    reference: str = EDITING.reference,
+    reference: Reference = EDITING.reference,
     margin: float = EDITING.margin,
     fade: float = EDITING.fade,
     lock_feet: bool = EDITING.lock_feet,
@@ -379,7 +385,8 @@ def exaggerate(
     estimate_offsets: bool = EDITING.estimate_offsets,
     timing: bool = EDITING.timing,
     roles: JointRoles | None = None,
-    hinges: bool = True,
+    hinges: bool = EDITING.hinges,
+    settings: EditSettings | None = None,
 ) -> tuple[Motion, ExaggerationReport]:
     """Exaggerate (``to`` above the current intensity) or diminish ``motion`` with ``model``.
 
@@ -409,40 +416,45 @@ def exaggerate(
     ``hinges``: elbows and knees kept from straight to the most the training cycles bend them
     plus a margin, never tighter than the input has them, before the edit is retimed and the feet
     are locked (:func:`~expressive_mocap.body.hinges.limit_hinges`; the report's ``hinges``).
-    Defaults: :data:`~expressive_mocap.exaggeration.EDITING`.
+    Defaults: :data:`~expressive_mocap.exaggeration.EDITING`; ``settings``: all of them at once,
+    an :class:`~expressive_mocap.exaggeration.EditSettings` (the keywords then left as they are).
+    A bad value is an :class:`~expressive_mocap.errors.ArgumentError` naming its argument.
     Returns the new motion and an :class:`ExaggerationReport`.
     """
-    options = {"reference": reference, "margin": margin, "fade": fade, "blend": blend}
-    _check_arguments(model, motion, to, current, dict(options, baseline=baseline, baseline_level=baseline_level))
+    _check_arguments(model, motion, to, current, baseline, baseline_level)
+    keywords = EditSettings(reference, margin, fade, lock_feet, blend, estimate_offsets, timing, hinges)
+    edit = _one_of(settings, keywords)
     roles = roles or JointRoles.find(motion.skeleton)
     contacts = foot_contacts(motion, roles)
-    measured = _measure(model, motion, roles, reference, estimate_offsets, cycles, contacts)
+    measured = _measure(model, motion, roles, edit, cycles, contacts)
     cycles, yaw, ref = measured.cycles, measured.yaw, measured.reference
     X = motion_dofs(model, motion, roles, yaw, ref)  # [F, D]
     offset, shift, read_as = np.zeros_like(measured.coefficients[0]), np.zeros(model.n_dofs), None
     if baseline is not None and baseline_level is not None:
-        offset, shift, as_is = _baseline_offsets(model, baseline, float(baseline_level), reference, estimate_offsets)
+        offset, shift, as_is = _baseline_offsets(model, baseline, float(baseline_level), edit)
         read_as = (float(baseline_level), as_is)
     per_cycle = measured.estimated - offset
     estimate = (
-        None if current is not None else model.estimate(per_cycle.mean(axis=0), per_cycle, offsets=estimate_offsets)
+        None
+        if current is not None
+        else model.estimate(per_cycle.mean(axis=0), per_cycle, offsets=edit.estimate_offsets)
     )
     k0 = estimate.k if estimate is not None else float(current)  # type: ignore[arg-type]
     if estimate is not None and estimate.warning():
         warnings.warn(estimate.warning(), stacklevel=2)
     change = (model.predict_coefficients(float(to)) - model.predict_coefficients(k0)) * model.key[:, None]  # [D, r]
-    per_frame = _per_frame_change(model.basis @ change.T, cycles, motion.n_frames, int(round(fade * motion.fps)))
-    new, clamped = _clamp(model, X, X + per_frame, reference, margin, shift)
+    per_frame = _per_frame_change(model.basis @ change.T, cycles, motion.n_frames, int(round(edit.fade * motion.fps)))
+    new, clamped = _clamp(model, X, X + per_frame, edit.reference, edit.margin, shift)
     out = _rebuilt(model, motion, roles, X, new, ref, yaw)
     limited = None
-    if hinges:  # before the feet are locked, so that the leg IK bends each knee the right way
+    if edit.hinges:  # before the feet are locked, so that the leg IK bends each knee the right way
         out, limited = limit_hinges(out, model.hinge_limits, allow=(motion.rotations,))
-    at = _retimed(model, motion, out, roles, cycles, contacts, (k0, float(to)), margin) if timing else None
+    at = _retimed(model, motion, out, roles, cycles, contacts, (k0, float(to)), edit.margin) if edit.timing else None
     held, out, held_contacts = (at.motion, at.edited, at.contacts) if at else (motion, out, contacts)
     correction = residual = lowered = 0.0
-    if lock_feet and (np.abs(new - X).max(initial=0.0) > 0 or (at and at.timing)):
+    if edit.lock_feet and (np.abs(new - X).max(initial=0.0) > 0 or (at and at.timing)):
         out, correction, residual, lowered = lock_stance_feet(
-            held, out, held_contacts, roles, int(round(blend * motion.fps)), at.ankles if at else None
+            held, out, held_contacts, roles, int(round(edit.blend * motion.fps)), at.ankles if at else None
         )
     angles = np.degrees(quat.angle(quat.mul(quat.conjugate(held.rotations), out.rotations))).max(axis=0)
     report = ExaggerationReport(
@@ -454,6 +466,18 @@ def exaggerate(
         timing=at.timing if at else None, hinges=limited,
     )  # fmt: skip
     return out, report
+
+
+def _one_of(settings: EditSettings | None, keywords: EditSettings) -> EditSettings:
+    """The edit's settings: ``settings`` when given (the keywords then left at their defaults, or
+    the same), else the keywords'."""
+    if settings is None:
+        return keywords
+    if not isinstance(settings, EditSettings):
+        raise ArgumentError(f"argument `settings`: expected an EditSettings, got {type(settings).__name__}")
+    if keywords not in (EDITING, settings):
+        raise ArgumentError("argument `settings`: give the edit's settings as `settings` or as keywords, not both")
+    return settings
 
 
 __all__ = ["ExaggerationReport", "exaggerate", "motion_dofs", "stance_foot_speed"]

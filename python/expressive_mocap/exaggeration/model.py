@@ -7,7 +7,7 @@ import io
 import json
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from .._utils.files import atomic_write, check_keys, finite_array, read_model_file
 from ..body.hinges import HingeLimits, learn_hinge_limits
-from ..errors import MocapError, ModelError
+from ..errors import ArgumentError, MocapError, ModelError
 from ..motion import Motion
 from .dofs import dofs_to_rotations
 from .estimate import IntensityEstimate, estimate_intensity
@@ -54,7 +54,7 @@ class ExaggerationModel:
     from their own mean, for validation), ``cycle_trajectories [N, T, D]`` (every cycle they were
     averaged from) with ``cycle_performance [N, 2]`` (the person and intensity index of each);
     ``person_reference [P, J, 4]`` (the people's means); ``settings`` what training was run with
-    (:meth:`TrainSettings.to_dict`; see :attr:`training`); ``joint_map`` which joint of its skeleton
+    (a :class:`TrainSettings`, the defaults where a file has none); ``joint_map`` which joint of its skeleton
     plays which role (a map file's form), by which motions of other skeletons reach the model.
     Timing (:mod:`.timing`; None in a model file written without it): ``cycle_timing [N, 2]``
     each training cycle's log duration (s) and log travel (actor heights), ``timing_mappings
@@ -88,7 +88,7 @@ class ExaggerationModel:
     trajectories: np.ndarray
     cycle_trajectories: np.ndarray
     cycle_performance: np.ndarray
-    settings: dict = field(default_factory=dict)
+    settings: TrainSettings = field(default_factory=TrainSettings)
     joint_map: dict = field(default_factory=dict)  # role -> joint name(s) of its skeleton, as found in training
     cycle_timing: np.ndarray | None = None
     timing_mappings: np.ndarray | None = None
@@ -104,8 +104,8 @@ class ExaggerationModel:
 
     @property
     def training(self) -> TrainSettings:
-        """:attr:`settings` as :class:`TrainSettings` (the defaults where a file has none)."""
-        return TrainSettings.from_dict(dict(self.settings, representation=self.representation))
+        """:attr:`settings`, with the model's :attr:`representation`."""
+        return replace(self.settings, representation=self.representation)
 
     @property
     def zero_weight_joints(self) -> list[str]:
@@ -259,7 +259,7 @@ class ExaggerationModel:
             "hips": self.hips,
             "representation": self.representation,
             "energy": self.energy,
-            "settings": self.settings,
+            "settings": self.settings.to_dict(),
             "joint_map": self.joint_map,
         }
         arrays = {name: np.asarray(getattr(self, name)) for name in ARRAYS}
@@ -297,7 +297,7 @@ class ExaggerationModel:
                 joint_names=tuple(meta["joint_names"]), dof_names=tuple(meta["dof_names"]),
                 height=float(meta["height"]),
                 hips=int(meta["hips"]), representation=meta["representation"], energy=float(meta["energy"]),
-                settings=dict(meta.get("settings", {})), joint_map=dict(meta.get("joint_map") or {}),
+                settings=_settings(meta, name), joint_map=dict(meta.get("joint_map") or {}),
                 **{k: (arrays[k].astype(bool) if k in ("key", "person_key") else arrays[k]) for k in ARRAYS},
                 **{k: arrays[k] for k in TIMING_ARRAYS if k in arrays},
             )  # fmt: skip
@@ -317,6 +317,15 @@ def _check_metadata(meta: dict[str, Any], name: str) -> None:
             raise ModelError(f"{name}: the metadata's {key} must be a list of names")
     if not isinstance(meta.get("settings", {}), dict):
         raise ModelError(f"{name}: the metadata's settings must be a JSON object")
+
+
+def _settings(meta: dict[str, Any], name: str) -> TrainSettings:
+    """The metadata's settings as a record, with the model's representation (an older file's
+    missing entries take the defaults and are not written back; unknown ones are kept)."""
+    try:
+        return TrainSettings.from_dict(dict(meta.get("settings", {}), representation=meta["representation"]))
+    except ArgumentError as error:
+        raise ModelError(f"{name}: the metadata's {error}") from None
 
 
 def _check_model(model: ExaggerationModel, name: str) -> None:

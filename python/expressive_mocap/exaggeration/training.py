@@ -220,7 +220,7 @@ def _model(
         trajectories=X,
         cycle_trajectories=cycle_trajectories,
         cycle_performance=cycle_performance,
-        settings=settings.to_dict(),
+        settings=settings,
         cycle_timing=np.concatenate([d.timing for d in per_person]),
         timing_mappings=timing.mappings,
         timing_predictability=timing.predictability,

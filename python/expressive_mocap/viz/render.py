@@ -14,14 +14,16 @@ import io
 import math
 import os
 from collections.abc import Sequence
+from typing import Literal
 
 import numpy as np
 
 from .._utils.files import atomic_write, output_target
-from ..errors import MocapError
+from ..errors import ArgumentError, MocapError
 from ..motion import Motion
 
 VIEWS = ("side", "front")
+View = Literal["side", "front"]
 MARGIN = 0.06  # of the figure's height, around every panel
 MIN_GIF_DELAY = 0.02  # s: browsers play shorter GIF frame delays as 0.1 s
 
@@ -281,16 +283,22 @@ def render(
     motions: Sequence[Motion],
     path: str | os.PathLike,
     titles: Sequence[str] | None = None,
-    view: str = "side",
-    **options,
+    view: View = "side",
+    *,
+    poses: int = 8,
+    speed: float = 1.0,
 ) -> str | None:
-    """Render to ``path``: a GIF animation if it ends in ``.gif`` (returns how it plays), otherwise
-    a PNG of poses. ``path`` is checked before drawing (:func:`expressive_mocap._utils.files.output_target`)."""
+    """Render to ``path``: a GIF animation if it ends in ``.gif`` (:func:`render_animation`, played
+    at ``speed`` x real time; returns how it plays), otherwise a PNG of ``poses`` poses per motion
+    (:func:`render_poses`). ``path`` is checked before drawing
+    (:func:`expressive_mocap._utils.files.output_target`)."""
     output_target(path)
+    if isinstance(poses, bool) or not isinstance(poses, (int, np.integer)) or poses < 1:
+        raise ArgumentError(f"argument `poses`: expected a whole number of poses >= 1, got {poses!r}")
     if str(path).lower().endswith(".gif"):
-        return render_animation(motions, path, titles, view, **options)
+        return render_animation(motions, path, titles, view, speed)
     if str(path).lower().endswith(".png"):
-        render_poses(motions, path, titles, view=view, **options)
+        render_poses(motions, path, titles, int(poses), view)
         return None
     raise MocapError(f"render: the output must end in .png or .gif, got {path}")
 
@@ -350,6 +358,7 @@ __all__ = [
     "MARGIN",
     "MIN_GIF_DELAY",
     "VIEWS",
+    "View",
     "gif_timing",
     "heading",
     "plot_contacts",
