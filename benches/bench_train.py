@@ -3,7 +3,7 @@ in clips of 75, 19 features, D = 80 pose values, H = 300, every stage (and the p
 
     PYTHONPATH=python python benches/bench_train.py [--clips 667] [--frames 75] [--max-iter 400]
 
-Poses are ``tanh(X A) B`` plus noise on a 6-D manifold (as in tests/test_train.py), so the MSE
+Poses are ``tanh(X A) B`` plus noise on a 6-D manifold (as in tests/decoupling/test_training.py), so the MSE
 figures say the optimiser works, not how well real poses are predicted. Checked before the total
 is printed (benches/harness.py; a failed check raises): every row in the train/test split, and the
 network's test MSE finite and below the mean pose's.

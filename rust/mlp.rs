@@ -149,7 +149,7 @@ pub fn tanh_f64(x: f64) -> f64 {
         -929_569.0 / 638_512_875.0,
     ];
     // tanh(20) = 1 - 8e-18: 1 in float64. Not `min`, which would turn NaN into 20 (and
-    // tanh(NaN) into 1: found by tests/test_kernel_misuse.py).
+    // tanh(NaN) into 1: found by tests/ops/test_kernel_misuse.py).
     let a = if x.abs() > 20.0 { 20.0 } else { x.abs() };
     let e = exp_neg(-2.0 * a);
     let big = (1.0 - e) / (1.0 + e);

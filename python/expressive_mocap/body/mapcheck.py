@@ -12,7 +12,7 @@ map file gave a side's roles, the toes pointing forwards. A rest pose cannot tel
 one line naming the role and the joint.
 
 Every map the package finds passes: those of all 3,076 Bandai-Namco clips, the files on other
-rigs and the synthetic rigs (tests/test_joint_map_checks.py).
+rigs and the synthetic rigs (tests/body/test_mapcheck.py).
 """
 
 from __future__ import annotations
