@@ -22,7 +22,7 @@ import numpy as np
 
 import expressive_mocap as em
 from expressive_mocap import reference
-from expressive_mocap.body.roles import JointRoles, actor_height, hips_rest_height
+from expressive_mocap.body import Body
 from expressive_mocap.decoupling import features
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -33,13 +33,13 @@ FEATURE_TOL = 1e-12  # Rust against the NumPy twin (8.8e-15 measured on the walk
 
 
 def kernel_inputs(motion: em.Motion) -> tuple:
-    roles = JointRoles.find(motion.skeleton)
+    body = Body.of(motion.skeleton)
+    roles = body.roles
     positions = motion.positions()
     feet = np.ascontiguousarray(positions[:, [[roles.feet[0], roles.toes[0]], [roles.feet[1], roles.toes[1]]]])
     points = np.ascontiguousarray(positions[:, [roles.hips, *roles.upper_legs]])
     thighs = np.ascontiguousarray(motion.rotations[:, list(roles.upper_legs)])
-    height = actor_height(motion.skeleton, roles)
-    return feet, points, thighs, thighs[0].copy(), motion.frame_time, height, hips_rest_height(motion.skeleton, roles)
+    return feet, points, thighs, thighs[0].copy(), motion.frame_time, body.actor_height, body.hips_rest_height
 
 
 def main() -> None:

@@ -68,12 +68,13 @@ def roles_of(path: Path) -> dict:
 
 
 def conventions(path: Path) -> dict:
-    """What `skeleton --json` reads of a file: its up axis, actor height, ..."""
+    """What `skeleton --json` reads of a file: its up axis, stature, ..."""
     return json.loads(run("skeleton", path, "--json"))
 
 
-def actor_height(path: Path) -> float:
-    return float(conventions(path)["actor_height"])
+def stature(path: Path) -> float:
+    """The standing height `skeleton` reads from the leg bones (file units): the scale here."""
+    return float(conventions(path)["stature"])
 
 
 def decoupled(path: Path, work: Path) -> dict:
@@ -84,7 +85,7 @@ def decoupled(path: Path, work: Path) -> dict:
     run("modulate", path, "--scale", "0", "-o", work / "body.bvh")
     original, _ = world_positions(path)
     body, _ = world_positions(work / "body.bvh")
-    jmap, height = roles_of(path), actor_height(path)
+    jmap, height = roles_of(path), stature(path)
     hands = [jmap[f"{s}_hand"] for s in ("left", "right")]
     moved = np.linalg.norm(original - body, axis=-1) / height
     return {**activity, "hands": float(moved[:, hands].mean(axis=0).max()), "body": float(moved.mean())}
@@ -94,7 +95,7 @@ def arm_measures(path: Path) -> tuple[float, float]:
     """Arm swing (range of the hands' travel along the walk, relative to the hips, over actor
     heights) and mean elbow flexion (degrees), averaged over both arms."""
     positions, _ = world_positions(path)
-    jmap, height = roles_of(path), actor_height(path)
+    jmap, height = roles_of(path), stature(path)
     hips = positions[:, jmap["hips"]]
     travel = hips[-1] - hips[0]
     travel[1] = 0.0
@@ -111,13 +112,13 @@ def arm_measures(path: Path) -> tuple[float, float]:
 
 
 def left_hand_height(path: Path) -> float:
-    """How high the left hand rises above the head at its highest, over actor heights (negative: below)."""
+    """How high the left hand rises above the head at its highest, over statures (negative: below)."""
     positions, _ = world_positions(path)
     jmap, read = roles_of(path), conventions(path)
     axis = "XYZ".index(read["up"][1])
     sign = 1.0 if read["up"][0] == "+" else -1.0
     rise = sign * (positions[:, jmap["left_hand"], axis] - positions[:, jmap["head"], axis])
-    return float(rise.max() / read["actor_height"])
+    return float(rise.max() / read["stature"])
 
 
 def main() -> None:
@@ -148,7 +149,8 @@ def main() -> None:
         lines.append(
             "Mean activity per body part (0: body mechanics, 1: expressive) and how far the expressive "
             "component moves the body: mean displacement between the file and its body mechanics "
-            "(`modulate --scale 0`), over actor heights, for the hand that moves more and for every joint."
+            "(`modulate --scale 0`), over statures (standing height from the leg bones), for the hand that moves more "
+            "and for every joint."
         )
         lines += ["", "| file | spine | arms | legs | hand moved | body moved |", "|---|---|---|---|---|---|"]
         for label, path in clips.items():
@@ -172,7 +174,7 @@ def main() -> None:
             lines.append(f"| {name} | {estimate} | {s0:.3f} -> {s1:.3f} | {f0:.0f} -> {f1:.0f} deg |")
         lines += ["", "## A Bandai-Namco wave mixed onto their walks", ""]
         wave = d2 / "dataset-2_wave-left-hand_normal_001.bvh"
-        lines += ["| body | left hand above the head, before -> after (actor heights) |", "|---|---|"]
+        lines += ["| body | left hand above the head, before -> after (statures) |", "|---|---|"]
         for name, path in (("dme_comp_3d_2", other / "dme_comp_3d_2.bvh"), ("cmu", other / "cmu_scaled_131_03.bvh")):
             run("mix", "--body", path, "--expressive", wave, "-o", work / f"mix_{name}.bvh")
             lines.append(

@@ -6,8 +6,10 @@ lengths are in the file's units. See docs/bvh.md for the conventions table.
 
 from ._utils.lazy import lazy_exports
 from .backend import get_backend, rust_available, set_backend, use_backend
+from .body.body import Body, actor_height
 from .body.contacts import contact_intervals, foot_contacts
-from .body.roles import JointRoles, actor_height
+from .body.roles import JointRoles
+from .body.take import Take
 from .bvh import bvh_bytes, read_bvh, read_bvh_many, write_bvh
 from .decoupling.features import FEATURE_NAMES, dynamic_features, gait_many
 from .decoupling.network import Mlp
@@ -50,6 +52,7 @@ __all__ = [
     "modulate",
     "preprocess",
     "BVHError",
+    "Body",
     "BodyModel",
     "Dataset",
     "Decomposition",
@@ -60,6 +63,7 @@ __all__ = [
     "Mlp",
     "Motion",
     "Skeleton",
+    "Take",
     "__version__",
     "actor_height",
     "bvh_bytes",

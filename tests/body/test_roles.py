@@ -6,8 +6,9 @@ import pytest
 
 import expressive_mocap as em
 from conftest import stick_walker, straight_walker
+from expressive_mocap.body import actor_height
 from expressive_mocap.body.canonical import bandai_like_skeleton
-from expressive_mocap.body.roles import JointRoles, actor_height, hips_rest_height
+from expressive_mocap.body.roles import JointRoles, rest_heights
 
 
 def test_roles_of_bandai_cmu_and_mixamo_names():
@@ -69,18 +70,18 @@ def test_two_candidates_for_a_role_are_settled_by_the_topology():
 def test_actor_height_by_hand():
     skeleton = straight_walker(frames=2).skeleton
     roles = JointRoles.find(skeleton)
-    assert hips_rest_height(skeleton, roles) == pytest.approx(90.0)
-    assert actor_height(skeleton, roles) == pytest.approx(140.0)
+    assert rest_heights(skeleton, roles)[0] == pytest.approx(90.0)
+    assert rest_heights(skeleton, roles)[1] == pytest.approx(140.0)
     # Rest pose hanging from the origin (CMU style): the leg's length stands in for the hips' height.
     offsets = skeleton.offsets.copy()
     offsets[0] = 0.0
     hanging = skeleton.with_offsets(offsets, [])
-    assert hips_rest_height(hanging, roles) == pytest.approx(np.hypot(10, 5) + 80)
+    assert rest_heights(hanging, roles)[0] == pytest.approx(np.hypot(10, 5) + 80)
 
 
 @pytest.mark.real_data
 def test_bandai_actor_is_141_cm(bandai2_dir):
     skeleton = em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh").skeleton
     roles = JointRoles.find(skeleton)
-    assert hips_rest_height(skeleton, roles) == pytest.approx(93.31, abs=0.01)
+    assert rest_heights(skeleton, roles)[0] == pytest.approx(93.31, abs=0.01)
     assert actor_height(skeleton) == pytest.approx(140.9, abs=0.1)

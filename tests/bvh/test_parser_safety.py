@@ -30,7 +30,7 @@ HAMMER = textwrap.dedent(
     import json, sys, threading, time
     import numpy as np
     from expressive_mocap import _core, bvh, ops, procedural
-    from expressive_mocap.body import roles as R
+    from expressive_mocap.body import Body
     from expressive_mocap.body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 
     GAIT = ops.GaitSettings(HEIGHT_THRESHOLD, SPEED_THRESHOLD, MIN_DURATION, FLOOR_PERCENTILE)
@@ -54,8 +54,9 @@ HAMMER = textwrap.dedent(
         data = bvh.bvh_bytes(procedural.procedural_walk(seconds=4.0))
         header = bvh.parse_header(data, "walk")
         skeleton = header.skeleton
-        roles = R.JointRoles.find(skeleton)
-        clip = ops.ClipInput.of(data, header, R.actor_height(skeleton, roles), R.hips_rest_height(skeleton, roles))
+        body = Body.of(skeleton)
+        roles = body.roles
+        clip = ops.ClipInput.of(data, header, body.actor_height, body.hips_rest_height)
         outputs = ops.PipelineOutputs(positions=True, features=(ops.FeatureRequest(0.0),), contacts=True)
         parents = np.array(skeleton.parents, dtype=np.int64)  # the skeleton's own is read-only
         joint = skeleton.n_joints - 1

@@ -33,7 +33,9 @@ def test_skeleton_reports_the_map_and_conventions_of_each_file(rig_files, capsys
         assert {k: v for k, v in report["map"].items() if k in truth} == truth
         built = synthetic_walk(rig).conventions
         assert (report["up"], report["facing"], report["unit"]) == (built.up, built.facing, built.unit)
-        assert report["actor_height_m"] == pytest.approx(1.63, abs=0.05)
+        assert report["stature_m"] == pytest.approx(1.63, abs=0.05)  # what tells the unit
+        # The actor height is the one every other step reads: the skeleton's Body's.
+        assert report["actor_height"] == pytest.approx(em.actor_height(em.read_bvh(rig_files[rig]).skeleton), abs=1e-6)
     game = reports[2]
     assert "upperarm_twist_01_l" in game["unmapped"] and game["rest_pose"] == "A"
 

@@ -8,9 +8,10 @@ from scipy.spatial.transform import Rotation
 import expressive_mocap as em
 from conftest import straight_walker
 from expressive_mocap import ops, reference
+from expressive_mocap.body import actor_height
 from expressive_mocap.body.canonical import bandai_like_skeleton
 from expressive_mocap.body.contacts import default_floor
-from expressive_mocap.body.roles import JointRoles, actor_height
+from expressive_mocap.body.roles import JointRoles
 from expressive_mocap.decoupling.features import FEATURE_NAMES, dynamic_features
 from expressive_mocap.procedural import procedural_walk
 from expressive_mocap.rotations import quat
@@ -178,8 +179,6 @@ def test_demo_walk_features(backend):
     [
         (dict(thigh_reference=[0, 0, 0, 1]), "thigh_reference"),
         (dict(floor=float("nan")), "floor"),
-        (dict(roles=3), "roles"),
-        (dict(height=0), "height"),
         (dict(speed_threshold=0), "speed_threshold"),
     ],
 )

@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
+from expressive_mocap.body import actor_height
 from expressive_mocap.body.contacts import foot_contacts
-from expressive_mocap.body.roles import JointRoles, actor_height
+from expressive_mocap.body.roles import JointRoles
 from expressive_mocap.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
@@ -149,7 +150,7 @@ def hips_steps(motion: em.Motion) -> tuple[float, float]:
     roles = JointRoles.find(motion.skeleton)
     hips = motion.positions()[:, roles.hips]
     steps = np.linalg.norm(np.diff(hips, axis=0), axis=1) * motion.fps / 30
-    scale = BANDAI_ACTOR_CM / actor_height(motion.skeleton, roles)
+    scale = BANDAI_ACTOR_CM / actor_height(motion.skeleton)
     return float(steps.max()) * scale, float(np.percentile(steps, 90)) * scale
 
 
@@ -200,7 +201,7 @@ def test_the_readme_examples_run_and_their_outputs_are_plausible(
     walk = em.read_bvh(bandai2_dir / PLACEHOLDERS["walk.bvh"])
     heavier = em.read_bvh(tmp_path / "heavier.bvh")
     roles = JointRoles.find(walk.skeleton)
-    contacts, heavier_contacts = foot_contacts(walk, roles), foot_contacts(heavier, roles)
+    contacts, heavier_contacts = foot_contacts(walk), foot_contacts(heavier)
     for side, foot in enumerate(roles.feet):
         highest = walk.positions()[contacts[:, side], foot, 1].max()
         rise = heavier.positions()[heavier_contacts[:, side], foot, 1].max() - highest

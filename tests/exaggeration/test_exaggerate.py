@@ -281,18 +281,16 @@ def test_the_clamping_range_is_measured_as_the_edit_measures(walk):
 def test_foot_locking_pins_the_stance_foot(walk):
     """An edit that swings both thighs 12 degrees (the feet skate), locked: in contact the ankles
     and toes are back where the input has them; beyond the 3-frame blend the edit is untouched."""
-    roles = em.JointRoles.find(walk.skeleton)
-    contacts = em.foot_contacts(walk, roles)
+    roles = em.Body.of(walk.skeleton).roles
+    contacts = em.foot_contacts(walk)
     rotations = walk.rotations.copy()
     for j in roles.upper_legs:
         rotations[:, j] = quat.mul(quat.about("X", 12.0), rotations[:, j])
     edited = em.Motion(walk.skeleton, rotations, walk.translations, walk.frame_time)
     locked, correction, residual, lowered = lock_stance_feet(walk, edited, contacts, roles, blend_frames=3)
     assert correction > 5.0 and residual < 1e-6 and lowered == 0.0  # the thighs' swing keeps the feet within reach
-    assert stance_foot_speed(edited, contacts, roles) > 2 * stance_foot_speed(walk, contacts, roles)
-    assert stance_foot_speed(locked, contacts, roles) == pytest.approx(
-        stance_foot_speed(walk, contacts, roles), abs=1e-6
-    )
+    assert stance_foot_speed(edited, contacts) > 2 * stance_foot_speed(walk, contacts)
+    assert stance_foot_speed(locked, contacts) == pytest.approx(stance_foot_speed(walk, contacts), abs=1e-6)
     for s in (0, 1):
         for joint in (roles.feet[s], roles.toes[s]):
             gap = np.linalg.norm(
@@ -562,9 +560,9 @@ def test_rank_names_the_clip_it_cannot_use_and_the_option_to_use(tmp_path, mixed
 def test_foot_locking_lowers_the_hips_where_a_leg_cannot_reach(walk):
     """An edit that raises the hips 5% of the actor's height: the stance legs cannot reach the
     input's ankles, so the hips come down just enough, eased; the feet stay planted."""
-    roles = em.JointRoles.find(walk.skeleton)
-    contacts = em.foot_contacts(walk, roles)
-    height = em.actor_height(walk.skeleton, roles)
+    body = em.Body.of(walk.skeleton)
+    roles, height = body.roles, body.actor_height
+    contacts = em.foot_contacts(walk)
     translations = walk.translations.copy()
     translations[:, roles.hips, 1] += 0.05 * height  # the hips' parent is the identity in the demo walk
     edited = em.Motion(walk.skeleton, walk.rotations, translations, walk.frame_time)

@@ -15,7 +15,6 @@ import expressive_mocap as em
 from expressive_mocap.body import conventions as conv
 from expressive_mocap.body.contacts import foot_contacts
 from expressive_mocap.body.jointmap import find_joint_map
-from expressive_mocap.body.roles import JointRoles
 from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons.canonical import canonical_rig
 from expressive_mocap.skeletons.retargeting import retarget, retarget_rigs
@@ -153,17 +152,23 @@ def test_z_up_files_are_drawn_upright(walks):
     assert np.ptp(project(walks["bandai"])[0][..., 1]) == pytest.approx(160, abs=15)
 
 
+def _turned(motion: em.Motion, turn: np.ndarray) -> em.Motion:
+    """``motion`` with its root turned by ``turn`` (every world position turned alike), on its own
+    skeleton: what its Body reads on upright positions."""
+    rotations, translations = motion.rotations.copy(), motion.translations.copy()
+    rotations[:, 0] = quat.mul(turn[None], rotations[:, 0])
+    translations[:, 0] = quat.rotate(turn, translations[:, 0])
+    return em.Motion(motion.skeleton, rotations, translations, motion.frame_time)
+
+
 def test_contacts_of_a_z_up_file_from_its_upright_positions(walks):
     smpl, bandai = walks["smpl"], walks["bandai"]
     upright = conv.upright(smpl)
-    roles = JointRoles.find(smpl.skeleton)
-    from_positions = foot_contacts(smpl, roles, positions=upright.positions())
+    from_positions = foot_contacts(_turned(smpl, Rig.of(smpl).conventions.rotation()))
     # The same but for the actor height of the thresholds, read from the Z-up rest pose.
-    assert np.mean(from_positions == foot_contacts(upright, roles)) > 0.99
+    assert np.mean(from_positions == foot_contacts(upright)) > 0.99
     same_times = from_positions[::2][: bandai.n_frames]  # 60 fps against 30
     assert np.mean(same_times == foot_contacts(bandai)) > 0.95
-    with pytest.raises(em.MocapError, match="argument `positions`: expected shape"):
-        foot_contacts(smpl, roles, positions=upright.positions()[1:])
 
 
 def test_clips_retargeted_together_are_those_retargeted_one_by_one(walks):
@@ -224,9 +229,9 @@ def test_source_contacts_of_clips_end_to_end_are_each_clips_foot_contacts(walks)
         source = Rig.of(motion)
         clips = [motion[:50], motion[50:51], motion[51:]]
         bounds = np.cumsum([0] + [c.n_frames for c in clips])
-        upright = quat.rotate(source.conventions.rotation(), motion.positions())
-        roles = JointRoles.from_map(motion.skeleton, source.jmap)
-        want = [foot_contacts(c, roles, positions=upright[a:b]) for c, a, b in zip(clips, bounds[:-1], bounds[1:])]
+        turn = source.conventions.rotation()
+        upright = quat.rotate(turn, motion.positions())
+        want = [foot_contacts(_turned(c, turn)) for c in clips]
         np.testing.assert_array_equal(source_contacts(clips, source, upright, bounds), np.concatenate(want), rig)
 
 

@@ -1,6 +1,11 @@
 """What the package knows about a skeleton, found once per rig:
 
-- :mod:`.roles`: the joints the gait features read (:class:`JointRoles`) and the actor's height;
+- :mod:`.body`: :class:`Body`, a skeleton's joint map, roles, actor height and stature, kept per
+  skeleton content; :mod:`.take`: :class:`Take`, a motion with its Body and what is derived from
+  it once (positions, floor, contacts);
+
+- :mod:`.roles`: the joints the gait features read (:class:`JointRoles`) and the rest heights;
+- :mod:`.contacts`: foot contacts, the floor, steps and cadence;
 - :mod:`.jointmap`: which joint plays which part of the body (:func:`find_joint_map`, by names,
   topology or a user's map file, :func:`read_joint_map`), and :mod:`.mapcheck`, its whole checks;
 - :mod:`.names`: what a joint's name says (side and part);
@@ -19,8 +24,10 @@ _LAZY = {
     "JointMap": "jointmap",
     "find_joint_map": "jointmap",
     "read_joint_map": "jointmap",
+    "Body": "body",
+    "Take": "take",
+    "actor_height": "body",
     "JointRoles": "roles",
-    "actor_height": "roles",
     "Conventions": "conventions",
     "read_conventions": "conventions",
     "to_canonical": "conventions",

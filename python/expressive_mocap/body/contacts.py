@@ -1,8 +1,10 @@
 """Foot contacts: when each foot is on the floor (after Lee et al. 2002), the floor itself, and the
 steps and cadence read from the contacts. Used by every method, the CLI and preprocessing.
 
-Thresholds are fractions of the actor's height (:func:`expressive_mocap.body.roles.actor_height`),
+Thresholds are fractions of the actor's height (:attr:`expressive_mocap.body.Body.actor_height`),
 speeds per second; Y is up. The per-frame filter runs in the kernels (Rust, or the NumPy twin).
+A motion's floor and contacts are kept on its :class:`~expressive_mocap.body.Take`: asked again
+for the same take and settings, they are not computed again.
 """
 
 from __future__ import annotations
@@ -14,7 +16,8 @@ import numpy as np
 from .. import ops
 from ..errors import ArgumentError
 from ..motion import Motion
-from .roles import JointRoles, actor_height
+from .roles import JointRoles
+from .take import Take
 
 HEIGHT_THRESHOLD = 0.05  # x actor height
 SPEED_THRESHOLD = 0.5  # x actor height per second
@@ -30,12 +33,12 @@ class ContactInterval(NamedTuple):
     seconds: float
 
 
-def _motion(motion) -> Motion:
-    if not isinstance(motion, Motion):
-        raise ArgumentError(f"argument `motion`: expected a Motion, got {type(motion).__name__}")
-    if motion.n_frames == 0:
+def take_of(source: Motion | Take) -> Take:
+    """:meth:`Take.of` ``source``, refusing a motion without frames."""
+    take = Take.of(source)
+    if take.motion.n_frames == 0:
         raise ArgumentError("argument `motion`: the motion has no frames")
-    return motion
+    return take
 
 
 def _positive(name: str, value) -> float:
@@ -55,6 +58,12 @@ def _frames(seconds: float, motion: Motion) -> int:
 def default_floor(positions: np.ndarray, roles: JointRoles) -> float:
     """The floor height: the 5th percentile of both toes' heights over the clip (``positions [F, J, 3]``)."""
     return float(np.percentile(positions[:, list(roles.toes), 1], FLOOR_PERCENTILE))
+
+
+def floor_of(source: Motion | Take) -> float:
+    """:func:`default_floor` of a motion (kept on its take)."""
+    take = take_of(source)
+    return take.kept("floor", lambda: default_floor(take.positions, take.body.roles))
 
 
 def percentiles_by_clip(values: np.ndarray, bounds, q: float) -> np.ndarray:
@@ -85,56 +94,23 @@ def percentiles_by_clip(values: np.ndarray, bounds, q: float) -> np.ndarray:
     return np.where(empty, np.nan, out)
 
 
-def _floor(floor, positions: np.ndarray, roles: JointRoles, causal: bool) -> float:
+def _floor(floor, take: Take, causal: bool) -> float:
     if floor is None:
-        return 0.0 if causal else default_floor(positions, roles)
+        return 0.0 if causal else floor_of(take)
     value = float(floor)
     if not np.isfinite(value):
         raise ArgumentError(f"argument `floor`: must be a finite height, got {floor}")
     return value
 
 
-def _contacts(
-    motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration
-) -> np.ndarray:
-    feet = positions[:, [[roles.feet[0], roles.toes[0]], [roles.feet[1], roles.toes[1]]]]
-    return ops.foot_contacts(
-        np.ascontiguousarray(feet),
-        motion.frame_time,
-        floor,
-        _positive("height_threshold", height_threshold) * height,
-        _positive("speed_threshold", speed_threshold) * height,
-        _frames(_positive("min_duration", min_duration), motion),
-        bool(causal),
-    )
-
-
-def _roles(motion: Motion, roles) -> JointRoles:
-    if roles is None:
-        return JointRoles.find(motion.skeleton)
-    if not isinstance(roles, JointRoles):
-        raise ArgumentError(f"argument `roles`: expected JointRoles, got {type(roles).__name__}")
-    return roles
-
-
-def _setup(motion, roles, height):
-    motion = _motion(motion)
-    roles = _roles(motion, roles)
-    height = actor_height(motion.skeleton, roles) if height is None else _positive("height", height)
-    return motion, roles, height
-
-
 def foot_contacts(
-    motion: Motion,
-    roles: JointRoles | None = None,
+    motion: Motion | Take,
     *,
     floor: float | None = None,
     causal: bool = False,
     height_threshold: float = HEIGHT_THRESHOLD,
     speed_threshold: float = SPEED_THRESHOLD,
     min_duration: float = MIN_DURATION,
-    height: float | None = None,
-    positions: np.ndarray | None = None,
 ) -> np.ndarray:
     """Contacts ``bool [F, 2]`` (left, right foot) after Lee et al. 2002.
 
@@ -143,20 +119,36 @@ def foot_contacts(
     per second. Offline (default) contact and flight runs shorter than ``min_duration`` seconds
     are absorbed by their neighbours; ``causal=True`` uses a hold of ``min_duration`` instead
     (a change counts once it has lasted that long; frame ``t`` uses frames ``<= t``).
-    ``floor`` defaults to the 5th percentile of toe heights (0 when causal); ``height`` (file
-    units) to :func:`~expressive_mocap.body.roles.actor_height`; ``roles`` to ``JointRoles.find``.
-    ``positions``: the motion's world positions ``[F, J, 3]`` when already at hand (Y up; e.g.
-    turned from a Z-up file), instead of computing them.
+    ``floor`` defaults to the 5th percentile of toe heights (0 when causal). ``motion``: a
+    motion, or a :class:`~expressive_mocap.body.Take` of one (whose Body gives the joints and
+    the actor's height: a Body read with a user's joint map picks other feet).
     """
-    motion, roles, height = _setup(motion, roles, height)
-    positions = motion.positions() if positions is None else np.asarray(positions, dtype=np.float64)
-    if positions.shape != (motion.n_frames, motion.skeleton.n_joints, 3):
-        raise ArgumentError(
-            f"argument `positions`: expected shape {[motion.n_frames, motion.skeleton.n_joints, 3]}, "
-            f"got {list(positions.shape)}"
-        )
-    floor = _floor(floor, positions, roles, causal)
-    return _contacts(motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration)
+    take = take_of(motion)
+    floor = _floor(floor, take, causal)
+    settings = (
+        floor,
+        bool(causal),
+        _positive("height_threshold", height_threshold),
+        _positive("speed_threshold", speed_threshold),
+        _positive("min_duration", min_duration),
+    )
+    return take.kept(("contacts", settings), lambda: _contacts(take, *settings)).copy()
+
+
+def _contacts(
+    take: Take, floor: float, causal: bool, height_threshold: float, speed_threshold: float, min_duration: float
+) -> np.ndarray:
+    roles, height, motion = take.body.roles, take.body.actor_height, take.motion
+    feet = take.positions[:, [[roles.feet[0], roles.toes[0]], [roles.feet[1], roles.toes[1]]]]
+    return ops.foot_contacts(
+        np.ascontiguousarray(feet),
+        motion.frame_time,
+        floor,
+        height_threshold * height,
+        speed_threshold * height,
+        _frames(min_duration, motion),
+        causal,
+    )
 
 
 def air_time(contacts, frame_time: float) -> np.ndarray:
@@ -216,6 +208,7 @@ __all__ = [
     "cadence",
     "contact_intervals",
     "default_floor",
+    "floor_of",
     "foot_contacts",
     "footstrikes",
     "percentiles_by_clip",

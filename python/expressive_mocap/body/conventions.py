@@ -24,9 +24,11 @@ from typing import Callable
 
 import numpy as np
 
+from .._utils.kept import Kept
 from ..errors import MocapError
 from ..motion import Motion, Skeleton, spread_frames
 from ..rotations import quat
+from .body import Body
 from .jointmap import JointMap
 from .mapcheck import check_posed_map, four_legged
 
@@ -214,19 +216,16 @@ def facing_of(skeleton: Skeleton, jmap: JointMap, up: str) -> tuple[str, float]:
     """``(facing, how sure)`` of ``skeleton`` whose up axis is ``up``: its rest pose's forward
     (:func:`body_axes`), turned upright, nearest axis across ``up``. The same for every motion of
     a skeleton: kept for the skeletons met last."""
-    key = (skeleton.content_key, tuple(jmap.joints.items()), up)
-    if key not in _FACINGS:
-        if len(_FACINGS) >= 64:
-            _FACINGS.pop(next(iter(_FACINGS)))
-        rest = skeleton.rest_positions()[0]
-        rest_up, _, rest_forward = body_axes(rest, jmap)
-        upright = quat.between(rest_up, np.array(AXES[up], float))
-        forward = quat.rotate(upright, rest_forward)
-        _FACINGS[key] = _nearest_axis(forward - np.dot(forward, AXES[up]) * np.array(AXES[up]), exclude=up)
-    return _FACINGS[key]
+
+    def facing() -> tuple[str, float]:
+        rest_up, _, rest_forward = body_axes(skeleton.rest_positions()[0], jmap)
+        forward = quat.rotate(quat.between(rest_up, np.array(AXES[up], float)), rest_forward)
+        return _nearest_axis(forward - np.dot(forward, AXES[up]) * np.array(AXES[up]), exclude=up)
+
+    return _FACINGS.get((skeleton.content_key, tuple(jmap.joints.items()), up), facing)
 
 
-_FACINGS: dict = {}
+_FACINGS: Kept[tuple[str, float]] = Kept(64)
 
 
 def frame_rotation(up: str, facing: str) -> np.ndarray:
@@ -259,16 +258,15 @@ def read_conventions(motion: Motion, jmap: JointMap) -> Conventions:
 def _of_skeleton(skeleton: Skeleton, jmap: JointMap) -> tuple:
     """The conventions a skeleton alone tells: its actor's height, unit and rest pose, kept for the
     skeletons met last (an archive's clips share a few)."""
-    key = (skeleton.content_key, tuple(jmap.joints.items()))
-    if key not in _SKELETONS:
-        if len(_SKELETONS) >= 64:
-            _SKELETONS.pop(next(iter(_SKELETONS)))
+
+    def tells() -> tuple:
         height = stature(skeleton, jmap)
-        _SKELETONS[key] = (height, guess_unit(height), rest_pose_kind(skeleton, jmap))
-    return _SKELETONS[key]
+        return height, guess_unit(height), rest_pose_kind(skeleton, jmap)
+
+    return _SKELETONS.get((skeleton.content_key, tuple(jmap.joints.items())), tells)
 
 
-_SKELETONS: dict = {}
+_SKELETONS: Kept[tuple] = Kept(64)
 
 
 def to_canonical(motion: Motion, conventions: Conventions) -> Motion:
@@ -291,10 +289,8 @@ def upright(motion: Motion) -> Motion:
 def upright_and_back(motion: Motion) -> tuple[Motion, Callable[[Motion], Motion]]:
     """:func:`upright` of ``motion``, and the turn that puts a motion of the same skeleton back
     into ``motion``'s own axes (the identity when nothing was turned)."""
-    from .jointmap import find_joint_map
-
     try:
-        up = read_conventions(motion, find_joint_map(motion.skeleton)).up
+        up = read_conventions(motion, Body.of(motion.skeleton).joint_map).up
     except MocapError:
         up = "+Y"
     if up == "+Y":

@@ -20,10 +20,12 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import ArgumentError, MocapError
-from ..motion import Motion, Skeleton, spread_frames
+from ..motion import Motion, spread_frames
 from ..ops import forward_kinematics
 from ..rotations import quat
+from .body import Body
 from .canonical import canonical_shape, canonical_skeleton
+from .take import Take
 
 # Each hinge (the joint map's role of its middle joint) with its limb: upper, middle, end.
 LIMBS = {"forearm": ("upper_arm", "forearm", "hand"), "lower_leg": ("upper_leg", "lower_leg", "foot")}
@@ -103,12 +105,10 @@ def _flexion(world: np.ndarray, positions: np.ndarray, hinge: Hinge) -> np.ndarr
     return np.degrees(np.arctan2(sine, cosine))  # both scaled by the two lengths
 
 
-def _limbs(skeleton: Skeleton) -> list[tuple[str, int, int, int]]:
-    """The hinges the skeleton's joint map knows: (role, upper, middle, end) joint indices."""
-    from .jointmap import find_joint_map
-
+def _limbs(body: Body) -> list[tuple[str, int, int, int]]:
+    """The hinges the body's joint map knows: (role, upper, middle, end) joint indices."""
     try:
-        jmap = find_joint_map(skeleton)
+        jmap = body.joint_map
     except MocapError:  # no limbs to tell: no hinges
         return []
     out = []
@@ -121,35 +121,34 @@ def _limbs(skeleton: Skeleton) -> list[tuple[str, int, int, int]]:
 
 
 def learn_hinge_limits(
-    motions: Sequence[Motion], margin: float = MARGIN, most: dict[str, float] | None = None
+    motions: Sequence[Motion | Take], margin: float = MARGIN, most: dict[str, float] | None = None
 ) -> HingeLimits:
     """Hinge limits learnt from real ``motions`` (one skeleton): each hinge's axis, the mean
     normal of its two segments in the upper joint's frame over the frames bent at least
     :data:`BENT` degrees; its most flexion, the most the motions show (or ``most[role]``, e.g.
     ``most["left_forearm"]``, where given) plus ``margin`` x the range they show. A hinge never
-    bent that far in the motions is left without limits."""
+    bent that far in the motions is left without limits. The limbs are those of the first
+    motion's Body (a take's, where given: a Body read with a user's joint map)."""
     if not motions:
         raise ArgumentError("hinge limits need at least one motion to learn from")
-    skeleton = motions[0].skeleton
-    names = tuple(skeleton.names)
-    if any(tuple(m.skeleton.names) != names for m in motions):
+    takes = [Take.of(m) for m in motions]
+    body = takes[0].body
+    names = tuple(body.skeleton.names)
+    if any(tuple(t.motion.skeleton.names) != names for t in takes):
         raise ArgumentError("hinge limits are learnt from motions of one skeleton")
-    rotations = np.concatenate([m.rotations for m in motions])
-    translations = np.concatenate([m.translations for m in motions])
-    return _learnt(names, skeleton, rotations, translations, margin, most)
+    rotations = np.concatenate([t.motion.rotations for t in takes])
+    translations = np.concatenate([t.motion.translations for t in takes])
+    return _learnt(body, rotations, translations, margin, most)
 
 
 def _learnt(
-    names: tuple[str, ...],
-    skeleton: Skeleton,
-    rotations: np.ndarray,
-    translations: np.ndarray,
-    margin: float,
-    most: dict[str, float] | None,
+    body: Body, rotations: np.ndarray, translations: np.ndarray, margin: float, most: dict[str, float] | None
 ) -> HingeLimits:
+    skeleton = body.skeleton
+    names = tuple(skeleton.names)
     world, positions = forward_kinematics(rotations, translations, skeleton.parents)
     hinges = []
-    for role, upper, middle, end in _limbs(skeleton):
+    for role, upper, middle, end in _limbs(body):
         inverse = quat.conjugate(world[:, upper])
         a = quat.rotate(inverse, positions[:, middle] - positions[:, upper])
         b = quat.rotate(inverse, positions[:, end] - positions[:, middle])
@@ -233,7 +232,7 @@ def canonical_hinge_limits() -> HingeLimits:
     skeleton = canonical_skeleton()
     names = tuple(skeleton.names)
     hinges = []
-    for role, upper, middle, end in _limbs(skeleton):
+    for role, upper, middle, end in _limbs(Body.of(skeleton)):
         axis = np.asarray(CANONICAL_AXES[role], dtype=np.float64)
         hinges.append(Hinge(role, upper, middle, end, axis, NEUTRAL_MOST[role] * (1 + MARGIN)))
     return HingeLimits(names, tuple(hinges))

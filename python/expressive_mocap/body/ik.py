@@ -9,8 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import ops
-
-REACH = 0.9999  # of the chain's length: the solver stops short of a fully straight knee
+from ..reference.ik import REACH  # the kernels' constant (rust/ik.rs has the same)
 
 
 def two_bone_ik(

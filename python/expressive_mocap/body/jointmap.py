@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -143,21 +142,11 @@ def find_joint_map(skeleton: Skeleton, user_map: dict[str, object] | None = None
     names do not; without it, the rest pose is used.
 
     Raises :class:`MocapError` naming the roles that could not be found and how to give them.
+    Commands read a skeleton's map once, from its :class:`~expressive_mocap.body.Body`.
     """
     if user_map:
         return _with_user_map(skeleton, user_map, pose)
-    return _found(skeleton, None if pose is None else _key(pose))
-
-
-def _key(pose) -> tuple:
-    return tuple(np.round(np.asarray(pose, dtype=np.float64).ravel(), 9))
-
-
-@lru_cache(maxsize=128)
-def _found(skeleton: Skeleton, pose: tuple | None) -> JointMap:
-    # Cached: skeletons are immutable (hashed by identity); archives ask once per clip.
-    finder = _Finder(skeleton, None if pose is None else np.reshape(pose, (-1, 3)))
-    return finder.run({})
+    return _Finder(skeleton, None if pose is None else np.asarray(pose, dtype=np.float64).reshape(-1, 3)).run({})
 
 
 def _with_user_map(skeleton: Skeleton, user_map: dict[str, object], pose) -> JointMap:

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from .._utils.tokens import listed
 from ..errors import MocapError
 from ..motion import Skeleton
+from .jointmap import find_joint_map
 
 _SIDES = {"left": r"(?:left|l)", "right": r"(?:right|r)"}
 _PARTS = {
@@ -64,11 +64,26 @@ class JointRoles:
 
     @classmethod
     def find(cls, skeleton: Skeleton, **overrides: int | str) -> JointRoles:
-        """Roles of ``skeleton`` by joint name. ``overrides`` give any role (names in
-        :data:`ROLE_NAMES`) as a joint index or name, e.g. ``left_toe="LeftToe_End"``.
+        """Roles of ``skeleton`` by joint name, else (no ``overrides`` given) by its joint map,
+        which reads the topology too. ``overrides`` give any role (names in :data:`ROLE_NAMES`) as
+        a joint index or name, e.g. ``left_toe="LeftToe_End"``. Commands read a skeleton's roles
+        once, from its :class:`~expressive_mocap.body.Body`.
 
         Raises :class:`MocapError` naming every role that could not be found (or was found twice).
         """
+        try:
+            return cls.by_names(skeleton, **overrides)
+        except MocapError as named:
+            if overrides:
+                raise
+            try:
+                return cls.from_map(skeleton, find_joint_map(skeleton))
+            except MocapError:
+                raise named from None
+
+    @classmethod
+    def by_names(cls, skeleton: Skeleton, **overrides: int | str) -> JointRoles:
+        """Roles of ``skeleton`` by joint name only (see :meth:`find`)."""
         unknown = set(overrides) - set(ROLE_NAMES)
         if unknown:
             raise MocapError(f"unknown joint role(s) {', '.join(sorted(unknown))}; roles are {', '.join(ROLE_NAMES)}")
@@ -86,15 +101,6 @@ class JointRoles:
                 problems.append(f"{role} (several candidates: {', '.join(skeleton.names[j] for j in matches)})")
             else:
                 problems.append(role)
-        if problems and not overrides:
-            # Names missing or ambiguous (SMPL's "left_foot" is a toe, a rig named j0..jN): the
-            # full joint map, which reads the topology too.
-            from .jointmap import find_joint_map
-
-            try:
-                return cls.from_map(skeleton, find_joint_map(skeleton))
-            except MocapError:
-                pass
         if problems:
             raise MocapError(
                 f"cannot tell which joint is the {'; '.join(problems)}: pass it by name, e.g. "
@@ -154,28 +160,17 @@ def _chain(skeleton: Skeleton, top: int, bottom: int) -> tuple[int, ...]:
     return tuple(reversed(chain))
 
 
-def hips_rest_height(skeleton: Skeleton, roles: JointRoles) -> float:
-    """Height of the hips above the floor in the rest pose, in file units.
+def rest_heights(skeleton: Skeleton, roles: JointRoles) -> tuple[float, float]:
+    """``(hips rest height, actor height)`` in file units; read them from a skeleton's
+    :class:`~expressive_mocap.body.Body`, which finds them once.
 
-    The hips' rest Y above the file's origin, taken as the floor (Bandai-Namco, Mixamo and the
-    demo put the origin there). Where that is under half the leg's length (files such as CMU's
-    hang the rest pose from the origin), the leg's length is used: the bone lengths from the
-    hips down to the ankle, which a standing actor's hips are about that high.
+    The hips' rest height is their rest Y above the file's origin, taken as the floor
+    (Bandai-Namco, Mixamo and the demo put the origin there); where that is under half the leg's
+    length (files such as CMU's hang the rest pose from the origin), the leg's length: the bone
+    lengths from the hips down to the ankle, which a standing actor's hips are about that high.
+    The actor's height adds the bone lengths of the spine-to-head chain (the Bandai rest pose is
+    not upright, so its vertical extent is no measure; this gives about 141 cm there).
     """
-    return _rest_heights(skeleton, roles)[0]
-
-
-def actor_height(skeleton: Skeleton, roles: JointRoles | None = None) -> float:
-    """The actor's height in file units: :func:`hips_rest_height` plus the bone lengths of the
-    spine-to-head chain (the Bandai rest pose is not upright, so its vertical
-    extent is no measure; this gives about 141 cm there)."""
-    return _rest_heights(skeleton, roles or JointRoles.find(skeleton))[1]
-
-
-@lru_cache(maxsize=64)
-def _rest_heights(skeleton: Skeleton, roles: JointRoles) -> tuple[float, float]:
-    """(hips rest height, actor height). Cached: skeletons are immutable (hashed by identity)
-    and an archive asks for both once per clip."""
     joints, _ = skeleton.rest_positions()
     bone = np.linalg.norm(skeleton.offsets, axis=1)
     leg = float(sum(bone[j] for j in _chain(skeleton, roles.hips, roles.feet[0])[1:]))
@@ -192,11 +187,10 @@ def facing_yaw(positions: np.ndarray, roles: JointRoles) -> float:
     return float(np.degrees(np.arctan2(-side[2], side[0])))  # forward = left x up = (-z, 0, x)
 
 
-def path_joint(translations: np.ndarray, skeleton: Skeleton, roles: JointRoles | None = None) -> int:
+def path_joint(translations: np.ndarray, skeleton: Skeleton, roles: JointRoles) -> int:
     """The joint that carries the motion's path: the first joint on the chain from the root down to
     the hips whose local translation changes over ``translations [F, J, 3]`` (the root itself on
     most skeletons; the hips on Bandai-Namco's, whose ``joint_Root`` never moves), else the hips."""
-    roles = roles or JointRoles.find(skeleton)
     root = int(np.flatnonzero(skeleton.parents < 0)[0])
     chain = _chain(skeleton, root, roles.hips) if roles.hips != root else (root,)
     for joint in chain:
@@ -205,4 +199,4 @@ def path_joint(translations: np.ndarray, skeleton: Skeleton, roles: JointRoles |
     return int(roles.hips)
 
 
-__all__ = ["ROLE_NAMES", "JointRoles", "actor_height", "facing_yaw", "hips_rest_height", "path_joint"]
+__all__ = ["ROLE_NAMES", "JointRoles", "facing_yaw", "path_joint", "rest_heights"]

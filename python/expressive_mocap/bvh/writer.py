@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import os
-from functools import lru_cache
 
 import numpy as np
 
 from .. import ops
 from .._utils.files import atomic_write
+from .._utils.kept import Kept
 from ..errors import MocapError
 from ..motion import Motion, Skeleton
 from .channels import encode
@@ -25,10 +25,17 @@ def _number(value: float, decimals: int | None) -> str:
 _MAX_INDENT = 16  # tabs: deeper joints are not indented further, so a deep chain's header stays linear
 
 
-@lru_cache(maxsize=64)
 def _hierarchy(skeleton: Skeleton, decimals: int | None) -> str:
-    """The HIERARCHY part of a file. Cached: skeletons are immutable (hashed by identity), and
-    retargeting onto one body writes it once per clip."""
+    """The HIERARCHY part of a file, kept per skeleton content: retargeting onto one body writes
+    it once per clip."""
+    key = (skeleton.content_key, skeleton.end_sites, decimals)
+    return _HIERARCHIES.get(key, lambda: _written_hierarchy(skeleton, decimals))
+
+
+_HIERARCHIES: Kept[str] = Kept(64)
+
+
+def _written_hierarchy(skeleton: Skeleton, decimals: int | None) -> str:
     sites: dict[int, list] = {}
     for joint, offset in skeleton.end_sites:
         sites.setdefault(joint, []).append(offset)

@@ -53,23 +53,17 @@ def add_footsteps(commands) -> None:
 
 
 def cmd_footsteps(args) -> int:
-    from ..body.contacts import cadence, contact_intervals, default_floor, foot_contacts, footstrikes
+    from ..body.contacts import cadence, contact_intervals, floor_of, foot_contacts, footstrikes
     from ..body.conventions import upright
-    from ..body.roles import JointRoles, actor_height
+    from ..body.take import Take
 
     motion = upright(read_bvh(args.file))  # contacts are read along Y: a Z-up file is turned first
-    if args.map:
-        from ..body import find_joint_map
-
-        roles = JointRoles.from_map(motion.skeleton, find_joint_map(motion.skeleton, _joint_map(args.map)))
-    else:
-        roles = JointRoles.find(motion.skeleton)
+    take = Take.of(motion, _joint_map(args.map) if args.map else None)
+    roles, height = take.body.roles, take.body.actor_height
     names = roles.names(motion.skeleton)
-    height = actor_height(motion.skeleton, roles)
-    floor = args.floor if args.floor is not None else (0.0 if args.causal else default_floor(motion.positions(), roles))
+    floor = args.floor if args.floor is not None else (0.0 if args.causal else floor_of(take))
     contacts = foot_contacts(
-        motion,
-        roles,
+        take,
         floor=floor,
         causal=args.causal,
         height_threshold=args.height_threshold,

@@ -42,7 +42,7 @@ def add_demo(commands) -> None:
 
 def cmd_demo(args) -> int:
     from ..body.contacts import cadence, foot_contacts, footstrikes
-    from ..body.roles import JointRoles, actor_height
+    from ..body.take import Take
     from ..procedural import walk_and_wave
     from ..viz.render import render
 
@@ -54,19 +54,19 @@ def cmd_demo(args) -> int:
     write_bvh(pair.walk, bvh_path)
     write_bvh(pair.waving, wave_path)
     again, waving = read_bvh(bvh_path), read_bvh(wave_path)
-    drift = float(np.abs(again.positions() - pair.walk.positions()).max())
+    take = Take.of(again)
+    drift = float(np.abs(take.positions - pair.walk.positions()).max())
     skeleton = "the Bandai-Namco dataset-2 skeleton"
     print(f"procedural walk at {args.speed} m/s on {skeleton}: {again.n_frames} frames -> {bvh_path}")
     cmd_info(argparse.Namespace(files=[str(bvh_path)]))
-    roles = JointRoles.find(again.skeleton)
-    height = actor_height(again.skeleton, roles)
+    roles, height = take.body.roles, take.body.actor_height
     print(f"  actor height {height:.4g} cm (hips rest height + spine-to-head chain: the rest pose is not upright)")
     print(f"  read back: largest joint position difference {drift:.2e} cm")
-    hips = again.positions()[:, roles.hips]
+    hips = take.positions[:, roles.hips]
     print(
         f"  hips travelled {np.linalg.norm(hips[-1, [0, 2]] - hips[0, [0, 2]]) / 100:.2f} m in {again.duration:.2f} s"
     )
-    contacts = foot_contacts(again, roles)
+    contacts = foot_contacts(take)
     strikes = footstrikes(contacts)
     left = int(np.count_nonzero(strikes[:, 1] == 0))
     steps = f"{len(strikes)} ({left} left, {len(strikes) - left} right)"

@@ -44,12 +44,13 @@ def add_skeleton(commands) -> None:
 
 def describe(path: str, user_map: dict | None, args) -> dict:
     """What ``skeleton`` reports for one file."""
-    from ..body import find_joint_map, read_conventions
+    from ..body import Body, read_conventions
     from ..skeletons.rig import Rig
     from ..skeletons.transfer import untrusted_twists
 
     motion = read_bvh(path)
-    jmap = find_joint_map(motion.skeleton, user_map)
+    body = Body.of(motion.skeleton, user_map)
+    jmap = body.joint_map
     conventions = read_conventions(motion, jmap).with_overrides(args.up, args.facing, args.unit)
     untrusted = untrusted_twists(motion, Rig(motion.skeleton, jmap, conventions, 0.0))
     names = motion.skeleton.names
@@ -65,8 +66,10 @@ def describe(path: str, user_map: dict | None, args) -> dict:
         "facing": conventions.facing,
         "unit": conventions.unit,
         "metres_per_unit": conventions.metres_per_unit,
-        "actor_height": round(conventions.height, 6),
-        "actor_height_m": round(conventions.height * conventions.metres_per_unit, 3),
+        "actor_height": round(body.actor_height, 6),
+        "actor_height_m": round(body.actor_height * conventions.metres_per_unit, 3),
+        "stature": round(conventions.height, 6),
+        "stature_m": round(conventions.height * conventions.metres_per_unit, 3),
         "rest_pose": conventions.rest_pose,
         "sure": conventions.sure,
         "twists_from_positions": sorted(untrusted),
@@ -90,8 +93,12 @@ def cmd_skeleton(args) -> int:
         print(f"{path}: {report['joints']} joints, {report['frames']} frames at {report['fps']:.6g} fps")
         print(
             f"  up {report['up']} (sure {sure['up']:.2f}), facing {report['facing']} ({sure['facing']:.2f}), "
-            f"unit {report['unit']} ({sure['unit']:.2f}): actor {report['actor_height']:.4g} units "
-            f"= {report['actor_height_m']:.2f} m tall; rest pose {report['rest_pose']} ({sure['rest_pose']:.2f})"
+            f"unit {report['unit']} ({sure['unit']:.2f}): stature {report['stature_m']:.2f} m; "
+            f"rest pose {report['rest_pose']} ({sure['rest_pose']:.2f})"
+        )
+        print(
+            f"  actor height {report['actor_height']:.4g} units = {report['actor_height_m']:.2f} m "
+            "(hips standing + spine to the head joint: the scale of contacts and features)"
         )
         print("  role             joint                      found by")
         for role, joint in report["map"].items():
@@ -132,15 +139,16 @@ def add_retarget(commands) -> None:
 
 
 def cmd_retarget(args) -> int:
-    from ..body import find_joint_map, read_conventions
+    from ..body import Body, read_conventions
     from ..skeletons import retarget
 
     source_map, target_map = _map_file(args.map), _map_file(args.to_map)
     motion = read_bvh(args.file)
     target = read_bvh(args.to)
+    source, goal = Body.of(motion.skeleton, source_map).joint_map, Body.of(target.skeleton, target_map).joint_map
     conventions = None
     if args.up or args.facing or args.unit:
-        conventions = read_conventions(motion, find_joint_map(motion.skeleton, source_map))
+        conventions = read_conventions(motion, source)
         conventions = conventions.with_overrides(args.up, args.facing, args.unit)
     out = retarget(
         motion,
@@ -152,8 +160,6 @@ def cmd_retarget(args) -> int:
         fps=args.fps,
     )
     write_bvh(out, args.output)
-    source = find_joint_map(motion.skeleton, source_map)
-    goal = find_joint_map(target.skeleton, target_map)
     carried = [role for role in goal.joints if role in source.joints]
     held = [target.skeleton.names[j] for j in goal.unmapped]
     print(

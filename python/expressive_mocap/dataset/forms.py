@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..body.body import Body
 from ..body.conventions import ups_of
-from ..body.jointmap import find_joint_map
 from ..errors import MocapError
 from .derive import Options, derive, totals
 from .heading import HeadingFrame
@@ -44,10 +44,10 @@ def heading_frames(group: Group, owners: list[Outcome], done: list, keep: tuple[
     live = [k for k, outcome in enumerate(owners) if outcome.error is None]
     frames: list = [False] * len(done)  # False: its clip's frame was not found
     try:
-        jmap = find_joint_map(skeleton)
+        jmap = Body.of(skeleton).joint_map
         samples = [done[k][1][0] for k in live]
         ups = ups_of(jmap, [p[:: max(1, len(p) // SAMPLED_FRAMES)] for p in samples])
-        by_up = {up: HeadingFrame.for_up(skeleton, up, jmap) for up in set(ups)}  # all that differs
+        by_up = {up: HeadingFrame.for_up(skeleton, up) for up in set(ups)}  # all that differs
     except MocapError as error:
         for k in live:
             if options.heading(keep):

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..body.body import Body
 from ..body.conventions import AXES, facing_of, frame_rotation, up_of
-from ..body.jointmap import JointMap, find_joint_map
 from ..motion import Skeleton
 from ..rotations import quat
 
@@ -38,17 +38,16 @@ class HeadingFrame:
     pairs: tuple[tuple[int, int], ...]
 
     @classmethod
-    def of(cls, skeleton: Skeleton, positions: np.ndarray, jmap: JointMap | None = None) -> HeadingFrame:
+    def of(cls, skeleton: Skeleton, positions: np.ndarray) -> HeadingFrame:
         """The heading frame of ``skeleton`` whose world positions ``[F, J, 3]`` (a sample of
         frames is enough) show its up axis. Raises MocapError when its hips, legs or head are
         not found (:func:`~expressive_mocap.body.jointmap.find_joint_map`)."""
-        jmap = jmap or find_joint_map(skeleton)
-        return cls.for_up(skeleton, up_of(jmap, positions)[0], jmap)
+        return cls.for_up(skeleton, up_of(Body.of(skeleton).joint_map, positions)[0])
 
     @classmethod
-    def for_up(cls, skeleton: Skeleton, up: str, jmap: JointMap | None = None) -> HeadingFrame:
+    def for_up(cls, skeleton: Skeleton, up: str) -> HeadingFrame:
         """The heading frame of ``skeleton`` whose up axis is ``up`` (an axis name, ``"+Y"``)."""
-        jmap = jmap or find_joint_map(skeleton)
+        jmap = Body.of(skeleton).joint_map
         facing, _ = facing_of(skeleton, jmap, up)
         turn = frame_rotation(up, facing)
         pairs = [("left_upper_leg", "right_upper_leg"), ("left_upper_arm", "right_upper_arm")]

@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import numpy as np
 
 from .. import ops
 from .._utils import files as inputs
+from ..body.body import Body
 from ..body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
-from ..body.roles import JointRoles, actor_height, hips_rest_height
 from ..bvh import block_error, parse_header, read_error
 from ..bvh.header import Header, header_template
 from ..bvh.reader import HEADER_PREFIX
@@ -84,12 +83,9 @@ def load_model(model):
     return BodyModel.load(None if model == "" else model)
 
 
-@lru_cache(maxsize=64)
 def bone_length(skeleton) -> float:
     """The summed lengths of a skeleton's bones (offsets, End Sites included), in file units:
-    what tells a skeleton in metres from the same one in centimetres, whatever its axes.
-    Cached: skeletons are immutable (hashed by identity), and the clips of an archive with
-    one hierarchy share one."""
+    what tells a skeleton in metres from the same one in centimetres, whatever its axes."""
     sites = np.array([offset for _, offset in skeleton.end_sites], dtype=np.float64).reshape(-1, 3)
     return float(np.linalg.norm(skeleton.offsets, axis=1).sum() + np.linalg.norm(sites, axis=1).sum())
 
@@ -198,7 +194,7 @@ def _signed_joints(keep: tuple[str, ...], use_model: bool) -> list[int] | None:
         return []
     from ..body.canonical import canonical_skeleton
 
-    return JointRoles.find(canonical_skeleton()).gait_joints[1:3]  # left and right upper leg
+    return Body.of(canonical_skeleton()).roles.gait_joints[1:3]  # left and right upper leg
 
 
 def onto_canonical(
@@ -355,14 +351,14 @@ def _group(members: list, needs_roles: bool, use_model: bool, model, mirrors: li
     header, first = members[0][1:]
     skeleton = first.skeleton if header is None else header.skeleton
     try:
-        roles = JointRoles.find(skeleton) if needs_roles else None
+        roles = Body.of(skeleton).roles if needs_roles else None
         if use_model:
             model.check_skeleton(skeleton)
     except MocapError as error:
         return error
 
     def scale(s) -> tuple[float, float]:  # without features or contacts the body scale is not used
-        return (actor_height(s, roles), hips_rest_height(s, roles)) if roles else (1.0, 1.0)
+        return (Body.of(s).actor_height, Body.of(s).hips_rest_height) if roles else (1.0, 1.0)
 
     if header is None:  # each clip's own body scale: clips of one hierarchy differ in their offsets
         clips: list = [

@@ -21,6 +21,7 @@ from typing import Protocol
 
 import numpy as np
 
+from ..body.take import Take
 from ..errors import ModelError
 from ..motion import Motion
 from ..ops import compose_rotations, decouple_rotations
@@ -107,12 +108,17 @@ class Decomposition:
 
 
 def decompose(
-    motion: Motion, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT
+    motion: Motion | Take, model: BodyMechanicsModel, gain: float = GAIN, exponent: float = EXPONENT
 ) -> Decomposition:
-    """Split ``motion`` into expressive and body-mechanics components with ``model``."""
+    """Split ``motion`` (or a take of it) into expressive and body-mechanics components with
+    ``model`` (a :class:`~expressive_mocap.decoupling.BodyModel` reads the take's positions and
+    contacts instead of computing them again)."""
+    take = Take.of(motion)
     scale = getattr(model, "activity_scale", None)
-    expressive, body, activity = split(motion.rotations, model.predict(motion), gain, exponent, scale)
-    return Decomposition(motion, expressive, body, activity)
+    predict_take = getattr(model, "predict_take", None)
+    predicted = predict_take(take) if predict_take is not None else model.predict(take.motion)
+    expressive, body, activity = split(take.motion.rotations, predicted, gain, exponent, scale)
+    return Decomposition(take.motion, expressive, body, activity)
 
 
 def decompose_many(

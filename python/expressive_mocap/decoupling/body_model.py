@@ -26,8 +26,8 @@ from importlib import resources
 import numpy as np
 
 from .._utils.files import atomic_write, check_keys, finite_array, read_model_file
-from ..body.contacts import default_floor
-from ..body.roles import JointRoles
+from ..body.contacts import floor_of
+from ..body.take import Take
 from ..errors import ArgumentError, ModelError
 from ..motion import Motion, Skeleton
 from ..rotations import quat
@@ -102,16 +102,22 @@ class BodyModel:
                 f"the motion has {len(names)} joints{': ' + detail if detail else ' in another order'}"
             )
 
-    def features(self, motion: Motion, floor: float | None = None) -> np.ndarray:
-        """The model's inputs ``[F, 19]`` for ``motion``: causal dynamic features (floor: the
-        clip's 5th percentile of toe heights unless given)."""
-        self.check_skeleton(motion)
-        return model_features(motion, self.thigh_reference, floor)
+    def features(self, motion: Motion | Take, floor: float | None = None) -> np.ndarray:
+        """The model's inputs ``[F, 19]`` for ``motion`` (or a take of it): causal dynamic
+        features (floor: the clip's 5th percentile of toe heights unless given)."""
+        take = Take.of(motion)
+        self.check_skeleton(take.motion)
+        return model_features(take, self.thigh_reference, floor)
 
-    def predict(self, motion: Motion, floor: float | None = None) -> np.ndarray:
+    def predict(self, motion: Motion | Take, floor: float | None = None) -> np.ndarray:
         """Body-mechanics local rotations ``[F, J, 4]``: the network's pose for each frame's
         features (calibrated if the model is), root and hips copied from ``motion``."""
-        return self.predict_from_features(motion.rotations, self.features(motion, floor))
+        take = Take.of(motion)
+        return self.predict_from_features(take.motion.rotations, self.features(take, floor))
+
+    def predict_take(self, take: Take) -> np.ndarray:
+        """:meth:`predict` of a take (what :func:`~expressive_mocap.decoupling.decompose` calls)."""
+        return self.predict(take)
 
     def predict_from_features(self, rotations: np.ndarray, features: np.ndarray) -> np.ndarray:
         """As :meth:`predict`, from ``features [F, 19]`` and the motion's ``rotations [F, J, 4]``."""
@@ -325,12 +331,13 @@ def pose_vectors(rotations: np.ndarray, predicted: np.ndarray, hemispheres: np.n
     return q.reshape(len(rotations), -1)
 
 
-def model_features(motion: Motion, thigh_reference: np.ndarray, floor: float | None = None) -> np.ndarray:
-    """The 19 causal dynamic features ``[F, 19]`` as a model sees them (training and prediction alike)."""
-    roles = JointRoles.find(motion.skeleton)
-    if floor is None:
-        floor = default_floor(motion.positions(), roles)
-    return dynamic_features(motion, roles, floor=floor, thigh_reference=thigh_reference, causal=True)
+def model_features(motion: Motion | Take, thigh_reference: np.ndarray, floor: float | None = None) -> np.ndarray:
+    """The 19 causal dynamic features ``[F, 19]`` as a model sees them (training and prediction
+    alike): on the clip's own floor unless ``floor`` is given."""
+    take = Take.of(motion)
+    return dynamic_features(
+        take, floor=floor_of(take) if floor is None else floor, thigh_reference=thigh_reference, causal=True
+    )
 
 
 __all__ = [

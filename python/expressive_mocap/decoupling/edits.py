@@ -11,6 +11,7 @@ import numpy as np
 
 from ..body.hinges import hinge_limits_for, limit_hinges
 from ..body.roles import JointRoles, facing_yaw, path_joint
+from ..body.take import Take
 from ..errors import ArgumentError
 from ..motion import Motion
 from ..ops import compose_rotations, forward_kinematics
@@ -22,7 +23,7 @@ IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 def modulate(
-    motion: Motion,
+    motion: Motion | Take,
     scale: float,
     model: BodyMechanicsModel,
     gain: float = GAIN,
@@ -34,9 +35,11 @@ def modulate(
     mechanics only); elbows and knees kept within their limits (``hinges``, see :func:`_limited`).
     ``plant_feet``: the stance feet kept where ``motion`` has them during its contacts
     (:func:`~expressive_mocap.decoupling.feet.planted`)."""
-    out = decompose(motion, model, gain, exponent).recompose(scale)
+    take = Take.of(motion)
+    motion = take.motion
+    out = decompose(take, model, gain, exponent).recompose(scale)
     out = _limited(out, [motion], [motion.rotations], hinges)
-    return planted(motion, out)[0] if plant_feet else out
+    return planted(take, out)[0] if plant_feet else out
 
 
 def _limited(out: Motion, sources: list[Motion], allow: list[np.ndarray], hinges: bool) -> Motion:
@@ -72,6 +75,12 @@ def at_rate_of(motion: Motion, other: Motion, align: str = "time") -> Motion:
     return motion.resample(fps=other.fps)
 
 
+def _at_rate_of(take: Take, other: Motion, align: str) -> Take:
+    """:func:`at_rate_of` of a take: the take itself where its motion is kept."""
+    motion = at_rate_of(take.motion, other, align)
+    return take if motion is take.motion else Take(motion, take.body)
+
+
 def _aligned(rotations: np.ndarray, frames: int, align: str, offset: int) -> np.ndarray:
     """``rotations [F, J, 4]`` on a timeline of ``frames`` frames: frame by frame from ``offset``
     (holding the last frame), or resampled (slerp) to that length."""
@@ -86,8 +95,8 @@ def _aligned(rotations: np.ndarray, frames: int, align: str, offset: int) -> np.
 
 
 def mix(
-    body_source: Motion,
-    expressive_source: Motion,
+    body_source: Motion | Take,
+    expressive_source: Motion | Take,
     model: BodyMechanicsModel,
     align: str = "time",
     offset: int = 0,
@@ -107,17 +116,20 @@ def mix(
     others keep ``body_source``'s rotations exactly. ``plant_feet``: the stance feet kept where
     ``body_source`` has them during its contacts. Elbows and knees are kept within their limits
     (``hinges``), never tighter than either source has them."""
-    _check_same_skeleton(body_source, expressive_source, "mix")
-    expressive_source = at_rate_of(expressive_source, body_source, align)
-    mask = chosen_joints(joints, body_source, expressive_source)
-    body = decompose(body_source, model, gain, exponent)
-    expressive = decompose(expressive_source, model, gain, exponent).expressive
+    body_take = Take.of(body_source)
+    body_source = body_take.motion
+    _check_same_skeleton(body_source, Take.of(expressive_source).motion, "mix")
+    expressive_take = _at_rate_of(Take.of(expressive_source), body_source, align)
+    expressive_source = expressive_take.motion
+    mask = chosen_joints(joints, body_take, expressive_take)
+    body = decompose(body_take, model, gain, exponent)
+    expressive = decompose(expressive_take, model, gain, exponent).expressive
     rotations = compose_rotations(_aligned(expressive, body_source.n_frames, align, offset), body.body)
     rotations = np.where(mask[None, :, None], rotations, body_source.rotations)
     out = Motion(body_source.skeleton, rotations, body_source.translations, body_source.frame_time)
     allow = [body_source.rotations, _aligned(expressive_source.rotations, body_source.n_frames, align, offset)]
     out = _limited(out, [body_source, expressive_source], allow, hinges)
-    return planted(body_source, out)[0] if plant_feet else out
+    return planted(body_take, out)[0] if plant_feet else out
 
 
 def _weights(frames: int, window: tuple[int, int]) -> np.ndarray:
@@ -188,24 +200,24 @@ class BlendAlignment:
 
 
 def blend_alignment(
-    first: Motion,
-    second: Motion,
+    first: Motion | Take,
+    second: Motion | Take,
     body_window: tuple[int, int],
     expressive_window: tuple[int, int] | None = None,
-    roles: JointRoles | None = None,
-    first_positions: np.ndarray | None = None,
     align: str = "time",
 ) -> BlendAlignment:
     """The placement of ``second`` that :func:`blend` uses with these windows (and ``align``)."""
-    second = at_rate_of(second, first, align)
-    roles = roles or JointRoles.find(first.skeleton)
+    first_take = Take.of(first)
+    first = first_take.motion
+    second_take = _at_rate_of(Take.of(second), first, align)
+    second = second_take.motion
+    roles = first_take.body.roles
     start = _second_start(body_window, expressive_window)
     frames = start + second.n_frames
     anchor = min(body_window[0], frames - 1)
     i, j = _on_timeline(first, 0, frames)[anchor], _on_timeline(second, start, frames)[anchor]
     joint = min(path_joint(m.translations, m.skeleton, roles) for m in (first, second))  # the higher on the chain
-    a = first.positions() if first_positions is None else first_positions
-    b = second.positions()
+    a, b = first_take.positions, second_take.positions
     turn = _facing_at(a, roles, i, first.fps) - _facing_at(b, roles, j, second.fps)
     turn = (turn + 180.0) % 360.0 - 180.0
     return BlendAlignment(
@@ -214,14 +226,13 @@ def blend_alignment(
 
 
 def blend(
-    first: Motion,
-    second: Motion,
+    first: Motion | Take,
+    second: Motion | Take,
     model: BodyMechanicsModel | None,
     body_window: tuple[int, int],
     expressive_window: tuple[int, int] | None = None,
     gain: float = GAIN,
     exponent: float = EXPONENT,
-    roles: JointRoles | None = None,
     joints=None,
     plant_feet: bool = True,
     hinges: bool = True,
@@ -244,28 +255,30 @@ def blend(
     first's before the body window and the second's after it) has them during its contacts.
     Elbows and knees are kept within their limits (``hinges``), never tighter than the two motions
     have them."""
-    _check_same_skeleton(first, second, "blend")
+    first_take = Take.of(first)
+    first = first_take.motion
+    _check_same_skeleton(first, Take.of(second).motion, "blend")
     if align == "resample":
         raise ArgumentError("blend: align must be 'time' or 'index' (a blend keeps each motion's own length)")
-    second = at_rate_of(second, first, align)
-    roles = roles or JointRoles.find(first.skeleton)
+    second_take = _at_rate_of(Take.of(second), first, align)
+    second = second_take.motion
     start = _second_start(body_window, expressive_window)
     frames = start + second.n_frames
     i, j = _on_timeline(first, 0, frames), _on_timeline(second, start, frames)
     body_weights = _weights(frames, body_window)
 
-    original_second = second
-    first_positions = first.positions()
-    alignment = blend_alignment(first, second, body_window, expressive_window, roles, first_positions)
+    first_positions = first_take.positions
+    alignment = blend_alignment(first_take, second_take, body_window, expressive_window)
     carrier = alignment.joint
     second = _turned(second, carrier, alignment.turn, alignment.pivot, alignment.pivot + alignment.shift)
 
     if model is None or expressive_window is None:
         rotations = quat.slerp(first.rotations[i], second.rotations[j], body_weights[:, None])
     else:
-        a, b = decompose(first, model, gain, exponent), decompose(second, model, gain, exponent)
+        turned = Take(second, second_take.body)
+        a, b = decompose(first_take, model, gain, exponent), decompose(turned, model, gain, exponent)
         body = quat.slerp(a.body[i], b.body[j], body_weights[:, None])
-        mask = chosen_joints(joints, first, second, roles)[None, :]
+        mask = chosen_joints(joints, first_take, turned)[None, :]
         weights = np.where(mask, _weights(frames, expressive_window)[:, None], body_weights[:, None])
         expressive = quat.slerp(a.expressive[i], b.expressive[j], weights)
         rotations = compose_rotations(expressive, body)
@@ -288,8 +301,8 @@ def blend(
     out = Motion(first.skeleton, rotations, translations, first.frame_time)
     out = _limited(out, [first, second], [first.rotations[i], second.rotations[j]], hinges)
     if plant_feet and model is not None and expressive_window is not None:
-        naive = blend(first, original_second, None, body_window, expressive_window, roles=roles, plant_feet=False)
-        out = planted(naive, out, roles)[0]
+        naive = blend(first_take, second_take, None, body_window, expressive_window, plant_feet=False)
+        out = planted(naive, out)[0]
     return out
 
 

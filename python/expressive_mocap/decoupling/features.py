@@ -18,13 +18,11 @@ from ..body.contacts import (
     HEIGHT_THRESHOLD,
     MIN_DURATION,
     SPEED_THRESHOLD,
-    _contacts,
     _floor,
-    _motion,
-    _roles,
-    _setup,
+    foot_contacts,
+    take_of,
 )
-from ..body.roles import JointRoles, actor_height, hips_rest_height
+from ..body.take import Take
 from ..errors import ArgumentError
 from ..motion import Motion
 from ..rotations.quat import mean_rotation
@@ -68,13 +66,11 @@ def _thigh_reference(thigh_reference, thighs: np.ndarray | None, causal: bool) -
 
 
 def dynamic_features(
-    motion: Motion,
-    roles: JointRoles | None = None,
+    motion: Motion | Take,
+    *,
     floor: float | None = None,
     thigh_reference=None,
     causal: bool = True,
-    *,
-    height: float | None = None,
     height_threshold: float = HEIGHT_THRESHOLD,
     speed_threshold: float = SPEED_THRESHOLD,
     min_duration: float = MIN_DURATION,
@@ -89,15 +85,20 @@ def dynamic_features(
     (default: the first frame's thigh rotations; a trained model passes its own).
     ``causal=False`` uses the offline contact filter, the 5th percentile of toe heights as the
     default floor (0 when causal) and the clip's mean thigh rotations as the default reference.
-    Other arguments as in :func:`foot_contacts`.
+    Other arguments as in :func:`~expressive_mocap.body.contacts.foot_contacts`.
     """
-    motion, roles, height = _setup(motion, roles, height)
-    positions = motion.positions()
-    floor = _floor(floor, positions, roles, causal)
-    contacts = _contacts(
-        motion, positions, roles, floor, causal, height, height_threshold, speed_threshold, min_duration
+    take = take_of(motion)
+    motion, roles, body = take.motion, take.body.roles, take.body
+    floor = _floor(floor, take, causal)
+    contacts = foot_contacts(
+        take,
+        floor=floor,
+        causal=causal,
+        height_threshold=height_threshold,
+        speed_threshold=speed_threshold,
+        min_duration=min_duration,
     )
-    points = np.ascontiguousarray(positions[:, [roles.hips, *roles.upper_legs]])
+    points = np.ascontiguousarray(take.positions[:, [roles.hips, *roles.upper_legs]])
     thighs = np.ascontiguousarray(motion.rotations[:, list(roles.upper_legs)])
     reference = _thigh_reference(thigh_reference, thighs, causal)
     window = max(1, int(round(motion.fps / 3)))
@@ -107,8 +108,8 @@ def dynamic_features(
         contacts,
         reference,
         motion.frame_time,
-        height,
-        hips_rest_height(motion.skeleton, roles),
+        body.actor_height,
+        body.hips_rest_height,
         floor,
         window,
     )
@@ -116,7 +117,6 @@ def dynamic_features(
 
 def gait_many(
     motions,
-    roles: JointRoles | None = None,
     *,
     features: bool = True,
     contacts: bool = True,
@@ -124,47 +124,40 @@ def gait_many(
     thigh_reference=None,
     fk=None,
 ) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
-    """:func:`dynamic_features` and :func:`foot_contacts` of many motions in one kernel call
-    (clips in parallel with the Rust kernels: the way to run them over an archive).
+    """:func:`dynamic_features` and :func:`~expressive_mocap.body.contacts.foot_contacts` of many
+    motions (or takes) in one kernel call (clips in parallel with the Rust kernels: the way to run
+    them over an archive).
 
     Per motion ``(features [F, 19] or None, contacts bool [F, 2] or None)``: the features are
     causal, on ``floor`` (None: the 5th percentile of toe heights) with ``thigh_reference``
-    (default: the first frame's thighs), i.e. ``dynamic_features(m, roles, floor,
-    thigh_reference)``; the contacts are ``foot_contacts(m, roles)`` (offline, default floor).
-    All motions share one hierarchy (joint names), whose ``roles`` default to
-    ``JointRoles.find``; thresholds and actor height are the defaults. ``fk``: each motion's
-    ``(world rotations, world positions)`` if already computed."""
-    motions = [_motion(m) for m in motions]
-    if not motions:
+    (default: the first frame's thighs), i.e. ``dynamic_features(m, floor=floor,
+    thigh_reference=thigh_reference)``; the contacts are ``foot_contacts(m)`` (offline, default
+    floor). All motions share one hierarchy (joint names), whose roles the first one's Body
+    gives; each clip has its own actor height; thresholds are the defaults. ``fk``: each motion's
+    ``(world rotations, world positions)`` if already computed (a take's are used otherwise)."""
+    takes = [take_of(m) for m in motions]
+    if not takes:
         return []
-    names = motions[0].skeleton.names
-    other = next((m for m in motions if m.skeleton.names != names), None)
+    names = takes[0].motion.skeleton.names
+    other = next((t.motion for t in takes if t.motion.skeleton.names != names), None)
     if other is not None:
         raise ArgumentError(
             f"argument `motions`: every motion needs the same joints; {len(other.skeleton.names)} joints "
             f"({', '.join(other.skeleton.names[:3])}, ...) differ from the first motion's"
         )
-    roles = _roles(motions[0], roles)
+    roles = takes[0].body.roles
     if floor is not None and not np.isfinite(float(floor)):
         raise ArgumentError(f"argument `floor`: must be a finite height or None, got {floor}")
     if thigh_reference is not None:
         thigh_reference = _thigh_reference(thigh_reference, None, True)
     if fk is None:
-        fk = [m.fk() for m in motions]
-    elif len(fk) != len(motions):
-        raise ArgumentError(f"argument `fk`: {len(fk)} results for {len(motions)} motions")
-    clips = []
-    for motion, (_, positions) in zip(motions, fk):
-        skeleton = motion.skeleton
-        clips.append(
-            (
-                positions,
-                motion.rotations,
-                motion.frame_time,
-                actor_height(skeleton, roles),
-                hips_rest_height(skeleton, roles),
-            )
-        )
+        fk = [t.fk for t in takes]
+    elif len(fk) != len(takes):
+        raise ArgumentError(f"argument `fk`: {len(fk)} results for {len(takes)} motions")
+    clips = [
+        (positions, t.motion.rotations, t.motion.frame_time, t.body.actor_height, t.body.hips_rest_height)
+        for t, (_, positions) in zip(takes, fk)
+    ]
     return ops.clip_gait_many(
         clips,
         roles.gait_joints,

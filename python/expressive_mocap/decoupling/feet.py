@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..body.body import Body
 from ..body.contacts import foot_contacts
 from ..body.ik import two_bone_ik
-from ..body.jointmap import JointMap, find_joint_map
+from ..body.jointmap import JointMap
 from ..body.names import ARM_ROLES, LEG_ROLES
-from ..body.roles import JointRoles
+from ..body.take import Take
 from ..errors import ArgumentError
 from ..motion import Motion, Skeleton
 from ..rotations import quat
@@ -64,7 +65,7 @@ _GROUP_PARTS = {
 }
 
 
-def joint_mask(skeleton: Skeleton, groups, jmap: JointMap | None = None) -> np.ndarray:
+def joint_mask(skeleton: Skeleton, groups) -> np.ndarray:
     """``bool [J]``: the joints of ``skeleton`` in any of ``groups`` (names of
     :data:`JOINT_GROUPS`: ``arms`` from the clavicles to the fingers, ``head`` the neck and head,
     ``legs`` from the upper legs to the toes, ``upper-body`` the spine above the hips, arms and
@@ -76,42 +77,39 @@ def joint_mask(skeleton: Skeleton, groups, jmap: JointMap | None = None) -> np.n
             f"joints: unknown group(s) {', '.join(unknown) or '(none given)'}; groups are {', '.join(JOINT_GROUPS)}"
         )
     wanted = set().union(*(_GROUP_PARTS[g] for g in groups))
-    parts = _parts(skeleton, jmap or find_joint_map(skeleton))
+    parts = _parts(skeleton, Body.of(skeleton).joint_map)
     return np.array([p in wanted for p in parts])
 
 
-def stands(motion: Motion, roles: JointRoles | None = None, contacts: np.ndarray | None = None) -> bool:
+def stands(motion: Motion | Take) -> bool:
     """Whether ``motion`` stands: both feet on the floor in at least :data:`STANDING_SHARE` of its frames."""
-    contacts = foot_contacts(motion, roles) if contacts is None else contacts
+    contacts = foot_contacts(motion)
     return bool(len(contacts)) and float(contacts.all(axis=1).mean()) >= STANDING_SHARE
 
 
-def default_mask(
-    body_source: Motion, expressive_source: Motion, roles: JointRoles | None = None, jmap: JointMap | None = None
-) -> np.ndarray:
+def default_mask(body_source: Motion | Take, expressive_source: Motion | Take) -> np.ndarray:
     """The joints whose expressive component a mix or blend takes by default: all (the activity
     index decides how much), but not the legs when one source stands and the other does not (a
     standing clip's leg expression is a way of standing, not of walking, and the reverse)."""
-    skeleton = body_source.skeleton
-    if stands(body_source, roles) != stands(expressive_source, roles):
-        return ~joint_mask(skeleton, "legs", jmap)
-    return joint_mask(skeleton, "all", jmap)
+    skeleton = Take.of(body_source).motion.skeleton
+    if stands(body_source) != stands(expressive_source):
+        return ~joint_mask(skeleton, "legs")
+    return joint_mask(skeleton, "all")
 
 
-def chosen_joints(
-    joints, body_source: Motion, expressive_source: Motion, roles: JointRoles | None = None
-) -> np.ndarray:
+def chosen_joints(joints, body_source: Motion | Take, expressive_source: Motion | Take) -> np.ndarray:
     """``bool [J]`` from ``joints``: None for :func:`default_mask`, group names
     (:func:`joint_mask`) or a boolean mask over the skeleton's joints."""
     if joints is None:
-        return default_mask(body_source, expressive_source, roles)
+        return default_mask(body_source, expressive_source)
+    skeleton = Take.of(body_source).motion.skeleton
     if isinstance(joints, np.ndarray) and joints.dtype == bool:
-        if joints.shape != (body_source.skeleton.n_joints,):
+        if joints.shape != (skeleton.n_joints,):
             raise ArgumentError(
-                f"joints: expected a mask of {body_source.skeleton.n_joints} joints, got shape {list(joints.shape)}"
+                f"joints: expected a mask of {skeleton.n_joints} joints, got shape {list(joints.shape)}"
             )
         return joints
-    return joint_mask(body_source.skeleton, joints)
+    return joint_mask(skeleton, joints)
 
 
 def _grown(contact: np.ndarray, frames: int) -> np.ndarray:
@@ -137,9 +135,7 @@ def _between_contacts(contact: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     return before, after, x * x * (3 - 2 * x)
 
 
-def planted(
-    guide: Motion, edited: Motion, roles: JointRoles | None = None, contacts: np.ndarray | None = None
-) -> tuple[Motion, np.ndarray]:
+def planted(guide: Motion | Take, edited: Motion, contacts: np.ndarray | None = None) -> tuple[Motion, np.ndarray]:
     """``edited`` with each stance foot put back where ``guide`` (the source of the body
     mechanics, on the same timeline, its hips where ``edited`` has them) has it: through each of
     ``guide``'s foot contacts the ankle goes where ``guide``'s is and the foot takes its world
@@ -148,11 +144,12 @@ def planted(
     the next, so the swing carries the foot from where the edit would put it to where it lands
     without a jump. Returns it and ``guide``'s contacts ``bool [F, 2]``. A leg whose foot is not
     two joints below the upper leg is an :class:`~expressive_mocap.errors.ArgumentError`.
-    ``contacts``: ``guide``'s, when known (read Y up: a Z-up file's are read from it upright)."""
-    roles = roles or JointRoles.find(guide.skeleton)
-    contacts = foot_contacts(guide, roles) if contacts is None else contacts
+    ``contacts``: ``guide``'s, where read otherwise (Y up: a Z-up file's are read from it upright)."""
+    take = Take.of(guide)
+    guide, roles = take.motion, take.body.roles
+    contacts = foot_contacts(take) if contacts is None else contacts
     parents = guide.skeleton.parents
-    world_in, pos_in = guide.fk()
+    world_in, pos_in = take.fk
     world_out, pos_out = edited.fk()
     rotations = edited.rotations.copy()
     for s in (0, 1):

@@ -32,7 +32,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..body.roles import JointRoles
+from ..body.body import Body
 from ..errors import ArgumentError
 from ..motion import Motion
 from ..rotations import quat
@@ -405,7 +405,7 @@ def train_body_model(
     for motion in list(neutral) + list(unlabelled):
         if motion.skeleton.names != skeleton.names:
             raise ArgumentError("every training clip must have the same skeleton (joint names) as the first")
-    roles = JointRoles.find(skeleton)
+    roles = Body.of(skeleton).roles
     predicted = np.array([j for j in range(skeleton.n_joints) if skeleton.parents[j] >= 0 and j != roles.hips])
     rotations = np.concatenate([m.rotations for m in neutral])
     hemispheres = quat.mean_rotation(rotations[:, predicted])

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..body.contacts import foot_contacts, footstrikes
-from ..body.roles import JointRoles, actor_height, facing_yaw
+from ..body.roles import facing_yaw
+from ..body.take import Take
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion
 from ..rotations import quat
@@ -30,18 +31,11 @@ class Cycle:
         return self.end - self.start + 1
 
 
-def find_cycles(
-    motion: Motion,
-    roles: JointRoles | None = None,
-    contacts: np.ndarray | None = None,
-    foot: int | None = TRAINING.foot,
-) -> list[Cycle]:
+def find_cycles(motion: Motion | Take, foot: int | None = TRAINING.foot) -> list[Cycle]:
     """Gait cycles of a walk: footstrike to next footstrike of ``foot`` (0 = left, the default, so
     that every cycle of every clip starts in the same phase; None: the foot whose cycles cover
     more frames). The cycles follow each other without gaps; empty when the foot never strikes twice."""
-    if contacts is None:
-        contacts = foot_contacts(motion, roles)
-    strikes = footstrikes(contacts)
+    strikes = footstrikes(foot_contacts(motion))
     best: list[Cycle] = []
     for side in (0, 1) if foot is None else (int(foot),):
         frames = strikes[strikes[:, 1] == side, 0]
@@ -74,17 +68,19 @@ def check_cycle_choice(cycle: CycleChoice) -> None:
         )
 
 
-def choose_cycles(motion: Motion, roles: JointRoles, cycle: CycleChoice, foot: int = TRAINING.foot) -> list[Cycle]:
+def choose_cycles(motion: Motion | Take, cycle: CycleChoice, foot: int = TRAINING.foot) -> list[Cycle]:
     """The cycles of a training clip for ``cycle`` = "all" (every one), "middle" (the one nearest the
     clip's middle: steady walking), "first", "whole" (the clip), an index, or a ``(start, end)``
     frame range; walking cycles run from one footstrike of ``foot`` to the next."""
+    take = Take.of(motion)
+    motion = take.motion
     if isinstance(cycle, tuple):
         start, end = (int(v) for v in cycle)
         return [Cycle(start, end)]
     if cycle == "whole":
         return [Cycle(0, motion.n_frames - 1)]
     check_cycle_choice(cycle)
-    cycles = find_cycles(motion, roles, foot=foot)
+    cycles = find_cycles(take, foot=foot)
     if not cycles:
         raise MocapError(
             f"no gait cycle found in its {motion.n_frames} frames (no foot strikes twice): for an action other than "
@@ -111,26 +107,26 @@ def _yaw(vector: np.ndarray) -> float:
     return float(np.degrees(np.arctan2(vector[0], vector[2])))
 
 
-def cycle_heading(motion: Motion, roles: JointRoles, cycle: Cycle, positions: np.ndarray | None = None) -> float:
+def cycle_heading(take: Take, cycle: Cycle) -> float:
     """The yaw (degrees) of a cycle's travel direction: the hips' horizontal displacement from its
     first to its last frame; where the hips barely travel (< 5% of the actor's height), the
     facing direction (perpendicular to the line from the right to the left upper leg)."""
-    if positions is None:
-        positions = motion.positions()
+    positions, roles = take.positions, take.body.roles
     hips = positions[[cycle.start, cycle.end], roles.hips]
     travel = hips[1] - hips[0]
     travel[1] = 0.0
-    if np.linalg.norm(travel) >= 0.05 * actor_height(motion.skeleton, roles):
+    if np.linalg.norm(travel) >= 0.05 * take.body.actor_height:
         return _yaw(travel)
     return facing_yaw(positions[cycle.start : cycle.end + 1], roles)
 
 
-def frame_yaw(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], positions: np.ndarray) -> np.ndarray:
+def frame_yaw(take: Take, cycles: Sequence[Cycle]) -> np.ndarray:
     """Heading (degrees) of every frame: its cycle's; before the first / after the last, the nearest."""
-    yaw = np.zeros(motion.n_frames)
+    frames = take.motion.n_frames
+    yaw = np.zeros(frames)
     if not cycles:
-        return yaw + cycle_heading(motion, roles, Cycle(0, motion.n_frames - 1), positions)
-    headings = [cycle_heading(motion, roles, c, positions) for c in cycles]
+        return yaw + cycle_heading(take, Cycle(0, frames - 1))
+    headings = [cycle_heading(take, c) for c in cycles]
     yaw[: cycles[0].start] = headings[0]
     for c, h in zip(cycles, headings):
         yaw[c.start : c.end + 1] = h
@@ -154,13 +150,12 @@ class SampledCycles:
     heights: np.ndarray
 
 
-def sample_cycles(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], samples: int) -> SampledCycles:
+def sample_cycles(take: Take, cycles: Sequence[Cycle], samples: int) -> SampledCycles:
     """Each of ``cycles`` time-normalised to ``samples`` frames with its own heading removed."""
-    positions = motion.positions()
-    height = actor_height(motion.skeleton, roles)
+    motion, roles, height = take.motion, take.body.roles, take.body.actor_height
     rots, heights = [], []
     for cycle in cycles:
-        yaw = cycle_heading(motion, roles, cycle, positions)
+        yaw = cycle_heading(take, cycle)
         part = normalise_cycle(motion, cycle, samples)
         rots.append(without_heading(part.rotations, roles.hips, yaw))
         heights.append(part.positions()[:, roles.hips, 1] / height)

@@ -12,10 +12,9 @@ import numpy as np
 
 from ..body.contacts import foot_contacts
 from ..body.hinges import HingeReport, limit_hinges
-from ..body.roles import JointRoles, actor_height
+from ..body.take import Take
 from ..errors import ArgumentError, ModelError
 from ..motion import Motion
-from ..ops import forward_kinematics
 from ..rotations import quat
 from ..rotations.quat import mean_rotation
 from .cycles import Cycle, SampledCycles, find_cycles, frame_yaw, sample_cycles, to_cycle_timing, without_heading
@@ -113,11 +112,11 @@ def _amount(dof: str, value: float) -> str:
     return f"{value:.3f} x height" if dof.endswith(".height") else f"{np.degrees(value):.1f} deg"
 
 
-def stance_foot_speed(motion: Motion, contacts: np.ndarray, roles: JointRoles | None = None) -> float:
+def stance_foot_speed(motion: Motion | Take, contacts: np.ndarray) -> float:
     """Mean horizontal speed (file units per second) of the feet (ankle and toe) over the frames
     where ``contacts [F, 2]`` says they touch the floor."""
-    roles = roles or JointRoles.find(motion.skeleton)
-    p = motion.positions()
+    take = Take.of(motion)
+    motion, roles, p = take.motion, take.body.roles, take.positions
     speeds = []
     for s in (0, 1):
         for joint in (roles.feet[s], roles.toes[s]):
@@ -157,16 +156,16 @@ def _per_frame_change(delta: np.ndarray, cycles: Sequence[Cycle], n_frames: int,
     return corrected
 
 
-def motion_dofs(
-    model: ExaggerationModel, motion: Motion, roles: JointRoles, yaw: np.ndarray, reference: np.ndarray
-) -> np.ndarray:
+def motion_dofs(model: ExaggerationModel, motion: Motion | Take, yaw: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """DOFs ``[F, D]`` of every frame of ``motion`` (heading ``yaw [F]`` removed, rotations relative to
     ``reference``; the hips height in units of the motion's own actor height, as in training, so a
     model trained in centimetres edits a motion in metres)."""
+    take = Take.of(motion)
+    motion, roles = take.motion, take.body.roles
     rot = rotations_to_dofs(
         without_heading(motion.rotations, roles.hips, yaw), reference, model.representation, model.orders
     )
-    heights = motion.positions()[:, roles.hips, 1] / actor_height(motion.skeleton, roles)
+    heights = take.positions[:, roles.hips, 1] / take.body.actor_height
     return np.concatenate([rot, heights[:, None]], axis=1)
 
 
@@ -229,8 +228,7 @@ def _clamp(
 
 def _rebuilt(
     model: ExaggerationModel,
-    motion: Motion,
-    roles: JointRoles,
+    take: Take,
     X: np.ndarray,
     new: np.ndarray,
     ref: np.ndarray,
@@ -238,6 +236,7 @@ def _rebuilt(
 ) -> Motion:
     """``motion`` with the joints whose DOFs changed from ``X`` to ``new [F, D]`` rotated anew (the
     heading ``yaw`` put back) and the hips raised by the height DOF's change."""
+    motion, roles = take.motion, take.body.roles
     J = motion.skeleton.n_joints
     changed = np.flatnonzero(np.abs(new - X).max(axis=0) > 0)
     rotations = motion.rotations.copy()
@@ -247,11 +246,11 @@ def _rebuilt(
         rebuilt = dofs_to_rotations(new[:, : 3 * J], ref, model.representation, model.orders)
         rebuilt[:, roles.hips] = quat.mul(quat.about("Y", yaw), rebuilt[:, roles.hips])  # the heading back
         rotations[:, joints] = rebuilt[:, joints]
-    world_rotations, _ = forward_kinematics(motion.rotations, motion.translations, motion.skeleton.parents)
+    world_rotations = take.fk[0]
     parent = motion.skeleton.parents[roles.hips]
     parent_rot = world_rotations[:, parent] if parent >= 0 else np.broadcast_to(IDENTITY, (motion.n_frames, 4))
     lift = np.zeros((motion.n_frames, 3))
-    lift[:, 1] = (new[:, -1] - X[:, -1]) * actor_height(motion.skeleton, roles)  # the motion's units, not the model's
+    lift[:, 1] = (new[:, -1] - X[:, -1]) * take.body.actor_height  # the motion's units, not the model's
     translations[:, roles.hips] += quat.rotate(quat.conjugate(parent_rot), lift)
     return Motion(motion.skeleton, rotations, translations, motion.frame_time)
 
@@ -271,9 +270,8 @@ class _Retimed:
 
 def _retimed(
     model: ExaggerationModel,
-    motion: Motion,
+    take: Take,
     edited: Motion,
-    roles: JointRoles,
     cycles: Sequence[Cycle],
     contacts: np.ndarray,
     levels: tuple[float, float],
@@ -282,6 +280,7 @@ def _retimed(
     """``edited`` with its cycles' duration and the hips' travel over them multiplied by what the
     timing mappings give from ``levels`` (k0, k1), for the features that follow the intensity;
     unchanged when the model has no timing or nothing changes."""
+    motion, roles = take.motion, take.body.roles
     same = _Retimed(motion, edited, contacts)
     if not model.has_timing or not cycles:
         return same
@@ -289,8 +288,7 @@ def _retimed(
     live = model.timing_predictability >= PREDICTABLE
     to, k0 = (mapped_timing(model.timing_mappings, model.levels, k) for k in (levels[1], levels[0]))
     change = (to - k0) * live
-    positions = motion.positions()
-    own = cycle_timing(motion, roles, cycles, positions)
+    own = cycle_timing(take, cycles)
     # The training range is in actor heights; the motion's own travel is measured the same way.
     factors, clamped = timing_factors(change, own.mean(axis=0), *model.timing_range(), margin)
     if np.abs(factors - 1).max() < 1e-9:
@@ -300,7 +298,7 @@ def _retimed(
     held, shift = retime(motion, roles, warp, span, float(factors[1]))
     out, _ = retime(edited, roles, warp, span, float(factors[1]))
     new_contacts = warped_contacts(contacts, warp)
-    seconds, travel = np.exp(own).mean(axis=0) * [1.0, actor_height(motion.skeleton, roles)]
+    seconds, travel = np.exp(own).mean(axis=0) * [1.0, take.body.actor_height]
     timing = Timing(
         float(factors[0]), float(factors[1]), clamped, (seconds, travel),
         (seconds * factors[0], travel * factors[1]), warp, span,
@@ -308,9 +306,9 @@ def _retimed(
     return _Retimed(held, out, new_contacts, planted_ankles(held, new_contacts, roles, shift), timing)
 
 
-def _own_reference(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], yaw: np.ndarray) -> np.ndarray:
+def _own_reference(motion: Motion, hips: int, cycles: Sequence[Cycle], yaw: np.ndarray) -> np.ndarray:
     """The motion's own mean rotations ``[J, 4]`` (heading removed) over its cycles' frames."""
-    heading_free = without_heading(motion.rotations, roles.hips, yaw)
+    heading_free = without_heading(motion.rotations, hips, yaw)
     return mean_rotation(heading_free[cycles[0].start : cycles[-1].end + 1])
 
 
@@ -335,19 +333,18 @@ class _Measured:
 
 def _measure(
     model: ExaggerationModel,
-    motion: Motion,
-    roles: JointRoles,
+    take: Take,
     edit: EditSettings,
     cycles: Sequence[Cycle] | None = None,
-    contacts: np.ndarray | None = None,
 ) -> _Measured:
+    motion = take.motion
     if cycles is None:
-        cycles = find_cycles(motion, roles, contacts, foot=model.settings.foot) or [Cycle(0, motion.n_frames - 1)]
+        cycles = find_cycles(take, foot=model.settings.foot) or [Cycle(0, motion.n_frames - 1)]
     cycles = list(cycles)
-    yaw = frame_yaw(motion, roles, cycles, motion.positions())
-    own = _own_reference(motion, roles, cycles, yaw)
+    yaw = frame_yaw(take, cycles)
+    own = _own_reference(motion, take.body.roles.hips, cycles, yaw)
     ref = model.reference if edit.reference == "model" else own
-    sampled = sample_cycles(motion, roles, cycles, model.basis.shape[0])
+    sampled = sample_cycles(take, cycles, model.basis.shape[0])
     coefficients = _coefficients(model, sampled, ref)
     same = edit.estimate_offsets or edit.reference == "own"
     return _Measured(cycles, yaw, ref, coefficients, coefficients if same else _coefficients(model, sampled, own))
@@ -360,7 +357,7 @@ def _baseline_offsets(
     level: the difference of the coefficients the estimate reads ``[D, r]``, and of each DOF's mean
     ``[D]`` as the edit measures it (the shift of the training range); with the intensity the
     baseline is estimated at as it is."""
-    measured = _measure(model, baseline, JointRoles.find(baseline.skeleton), edit)
+    measured = _measure(model, Take.of(baseline), edit)
     at_level = model.predict_coefficients(level)
     as_is = model.estimate(measured.estimated.mean(axis=0), offsets=edit.estimate_offsets).k
     shift = (model.basis @ (measured.coefficients.mean(axis=0) - at_level).T).mean(axis=0)
@@ -384,7 +381,6 @@ def exaggerate(
     baseline_level: float | None = None,
     estimate_offsets: bool = EDITING.estimate_offsets,
     timing: bool = EDITING.timing,
-    roles: JointRoles | None = None,
     hinges: bool = EDITING.hinges,
     settings: EditSettings | None = None,
 ) -> tuple[Motion, ExaggerationReport]:
@@ -424,11 +420,12 @@ def exaggerate(
     _check_arguments(model, motion, to, current, baseline, baseline_level)
     keywords = EditSettings(reference, margin, fade, lock_feet, blend, estimate_offsets, timing, hinges)
     edit = _one_of(settings, keywords)
-    roles = roles or JointRoles.find(motion.skeleton)
-    contacts = foot_contacts(motion, roles)
-    measured = _measure(model, motion, roles, edit, cycles, contacts)
+    take = Take.of(motion)
+    roles = take.body.roles
+    contacts = foot_contacts(take)
+    measured = _measure(model, take, edit, cycles)
     cycles, yaw, ref = measured.cycles, measured.yaw, measured.reference
-    X = motion_dofs(model, motion, roles, yaw, ref)  # [F, D]
+    X = motion_dofs(model, take, yaw, ref)  # [F, D]
     offset, shift, read_as = np.zeros_like(measured.coefficients[0]), np.zeros(model.n_dofs), None
     if baseline is not None and baseline_level is not None:
         offset, shift, as_is = _baseline_offsets(model, baseline, float(baseline_level), edit)
@@ -445,11 +442,11 @@ def exaggerate(
     change = (model.predict_coefficients(float(to)) - model.predict_coefficients(k0)) * model.key[:, None]  # [D, r]
     per_frame = _per_frame_change(model.basis @ change.T, cycles, motion.n_frames, int(round(edit.fade * motion.fps)))
     new, clamped = _clamp(model, X, X + per_frame, edit.reference, edit.margin, shift)
-    out = _rebuilt(model, motion, roles, X, new, ref, yaw)
+    out = _rebuilt(model, take, X, new, ref, yaw)
     limited = None
     if edit.hinges:  # before the feet are locked, so that the leg IK bends each knee the right way
         out, limited = limit_hinges(out, model.hinge_limits, allow=(motion.rotations,))
-    at = _retimed(model, motion, out, roles, cycles, contacts, (k0, float(to)), edit.margin) if edit.timing else None
+    at = _retimed(model, take, out, cycles, contacts, (k0, float(to)), edit.margin) if edit.timing else None
     held, out, held_contacts = (at.motion, at.edited, at.contacts) if at else (motion, out, contacts)
     correction = residual = lowered = 0.0
     if edit.lock_feet and (np.abs(new - X).max(initial=0.0) > 0 or (at and at.timing)):
@@ -461,8 +458,8 @@ def exaggerate(
         k0=k0, k1=float(to), k0_estimated=estimate is not None, cycles=cycles, clamped=clamped, estimate=estimate,
         largest_change={n: float(a) for n, a in zip(motion.skeleton.names, angles)},
         foot_correction=correction, foot_residual=residual, hips_lowered=lowered,
-        stance_speed_input=stance_foot_speed(motion, contacts, roles),
-        stance_speed_output=stance_foot_speed(out, held_contacts, roles), baseline=read_as,
+        stance_speed_input=stance_foot_speed(take, contacts),
+        stance_speed_output=stance_foot_speed(out, held_contacts), baseline=read_as,
         timing=at.timing if at else None, hinges=limited,
     )  # fmt: skip
     return out, report

@@ -5,16 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..body.ik import two_bone_ik
-from ..body.roles import JointRoles, actor_height
+from ..body.body import Body
+from ..body.ik import REACH, two_bone_ik
+from ..body.roles import JointRoles
 from ..errors import ArgumentError
 from ..motion import Motion
 from ..ops import forward_kinematics
 from ..rotations import quat
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
-# A leg reaches this share of its length at most: a knee straightened to the last 0.01% would flip.
-REACH = 0.9999
 
 
 def contact_weights(contacts: np.ndarray, frames: int) -> np.ndarray:
@@ -75,7 +74,7 @@ def lock_stance_feet(
     weights = contact_weights(np.asarray(contacts, dtype=bool), blend_frames)
     edited, lowered = _lowered_to_reach(edited, pos_in, weights, roles, blend_frames)
     world_out, pos_out = forward_kinematics(edited.rotations, edited.translations, parents)
-    height = actor_height(original.skeleton, roles)  # tolerances in the motion's units
+    height = Body.of(original.skeleton).actor_height  # tolerances in the motion's units
     rotations = edited.rotations.copy()
     correction = 0.0
     legs = []

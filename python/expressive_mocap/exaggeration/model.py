@@ -14,7 +14,9 @@ from typing import Any
 import numpy as np
 
 from .._utils.files import atomic_write, check_keys, finite_array, read_model_file
+from ..body.body import Body
 from ..body.hinges import HingeLimits, learn_hinge_limits
+from ..body.take import Take
 from ..errors import ArgumentError, MocapError, ModelError
 from ..motion import Motion
 from .dofs import dofs_to_rotations
@@ -148,7 +150,14 @@ class ExaggerationModel:
             ]
         )
         translations = np.broadcast_to(body.translations[0], (len(rotations), J, 3))
-        return learn_hinge_limits([Motion(body.skeleton, rotations, translations, body.frame_time)])
+        cycles = Motion(body.skeleton, rotations, translations, body.frame_time)
+        return learn_hinge_limits([Take(cycles, self.skeleton_body)])
+
+    @property
+    def skeleton_body(self) -> Body:
+        """The :class:`~expressive_mocap.body.Body` of the model's skeleton, read with the joint
+        map the model records."""
+        return Body.of(self.body().skeleton, self.joint_map or None)
 
     def dof_range(self, reference: str = "model") -> tuple[np.ndarray, np.ndarray]:
         """The lowest and highest value ``[D]`` of each DOF over every training sample, measured as
@@ -338,10 +347,8 @@ def _check_model(model: ExaggerationModel, name: str) -> None:
             f"{name}: the levels must hold two different intensities at least, got {model.levels.tolist()}"
         )
     if model.joint_map:
-        from ..body.jointmap import find_joint_map
-
         try:
-            find_joint_map(model.body().skeleton, model.joint_map)
+            _ = model.skeleton_body.joint_map
         except MocapError as error:
             raise ModelError(f"{name}: its joint map does not fit its own skeleton: {error}") from None
 

@@ -18,7 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..body.roles import JointRoles, actor_height, path_joint
+from ..body.body import Body
+from ..body.roles import JointRoles, path_joint
+from ..body.take import Take
 from ..motion import Motion
 from ..ops import forward_kinematics
 from ..rotations import quat
@@ -31,10 +33,10 @@ IN_PLACE = 0.05
 PREDICTABLE = 0.5
 
 
-def cycle_timing(motion: Motion, roles: JointRoles, cycles: Sequence[Cycle], positions: np.ndarray) -> np.ndarray:
+def cycle_timing(take: Take, cycles: Sequence[Cycle]) -> np.ndarray:
     """``[C, 2]``: per cycle, log of its duration (seconds) and log of the hips' horizontal travel
     from its first to its last frame in actor heights (at least :data:`IN_PLACE`)."""
-    height = actor_height(motion.skeleton, roles)
+    motion, roles, positions, height = take.motion, take.body.roles, take.positions, take.body.actor_height
     out = np.empty((len(cycles), 2))
     for i, c in enumerate(cycles):
         travel = positions[c.end, roles.hips, [0, 2]] - positions[c.start, roles.hips, [0, 2]]
@@ -175,10 +177,10 @@ def retime(
     return Motion(motion.skeleton, rotations, translations, motion.frame_time), shift
 
 
-def retime_like(motion: Motion, timing: Timing, roles: JointRoles | None = None) -> Motion:
+def retime_like(motion: Motion, timing: Timing) -> Motion:
     """``motion`` (of as many frames as the edited one, on any skeleton) retimed as an edit was:
     what an edit of it carried onto another skeleton is laid back on."""
-    return retime(motion, roles or JointRoles.find(motion.skeleton), timing.warp, timing.span, timing.travel)[0]
+    return retime(motion, Body.of(motion.skeleton).roles, timing.warp, timing.span, timing.travel)[0]
 
 
 def warped_contacts(contacts: np.ndarray, warp: np.ndarray) -> np.ndarray:

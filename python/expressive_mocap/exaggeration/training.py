@@ -8,7 +8,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..body.roles import JointRoles, actor_height
+from ..body.body import Body
+from ..body.roles import JointRoles
+from ..body.take import Take
 from ..errors import ArgumentError, ClipError, MocapError
 from ..motion import Motion, Skeleton
 from ..rotations.quat import mean_rotation
@@ -34,13 +36,14 @@ class _PersonDofs:
     timing: np.ndarray
 
 
-def _person_dofs(motions: Sequence[Motion], roles: JointRoles, settings: TrainSettings) -> _PersonDofs:
+def _person_dofs(motions: Sequence[Motion], settings: TrainSettings) -> _PersonDofs:
     sampled, timing = [], []
     for k, m in enumerate(motions):
+        take = Take.of(m)
         try:
-            cycles = choose_cycles(m, roles, settings.cycle, settings.foot)
-            sampled.append(sample_cycles(m, roles, cycles, settings.samples))
-            timing.append(cycle_timing(m, roles, cycles, m.positions()))
+            cycles = choose_cycles(take, settings.cycle, settings.foot)
+            sampled.append(sample_cycles(take, cycles, settings.samples))
+            timing.append(cycle_timing(take, cycles))
         except MocapError as error:  # which clip: the caller knows the person, and maybe the file
             raise ClipError(str(error), -1, k) from None
     everything = np.concatenate([s.rotations.reshape(-1, *s.rotations.shape[2:]) for s in sampled])
@@ -134,7 +137,6 @@ def train(
     representation: str = TRAINING.representation,
     cycle: CycleChoice = TRAINING.cycle,
     foot: int = TRAINING.foot,
-    roles: JointRoles | None = None,
     joint_map: dict | None = None,
 ) -> ExaggerationModel:
     """Rank the expressive features of one action and fit the intensity mappings.
@@ -164,11 +166,11 @@ def train(
     check_cycle_choice(cycle)
     settings = TrainSettings(int(samples), share, energy, rank, int(degree), representation, cycle, int(foot))
     skeleton = _check_skeletons(clips)
-    roles = roles or JointRoles.find(skeleton)
+    roles = Body.of(skeleton).roles
     per_person = []
     for i, person in enumerate(clips):
         try:
-            per_person.append(_person_dofs(person, roles, settings))
+            per_person.append(_person_dofs(person, settings))
         except ClipError as error:
             raise ClipError(str(error), i, error.level) from None
     model = _model(skeleton, roles, intensities, per_person, settings)
@@ -198,7 +200,7 @@ def _model(
         joint_names=skeleton.names,
         parents=np.asarray(skeleton.parents),
         offsets=np.asarray(skeleton.offsets),
-        height=actor_height(skeleton, roles),
+        height=Body.of(skeleton).actor_height,
         hips=roles.hips,
         orders=np.asarray(skeleton.euler_orders).astype(np.int64),
         representation=settings.representation,
@@ -231,10 +233,8 @@ def _recorded_map(skeleton, user_map: dict | None) -> dict:
     """The joint map a model records of its skeleton (``user_map``'s roles, the rest found by names
     and topology), by which motions of other skeletons reach it; {} when the skeleton has none
     and no map was given (the model then takes its own skeleton only)."""
-    from ..body.jointmap import find_joint_map
-
     try:
-        return find_joint_map(skeleton, user_map).as_names()
+        return Body.of(skeleton, user_map).joint_map.as_names()
     except MocapError:
         if user_map:
             raise

@@ -6,11 +6,11 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
+from .._utils.kept import Kept
 from ..backend import kernels
 from ..errors import ArgumentError
 from ._args import _array
@@ -29,13 +29,19 @@ class ChannelLayout:
     offsets: np.ndarray
 
 
-@lru_cache(maxsize=64)
 def channel_layout(skeleton) -> ChannelLayout:
-    """The :class:`ChannelLayout` of a :class:`~expressive_mocap.motion.Skeleton`. Cached:
-    skeletons are immutable (hashed by identity), and the clips of an archive with one
-    hierarchy share one (the kernels copy the layout's index arrays: nothing writes to them)."""
-    rotation_columns, orders, position_columns = skeleton.layout()
-    return ChannelLayout(skeleton.n_channels, rotation_columns, orders, position_columns, skeleton.offsets)
+    """The :class:`ChannelLayout` of a :class:`~expressive_mocap.motion.Skeleton`, kept per
+    skeleton content: the clips of an archive with one hierarchy share one (the kernels copy the
+    layout's index arrays: nothing writes to them)."""
+
+    def layout() -> ChannelLayout:
+        rotation_columns, orders, position_columns = skeleton.layout()
+        return ChannelLayout(skeleton.n_channels, rotation_columns, orders, position_columns, skeleton.offsets)
+
+    return _LAYOUTS.get(skeleton.content_key, layout)
+
+
+_LAYOUTS: Kept[ChannelLayout] = Kept(64)
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,9 @@ import numpy as np
 from ..errors import ArgumentError
 from ..rotations import quat
 
-REACH = 0.9999  # of the chain's length: the solver stops short of a fully straight knee
+# Of the chain's length: the solver stops short of a fully straight knee (a knee straightened to
+# the last 0.01% would flip). The Rust kernel's constant is the same.
+REACH = 0.9999
 
 
 def _about(axis: np.ndarray, radians: np.ndarray) -> np.ndarray:

@@ -13,9 +13,11 @@ from typing import Any
 
 import numpy as np
 
+from ..body.body import Body
 from ..body.canonical import canonical_shape, canonical_skeleton
 from ..body.conventions import Conventions
-from ..body.jointmap import JointMap, find_joint_map
+from ..body.jointmap import JointMap
+from ..body.take import Take
 from ..errors import MocapError
 from ..motion import Motion
 from .retargeting import retarget_clips, retarget_rigs
@@ -30,7 +32,7 @@ _TOE_HEIGHT_CM = 4.35
 def canonical_rig() -> Rig:
     """The canonical body with its joint map, conventions and floor."""
     skeleton = canonical_skeleton()
-    jmap = find_joint_map(skeleton)
+    jmap = Body.of(skeleton).joint_map
     sure = {"up": 1.0, "facing": 1.0, "unit": 1.0, "rest_pose": 1.0}
     conventions = Conventions("+Y", "+Z", "cm", 0.01, 163.07, "other", 30.0, sure)
     return Rig(skeleton, jmap, conventions, _TOE_HEIGHT_CM)
@@ -65,14 +67,12 @@ class Carried:
         self, motion: Motion, user_map: dict | None = None, target: Rig | None = None, source: Rig | None = None
     ):
         self.original = motion
-        self._kinematics = motion.fk()  # read once: by the rig, the retarget and the way back
+        self._take = Take(motion, Body.of(motion.skeleton, user_map))  # its positions: read once
         # Given: a stream's rig, read from its first frame.
-        self.source = with_twists(
-            source or Rig.of(motion, user_map, kinematics=self._kinematics), motion, self._kinematics
-        )
+        self.source = with_twists(source or Rig.of(self._take, user_map), self._take)
         self.target = target or canonical_rig()
-        self.body = retarget_rigs(motion, self.source, self.target, plant_feet=False, kinematics=self._kinematics)
-        self._body_kinematics: tuple[np.ndarray, np.ndarray] | None = None  # the body's, once needed
+        self.body = retarget_rigs(self._take, self.source, self.target, plant_feet=False)
+        self._body_take = Take(self.body)
         self._limits: Any = None  # the user's HingeLimits, once needed
         self._contacts: np.ndarray | None = None  # the user's foot contacts, once needed
 
@@ -108,7 +108,7 @@ class Carried:
         if self._contacts is None:  # the user's contacts, read once, Y up
             self._contacts = foot_contacts(upright(self.original))
         try:
-            return planted(self.original, out, contacts=self._contacts)[0]
+            return planted(self._take, out, contacts=self._contacts)[0]
         except ArgumentError:
             return out
 
@@ -117,14 +117,12 @@ class Carried:
 
         if edited.n_frames != self.body.n_frames:
             return retarget_rigs(edited, self.target, self.source, plant_feet=False)
-        if self._body_kinematics is None:
-            self._body_kinematics = self.body.fk()
-        before, body_positions = self._body_kinematics
+        before, body_positions = self._body_take.fk
         after, edited_positions = edited.fk()
         # The body's axes -> canonical -> the user's: a change of orientation D on the body is
         # user^-1 body D body^-1 user in the user's axes.
         turn = quat.mul(quat.conjugate(self.source.conventions.rotation()), self.target.conventions.rotation())
-        world, positions = self._kinematics
+        world, positions = self._take.fk
         skeleton = self.original.skeleton
         parents = skeleton.parents
         # Each joint turns by the change of the nearest mapped joint at or above it (the root by

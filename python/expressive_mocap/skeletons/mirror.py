@@ -19,8 +19,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import ops
+from ..body.body import Body
 from ..body.conventions import SAMPLED_FRAMES, facing_of, frame_rotation, ups_of
-from ..body.jointmap import JointMap, find_joint_map
+from ..body.jointmap import JointMap
 from ..body.names import label
 from ..motion import Motion, Skeleton, spread_frames
 from ..rotations import quat
@@ -106,7 +107,7 @@ def _planes_of(motions: list[Motion], user_map: dict | None = None) -> list[_Pla
     out: list = [None] * len(motions)
     for members in by_skeleton.values():
         skeleton = motions[members[0]].skeleton
-        jmap = find_joint_map(skeleton, user_map)
+        jmap = Body.of(skeleton, user_map).joint_map
         picked = [spread_frames(motions[k].n_frames, SAMPLED_FRAMES) for k in members]
         _, positions = ops.forward_kinematics(
             np.concatenate([m.rotations[f] for m, f in zip((motions[k] for k in members), picked)]),

@@ -9,7 +9,6 @@ import numpy as np
 from .. import ops
 from ..body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from ..body.jointmap import JointMap
-from ..body.roles import JointRoles, actor_height
 from ..motion import Motion
 
 BLEND_FRAMES = 3
@@ -48,9 +47,8 @@ def source_contacts(clips: list[Motion], rig, upright_positions: np.ndarray, bou
     units), each clip on its own floor: :func:`~expressive_mocap.body.contacts.foot_contacts` with its
     defaults, all clips in one kernel call (``clip_gait_many``, clips in parallel)."""
     bounds = [0, len(upright_positions)] if bounds is None else bounds
-    skeleton = clips[0].skeleton
-    roles = JointRoles.from_map(skeleton, rig.jmap)
-    height = actor_height(skeleton, roles)  # one skeleton: the same for every clip
+    body = rig.body
+    roles, height = body.roles, body.actor_height  # one skeleton: the same for every clip
     pieces = zip(clips, bounds[:-1], bounds[1:])
     # The hips' rest height is read by the features only: none are asked for.
     gait = [(upright_positions[a:b], c.rotations, c.frame_time, height, 1.0) for c, a, b in pieces]

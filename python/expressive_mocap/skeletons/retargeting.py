@@ -27,8 +27,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..body.body import Body
 from ..body.conventions import Conventions, read_conventions
-from ..body.jointmap import JointMap, find_joint_map
+from ..body.jointmap import JointMap
+from ..body.take import Take
 from ..motion import Motion, Skeleton
 from ..rotations import quat
 from .rig import Rig, _axis, _floors_of, _path_joint, rest_motion
@@ -64,10 +66,11 @@ def retarget(
     return out if fps is None else out.resample(fps=fps)
 
 
-def retarget_rigs(motion: Motion, source: Rig, goal: Rig, *, plant_feet: bool = True, kinematics=None) -> Motion:
+def retarget_rigs(motion: Motion | Take, source: Rig, goal: Rig, *, plant_feet: bool = True) -> Motion:
     """:func:`retarget` with both rigs known (``source`` must be ``motion``'s skeleton's)."""
-    bounds, floors = [0, motion.n_frames], np.array([source.floor])
-    return _retarget_frames(motion, bounds, source, goal, floors, plant_feet, kinematics=kinematics)
+    take = Take.of(motion)
+    bounds, floors = [0, take.motion.n_frames], np.array([source.floor])
+    return _retarget_frames(take, bounds, source, goal, floors, plant_feet)
 
 
 def retarget_clips(
@@ -98,8 +101,8 @@ def retarget_clips(
 def _conventions_rig(motion: Motion, user_map: dict | None = None) -> Rig:
     """``motion``'s rig as :meth:`Rig.of` reads it from ``motion`` alone, but for its floor (each
     clip's retarget reads its own) and its untrusted twists (read for many clips at once)."""
-    jmap = find_joint_map(motion.skeleton, user_map)
-    return Rig(motion.skeleton, jmap, read_conventions(motion, jmap), 0.0, None)
+    jmap = Body.of(motion.skeleton, user_map).joint_map
+    return Rig(motion.skeleton, jmap, read_conventions(motion, jmap), 0.0, None, user_map)
 
 
 # Frames retargeted together: enough that NumPy's work per call outweighs its overhead, few
@@ -133,7 +136,7 @@ def _retarget_run(run: list[int], motions: list[Motion], source: Rig, goal: Rig,
             np.concatenate([c.translations for c in clips]),
             clips[0].frame_time,
         )
-        moved = _retarget_frames(together, bounds, source, goal, None, plant_feet, clips)
+        moved = _retarget_frames(Take(together), bounds, source, goal, None, plant_feet, clips)
         for k, a, b, clip in zip(members, bounds[:-1], bounds[1:], clips):
             out[k] = (
                 Motion(goal.skeleton, moved.rotations[a:b], moved.translations[a:b], clip.frame_time),
@@ -142,24 +145,23 @@ def _retarget_run(run: list[int], motions: list[Motion], source: Rig, goal: Rig,
 
 
 def _retarget_frames(
-    motion: Motion,
+    take: Take,
     bounds,
     source: Rig,
     goal: Rig,
     floors: np.ndarray | None,
     plant_feet: bool,
     clips: list[Motion] | None = None,
-    kinematics=None,
 ) -> Motion:
-    """The retarget of ``motion``, whose frames are clips end to end (clip ``i`` is frames
+    """The retarget of ``take``'s motion, whose frames are clips end to end (clip ``i`` is frames
     ``bounds[i]`` to ``bounds[i + 1]``, its floor ``floors[i]``, None: read from each clip;
-    ``clips`` the clips themselves; ``kinematics``: ``motion.fk()`` when known)."""
-    kinematics = motion.fk() if kinematics is None else kinematics
+    ``clips`` the clips themselves)."""
+    motion = take.motion
+    world, positions = take.fk
     if floors is None:
-        floors = _floors_of(kinematics[1], bounds, source.jmap, source.conventions)
+        floors = _floors_of(positions, bounds, source.jmap, source.conventions)
     floor = np.repeat(floors, np.diff(bounds))  # per frame
-    world, positions = kinematics
-    source = with_twists(source, motion, kinematics)
+    source = with_twists(source, take)
     out = _transfer(motion, source, goal, (_trusted(world, positions, source), positions), floor)
     into_goal = quat.mul(quat.conjugate(goal.conventions.rotation()), source.conventions.rotation())
     out = keep_trunk(out, positions, source.jmap, goal.jmap, into_goal)

@@ -10,9 +10,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..body.body import Body
 from ..body.contacts import percentiles_by_clip
 from ..body.conventions import AXES, Conventions, read_conventions
-from ..body.jointmap import JointMap, find_joint_map
+from ..body.jointmap import JointMap
+from ..body.take import Take
 from ..errors import MocapError
 from ..motion import Motion, Skeleton
 from ..rotations import quat
@@ -48,18 +50,24 @@ class Rig(NamedTuple):
     conventions: Conventions
     floor: float
     untrusted: frozenset | None = frozenset()
+    user_map: dict | None = None
+
+    @property
+    def body(self) -> Body:
+        """The :class:`~expressive_mocap.body.Body` of the skeleton, read with the rig's user map."""
+        return Body.of(self.skeleton, self.user_map)
 
     @classmethod
-    def of(
-        cls, motion: Motion, user_map: dict | None = None, conventions: Conventions | None = None, kinematics=None
-    ) -> Rig:
-        """The rig of ``motion``'s skeleton, its conventions and floor read from its frames
-        (``kinematics``: ``motion.fk()``, when already known); its untrusted twists are read
+    def of(cls, motion: Motion | Take, user_map: dict | None = None, conventions: Conventions | None = None) -> Rig:
+        """The rig of ``motion``'s skeleton (read with ``user_map``), its conventions and floor
+        read from its frames (a take's positions, where given); its untrusted twists are read
         when it is first a source (:func:`~.transfer.with_twists`)."""
-        jmap = find_joint_map(motion.skeleton, user_map)
+        take = Take.of(motion)
+        motion = take.motion
+        jmap = Body.of(motion.skeleton, user_map).joint_map
         conventions = conventions or read_conventions(motion, jmap)
-        positions = motion.positions() if kinematics is None else kinematics[1]
-        return cls(motion.skeleton, jmap, conventions, _floor_of(positions, jmap, conventions), None)
+        floor = _floor_of(take.positions, jmap, conventions)
+        return cls(motion.skeleton, jmap, conventions, floor, None, user_map)
 
 
 def _floor(motion: Motion, jmap: JointMap, conventions: Conventions) -> float:

@@ -26,8 +26,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..body.body import Body
 from ..body.conventions import UNITS, Conventions, _frame_rotation
-from ..body.jointmap import find_joint_map
 from ..motion import Motion, Skeleton
 from ..procedural import procedural_walk
 from ..rotations import quat
@@ -252,7 +252,7 @@ def synthetic_skeleton(rig: str) -> tuple[Skeleton, Conventions, dict]:
         from ..body.canonical import bandai_like_skeleton
 
         skeleton = bandai_like_skeleton()
-        truth = find_joint_map(skeleton).as_names()
+        truth = Body.of(skeleton).joint_map.as_names()
         truth.pop("spine")
         conventions = Conventions("+Y", "+Z", "cm", 0.01, 163.07, "other", 30.0, _SURE)
         return skeleton, conventions, truth
@@ -313,9 +313,9 @@ def synthetic_walk(rig: str, *, wave: str | None = None, seconds: float = 4.0) -
     if rig == "bandai":
         return Synthetic(walk, conventions, truth)
     source = Rig.of(walk)
-    jmap = find_joint_map(skeleton, truth)
+    jmap = Body.of(skeleton, truth).joint_map
     floor = _L["toes"][1] / conventions.metres_per_unit  # the toe joint's height on a flat foot
-    target = Rig(skeleton, jmap, conventions, floor)
+    target = Rig(skeleton, jmap, conventions, floor, user_map=truth)
     motion = retarget_rigs(walk, source, target, plant_feet=False)
     if conventions.fps != walk.fps:
         motion = motion.resample(fps=conventions.fps)

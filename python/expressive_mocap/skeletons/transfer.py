@@ -10,7 +10,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import ops
+from .._utils.kept import Kept
 from ..body.jointmap import JointMap
+from ..body.take import Take
 from ..motion import Motion, spread_frames
 from ..rotations import quat
 from . import twist
@@ -31,39 +33,41 @@ from .rig import (
 _TWIST_FRAMES = 60  # frames read to tell untrusted twists
 
 
-def with_twists(rig: Rig, motion: Motion, kinematics=None) -> Rig:
+def with_twists(rig: Rig, motion: Motion | Take) -> Rig:
     """``rig`` with its untrusted twists read from ``motion`` (a motion of it), unless known."""
     if rig.untrusted is not None:
         return rig
-    return rig._replace(untrusted=untrusted_twists(motion, rig, kinematics))
+    return rig._replace(untrusted=untrusted_twists(motion, rig))
 
 
-def untrusted_twists(motion: Motion, rig: Rig, kinematics=None) -> frozenset:
+def untrusted_twists(motion: Motion | Take, rig: Rig) -> frozenset:
     """The roles whose twist ``motion``'s rotations set far from what its positions show (a median
     over the frames beyond :func:`~.twist.trusted`, 45 degrees for the hips and chest), such as a
     network's output that turns a thigh 100 degrees about itself and the shin back, or hips and a
     chest whose children all sit at the joint, leaving their rotations free. Real captures stay
-    under the bounds (measured: the CMU file and 3,073 of the 3,076 Bandai-Namco clips).
-    ``kinematics``: ``motion.fk()``, when already known."""
-    return untrusted_twists_many([motion], rig, None if kinematics is None else [kinematics])[0]
+    under the bounds (measured: the CMU file and 3,073 of the 3,076 Bandai-Namco clips)."""
+    return untrusted_twists_many([motion], rig)[0]
 
 
-def untrusted_twists_many(motions: list[Motion], rig: Rig, kinematics: list | None = None) -> list[frozenset]:
+def untrusted_twists_many(sources: list[Motion | Take], rig: Rig) -> list[frozenset]:
     """:func:`untrusted_twists` of each of ``motions`` (all of ``rig``'s skeleton), each from its
     own frames alone, computed together: one forward kinematics call and one pass of the per-frame
     algebra over every clip's sampled frames, then each clip's medians (an archive's short clips
-    took 11 ms each one by one)."""
+    took 11 ms each one by one). A take whose forward kinematics is known lends its frames."""
+    takes = [Take.of(m) for m in sources]
+    motions = [t.motion for t in takes]
     picked = [spread_frames(m.n_frames, _TWIST_FRAMES) for m in motions]
     # A median over evenly spread frames: a clip's is as good.
-    if kinematics is None:
+    kinematics = [t.fk_if_computed for t in takes]
+    if any(k is None for k in kinematics):
         world, positions = ops.forward_kinematics(
             np.concatenate([m.rotations[f] for m, f in zip(motions, picked)]),
             np.concatenate([m.translations[f] for m, f in zip(motions, picked)]),
             rig.skeleton.parents,
         )
     else:
-        world = np.concatenate([k[0][f] for k, f in zip(kinematics, picked)])
-        positions = np.concatenate([k[1][f] for k, f in zip(kinematics, picked)])
+        world = np.concatenate([k[0][f] for k, f in zip(kinematics, picked) if k is not None])
+        positions = np.concatenate([k[1][f] for k, f in zip(kinematics, picked) if k is not None])
     # Each clip's frames as a row of a [clips, _TWIST_FRAMES] table, NaN past its own.
     frames_of = np.array([len(f) for f in picked])
     rows = np.repeat(np.arange(len(motions)), frames_of)
@@ -110,10 +114,8 @@ def untrusted_twists_many(motions: list[Motion], rig: Rig, kinematics: list | No
     return [frozenset(found) for found in out]
 
 
-_PLANS: dict = {}
-
-
 _PLANS_KEPT = 64
+_PLANS: Kept[ops.TransferPlan] = Kept(_PLANS_KEPT)
 
 
 def _rig_key(rig: Rig) -> tuple:
@@ -124,13 +126,7 @@ def _rig_key(rig: Rig) -> tuple:
 
 def _plan(source: Rig, target: Rig) -> ops.TransferPlan:
     """The plan of a pair, kept for the pairs met last: an archive's clips share a few skeletons."""
-    key = (_rig_key(source), _rig_key(target))
-    plan = _PLANS.get(key)
-    if plan is None:
-        if len(_PLANS) >= _PLANS_KEPT:
-            _PLANS.pop(next(iter(_PLANS)))
-        plan = _PLANS[key] = _new_plan(source, target)
-    return plan
+    return _PLANS.get((_rig_key(source), _rig_key(target)), lambda: _new_plan(source, target))
 
 
 class _OwnFrames(NamedTuple):
@@ -142,27 +138,26 @@ class _OwnFrames(NamedTuple):
     framed: list[tuple[str, int, np.ndarray]]
 
 
-_FRAMES: dict = {}
+_FRAMES: Kept[_OwnFrames] = Kept(_PLANS_KEPT)
 
 
 def _own_frames(rig: Rig) -> _OwnFrames:
     """The rig's :class:`_OwnFrames`, kept for the rigs met last."""
-    key = _rig_key(rig)
-    if key not in _FRAMES:
-        if len(_FRAMES) >= _PLANS_KEPT:
-            _FRAMES.pop(next(iter(_FRAMES)))
-        reference, points = _reference(rig)
-        jmap, readable, framed = rig.jmap, [], []
-        for role in jmap.joints:
-            if twist.readable(jmap, role, twist.READABLE):
-                frame = _role_frame(points, jmap, role, jmap)
-                local = quat.conjugate(reference[jmap[role]])
-                readable.append((role, jmap[role], quat.rotate(local, frame[:, 0]), quat.rotate(local, frame[:, 1])))
-        for role in ("hips", "chest"):
+    return _FRAMES.get(_rig_key(rig), lambda: _new_own_frames(rig))
+
+
+def _new_own_frames(rig: Rig) -> _OwnFrames:
+    reference, points = _reference(rig)
+    jmap, readable, framed = rig.jmap, [], []
+    for role in jmap.joints:
+        if twist.readable(jmap, role, twist.READABLE):
             frame = _role_frame(points, jmap, role, jmap)
-            framed.append((role, jmap[role], quat.mul(quat.conjugate(quat.from_matrix(frame)), reference[jmap[role]])))
-        _FRAMES[key] = _OwnFrames(readable, framed)
-    return _FRAMES[key]
+            local = quat.conjugate(reference[jmap[role]])
+            readable.append((role, jmap[role], quat.rotate(local, frame[:, 0]), quat.rotate(local, frame[:, 1])))
+    for role in ("hips", "chest"):
+        frame = _role_frame(points, jmap, role, jmap)
+        framed.append((role, jmap[role], quat.mul(quat.conjugate(quat.from_matrix(frame)), reference[jmap[role]])))
+    return _OwnFrames(readable, framed)
 
 
 def _new_plan(source: Rig, target: Rig) -> ops.TransferPlan:

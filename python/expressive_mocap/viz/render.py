@@ -19,6 +19,7 @@ from typing import Literal
 import numpy as np
 
 from .._utils.files import atomic_write, output_target
+from ..body.take import Take
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion
 
@@ -28,19 +29,19 @@ MARGIN = 0.06  # of the figure's height, around every panel
 MIN_GIF_DELAY = 0.02  # s: browsers play shorter GIF frame delays as 0.1 s
 
 
-def heading(motion: Motion, positions: np.ndarray | None = None) -> np.ndarray:
+def heading(motion: Motion | Take) -> np.ndarray:
     """The walker's forward direction, a horizontal unit vector ``[3]``: the hips' travel from the
     first frame to the last, or their facing where they barely travel (the yaw of
     :func:`~expressive_mocap.exaggeration.cycle_heading` over the whole clip); +Z when the
     skeleton's hips and upper legs cannot be told by name."""
-    from ..body.roles import JointRoles
     from ..exaggeration import Cycle, cycle_heading
 
+    take = Take.of(motion)
     try:
-        roles = JointRoles.find(motion.skeleton)
+        _ = take.body.roles
     except MocapError:
         return np.array([0.0, 0.0, 1.0])
-    yaw = np.radians(cycle_heading(motion, roles, Cycle(0, motion.n_frames - 1), positions))
+    yaw = np.radians(cycle_heading(take, Cycle(0, take.motion.n_frames - 1)))
     return np.array([np.sin(yaw), 0.0, np.cos(yaw)])
 
 
@@ -51,10 +52,10 @@ def _horizontal_axis(forward: np.ndarray, view: str) -> np.ndarray:
     return forward if view == "side" else -left
 
 
-def _segments(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+def _segments(take: Take) -> tuple[np.ndarray, np.ndarray]:
     """World positions of bone ends ``[F, B, 2, 3]`` (joint to parent, End Site to its joint)."""
-    positions = motion.positions()
-    world_rot, _ = motion.fk()
+    motion = take.motion
+    world_rot, positions = take.fk
     parents = motion.skeleton.parents
     children = np.flatnonzero(parents >= 0)
     if np.count_nonzero(parents == 0) == 1:
@@ -78,12 +79,11 @@ def project(motion: Motion, view: str = "side") -> tuple[np.ndarray, np.ndarray]
     from ..body.conventions import upright
 
     motion = upright(motion)
-    bones, positions = _segments(motion)
-    axis = _horizontal_axis(heading(motion, positions), view)
-    from ..body.roles import JointRoles
-
+    take = Take.of(motion)
+    bones, positions = _segments(take)
+    axis = _horizontal_axis(heading(take), view)
     try:
-        hips = JointRoles.find(motion.skeleton).hips
+        hips = take.body.roles.hips
     except MocapError:
         hips = 0
     flat = np.stack([bones @ axis, bones[..., 1]], axis=-1)
