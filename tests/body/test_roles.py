@@ -40,14 +40,14 @@ def test_roles_of_bandai_cmu_and_mixamo_names():
 
 def test_roles_can_be_given_and_missing_ones_are_named(mixed_path):
     skeleton = bandai_like_skeleton()
-    roles = JointRoles.find(skeleton, left_toe="Foot_L", right_toe=20)
+    roles = JointRoles.find(skeleton, {"left_toe": "Foot_L", "right_toe": 20})
     assert roles.toes == (16, 20)
     with pytest.raises(em.MocapError, match="no joint named 'Nope'"):
-        JointRoles.find(skeleton, head="Nope")
+        JointRoles.find(skeleton, {"head": "Nope"})
     with pytest.raises(em.MocapError, match="unknown joint role.*left_hand"):
-        JointRoles.find(skeleton, left_hand="Hand_L")
+        JointRoles.find(skeleton, {"left_hand": "Hand_L"})
     with pytest.raises(em.MocapError, match="out of range"):
-        JointRoles.find(skeleton, hips=99)
+        JointRoles.find(skeleton, {"hips": 99})
     hand_written = em.read_bvh(mixed_path).skeleton
     with pytest.raises(
         em.MocapError,
@@ -64,7 +64,7 @@ def test_two_candidates_for_a_role_are_settled_by_the_topology():
     twin = em.Skeleton(tuple(names), skeleton.parents, skeleton.offsets, skeleton.channels)
     assert twin.names[JointRoles.find(twin).upper_legs[0]] == "UpperLeg_L"
     with pytest.raises(em.MocapError, match="left_upper_leg \\(several candidates: LeftUpLeg, UpperLeg_L\\)"):
-        JointRoles.find(twin, head="Head")  # roles given: names only, so the clash is reported
+        JointRoles.find(twin, {"head": "Head"})  # roles given: names only, so the clash is reported
 
 
 def test_actor_height_by_hand():

@@ -8,6 +8,7 @@ Found by name on the skeletons met in practice (Bandai-Namco ``UpperLeg_L``/``Fo
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,18 +64,18 @@ class JointRoles:
         return [self.hips, *self.upper_legs, *self.feet, *self.toes]
 
     @classmethod
-    def find(cls, skeleton: Skeleton, **overrides: int | str) -> JointRoles:
-        """Roles of ``skeleton`` by joint name, else (no ``overrides`` given) by its joint map,
-        which reads the topology too. ``overrides`` give any role (names in :data:`ROLE_NAMES`) as
-        a joint index or name, e.g. ``left_toe="LeftToe_End"``. Commands read a skeleton's roles
+    def find(cls, skeleton: Skeleton, given: Mapping[str, int | str] | None = None) -> JointRoles:
+        """Roles of ``skeleton`` by joint name, else (none ``given``) by its joint map, which
+        reads the topology too. ``given``: any role (names in :data:`ROLE_NAMES`) -> a joint
+        index or name, e.g. ``{"left_toe": "LeftToe_End"}``. Commands read a skeleton's roles
         once, from its :class:`~expressive_mocap.body.Body`.
 
         Raises :class:`MocapError` naming every role that could not be found (or was found twice).
         """
         try:
-            return cls.by_names(skeleton, **overrides)
+            return cls.by_names(skeleton, given)
         except MocapError as named:
-            if overrides:
+            if given:
                 raise
             try:
                 return cls.from_map(skeleton, find_joint_map(skeleton))
@@ -82,8 +83,9 @@ class JointRoles:
                 raise named from None
 
     @classmethod
-    def by_names(cls, skeleton: Skeleton, **overrides: int | str) -> JointRoles:
+    def by_names(cls, skeleton: Skeleton, given: Mapping[str, int | str] | None = None) -> JointRoles:
         """Roles of ``skeleton`` by joint name only (see :meth:`find`)."""
+        overrides = dict(given or {})
         unknown = set(overrides) - set(ROLE_NAMES)
         if unknown:
             raise MocapError(f"unknown joint role(s) {', '.join(sorted(unknown))}; roles are {', '.join(ROLE_NAMES)}")
@@ -104,7 +106,7 @@ class JointRoles:
         if problems:
             raise MocapError(
                 f"cannot tell which joint is the {'; '.join(problems)}: pass it by name, e.g. "
-                f"JointRoles.find(skeleton, {problems[0].split()[0]}='JointName'); joints are: "
+                f"JointRoles.find(skeleton, {{'{problems[0].split()[0]}': 'JointName'}}); joints are: "
                 f"{listed(skeleton.names)}"
             )
         spine = _chain(skeleton, found["hips"], found["head"])
