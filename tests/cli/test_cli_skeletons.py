@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
+from expressive_mocap._utils.tokens import listed
 from expressive_mocap.body import find_joint_map
 from expressive_mocap.cli import main
 from expressive_mocap.skeletons import synthetic_walk
@@ -116,3 +117,23 @@ def test_retarget_can_take_the_targets_frame_rate(rig_files, tmp_path):
         same.positions()[::4, jmap["head"]],
         atol=0.5,  # inches
     )
+
+
+@pytest.mark.parametrize("source, target", [("bandai", "cmu"), ("cmu", "game"), ("smpl", "bandai")])
+def test_retarget_names_the_joints_without_counterpart(rig_files, source, target, tmp_path, capsys):
+    from expressive_mocap.body import Body
+    from expressive_mocap.skeletons.rig import Rig
+    from expressive_mocap.skeletons.transfer import without_counterpart
+
+    a, b = em.read_bvh(rig_files[source]), em.read_bvh(rig_files[target])
+    held, shared = without_counterpart(Rig.of(a), Rig.of(b))
+    ours, theirs = Body.of(a.skeleton).joint_map, Body.of(b.skeleton).joint_map
+    carried = {b.skeleton.names[theirs[role]] for role in theirs.joints if role in ours.joints}
+    assert not set(held) & set(shared) and not (set(held) | set(shared)) & carried
+    # Every joint is carried, held or shared: nothing is left out of the account.
+    assert carried | set(held) | set(shared) == set(b.skeleton.names)
+    out_file = str(tmp_path / "o.bvh")
+    assert main(["retarget", str(rig_files[source]), "--to", str(rig_files[target]), "-o", out_file]) == 0
+    out = capsys.readouterr().out
+    assert (f"held at rest with their parents: {listed(held)}" in out) == bool(held)
+    assert (f"sharing the turn from the hips to the chest: {listed(shared)}" in out) == bool(shared)

@@ -106,6 +106,11 @@ def cmd_skeleton(args) -> int:
             print(f"  {role:<16} {shown:<26} {report['how'].get(role, 'the chain from the hips to the chest')}")
         unmapped = report["unmapped"]
         print(f"  unmapped ({len(unmapped)}): {listed(unmapped) if unmapped else 'none'}")
+        if unmapped:
+            print(
+                "  (no role: retargeting holds them at rest with their parent, but for extra spine "
+                "segments, which share the turn from the hips to the chest)"
+            )
         if report["twists_from_positions"]:
             print(
                 "  twists read from the positions (the rotations twist these bones arbitrarily): "
@@ -140,7 +145,9 @@ def add_retarget(commands) -> None:
 
 def cmd_retarget(args) -> int:
     from ..body import Body, read_conventions
-    from ..skeletons import retarget
+    from ..skeletons.retargeting import retarget_rigs
+    from ..skeletons.rig import Rig
+    from ..skeletons.transfer import without_counterpart
 
     source_map, target_map = _map_file(args.map), _map_file(args.to_map)
     motion = read_bvh(args.file)
@@ -150,24 +157,22 @@ def cmd_retarget(args) -> int:
     if args.up or args.facing or args.unit:
         conventions = read_conventions(motion, source)
         conventions = conventions.with_overrides(args.up, args.facing, args.unit)
-    out = retarget(
-        motion,
-        target,
-        source_map=source_map,
-        target_map=target_map,
-        plant_feet=args.plant_feet,
-        source_conventions=conventions,
-        fps=args.fps,
-    )
+    # As skeletons.retarget does, with the rigs at hand to say what has no counterpart.
+    source_rig, goal_rig = Rig.of(motion, source_map, conventions), Rig.of(target, target_map)
+    out = retarget_rigs(motion, source_rig, goal_rig, plant_feet=args.plant_feet)
+    out = out if args.fps is None else out.resample(fps=args.fps)
     write_bvh(out, args.output)
     carried = [role for role in goal.joints if role in source.joints]
-    held = [target.skeleton.names[j] for j in goal.unmapped]
+    held, shared = without_counterpart(source_rig, goal_rig)
     print(
         f"{args.output}: {out.n_frames} frames at {out.fps:.6g} fps on {args.to}'s skeleton "
         f"({target.skeleton.n_joints} joints); {len(carried)} roles carried"
-        + (f", held at rest: {listed(held)}" if held else "")
         + ("; feet planted" if args.plant_feet else "")
     )
+    if held:
+        print(f"  no counterpart in {args.file}, held at rest with their parents: {listed(held)}")
+    if shared:
+        print(f"  spine joints sharing the turn from the hips to the chest: {listed(shared)}")
     return 0
 
 

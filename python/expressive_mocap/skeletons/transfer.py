@@ -289,6 +289,15 @@ def _shared_chains(jmap: JointMap, aligned: set[int]) -> dict[int, tuple[int, in
     return out
 
 
+def without_counterpart(source: Rig, target: Rig) -> tuple[list[str], list[str]]:
+    """The target's joints that no joint of the source gives a rotation to, by name: those held at
+    rest with their nearest carried ancestor (no role, or a role the source lacks), and the
+    extra spine segments that take a share of the turn between the hips and the chest."""
+    plan = _plan(source, target)
+    names = target.skeleton.names
+    return [names[j] for j in plan.held], [names[j] for j in plan.shared]
+
+
 def carried(points: np.ndarray, source: Rig, target: Rig, floor=None) -> np.ndarray:
     """Source world points ``[F, ..., 3]`` carried into the target's world: turned to its axes,
     and scaled by the ratio of the leg lengths from the source's floor (``floor``: one per
@@ -311,4 +320,4 @@ def _place_hips(translations: np.ndarray, positions_s: np.ndarray, source: Rig, 
     translations[:, mover] = skeleton.offsets[mover] + (placed - skeleton.rest_positions()[0][hips])
 
 
-__all__ = ["carried", "untrusted_twists", "untrusted_twists_many", "with_twists"]
+__all__ = ["carried", "untrusted_twists", "untrusted_twists_many", "with_twists", "without_counterpart"]
