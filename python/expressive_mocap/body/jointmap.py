@@ -320,6 +320,10 @@ class _Finder:
         path = self._main_path(start)
         by_name = self._limb_names(path, roles)
         by_topology = self._limb_topology(path, roles)
+        by_name = self._settled(by_name, by_topology)
+        if "toes" in by_topology and self.labels[by_topology["toes"]].part == "heel":
+            # A heel hangs behind the ankle, where no toe points: the foot's own joint stands in.
+            del by_topology["toes"]
         for role in roles:
             key = f"{side}_{role}"
             if key in given:
@@ -329,6 +333,19 @@ class _Finder:
                 self.how[key] = "name+topology" if by_topology.get(role) == by_name[role] else "name"
             elif role in by_topology and not _out_of_order(by_topology[role], role, roles, by_name, path):
                 found[key], self.how[key] = by_topology[role], "topology"
+
+    def _settled(self, by_name: dict[str, int], by_topology: dict[str, int]) -> dict[str, int]:
+        """``by_name`` with each joint whose name fits several roles given the one topology gives
+        it, where that is one of them: a "Foot" is the ankle where the leg ends with it or with a
+        fore-foot, ball or heel the names do not tell, the toes on SMPL, after its "ankle"."""
+        topology_role = {j: role for role, j in by_topology.items()}
+        out = dict(by_name)
+        for role, j in by_name.items():
+            settled = topology_role.get(j)
+            if settled and settled != role and settled in self.labels[j].roles and settled not in by_name:
+                del out[role]
+                out[settled] = j
+        return out
 
     def _side(self, start: int, other: int, centre: int) -> str:
         """Which side the branch ``start`` is on: its names, else the pose (left = up x forward)."""

@@ -35,7 +35,7 @@ PARTS: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("leg", "lowerleg", "calf", "knee", "shin", "tibia"), ("lower_leg",)),
     "ankle": ("foot",),
     "foot": ("foot", "toes"),
-    **dict.fromkeys(("toe", "toes", "toebase", "ball"), ("toes",)),
+    **dict.fromkeys(("toe", "toes", "toebase", "ball", "forefoot"), ("toes",)),
 }
 
 # Words that make a joint a helper, never a role: ends, twist and roll bones, IK targets, fingers.

@@ -175,19 +175,40 @@ def _role_frame(points: np.ndarray, jmap: JointMap, role: str, other: JointMap) 
     return _orthonormal(line, _UP if _role_of(jmap, role) == "toes" else _FORWARD)
 
 
-def _flat_frame(points: np.ndarray, jmap: JointMap, role: str, other: JointMap) -> np.ndarray:
-    """:func:`_role_frame`, but for a foot or toes (where both maps hold the toes) the frame a
-    foot standing flat has: forward along the floor, up. Each rig's reference pose stands on flat
-    feet, however its ankle sits (a flat Bandai-Namco foot points 40 degrees down to the toe
-    joint, a CMU one 10): carried bone by bone, a flat foot came out toes-up on another rig."""
+def _flat_frame(
+    points: np.ndarray, jmap: JointMap, role: str, other: JointMap, tips: dict[str, np.ndarray], other_tips: dict
+) -> np.ndarray:
+    """:func:`_role_frame`, but for a foot or toes (where both rigs show where their toes are:
+    :func:`_foot_tips`) the frame a foot standing flat has: forward along the floor, up. Each
+    rig's reference pose stands on flat feet, however its ankle sits (a flat Bandai-Namco foot
+    points 40 degrees down to the toe joint, a CMU one 10): carried bone by bone, a flat foot
+    came out toes-up on another rig."""
     part = _role_of(jmap, role)
     side = role.split("_", 1)[0]
-    if part in ("foot", "toes") and f"{side}_toes" in jmap and f"{side}_toes" in other:
-        forward = points[jmap[f"{side}_toes"]] - points[jmap[f"{side}_foot"]]
+    if part in ("foot", "toes") and side in tips and side in other_tips:
+        forward = tips[side] - points[jmap[f"{side}_foot"]]
         forward = forward - _UP * np.dot(forward, _UP)
         if np.linalg.norm(forward) > 1e-9:
             return _orthonormal(forward, _UP)
     return _role_frame(points, jmap, role, other)
+
+
+def _foot_tips(rig: Rig, world: np.ndarray, points: np.ndarray) -> dict[str, np.ndarray]:
+    """Per side, where the toes are in the reference pose (``world``, ``points``: canonical axes):
+    the toe joint, else the farthest End Site of a foot without one (a rig whose foot chain ends
+    at the ankle); a side with neither is left out."""
+    out = {}
+    turn = rig.conventions.rotation()
+    for side in ("left", "right"):
+        if f"{side}_toes" in rig.jmap:
+            out[side] = points[rig.jmap[f"{side}_toes"]]
+            continue
+        foot = rig.jmap[f"{side}_foot"]
+        sites = [np.asarray(off, dtype=np.float64) for j, off in rig.skeleton.end_sites if j == foot]
+        far = max(sites, key=np.linalg.norm, default=None)
+        if far is not None and np.linalg.norm(far) > 0:
+            out[side] = points[foot] + quat.rotate(world[foot], quat.rotate(turn, far))
+    return out
 
 
 def alignments(source: Rig, target: Rig) -> dict[str, np.ndarray]:
@@ -197,12 +218,13 @@ def alignments(source: Rig, target: Rig) -> dict[str, np.ndarray]:
     (which way its hinge faces) whatever the two rests are."""
     world_s, points_s = _reference(source)
     world_t, points_t = _reference(target)
+    tips_s, tips_t = _foot_tips(source, world_s, points_s), _foot_tips(target, world_t, points_t)
     out = {}
     for role in source.jmap.joints:
         if role not in target.jmap.joints:
             continue
-        frame_s = _flat_frame(points_s, source.jmap, role, target.jmap)
-        frame_t = _flat_frame(points_t, target.jmap, role, source.jmap)
+        frame_s = _flat_frame(points_s, source.jmap, role, target.jmap, tips_s, tips_t)
+        frame_t = _flat_frame(points_t, target.jmap, role, source.jmap, tips_t, tips_s)
         onto = quat.from_matrix(frame_s @ frame_t.T)
         js, jt = source.jmap[role], target.jmap[role]
         out[role] = quat.mul(quat.mul(quat.conjugate(world_s[js]), onto), world_t[jt])
