@@ -6,7 +6,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..bvh import write_bvh
+import numpy as np
+
+from ..bvh import read_bvh, write_bvh
 from ..errors import ArgumentError, ClipError, MocapError
 from ..exaggeration import exaggerate, swap_test, train
 from ..motion import Motion
@@ -275,10 +277,36 @@ def cmd_exaggerate(args) -> int:
             return retime_like(original, timing)
 
         _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), retimed)
-    write_bvh(back(out), args.output)
+    written = back(out, plant_feet=not args.no_foot_lock)
+    write_bvh(written, args.output)
     print(report.text())
+    original = read_bvh(args.input)
+    if original.skeleton.names != motion.skeleton.names:  # edited on the model's body: say what the file got
+        print(on_own_skeleton(original if timing is None else retime_like(original, timing), written))
     print(f"wrote {args.output}")
     return 0
+
+
+def on_own_skeleton(original: Motion, written: Motion) -> str:
+    """What an edit carried back onto the input's own skeleton did, measured on the file written
+    (``written``, frame for frame with ``original``), in that skeleton's joint names: the largest
+    change of each joint's rotation and the stance feet's speed through the input's contacts."""
+    from ..body.contacts import foot_contacts
+    from ..body.conventions import upright
+    from ..exaggeration.edit import stance_foot_speed
+    from ..rotations import quat
+
+    angles = np.degrees(quat.angle(quat.mul(quat.conjugate(original.rotations), written.rotations))).max(axis=0)
+    changes = sorted(zip(original.skeleton.names, angles), key=lambda nv: -nv[1])
+    moved = ", ".join(f"{n} {v:.1f}" for n, v in changes if v >= 0.05)[:600] or "none"
+    before, after = upright(original), upright(written)  # contacts and speeds are read along Y
+    contacts = foot_contacts(before)
+    speeds = stance_foot_speed(before, contacts), stance_foot_speed(after, contacts)
+    return (
+        f"on {original.skeleton.n_joints}-joint skeleton of the input, as written: "
+        f"largest change per joint (degrees): {moved}\n"
+        f"stance-foot speed {speeds[0]:.3g} -> {speeds[1]:.3g} (file units/s, through the input's contacts)"
+    )
 
 
 def add_validate(commands) -> None:
