@@ -33,7 +33,7 @@ from ..body.jointmap import JointMap
 from ..body.take import Take
 from ..motion import Motion, Skeleton
 from ..rotations import quat
-from .rig import Rig, _axis, _floors_of, _path_joint, rest_motion
+from .rig import Rig, _axis, _floors_of, _path_joint, rest_motion, stance_level
 from .transfer import _rig_key, _transfer, _trusted, carried, untrusted_twists_many, with_twists
 from .trunk import keep_trunk
 
@@ -62,6 +62,7 @@ def retarget(
         target = rest_motion(target)
     source = Rig.of(motion, source_map, source_conventions)
     goal = Rig.of(target, target_map, target_conventions)
+    goal = goal._replace(stance=stance_level(goal, target))
     out = retarget_rigs(motion, source, goal, plant_feet=plant_feet)
     return out if fps is None else out.resample(fps=fps)
 
@@ -182,7 +183,8 @@ def _retarget_frames(
 def _stand_on_floor(out: Motion, contacts: np.ndarray, goal: Rig, bounds) -> tuple[Motion, np.ndarray]:
     """``out`` with its path raised or lowered, clip by clip, so that its stance feet (the lower
     of each foot's ankle and toe joints through the source's ``contacts``, median over the clip)
-    stand on the target's floor, and that lift ``[F, 3]`` (target axes). The leg lengths' ratio
+    stand where the target's own do (:func:`~.rig.stance_level`; else on its floor), and that
+    lift ``[F, 3]`` (target axes). The leg lengths' ratio
     places the hips, but rigs set their ankles at different heights above their soles: a walk of
     a rig with low-set ankles stood 4-5 cm above the Bandai-Namco floor, one with high-set ankles
     sank."""
@@ -198,7 +200,7 @@ def _stand_on_floor(out: Motion, contacts: np.ndarray, goal: Rig, bounds) -> tup
     for a, b in zip(bounds[:-1], bounds[1:]):
         stance = standing[a:b][np.isfinite(standing[a:b])]
         if len(stance):
-            lift[a:b] = goal.floor - np.median(stance)
+            lift[a:b] = (goal.floor if goal.stance is None else goal.stance) - np.median(stance)
     translations = out.translations.copy()
     translations[:, _path_joint(skeleton, jmap["hips"])] += lift[:, None] * up
     return Motion(skeleton, out.rotations, translations, out.frame_time), lift[:, None] * up

@@ -19,6 +19,7 @@ from ..errors import MocapError
 from ..motion import Motion, Skeleton
 from ..rotations import quat
 from . import twist
+from .planting import source_contacts
 
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -51,6 +52,7 @@ class Rig(NamedTuple):
     floor: float
     untrusted: frozenset | None = frozenset()
     user_map: dict | None = None
+    stance: float | None = None  # where its stance feet stand (:func:`stance_level`; None: the floor)
 
     @property
     def body(self) -> Body:
@@ -231,6 +233,24 @@ def alignments(source: Rig, target: Rig) -> dict[str, np.ndarray]:
     return out
 
 
+def stance_level(rig: Rig, motion: Motion | Take) -> float:
+    """Where ``rig``'s own feet stand in ``motion`` (a motion of it), along its up axis: the
+    median over its stance frames (its own contacts) of the lower of the standing foot's ankle and
+    toe joints; its floor where it never stands (a rest pose). A retarget puts the target's stance
+    feet there: at the floor (a low percentile of every frame's lowest foot joint) they stood a
+    little low, and a round trip came back lower than it went."""
+    take = Take.of(motion)
+    upright = quat.rotate(rig.conventions.rotation(), take.positions)
+    contacts = source_contacts([take.motion], rig, upright)
+    lowest = []
+    for side in ("left", "right"):
+        joints = [rig.jmap[f"{side}_{part}"] for part in ("foot", "toes") if f"{side}_{part}" in rig.jmap]
+        lowest.append(upright[:, joints, 1].min(axis=1))
+    standing = np.where(contacts, np.stack(lowest, axis=1), np.inf).min(axis=1)
+    standing = standing[np.isfinite(standing)]
+    return float(np.median(standing)) if len(standing) else rig.floor
+
+
 def rest_motion(skeleton: Skeleton) -> Motion:
     """One frame of ``skeleton``'s rest pose."""
     rotations = np.zeros((1, skeleton.n_joints, 4))
@@ -260,4 +280,4 @@ def _path_joint(skeleton: Skeleton, hips: int) -> int:
     )
 
 
-__all__ = ["Rig", "alignments", "reference_pose", "rest_motion"]
+__all__ = ["Rig", "alignments", "reference_pose", "rest_motion", "stance_level"]
