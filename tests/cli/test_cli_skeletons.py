@@ -123,15 +123,16 @@ def test_retarget_can_take_the_targets_frame_rate(rig_files, tmp_path):
 def test_retarget_names_the_joints_without_counterpart(rig_files, source, target, tmp_path, capsys):
     from expressive_mocap.body import Body
     from expressive_mocap.skeletons.rig import Rig
-    from expressive_mocap.skeletons.transfer import without_counterpart
+    from expressive_mocap.skeletons.transfer import matched_chains, without_counterpart
 
     a, b = em.read_bvh(rig_files[source]), em.read_bvh(rig_files[target])
     held, shared = without_counterpart(Rig.of(a), Rig.of(b))
+    matched = {b.skeleton.names[j] for j, _, _, _ in matched_chains(Rig.of(a), Rig.of(b))}
     ours, theirs = Body.of(a.skeleton).joint_map, Body.of(b.skeleton).joint_map
     carried = {b.skeleton.names[theirs[role]] for role in theirs.joints if role in ours.joints}
-    assert not set(held) & set(shared) and not (set(held) | set(shared)) & carried
-    # Every joint is carried, held or shared: nothing is left out of the account.
-    assert carried | set(held) | set(shared) == set(b.skeleton.names)
+    assert not set(held) & set(shared) and not (set(held) | set(shared)) & (carried | matched)
+    # Every joint is carried (by role or as its counterpart's), held or shared: none left out.
+    assert carried | matched | set(held) | set(shared) == set(b.skeleton.names)
     out_file = str(tmp_path / "o.bvh")
     assert main(["retarget", str(rig_files[source]), "--to", str(rig_files[target]), "-o", out_file]) == 0
     out = capsys.readouterr().out

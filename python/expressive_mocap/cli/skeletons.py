@@ -108,8 +108,9 @@ def cmd_skeleton(args) -> int:
         print(f"  unmapped ({len(unmapped)}): {listed(unmapped) if unmapped else 'none'}")
         if unmapped:
             print(
-                "  (no role: retargeting holds them at rest with their parent, but for extra spine "
-                "segments, which share the turn from the hips to the chest)"
+                "  (no role: retargeting turns them as a counterpart in the same place on the other "
+                "skeleton, else holds them at rest with their parent; extra spine segments share the "
+                "turn from the hips to the chest)"
             )
         if report["twists_from_positions"]:
             print(
@@ -147,7 +148,7 @@ def cmd_retarget(args) -> int:
     from ..body import Body, read_conventions
     from ..skeletons.retargeting import retarget_rigs
     from ..skeletons.rig import Rig
-    from ..skeletons.transfer import without_counterpart
+    from ..skeletons.transfer import matched_chains, without_counterpart
 
     source_map, target_map = _map_file(args.map), _map_file(args.to_map)
     motion = read_bvh(args.file)
@@ -164,11 +165,14 @@ def cmd_retarget(args) -> int:
     write_bvh(out, args.output)
     carried = [role for role in goal.joints if role in source.joints]
     held, shared = without_counterpart(source_rig, goal_rig)
+    matched = [target.skeleton.names[j] for j, _, _, _ in matched_chains(source_rig, goal_rig)]
     print(
         f"{args.output}: {out.n_frames} frames at {out.fps:.6g} fps on {args.to}'s skeleton "
         f"({target.skeleton.n_joints} joints); {len(carried)} roles carried"
         + ("; feet planted" if args.plant_feet else "")
     )
+    if matched:
+        print(f"  without a role, turned as their counterparts in {args.file}: {listed(matched)}")
     if held:
         print(f"  no counterpart in {args.file}, held at rest with their parents: {listed(held)}")
     if shared:

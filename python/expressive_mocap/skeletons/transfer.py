@@ -239,10 +239,95 @@ def _transfer(
     positions, ``kinematics``, and its floor in each frame."""
     world_s, positions_s = kinematics
     rotations = ops.retarget_transfer(world_s, positions_s, _plan(source, target))
+    rotations = _chains_turned(rotations, world_s, source, target)
     frames, skeleton = motion.n_frames, target.skeleton
     translations = np.broadcast_to(skeleton.offsets, (frames, skeleton.n_joints, 3)).copy()
     _place_hips(translations, positions_s, source, target, floor)
     return Motion(skeleton, rotations, translations, motion.frame_time)
+
+
+def matched_chains(source: Rig, target: Rig) -> list[tuple[int, int, int, int]]:
+    """The joints without a role that both skeletons have in the same place, as ``(target joint,
+    its nearest mapped ancestor, source joint, that role's source joint)``, parents first: below
+    the same role, along the same branches (each step the same child, counted in order, of as
+    many unmapped children on both sides): a second neck joint, a hip joint before the upper leg,
+    fingers and thumbs; and the segments of spines of the same length. Each then turns as the
+    source's does beyond that role (see :func:`_chains_turned`) instead of being held at rest or
+    given an equal share of the spine's turn."""
+    return _CHAINS.get((_rig_key(source), _rig_key(target)), lambda: _new_matched_chains(source, target))
+
+
+def _new_matched_chains(source: Rig, target: Rig) -> list[tuple[int, int, int, int]]:
+    def unmapped(rig: Rig) -> set[int]:
+        named = set(rig.jmap.joints.values()) | set(rig.jmap.spine)
+        return set(range(rig.skeleton.n_joints)) - named
+
+    free_s, free_t = unmapped(source), unmapped(target)
+    children_s = _free_children(source.skeleton.parents, free_s)
+    children_t = _free_children(target.skeleton.parents, free_t)
+    role_of_t = {j: role for role, j in target.jmap.joints.items()}
+    # Spines of as many segments: each takes the source's own share of the turn, not an equal one.
+    spine_s, spine_t = source.jmap.spine[:-1], target.jmap.spine[:-1]
+    spine = dict(zip(spine_t, spine_s)) if len(spine_s) == len(spine_t) else {}
+    out, counterpart = [], {}  # target joint -> (source joint, mapped ancestors on both sides)
+    for j in range(target.skeleton.n_joints):  # parents first
+        if j in spine:
+            out.append((j, target.jmap["hips"], spine[j], source.jmap["hips"]))
+            continue
+        if j not in free_t:
+            continue
+        parent = int(target.skeleton.parents[j])
+        if parent in counterpart:
+            s_parent, anchor_t, anchor_s = counterpart[parent]
+        elif parent in role_of_t and role_of_t[parent] in source.jmap.joints:
+            s_parent, anchor_t, anchor_s = source.jmap[role_of_t[parent]], parent, source.jmap[role_of_t[parent]]
+        else:
+            continue
+        siblings_t, siblings_s = children_t.get(parent, []), children_s.get(s_parent, [])
+        if len(siblings_t) != len(siblings_s):
+            continue
+        joint_s = siblings_s[siblings_t.index(j)]
+        counterpart[j] = (joint_s, anchor_t, anchor_s)
+        out.append((j, anchor_t, joint_s, anchor_s))
+    return out
+
+
+def _free_children(parents: np.ndarray, free: set[int]) -> dict[int, list[int]]:
+    out: dict[int, list[int]] = {}
+    for j in sorted(free):
+        if parents[j] >= 0:
+            out.setdefault(int(parents[j]), []).append(j)
+    return out
+
+
+_CHAINS: Kept[list[tuple[int, int, int, int]]] = Kept(_PLANS_KEPT)
+
+
+def _chains_turned(rotations: np.ndarray, world_s: np.ndarray, source: Rig, target: Rig) -> np.ndarray:
+    """The target's local ``rotations`` with each joint of :func:`matched_chains` turned, beyond
+    its mapped ancestor, as the source's counterpart turns beyond the same role (both as changes
+    from their reference poses, in canonical axes); every other joint keeps its world rotation."""
+    matches = matched_chains(source, target)
+    if not matches:
+        return rotations
+    parents = target.skeleton.parents
+    reference_s, _ = _reference(source)
+    reference_t, _ = _reference(target)
+    turn_s, turn_t = source.conventions.rotation(), target.conventions.rotation()
+    world_t, _ = ops.forward_kinematics(rotations, np.zeros(rotations.shape[:-1] + (3,)), parents)
+    canonical_s, canonical_t = _turned(turn_s, world_s), _turned(turn_t, world_t).copy()
+    for j_t, anchor_t, j_s, anchor_s in matches:
+        beyond = _mul(
+            quat.conjugate(_mul(canonical_s[:, anchor_s], quat.conjugate(reference_s[anchor_s]))),
+            _mul(canonical_s[:, j_s], quat.conjugate(reference_s[j_s])),
+        )
+        change = _mul(canonical_t[:, anchor_t], quat.conjugate(reference_t[anchor_t]))
+        canonical_t[:, j_t] = _mul(_mul(change, beyond), reference_t[j_t])
+    world = _turned(quat.conjugate(turn_t), canonical_t)
+    local = world.copy()
+    inner = parents >= 0
+    local[:, inner] = _mul(quat.conjugate(world[:, parents[inner]]), world[:, inner])
+    return local
 
 
 def _trusted(world: np.ndarray, positions: np.ndarray, rig: Rig) -> np.ndarray:
@@ -291,11 +376,13 @@ def _shared_chains(jmap: JointMap, aligned: set[int]) -> dict[int, tuple[int, in
 
 def without_counterpart(source: Rig, target: Rig) -> tuple[list[str], list[str]]:
     """The target's joints that no joint of the source gives a rotation to, by name: those held at
-    rest with their nearest carried ancestor (no role, or a role the source lacks), and the
-    extra spine segments that take a share of the turn between the hips and the chest."""
+    rest with their nearest carried ancestor (no role, or a role the source lacks, and no
+    counterpart in :func:`matched_chains`), and the extra spine segments that take a share of
+    the turn between the hips and the chest."""
     plan = _plan(source, target)
     names = target.skeleton.names
-    return [names[j] for j in plan.held], [names[j] for j in plan.shared]
+    matched = {j for j, _, _, _ in matched_chains(source, target)}
+    return [names[j] for j in plan.held if j not in matched], [names[j] for j in plan.shared if j not in matched]
 
 
 def carried(points: np.ndarray, source: Rig, target: Rig, floor=None) -> np.ndarray:
@@ -320,4 +407,11 @@ def _place_hips(translations: np.ndarray, positions_s: np.ndarray, source: Rig, 
     translations[:, mover] = skeleton.offsets[mover] + (placed - skeleton.rest_positions()[0][hips])
 
 
-__all__ = ["carried", "untrusted_twists", "untrusted_twists_many", "with_twists", "without_counterpart"]
+__all__ = [
+    "carried",
+    "matched_chains",
+    "untrusted_twists",
+    "untrusted_twists_many",
+    "with_twists",
+    "without_counterpart",
+]
