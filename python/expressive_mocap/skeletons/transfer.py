@@ -269,7 +269,8 @@ def _new_matched_chains(source: Rig, target: Rig) -> list[tuple[int, int, int, i
     # Spines of as many segments: each takes the source's own share of the turn, not an equal one.
     spine_s, spine_t = source.jmap.spine[:-1], target.jmap.spine[:-1]
     spine = dict(zip(spine_t, spine_s)) if len(spine_s) == len(spine_t) else {}
-    out, counterpart = [], {}  # target joint -> (source joint, mapped ancestors on both sides)
+    out: list[tuple[int, int, int, int]] = []
+    counterpart: dict[int, tuple[int, int, int]] = {}  # target joint -> (source joint, the two mapped ancestors)
     for j in range(target.skeleton.n_joints):  # parents first
         if j in spine:
             out.append((j, target.jmap["hips"], spine[j], source.jmap["hips"]))
