@@ -145,9 +145,8 @@ def add_retarget(commands) -> None:
 
 
 def cmd_retarget(args) -> int:
-    from ..body import Body, read_conventions
-    from ..skeletons.retargeting import retarget_rigs
-    from ..skeletons.rig import Rig
+    from ..body import Body, Take, read_conventions
+    from ..skeletons.retargeting import retarget_rigs, rigs_for
     from ..skeletons.transfer import matched_chains, without_counterpart
 
     source_map, target_map = _map_file(args.map), _map_file(args.to_map)
@@ -159,8 +158,9 @@ def cmd_retarget(args) -> int:
         conventions = read_conventions(motion, source)
         conventions = conventions.with_overrides(args.up, args.facing, args.unit)
     # As skeletons.retarget does, with the rigs at hand to say what has no counterpart.
-    source_rig, goal_rig = Rig.of(motion, source_map, conventions), Rig.of(target, target_map)
-    out = retarget_rigs(motion, source_rig, goal_rig, plant_feet=args.plant_feet)
+    take = Take.of(motion)
+    source_rig, goal_rig = rigs_for(take, target, source_map, target_map, conventions)
+    out = retarget_rigs(take, source_rig, goal_rig, plant_feet=args.plant_feet)
     out = out if args.fps is None else out.resample(fps=args.fps)
     write_bvh(out, args.output)
     carried = [role for role in goal.joints if role in source.joints]

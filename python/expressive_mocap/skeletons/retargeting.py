@@ -58,13 +58,25 @@ def retarget(
     through the source's contacts. ``fps``: resample the result to this frame rate (the
     target file's own, say) instead of keeping the source's.
     """
-    if isinstance(target, Skeleton):
-        target = rest_motion(target)
-    source = Rig.of(motion, source_map, source_conventions)
-    goal = Rig.of(target, target_map, target_conventions)
-    goal = goal._replace(stance=stance_level(goal, target))
-    out = retarget_rigs(motion, source, goal, plant_feet=plant_feet)
+    take = Take.of(motion)
+    source, goal = rigs_for(take, target, source_map, target_map, source_conventions, target_conventions)
+    out = retarget_rigs(take, source, goal, plant_feet=plant_feet)
     return out if fps is None else out.resample(fps=fps)
+
+
+def rigs_for(
+    motion: Motion | Take,
+    target: Motion | Skeleton,
+    source_map: dict | None = None,
+    target_map: dict | None = None,
+    source_conventions: Conventions | None = None,
+    target_conventions: Conventions | None = None,
+) -> tuple[Rig, Rig]:
+    """The source's and the target's :class:`Rig` that :func:`retarget` moves ``motion`` with
+    (arguments as there): the target's stance level read from its own frames."""
+    target_take = Take.of(rest_motion(target) if isinstance(target, Skeleton) else target)
+    goal = Rig.of(target_take, target_map, target_conventions)
+    return Rig.of(motion, source_map, source_conventions), goal._replace(stance=stance_level(goal, target_take))
 
 
 def retarget_rigs(motion: Motion | Take, source: Rig, goal: Rig, *, plant_feet: bool = True) -> Motion:
@@ -206,4 +218,4 @@ def _stand_on_floor(out: Motion, contacts: np.ndarray, goal: Rig, bounds) -> tup
     return Motion(skeleton, out.rotations, translations, out.frame_time), lift[:, None] * up
 
 
-__all__ = ["CHUNK_FRAMES", "retarget", "retarget_clips", "retarget_rigs"]
+__all__ = ["CHUNK_FRAMES", "retarget", "retarget_clips", "retarget_rigs", "rigs_for"]
