@@ -108,15 +108,15 @@ def read_for_model(path: str, model, fix: str, user_map: dict | None = None) -> 
 
 
 def read_on_model(
-    path: str, model, fix: str, user_map: dict | None = None, change: Callable[[Motion], Motion] | None = None
+    path: str, model, fix: str, user_map: dict | None = None, motion: Motion | None = None
 ) -> tuple[Motion, Callable[..., Motion]]:
     """A BVH file on the model's skeleton, and how to carry an edit of it back to the file's own
     skeleton (the identity when the file is on the model's skeleton already; otherwise
-    :class:`~expressive_mocap.skeletons.canonical.Carried`); ``change`` is applied to the file's
-    motion first (an edit that retimed the motion carries back onto the file retimed alike)."""
+    :class:`~expressive_mocap.skeletons.canonical.Carried`). ``motion``: the file's motion when
+    already read, or changed (an edit that retimed it carries back onto it retimed alike)."""
     from ..skeletons.canonical import carried_for
 
-    motion = read_bvh(path) if change is None else change(read_bvh(path))
+    motion = read_bvh(path) if motion is None else motion
     try:
         carried = carried_for(motion, model, user_map)
     except MocapError as error:

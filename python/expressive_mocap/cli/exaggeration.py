@@ -250,7 +250,8 @@ def cmd_exaggerate(args) -> int:
     if (args.baseline is None) != (args.baseline_level is None):
         raise ArgumentError("--baseline and --baseline-level go together: a clip of the same actor and its intensity")
     model = ExaggerationModel.load(args.model)
-    motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args))
+    original = read_bvh(args.input)
+    motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
     baseline = None
     if args.baseline is not None:
         baseline, _ = read_on_model(args.baseline, model, EXAGGERATION_MODEL_FIX, joint_map(args))
@@ -273,16 +274,13 @@ def cmd_exaggerate(args) -> int:
     if timing is not None:  # carried back onto the input retimed alike, frame for frame
         from ..exaggeration.timing import retime_like
 
-        def retimed(original):
-            return retime_like(original, timing)
-
-        _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), retimed)
+        original = retime_like(original, timing)
+        _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
     written = back(out, plant_feet=not args.no_foot_lock)
     write_bvh(written, args.output)
     print(report.text())
-    original = read_bvh(args.input)
     if original.skeleton.names != motion.skeleton.names:  # edited on the model's body: say what the file got
-        print(on_own_skeleton(original if timing is None else retime_like(original, timing), written))
+        print(on_own_skeleton(original, written))
     print(f"wrote {args.output}")
     return 0
 
