@@ -17,22 +17,18 @@ from __future__ import annotations
 from collections.abc import Mapping
 from functools import cached_property
 
-import numpy as np
-import numpy.typing as npt
-
 from .._utils.kept import Kept
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion, Skeleton
 from .jointmap import JointMap, find_joint_map
 from .roles import JointRoles, rest_heights
 
-Array = npt.NDArray[np.float64]
 KEPT = 256  # bodies kept, the most recently asked for: an archive holds a handful of rigs
 
 
 class Body:
     """One skeleton's joint map and roles (one vocabulary: the roles are the map's gait joints),
-    actor height and rest pose, each found on first use and kept.
+    and actor height, each found on first use and kept.
 
     Get one with :meth:`Body.of` (kept per skeleton content and user map), or :meth:`Body.of_motion`.
     ``user_map``: role -> joint name (as :func:`~expressive_mocap.body.read_joint_map` reads a
@@ -94,10 +90,6 @@ class Body:
     def actor_height(self) -> float:
         """The actor's height in file units: :attr:`hips_rest_height` plus the spine-to-head bones."""
         return self._heights[1]
-
-    def rest_positions(self) -> tuple[Array, Array]:
-        """World positions of the joints ``[J, 3]`` and End Sites ``[E, 3]`` in the rest pose."""
-        return self.skeleton.rest_positions()
 
     def __repr__(self) -> str:
         return f"Body({self.skeleton.n_joints} joints, root {self.skeleton.names[0]!r})"
