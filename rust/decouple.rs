@@ -53,9 +53,6 @@ fn check_pair(name: &'static str, first: &[f64], second: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// One rotation's outputs: its index, `E*` and `B'` slots, and its activity.
-type Outputs<'a> = (usize, ((&'a mut [f64], &'a mut [f64]), &'a mut f64));
-
 /// Decouple original rotations `O` from body-mechanics rotations `B` (both `[F, J, 4]`):
 /// returns `(E*, B', A)` with `E*` and `B'` `[F, J, 4]` and the activity `A` `[F, J]`.
 ///
@@ -72,24 +69,70 @@ pub fn decouple(
     positive("gain", gain)?;
     positive("exponent", exponent)?;
     let count = original.len() / 4;
-    let mut expressive = vec![0.0; original.len()];
-    let mut recovered = vec![0.0; original.len()];
     let mut activities = vec![0.0; count];
-    let per_rotation = |(i, ((e_out, b_out), a_out)): Outputs| {
+    let per_rotation = |(i, a_out): (usize, &mut f64)| {
         let o = DQuat::from_slice(&original[4 * i..4 * i + 4]);
         let b = DQuat::from_slice(&body[4 * i..4 * i + 4]);
-        let e = o * b.conjugate();
-        let a = activity(angle(e), gain, exponent);
-        let e_star = power(e, a);
-        e_star.write_to_slice(e_out);
-        (e_star.conjugate() * o).write_to_slice(b_out);
-        *a_out = a;
+        *a_out = activity(angle(o * b.conjugate()), gain, exponent);
     };
     if count >= PARALLEL_MIN_ITEMS {
+        activities
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(1024)
+            .for_each(per_rotation);
+    } else {
+        activities.iter_mut().enumerate().for_each(per_rotation);
+    }
+    let (expressive, recovered) = filter(original, body, &activities);
+    Ok((expressive, recovered, activities))
+}
+
+/// As [`decouple`] with the activity `A` `[F, J]` given (one the caller smoothed in time, or
+/// computed with per-joint thresholds): returns `(E*, B')` with `E* = (O B^-1)^A`, `B' = E*^-1 O`.
+///
+/// # Errors
+/// `KernelError::Argument` when the arrays differ in shape or an activity is not in `[0, 1]`.
+pub fn decouple_with_activity(
+    original: &[f64],
+    body: &[f64],
+    activity: &[f64],
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    check_pair("body", original, body)?;
+    if activity.len() * 4 != original.len() {
+        return Err(KernelError::argument(
+            "activity",
+            format!(
+                "expected one value per rotation ({}), got {}",
+                original.len() / 4,
+                activity.len()
+            ),
+        ));
+    }
+    if let Some(bad) = activity.iter().find(|a| !(0.0..=1.0).contains(*a)) {
+        return Err(KernelError::argument(
+            "activity",
+            format!("expected values in [0, 1], got {bad}"),
+        ));
+    }
+    Ok(filter(original, body, activity))
+}
+
+/// `E* = (O B^-1)^A` and `B' = E*^-1 O` per rotation.
+fn filter(original: &[f64], body: &[f64], activities: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let mut expressive = vec![0.0; original.len()];
+    let mut recovered = vec![0.0; original.len()];
+    let per_rotation = |(i, (e_out, b_out)): (usize, (&mut [f64], &mut [f64]))| {
+        let o = DQuat::from_slice(&original[4 * i..4 * i + 4]);
+        let b = DQuat::from_slice(&body[4 * i..4 * i + 4]);
+        let e_star = power(o * b.conjugate(), activities[i]);
+        e_star.write_to_slice(e_out);
+        (e_star.conjugate() * o).write_to_slice(b_out);
+    };
+    if activities.len() >= PARALLEL_MIN_ITEMS {
         expressive
             .par_chunks_mut(4)
             .zip(recovered.par_chunks_mut(4))
-            .zip(activities.par_iter_mut())
             .enumerate()
             .with_min_len(1024)
             .for_each(per_rotation);
@@ -97,11 +140,10 @@ pub fn decouple(
         expressive
             .chunks_mut(4)
             .zip(recovered.chunks_mut(4))
-            .zip(activities.iter_mut())
             .enumerate()
             .for_each(per_rotation);
     }
-    Ok((expressive, recovered, activities))
+    (expressive, recovered)
 }
 
 /// Recompose `E^scale * B` for rotations `[F, J, 4]`: `scale = 1` gives `E * B`, 0 the body
@@ -167,6 +209,9 @@ mod tests {
         }
         // 2 degrees apart: (tanh(0.035) * 2)^4 ~ 2.4e-5; far apart: fully active.
         assert!(a[0] < 1e-4 && (a[1] - 1.0).abs() < 1e-12, "{a:?}");
+        // The activity it computed, given back, gives the same split.
+        let (e2, b3) = decouple_with_activity(&flat(&o), &flat(&b), &a).unwrap();
+        assert_eq!((e2, b3), (e, b2));
     }
 
     #[test]
@@ -174,5 +219,8 @@ mod tests {
         assert!(decouple(&[0.0; 8], &[0.0; 4], 2.0, 4.0).is_err());
         assert!(decouple(&[0.0; 4], &[0.0; 4], 0.0, 4.0).is_err());
         assert!(compose(&[0.0; 4], &[0.0; 4], f64::NAN).is_err());
+        assert!(decouple_with_activity(&[0.0; 8], &[0.0; 8], &[0.5]).is_err());
+        assert!(decouple_with_activity(&[0.0; 4], &[0.0; 4], &[1.5]).is_err());
+        assert!(decouple_with_activity(&[0.0; 4], &[0.0; 4], &[f64::NAN]).is_err());
     }
 }

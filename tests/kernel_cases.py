@@ -118,6 +118,10 @@ CORE = {
         lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0),
         ["original", "body"],
     ),
+    "decouple_with_activity": (
+        lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), RNG.uniform(size=(f, 3))),
+        ["original", "body", "activity"],
+    ),
     "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
     "retarget_transfer": (transfer_args, ["world", "positions", None]),
     "plant_feet": (

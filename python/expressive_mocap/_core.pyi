@@ -28,6 +28,7 @@ __all__ = [
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
+    "decouple_with_activity",
     "dynamic_features",
     "euler_to_quat",
     "foot_contacts",
@@ -147,6 +148,9 @@ def clip_pipeline_many(
 def decouple_rotations(original: _F64, body: _F64, gain: float, exponent: float) -> tuple[_F64, _F64, _F64]:
     """``(E*, B', A)`` of rotations ``original`` and ``body`` ``[F, J, 4]``: filtered expressive rotations, recovered
     body mechanics and the activity ``[F, J]``."""
+
+def decouple_with_activity(original: _F64, body: _F64, activity: _F64) -> tuple[_F64, _F64]:
+    """``(E*, B')`` of rotations ``original`` and ``body`` ``[F, J, 4]`` for a given activity ``[F, J]``."""
 
 def compose_rotations(expressive: _F64, body: _F64, scale: float = 1.0) -> _F64:
     """``expressive^scale * body`` for rotations ``[F, J, 4]``."""

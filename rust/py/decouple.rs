@@ -1,6 +1,8 @@
 //! Bindings of `crate::decouple`.
 
-use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 
 use super::{array, contiguous, shape_error};
@@ -43,6 +45,43 @@ fn decouple_rotations<'py>(
     ))
 }
 
+/// As `decouple_rotations` with the activity [F, J] given (in [0, 1]): returns E* and B'.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn decouple_with_activity<'py>(
+    py: Python<'py>,
+    original: PyReadonlyArray3<'py, f64>,
+    body: PyReadonlyArray3<'py, f64>,
+    activity: PyReadonlyArray2<'py, f64>,
+) -> PyResult<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray3<f64>>)> {
+    let shape = original.shape().to_vec();
+    if shape[2] != 4 || body.shape() != shape.as_slice() {
+        return Err(shape_error(
+            "body",
+            &format!("{shape:?} like `original` (quaternions [F, J, 4])"),
+            body.shape(),
+        ));
+    }
+    if activity.shape() != &shape[..2] {
+        return Err(shape_error(
+            "activity",
+            &format!("{:?} (one value per rotation of `original`)", &shape[..2]),
+            activity.shape(),
+        ));
+    }
+    let (o, b, a) = (
+        contiguous("original", &original)?,
+        contiguous("body", &body)?,
+        contiguous("activity", &activity)?,
+    );
+    let (e, recovered) = py.detach(|| crate::decouple::decouple_with_activity(o, b, a))?;
+    let dims = (shape[0], shape[1], 4);
+    Ok((
+        array(e, dims)?.into_pyarray(py),
+        array(recovered, dims)?.into_pyarray(py),
+    ))
+}
+
 /// Recompose `expressive^scale * body` for rotations [F, J, 4].
 #[pyfunction]
 #[pyo3(signature = (expressive, body, scale=1.0))]
@@ -70,6 +109,7 @@ fn compose_rotations<'py>(
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(decouple_rotations, m)?)?;
+    m.add_function(wrap_pyfunction!(decouple_with_activity, m)?)?;
     m.add_function(wrap_pyfunction!(compose_rotations, m)?)?;
     Ok(())
 }

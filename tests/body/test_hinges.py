@@ -129,18 +129,18 @@ def test_limits_are_learnt_about_the_way_each_hinge_bends():
 
 
 def test_modulating_the_demo_walk_keeps_its_knees_from_bending_backwards():
-    """The demo walk's expressiveness scaled by 1.5 and 2 with the shipped model bends its knees
-    15-42 degrees backwards without the limits; with them no hinge passes straight, and the
+    """The demo walk's expressiveness scaled by 2 and 3 with the shipped model bends its knees
+    12-28 degrees backwards without the limits; with them no hinge passes straight, and the
     hinges the edit left within range are as the bare method makes them."""
     walk = procedural_walk(seconds=4.0)
     model = BodyModel.load()
     limits = canonical_hinge_limits()
     knees = [k for k, h in enumerate(limits.hinges) if "lower_leg" in h.role]
-    for scale in (1.5, 2.0):
+    for scale in (2.0, 3.0):
         # The limits alone (planting the feet also unbends some knees, through the leg IK):
         loose = modulate(walk, scale, model, hinges=False, plant_feet=False)
         limited = modulate(walk, scale, model, plant_feet=False)
-        assert limits.of(loose)[:, knees].min() < -15.0
+        assert limits.of(loose)[:, knees].min() < -10.0
         assert limits.of(limited).min() >= -1e-9
         assert limits.of(modulate(walk, scale, model)).min() >= -1e-9  # both, as the command runs
         elbows = [h.middle for h in limits.hinges if "forearm" in h.role]

@@ -3,8 +3,8 @@ onto a 120 fps walk played 4x too fast, then froze on its last frame, without a 
 
 The gesture is the demo's wave (2 Hz) on a 30 fps walk; the body is the demo's walk at 120 fps.
 What a viewer sees is the waving hand's path about the chest: sampled at the gesture's own
-times, it must follow the source's (correlation at least 0.5) at the source's speed (median
-speed within 1.5x)."""
+times, it must follow the source's (correlation at least 0.5) at the source's speed (peak speed
+within 1.5x: before the decomposition was smoothed in time, single-frame pops peaked at 9x)."""
 
 from __future__ import annotations
 
@@ -43,16 +43,15 @@ def hand_about_chest(motion: em.Motion) -> np.ndarray:
     return positions[:, jmap["right_hand"]] - positions[:, jmap["chest"]]
 
 
-def speed(path: np.ndarray, fps: float) -> float:
-    """The median speed along ``path`` (units/s). The median, not the peak: the decomposition
-    itself makes single-frame pops (up to 30 degrees a frame at equal rates), whatever the timing."""
-    return float(np.median(np.linalg.norm(np.diff(path, axis=0), axis=-1)) * fps)
+def speed(path: np.ndarray, fps: float, statistic=np.median) -> float:
+    """The median (or another ``statistic``'s) speed along ``path`` (units/s)."""
+    return float(statistic(np.linalg.norm(np.diff(path, axis=0), axis=-1)) * fps)
 
 
 def follows(out: em.Motion, body: em.Motion, gesture) -> tuple[float, float]:
     """What the wave does to the hand in ``out`` against what it does in the source (each the hand's
     path about the chest minus that of the motion without the wave): (their correlation at the
-    source's frame times, the ratio of their median speeds over the source's duration from the
+    source's frame times, the ratio of their peak speeds over the source's duration from the
     start)."""
     step = int(round(out.fps / gesture.waving.fps))
     theirs = hand_about_chest(gesture.waving) - hand_about_chest(gesture.walk)
@@ -61,7 +60,7 @@ def follows(out: em.Motion, body: em.Motion, gesture) -> tuple[float, float]:
     a, b = sampled - sampled.mean(axis=0), theirs - theirs.mean(axis=0)
     correlation = float(np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)))
     first = mine[: len(theirs) * step] if step > 1 else mine[: len(theirs)]
-    return correlation, speed(first, out.fps) / speed(theirs, gesture.waving.fps)
+    return correlation, speed(first, out.fps, np.max) / speed(theirs, gesture.waving.fps, np.max)
 
 
 def test_a_30fps_gesture_on_a_120fps_walk_keeps_its_own_timing(model, gesture, fast_walk):
@@ -70,6 +69,14 @@ def test_a_30fps_gesture_on_a_120fps_walk_keeps_its_own_timing(model, gesture, f
     correlation, ratio = follows(out, fast_walk, gesture)
     assert correlation >= 0.5, correlation
     assert 1 / 1.5 <= ratio <= 1.5, ratio
+
+
+def test_a_gesture_mixed_at_its_own_rate_plays_without_pops(model, gesture):
+    """The same wave onto the 30 fps walk it was made on: no frame faster than 1.5x the source's
+    fastest (the network's pose jumps where a contact flips, and the steep activity index let
+    an elbow's expression drop 27 degrees in one frame: 2.6x before the split was smoothed)."""
+    correlation, ratio = follows(mix(gesture.walk, gesture.waving, model, joints="arms"), gesture.walk, gesture)
+    assert correlation >= 0.5 and 1 / 1.5 <= ratio <= 1.5, (correlation, ratio)
 
 
 def test_index_alignment_is_still_there_and_plays_the_gesture_4x_too_fast(model, gesture, fast_walk):

@@ -72,3 +72,20 @@ def test_rotation_vectors_agree_with_scipy_and_round_trip():
     np.testing.assert_allclose(np.abs(np.sum(back * q, axis=-1)), 1.0, atol=1e-12)
     rotvecs = Rotation.from_quat(q).as_rotvec()
     np.testing.assert_allclose(quat.exp(rotvecs), Rotation.from_rotvec(rotvecs).as_quat(), atol=1e-12)
+
+
+def test_smooth_keeps_a_steady_turn_ignores_signs_and_removes_a_pop():
+    # A turn about Z at 2 degrees a frame with every other quaternion's sign flipped: smoothing
+    # reads the rotations, not the signs, so the turn comes back (away from the held ends).
+    degrees = 2.0 * np.arange(40)
+    turn = Rotation.from_euler("z", degrees[:, None], degrees=True).as_quat()
+    flipped = turn * np.where(np.arange(40) % 2, -1.0, 1.0)[:, None]
+    smoothed = quat.smooth(flipped, 2.0)
+    off = np.degrees(quat.angle(quat.mul(smoothed, quat.conjugate(turn))))[8:-8]
+    assert off.max() < 1e-6, off.max()
+    # A 20-degree pop on one frame of a held pose shrinks to a fifth of it or less.
+    held = np.tile(Rotation.from_euler("x", 30, degrees=True).as_quat(), (21, 1))
+    held[10] = Rotation.from_euler("x", 50, degrees=True).as_quat()
+    pop = np.degrees(quat.angle(quat.mul(quat.smooth(held, 2.0), quat.conjugate(held[:1])))).max()
+    assert pop < 4.0, pop
+    np.testing.assert_array_equal(quat.smooth(held, 0.0), held)

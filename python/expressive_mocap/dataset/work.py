@@ -388,7 +388,7 @@ def run_kernels(
     # The model reads the local rotations as quaternions: then another form is derived from them.
     plain = options.plain(keep) and not (use_model and options.rotation_columns)
     requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
-    kept = []  # (values to update, local rotations, model features) of each clip for the model
+    kept = []  # (values to update, local rotations, model features, fps) of each clip for the model
     finished = []  # (an outcome of the group, [values]) of each group, for the sums
     for group in prepared.groups:
         outputs = ops.PipelineOutputs(
@@ -425,15 +425,19 @@ def run_kernels(
             derive_group(group, done, keep, options, frames)
         if use_model:
             kept += [
-                (values, result[1], result[2][-1]) for (values, result, _), f in zip(done, frames) if f is not False
+                (values, result[1], result[2][-1], 1.0 / frame_time)
+                for (values, result, frame_time), f in zip(done, frames)
+                if f is not False
             ]
         survivors = [values for (values, _, _), owner in zip(done, owners) if owner.error is None]
         if survivors:
             carrier = next(owner for owner in owners if owner.error is None)
             finished.append((carrier, survivors))
     if use_model:
-        parts = decompose_many([r for _, r, _ in kept], [f for _, _, f in kept], model, model_float32)
-        for (values, _, _), clip_parts in zip(kept, parts):
+        parts = decompose_many(
+            [r for _, r, _, _ in kept], [f for _, _, f, _ in kept], model, [fps for *_, fps in kept], model_float32
+        )
+        for (values, *_), clip_parts in zip(kept, parts):
             values.update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
     add_sums(finished, keep)
     return outcomes, prepared.seconds, time.perf_counter() - start

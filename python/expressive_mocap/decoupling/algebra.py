@@ -24,11 +24,19 @@ import numpy as np
 from ..body.take import Take
 from ..errors import ModelError
 from ..motion import Motion
-from ..ops import compose_rotations, decouple_rotations
+from ..ops import compose_rotations, decouple_rotations, decouple_with_activity
 from ..rotations import quat
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
 EXPONENT = 4.0  # b
+# The network reads each frame on its own, and its pose jumps where a binary feature (a foot
+# contact) flips: up to 20 degrees between two frames at 30 and at 120 fps alike. The activity
+# index is steep (0.03 to 1 over 13 to 32 degrees): a wave's elbow crossing it in two frames made
+# E* jump 27 degrees. Edits carried both into the output as pops (a mixed wave's hand peaked at
+# 2.6x the source's speed at 30 fps, 9x at 120 fps); smoothed in time (Gaussians, in seconds so
+# that every frame rate gets the same), the hand's peak is 1.2x the source's.
+BODY_SMOOTHING = 0.05  # s, sigma of the Gaussian on the predicted body mechanics B
+ACTIVITY_SMOOTHING = 0.1  # s, sigma of the Gaussian on the activity A
 
 
 class BodyMechanicsModel(Protocol):
@@ -47,23 +55,31 @@ def split(
     gain: float = GAIN,
     exponent: float = EXPONENT,
     activity_scale: np.ndarray | None = None,
+    fps: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(expressive E*, body B', activity A)`` of ``original [F, J, 4]`` given the model's
     ``predicted [F, J, 4]`` (:class:`~expressive_mocap.errors.ModelError` if their shapes differ).
     ``activity_scale [J]``: per joint, the angle of ``E`` is divided by it before the activity
-    index reads it (a calibrated model's threshold; None: 1 everywhere)."""
+    index reads it (a calibrated model's threshold; None: 1 everywhere). ``fps``: the frames are
+    one clip's at that rate, and ``B`` and ``A`` are smoothed in time (BODY_SMOOTHING,
+    ACTIVITY_SMOOTHING); None: each frame on its own (a stream's newest frame)."""
     predicted = np.asarray(predicted, dtype=np.float64)
     if predicted.shape != np.shape(original):
         raise ModelError(
             f"the model predicted rotations {list(predicted.shape)} for a motion of {list(np.shape(original))}"
         )
-    if activity_scale is None:
+    if activity_scale is None and fps is None:
         return decouple_rotations(original, predicted, gain, exponent)
-    # The kernel's steps with the angle scaled: E = O B^-1, A, E* = E^A, B' = E*^-1 O.
-    expressive = quat.mul(original, quat.conjugate(predicted))
-    activity = np.clip((np.tanh(quat.angle(expressive) / activity_scale) * gain) ** exponent, 0.0, 1.0)
-    filtered = quat.power(expressive, activity)
-    return filtered, quat.mul(quat.conjugate(filtered), original), activity
+    if fps is not None:
+        predicted = quat.smooth(predicted, BODY_SMOOTHING * fps)
+    # The kernel's steps with the activity read here: E = O B^-1, A, E* = E^A, B' = E*^-1 O.
+    angle = quat.angle(quat.mul(original, quat.conjugate(predicted)))
+    activity = np.clip((np.tanh(angle / (1.0 if activity_scale is None else activity_scale)) * gain) ** exponent, 0, 1)
+    if fps is not None and len(activity) > 1:
+        from scipy.ndimage import gaussian_filter1d  # here: SciPy takes a tenth of a second to import
+
+        activity = np.clip(gaussian_filter1d(activity, ACTIVITY_SMOOTHING * fps, axis=0, mode="nearest"), 0.0, 1.0)
+    return (*decouple_with_activity(original, predicted, activity), activity)
 
 
 def split_from_features(
@@ -117,32 +133,36 @@ def decompose(
     scale = getattr(model, "activity_scale", None)
     predict_take = getattr(model, "predict_take", None)
     predicted = predict_take(take) if predict_take is not None else model.predict(take.motion)
-    expressive, body, activity = split(take.motion.rotations, predicted, gain, exponent, scale)
+    expressive, body, activity = split(take.motion.rotations, predicted, gain, exponent, scale, take.motion.fps)
     return Decomposition(take.motion, expressive, body, activity)
 
 
 def decompose_many(
-    rotations: list[np.ndarray], features: list[np.ndarray], model: FeatureModel, float32: bool = False
+    rotations: list[np.ndarray],
+    features: list[np.ndarray],
+    model: FeatureModel,
+    fps: list[float],
+    float32: bool = False,
 ) -> list[dict[str, np.ndarray]]:
-    """``decompose`` of many clips at once, from each clip's local ``rotations [F, J, 4]`` and
-    model ``features [F, 19]``: one network call for all their frames (the network and the
-    decoupling work frame by frame, so this is the per-clip result, with one kernel call that
-    the Rust MLP spreads over its threads instead of a small call per clip). Returns per clip
-    ``activity [F, J]``, ``body`` and ``expressive [F, J, 4]`` (float64). ``float32``: run the
-    network in float32, about 2x faster (on 12,689 Bandai frames: activity within 2e-5, body
-    rotations within 3e-6 of the float64 result)."""
+    """``decompose`` of many clips at once, from each clip's local ``rotations [F, J, 4]``, model
+    ``features [F, 19]`` and frame rate: one network call for all their frames (the network works
+    frame by frame, so this is the per-clip result, with one kernel call that the Rust MLP
+    spreads over its threads instead of a small call per clip), then each clip split on its own
+    (smoothed in its own time, so a clip's result never depends on the clips beside it).
+    Returns per clip ``activity [F, J]``, ``body`` and ``expressive [F, J, 4]`` (float64).
+    ``float32``: run the network in float32, about 2x faster (on 12,689 Bandai frames: activity
+    within 2e-5, body rotations within 3e-6 of the float64 result)."""
     if not rotations:
         return []
-    original = np.concatenate(rotations)
     inputs = np.concatenate(features)
-    expressive, recovered, activity = split_from_features(
-        original, inputs.astype(np.float32) if float32 else inputs, model
-    )
+    predicted = model.predict_from_features(np.concatenate(rotations), inputs.astype(np.float32) if float32 else inputs)
     cuts = np.cumsum([len(r) for r in rotations])[:-1]
-    return [
-        {"activity": a, "body": b, "expressive": e}
-        for a, b, e in zip(np.split(activity, cuts), np.split(recovered, cuts), np.split(expressive, cuts))
-    ]
+    scale = getattr(model, "activity_scale", None)
+    out = []
+    for original, body, rate in zip(rotations, np.split(predicted, cuts), fps):
+        expressive, recovered, activity = split(original, body, GAIN, EXPONENT, scale, rate)
+        out.append({"activity": activity, "body": recovered, "expressive": expressive})
+    return out
 
 
 __all__ = [

@@ -18,6 +18,8 @@ class StreamingDecoupler:
     the last ``history`` seconds (enough for the velocity mean, the contact filter and the air
     time of any step) and returns, for each new frame, its body-mechanics rotations, filtered
     expressive rotations and activity per joint. The floor is given (default 0), not estimated.
+    Each frame is split on its own: without the offline split's smoothing in time (of the
+    prediction and of the activity), which needs the frames after.
 
     A ``skeleton`` other than the model's (any humanoid one; ``joint_map`` as for
     :func:`~expressive_mocap.body.find_joint_map`) is read from the first frame (its

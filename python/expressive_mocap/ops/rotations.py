@@ -92,6 +92,20 @@ def decouple_rotations(original, body, gain: float, exponent: float) -> tuple[np
     return e.reshape(original.shape), b.reshape(original.shape), a.reshape(batch)
 
 
+def decouple_with_activity(original, body, activity) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`decouple_rotations` with the activity ``[F, J]`` given (one smoothed in time, or read
+    with per-joint thresholds): returns ``(E*, B')``."""
+    original, body = _f64("original", original, 4), _f64("body", body, 4)
+    activity = _array("activity", activity, np.float64)
+    if activity.shape != original.shape[:-1]:
+        raise ArgumentError(
+            f"argument `activity`: expected shape {list(original.shape[:-1])}, got {list(activity.shape)}"
+        )
+    frames = _frames(original)
+    e, b = kernels().decouple_with_activity(frames, _frames(body), activity.reshape(frames.shape[:2]))
+    return e.reshape(original.shape), b.reshape(original.shape)
+
+
 def compose_rotations(expressive, body, scale: float = 1.0) -> np.ndarray:
     """``expressive^scale * body`` for rotations ``[F, J, 4]`` (modulation of expressiveness)."""
     expressive, body = _f64("expressive", expressive, 4), _f64("body", body, 4)
@@ -112,6 +126,7 @@ __all__ = [
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
+    "decouple_with_activity",
     "euler_to_quat",
     "forward_kinematics",
     "forward_kinematics_many",

@@ -20,6 +20,7 @@ _TWINS = {
     "compose_rotations": "decouple",
     "decode_channels": "motion_block",
     "decouple_rotations": "decouple",
+    "decouple_with_activity": "decouple",
     "dynamic_features": "features",
     "euler_to_quat": "rotations",
     "foot_contacts": "footsteps",

@@ -24,8 +24,25 @@ def decouple_rotations(original: np.ndarray, body: np.ndarray, gain: float = 2.0
             raise ArgumentError(f"argument `{name}`: must be a positive number, got {value}")
     expressive = quat.mul(original, quat.conjugate(body))
     activity = np.clip((np.tanh(quat.angle(expressive)) * gain) ** exponent, 0.0, 1.0)
-    filtered = quat.power(expressive, activity)
-    return filtered, quat.mul(quat.conjugate(filtered), original), activity
+    return (*_filtered(original, body, activity), activity)
+
+
+def decouple_with_activity(original: np.ndarray, body: np.ndarray, activity: np.ndarray):
+    """``E* = (O B^-1)^A`` and ``B' = E*^-1 O`` for a given activity ``A [F, J]`` in [0, 1]."""
+    _check("body", original, body)
+    if np.shape(activity) != original.shape[:2]:
+        raise ArgumentError(
+            f"argument `activity`: expected shape {list(original.shape[:2])} (one value per rotation of `original`), "
+            f"got {list(np.shape(activity))}"
+        )
+    if not np.all((activity >= 0.0) & (activity <= 1.0)):
+        raise ArgumentError("argument `activity`: expected values in [0, 1]")
+    return _filtered(original, body, activity)
+
+
+def _filtered(original: np.ndarray, body: np.ndarray, activity: np.ndarray):
+    filtered = quat.power(quat.mul(original, quat.conjugate(body)), activity)
+    return filtered, quat.mul(quat.conjugate(filtered), original)
 
 
 def compose_rotations(expressive: np.ndarray, body: np.ndarray, scale: float = 1.0) -> np.ndarray:
@@ -39,4 +56,5 @@ def compose_rotations(expressive: np.ndarray, body: np.ndarray, scale: float = 1
 __all__ = [
     "compose_rotations",
     "decouple_rotations",
+    "decouple_with_activity",
 ]
