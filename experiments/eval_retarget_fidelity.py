@@ -9,7 +9,10 @@ For each walk of ``DIR`` (the shared folder of files on other rigs), retargeted 
   against the floor), beside a dataset-2 walk's own (``dataset-2_walk_normal_001``);
 - the mean and largest angle between the source's and the retarget's hips-to-chest and
   chest-to-head lines, each in its frame's heading frame;
-- the height of a round trip A -> Bandai -> A against A, in % of A's actor height.
+- the height of a round trip A -> Bandai -> A against A, in % of A's actor height;
+- the stance feet's horizontal speed (ankle and toe joints, over pairs of frames the source has
+  the foot down) of the default retarget (feet planted), in actor heights a second, over the
+  source's.
 Positions by forward kinematics; every measure is computed here, not by the package's reports.
 Prints the table; the recorded runs, before and after, are in experiments/RETARGET_FIDELITY.md.
 Data: Bandai-Namco-Research-Motiondataset (CC BY-NC 4.0); CMU Graphics Lab Motion Capture
@@ -53,6 +56,18 @@ def stance(motion: em.Motion, contacts: np.ndarray) -> tuple[float, float, float
     return float(ankle), float(toe), float(pitch)
 
 
+def stance_speed(motion: em.Motion, contacts: np.ndarray) -> float:
+    points, jmap = canonical_points(motion)
+    steps = []
+    for s, side in enumerate(("left", "right")):
+        both = contacts[1:, s] & contacts[:-1, s]
+        for part in ("foot", "toes"):
+            moved = np.diff(points[:, jmap[f"{side}_{part}"]][:, [0, 2]], axis=0)
+            steps.append(np.linalg.norm(moved, axis=1)[both])
+    height = read_conventions(motion, jmap).height
+    return float(np.concatenate(steps).mean() * motion.fps / height)
+
+
 def trunk(motion: em.Motion) -> list[np.ndarray]:
     points, jmap = canonical_points(motion)
     left = points[:, jmap["left_upper_leg"]] - points[:, jmap["right_upper_leg"]]
@@ -80,8 +95,11 @@ def main() -> None:
     bandai = em.read_bvh(dataset / "Bandai-Namco-Research-Motiondataset-2" / "data" / "dataset-2_walk_normal_001.bvh")
     own = stance(bandai, foot_contacts(bandai))
     print(f"dataset-2 walk: stance ankle {own[0]:.1f} cm, toe {own[1]:.1f} cm, pitch {own[2]:.1f} deg")
-    print("| walk | ankle cm | toe cm | pitch deg | hips-chest deg (mean/max) | chest-head deg | round trip % |")
-    print("|---|---|---|---|---|---|---|")
+    print(
+        "| walk | ankle cm | toe cm | pitch deg | hips-chest deg (mean/max) | chest-head deg | round trip % "
+        "| stance speed x source |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
     for name in WALKS:
         source = em.read_bvh(args.other / f"{name}.bvh")
         out, _ = onto_canonical(source, plant_feet=False)
@@ -93,9 +111,11 @@ def main() -> None:
         up = quat.rotate(quat.conjugate(conventions.rotation()), np.array([0.0, 1.0, 0.0]))
         lift = (back.positions() - source.positions()) @ up
         trip = 100 * np.abs(lift).mean() / conventions.height
+        contacts = foot_contacts(upright(source))
+        sliding = stance_speed(onto_canonical(source)[0], contacts) / stance_speed(source, contacts)
         print(
             f"| {name} | {ankle:.1f} | {toe:.1f} | {pitch:.1f} | {lines[0].mean():.1f} / {lines[0].max():.1f} "
-            f"| {lines[1].mean():.1f} / {lines[1].max():.1f} | {trip:.2f} |"
+            f"| {lines[1].mean():.1f} / {lines[1].max():.1f} | {trip:.2f} | {sliding:.2f} |"
         )
 
 

@@ -69,6 +69,36 @@ def test_real_walks_of_other_rigs_stand_on_the_canonical_body_as_a_bandai_walk_d
         assert abs(got[2] - want[2]) < 5.0, (name, got, want)
 
 
+def stance_speed(motion: Motion, contacts: np.ndarray) -> float:
+    """The stance ankles' and toe joints' horizontal speed over pairs of frames in ``contacts``,
+    in actor heights a second (so that rigs of any unit compare)."""
+    from expressive_mocap.rotations import quat
+
+    jmap = find_joint_map(motion.skeleton)
+    conventions = read_conventions(motion, jmap)
+    points = quat.rotate(conventions.rotation(), motion.positions())
+    steps = []
+    for s, side in enumerate(("left", "right")):
+        both = contacts[1:, s] & contacts[:-1, s]
+        for part in ("foot", "toes"):
+            moved = np.diff(points[:, jmap[f"{side}_{part}"]][:, [0, 2]], axis=0)
+            steps.append(np.linalg.norm(moved, axis=1)[both])
+    return float(np.concatenate(steps).mean() * motion.fps / conventions.height)
+
+
+@pytest.mark.real_data
+def test_real_walks_keep_their_stance_feet_on_the_canonical_body(other_dir):
+    """Stance feet (the source's contacts) at most 1.1x the source's speed once planted. A walk on
+    the balls of its feet (dme_comp_3d_2: the heel up, the foot turning about the toe) slid its
+    toes at 1.13x while its ankles followed the source's: the toe is now the pivot where the
+    source's toe is the still one."""
+    for name in ("m21_walk", "m21_female-walk", "cmu_scaled_131_03", "cmu_01_01", "dme_comp_3d_2"):
+        source = em.read_bvh(other_dir / f"{name}.bvh")
+        contacts = foot_contacts(upright(source))
+        ratio = stance_speed(onto_canonical(source)[0], contacts) / stance_speed(source, contacts)
+        assert ratio <= 1.1, (name, ratio)
+
+
 def round_trip_height(source: Motion, through: Motion) -> float:
     """How far a round trip ``source`` -> ``through``'s rig -> ``source``'s rig moves the whole
     body along ``source``'s up axis, mean over joints and frames, in % of its actor height."""

@@ -186,10 +186,40 @@ def _retarget_frames(
     contacts = source_contacts(clips or [motion], source, upright, bounds)
     out, lift = _stand_on_floor(out, contacts, goal, bounds)
     if plant_feet:
-        feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
-        ankles = carried(positions[:, feet], source, goal, floor) + lift[:, None, :]
+        ankles = _ankle_guides(out, positions, source, goal, floor, bounds) + lift[:, None, :]
         out = plant(out, goal.jmap, contacts, ankles, starts=bounds)
     return out
+
+
+def _ankle_guides(out: Motion, positions: np.ndarray, source: Rig, goal: Rig, floor: np.ndarray, bounds) -> np.ndarray:
+    """Where each of the target's ankles ``[F, 2, 3]`` should move during a contact (target
+    world, before the lift): the source's ankle carried over, or, as the foot rolls onto its toe,
+    the ankle that puts the target's toe where the source's toe is carried (the target's foot
+    keeps its own orientation), weighted per frame by how fast each of the two moves in the
+    source (the slower one is the foot's pivot). A rig whose foot points steeper or flatter
+    than the source's otherwise slid its toe when a raised heel turned the foot about the toe
+    (a walk on the balls of the feet: toes at 1.3x the source's speed). Clip by clip (``bounds``)."""
+    feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
+    ankles = carried(positions[:, feet], source, goal, floor)
+    toes = [source.jmap.get(f"{side}_toes") for side in ("left", "right")]
+    goal_toes = [goal.jmap.get(f"{side}_toes") for side in ("left", "right")]
+    if None in toes or None in goal_toes or len(positions) < 2:
+        return ankles
+    source_toes = carried(positions[:, toes], source, goal, floor)
+    placed = out.positions()
+    goal_feet = [goal.jmap[f"{side}_foot"] for side in ("left", "right")]
+    reach = placed[:, goal_toes] - placed[:, goal_feet]  # [F, 2, 3]: the target's foot, ankle to toe
+    by_toe = source_toes - reach
+    # Blend the two paths' steps, not the paths: they stand apart by the rigs' different feet.
+    heel_step, toe_step = np.diff(ankles, axis=0), np.diff(by_toe, axis=0)
+    heel = np.linalg.norm(np.diff(ankles, axis=0), axis=-1)
+    toe = np.linalg.norm(np.diff(source_toes, axis=0), axis=-1)
+    toe_pivot = (heel / np.maximum(heel + toe, 1e-12))[..., None]
+    steps = (1.0 - toe_pivot) * heel_step + toe_pivot * toe_step
+    guides = ankles.copy()
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        guides[a + 1 : b] = ankles[a] + np.cumsum(steps[a : b - 1], axis=0)
+    return guides
 
 
 def _stand_on_floor(out: Motion, contacts: np.ndarray, goal: Rig, bounds) -> tuple[Motion, np.ndarray]:
