@@ -191,12 +191,15 @@ def _retarget_frames(
     return out
 
 
+STILL = 0.05  # actor heights a second: slower, a joint is standing still
+
+
 def _ankle_guides(out: Motion, positions: np.ndarray, source: Rig, goal: Rig, floor: np.ndarray, bounds) -> np.ndarray:
     """Where each of the target's ankles ``[F, 2, 3]`` should move during a contact (target
     world, before the lift): the source's ankle carried over, or, as the foot rolls onto its toe,
     the ankle that puts the target's toe where the source's toe is carried (the target's foot
-    keeps its own orientation), weighted per frame by how fast each of the two moves in the
-    source (the slower one is the foot's pivot). A rig whose foot points steeper or flatter
+    keeps its own orientation), weighted per frame by how much faster the source's ankle moves
+    than its toe (the toe is then the foot's pivot; a joint under STILL stands). A rig whose foot points steeper or flatter
     than the source's otherwise slid its toe when a raised heel turned the foot about the toe
     (a walk on the balls of the feet: toes at 1.3x the source's speed). Clip by clip (``bounds``)."""
     feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
@@ -214,7 +217,8 @@ def _ankle_guides(out: Motion, positions: np.ndarray, source: Rig, goal: Rig, fl
     heel_step, toe_step = np.diff(ankles, axis=0), np.diff(by_toe, axis=0)
     heel = np.linalg.norm(np.diff(ankles, axis=0), axis=-1)
     toe = np.linalg.norm(np.diff(source_toes, axis=0), axis=-1)
-    toe_pivot = (heel / np.maximum(heel + toe, 1e-12))[..., None]
+    still = STILL * goal.body.actor_height * out.frame_time  # a step this short is standing
+    toe_pivot = np.clip((heel - toe) / (heel + toe + still), 0.0, 1.0)[..., None]
     steps = (1.0 - toe_pivot) * heel_step + toe_pivot * toe_step
     guides = ankles.copy()
     for a, b in zip(bounds[:-1], bounds[1:]):
