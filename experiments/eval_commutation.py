@@ -1,0 +1,128 @@
+"""Do edits commute with retargeting? E(R(x)) against R(E(x)), on the files the commands write.
+
+    python experiments/eval_commutation.py [--other DIR] [--data DIR]
+
+``x`` is a dataset-2 wave (``wave-left-hand_normal_001``: decoupling a neutral walk changes little)
+or walk (``walk_normal_010``: exaggeration; ``mix`` takes the walk's body and the wave's expression),
+``R`` the retarget onto another rig (``retarget --target``: each synthetic rig's walk, and each
+walk of ``DIR``, the shared folder of files on other rigs), ``E`` one edit as a user runs it:
+``decouple`` (its body-mechanics file), ``modulate --scale`` 0 and 2, ``mix`` (the walk's body
+mechanics with the wave's expressiveness) and ``exaggerate --to 3`` with a model of dataset-2's
+walks (takes 1-8 of exhausted, normal and active as 8 people at intensities 1-3, trained here;
+``--no-timing``). E(R(x)): the retargeted walk edited on its rig; R(E(x)): the edit made on the
+Bandai-Namco walk, then retargeted. Both files are read with this folder's own BVH reader and
+SciPy forward kinematics (:mod:`independent`); the figure is each frame's mean joint distance
+between the two, in % of the rig's actor height: the mean over frames and the worst frame (in
+brackets, the edit's own size: the same distance between E(R(x)) and R(x)). The rigs of the shared
+folder's walks ``dme_*`` are ``cmu_01_01``'s skeleton.
+
+Data: Bandai-Namco-Research-Motiondataset (CC BY-NC 4.0); CMU Graphics Lab Motion Capture
+Database; deep-motion-editing demo files (BSD-2); the 21-joint walks of the shared folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+import expressive_mocap as em
+from expressive_mocap.body.conventions import read_conventions
+from expressive_mocap.body.jointmap import find_joint_map
+from expressive_mocap.cli import main as cli
+from expressive_mocap.exaggeration import train
+from expressive_mocap.skeletons import synthetic_walk
+from independent import read_fk
+
+REPO = Path(__file__).resolve().parent.parent
+SYNTHETIC = ("cmu", "mixamo", "game", "smpl", "lafan")
+REAL = ("m21_walk", "cmu_01_01", "cmu_scaled_131_03")
+WALK, WAVE = "dataset-2_walk_normal_010.bvh", "dataset-2_wave-left-hand_normal_001.bvh"
+
+
+def run(*args) -> None:
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):
+        code = cli([*map(str, args)])
+    if code != 0:
+        raise SystemExit(f"expressive-mocap {' '.join(map(str, args))} failed")
+
+
+def edit(name: str, walk: Path, wave: Path, model: Path, out: Path) -> Path:
+    """``out`` written by edit ``name`` of the ``walk`` or ``wave`` (one rig's)."""
+    if name == "decouple":
+        run("decouple", wave, "-o", out.with_suffix(""))
+        return out.with_name(out.stem + "_body.bvh")
+    if name.startswith("modulate"):
+        run("modulate", wave, "--scale", name.split()[-1], "-o", out)
+    elif name == "mix":
+        run("mix", "--body", walk, "--expressive", wave, "-o", out)
+    else:
+        run("exaggerate", "--model", model, "--input", walk, "--to", 3, "--no-timing", "-o", out)
+    return out
+
+
+def edited_clip(name: str, walk: Path, wave: Path) -> Path:
+    """The clip edit ``name`` starts from (the body source of ``mix``)."""
+    return wave if name == "decouple" or name.startswith("modulate") else walk
+
+
+EDITS = ("decouple", "modulate 0", "modulate 2", "mix", "exaggerate 3")
+
+
+def apart(a: Path, b: Path, height: float) -> tuple[float, float]:
+    """(mean, worst frame) of the mean joint distance between two files of one skeleton, % of height."""
+    pa, pb = read_fk(a).positions, read_fk(b).positions
+    frames = min(len(pa), len(pb))
+    per_frame = np.linalg.norm(pa[:frames] - pb[:frames], axis=-1).mean(axis=1) / height * 100
+    return float(per_frame.mean()), float(per_frame.max())
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--other", type=Path, default=REPO.parent / "shared" / "data" / "other")
+    parser.add_argument("--data", type=Path, default=Path.home() / ".cache" / "motion-data")
+    args = parser.parse_args()
+    found = subprocess.run(
+        [str(REPO.parent / "shared" / "data" / "unpack"), str(args.data)], capture_output=True, text=True, check=True
+    )
+    dataset = Path(found.stdout.strip().splitlines()[-1]) / "Bandai-Namco-Research-Motiondataset-2" / "data"
+    styles = ("exhausted", "normal", "active")
+    people = [[em.read_bvh(dataset / f"dataset-2_walk_{s}_{p:03d}.bvh") for s in styles] for p in range(1, 9)]
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        model = work / "walks.npz"
+        train(people, (1.0, 2.0, 3.0)).save(model)
+        targets = {}
+        for rig in SYNTHETIC:
+            targets[rig] = work / f"{rig}.bvh"
+            em.write_bvh(synthetic_walk(rig).motion, targets[rig])
+        for name in REAL:
+            targets[name] = args.other / f"{name}.bvh"
+        walk, wave = dataset / WALK, dataset / WAVE
+        edited = {e: edit(e, walk, wave, model, work / f"bandai_{e.replace(' ', '_')}.bvh") for e in EDITS}
+        print("| rig | " + " | ".join(EDITS) + " |")
+        print("|---|" + "---|" * len(EDITS))
+        for rig, target in targets.items():
+            on_rig, wave_on_rig = work / f"{rig}_walk.bvh", work / f"{rig}_wave.bvh"
+            run("retarget", walk, "--to", target, "-o", on_rig)
+            run("retarget", wave, "--to", target, "-o", wave_on_rig)
+            skeleton = em.read_bvh(on_rig).skeleton
+            height = read_conventions(em.read_bvh(on_rig), find_joint_map(skeleton)).height
+            cells = []
+            for e in EDITS:
+                after = edit(e, on_rig, wave_on_rig, model, work / f"{rig}_{e.replace(' ', '_')}.bvh")  # E(R(x))
+                before = work / f"{rig}_{e.replace(' ', '_')}_R.bvh"
+                run("retarget", edited[e], "--to", target, "-o", before)  # R(E(x))
+                mean, worst = apart(after, before, height)
+                size, _ = apart(after, edited_clip(e, on_rig, wave_on_rig), height)
+                cells.append(f"{mean:.2f} / {worst:.2f} ({size:.1f})")
+            print(f"| {rig} | " + " | ".join(cells) + " |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
