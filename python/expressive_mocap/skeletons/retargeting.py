@@ -199,9 +199,10 @@ def _ankle_guides(out: Motion, positions: np.ndarray, source: Rig, goal: Rig, fl
     world, before the lift): the source's ankle carried over, or, as the foot rolls onto its toe,
     the ankle that puts the target's toe where the source's toe is carried (the target's foot
     keeps its own orientation), weighted per frame by how much faster the source's ankle moves
-    than its toe (the toe is then the foot's pivot; a joint under STILL stands). A rig whose foot points steeper or flatter
-    than the source's otherwise slid its toe when a raised heel turned the foot about the toe
-    (a walk on the balls of the feet: toes at 1.3x the source's speed). Clip by clip (``bounds``)."""
+    than its toe (the toe is then the foot's pivot; a joint under STILL stands). A rig whose
+    foot points steeper or flatter than the source's otherwise slid its toe when a raised heel
+    turned the foot about the toe (a walk on the balls of the feet: toes at 1.3x the source's
+    speed). Clip by clip (``bounds``)."""
     feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
     ankles = carried(positions[:, feet], source, goal, floor)
     toes = [source.jmap.get(f"{side}_toes") for side in ("left", "right")]
