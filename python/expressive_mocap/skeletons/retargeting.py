@@ -205,10 +205,10 @@ def _ankle_guides(out: Motion, positions: np.ndarray, source: Rig, goal: Rig, fl
     speed). Clip by clip (``bounds``)."""
     feet = [source.jmap[f"{side}_foot"] for side in ("left", "right")]
     ankles = carried(positions[:, feet], source, goal, floor)
-    toes = [source.jmap.get(f"{side}_toes") for side in ("left", "right")]
-    goal_toes = [goal.jmap.get(f"{side}_toes") for side in ("left", "right")]
-    if None in toes or None in goal_toes or len(positions) < 2:
+    sides = ("left_toes", "right_toes")
+    if not all(r in source.jmap and r in goal.jmap for r in sides) or len(positions) < 2:
         return ankles
+    toes, goal_toes = [source.jmap[r] for r in sides], [goal.jmap[r] for r in sides]
     source_toes = carried(positions[:, toes], source, goal, floor)
     placed = out.positions()
     goal_feet = [goal.jmap[f"{side}_foot"] for side in ("left", "right")]
