@@ -276,13 +276,36 @@ def cmd_exaggerate(args) -> int:
 
         original = retime_like(original, timing)
         _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
-    written = back(out, plant_feet=not args.no_foot_lock)
+    on_model = original.skeleton.names == motion.skeleton.names
+    written = back(out, plant_feet=not args.no_foot_lock and on_model)
+    if not args.no_foot_lock and not on_model:
+        written = _locked_on_own_skeleton(original, written, args.blend, joint_map(args))
     write_bvh(written, args.output)
     print(report.text())
     if original.skeleton.names != motion.skeleton.names:  # edited on the model's body: say what the file got
         print(on_own_skeleton(original, written))
     print(f"wrote {args.output}")
     return 0
+
+
+def _locked_on_own_skeleton(original: Motion, written: Motion, blend: float, user_map) -> Motion:
+    """``written`` (an edit carried back onto ``original``'s skeleton) with its stance feet locked
+    there as the edit locks them on the model's body: where ``original`` has them through its own
+    contacts, eased in and out over ``blend`` seconds, the swing left as the edit made it. (The
+    decoupling edits' planting also moves the swing toward the next contact: on an exaggerated
+    walk that took 6 of the knees' 19 extra degrees.) A leg that is not two bones from hip to
+    ankle is left as it is."""
+    from ..body.body import Body
+    from ..body.contacts import foot_contacts
+    from ..body.conventions import upright
+    from ..exaggeration.footlock import lock_stance_feet
+
+    contacts = foot_contacts(upright(original))  # read Y up, as the edit's own are
+    roles = Body.of(original.skeleton, user_map).roles
+    try:
+        return lock_stance_feet(original, written, contacts, roles, int(round(blend * original.fps)))[0]
+    except ArgumentError:
+        return written
 
 
 def on_own_skeleton(original: Motion, written: Motion) -> str:

@@ -1,0 +1,134 @@
+"""Exaggeration on other rigs moves the knees and the trunk as it does on the Bandai-Namco body.
+
+    python experiments/eval_exaggeration_rigs.py [--other DIR] [--data DIR]
+
+A model of dataset-2's walks (takes 1-8 of exhausted, normal and active as 8 people at
+intensities 1-3, trained here) exaggerates dataset-2's held-out normal walks (takes 10-13) to 4
+and diminishes them to 0 (``exaggerate --no-timing``), on the Bandai-Namco skeleton and, each
+walk retargeted first (``retarget --to``), on every synthetic rig and on the skeletons of the
+shared folder's walks. On each written file, read with this folder's own BVH reader and SciPy
+forward kinematics (:mod:`independent`):
+
+- knee flexion: the largest angle between thigh and shank over the clip (degrees), mean of both
+  knees; the edit's change is output minus input;
+- lean: the mean angles of the hips-to-chest and the chest-to-head lines from the vertical
+  (degrees, the rig's up axis; one hips-to-head line would also measure each rig's neck and
+  head proportions).
+
+Printed: per rig, the edits' mean change of knee flexion and of lean over the walks, and the
+ratio to the change on the Bandai-Namco skeleton farthest from 1 among the changes of 2 degrees
+or more there (target: within 25 %).
+
+Data: Bandai-Namco-Research-Motiondataset (CC BY-NC 4.0); CMU Graphics Lab Motion Capture
+Database; the 21-joint walks of the shared folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+import expressive_mocap as em
+from expressive_mocap.body.conventions import read_conventions
+from expressive_mocap.body.jointmap import find_joint_map
+from expressive_mocap.cli import main as cli
+from expressive_mocap.exaggeration import train
+from expressive_mocap.rotations import quat
+from expressive_mocap.skeletons import synthetic_walk
+from independent import read_fk
+
+REPO = Path(__file__).resolve().parent.parent
+SYNTHETIC = ("cmu", "mixamo", "game", "smpl", "lafan")
+REAL = ("m21_walk", "cmu_01_01", "cmu_scaled_131_03")
+TAKES = (10, 11, 12, 13)
+LEVELS = (4, 0)
+
+
+def run(*args) -> None:
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):
+        code = cli([*map(str, args)])
+    if code != 0:
+        raise SystemExit(f"expressive-mocap {' '.join(map(str, args))} failed")
+
+
+def measures(path: Path) -> tuple[float, float, float]:
+    """(largest knee flexion, mean lean of the lower and of the upper trunk) of the file, degrees
+    (joint roles read from its names)."""
+    fk = read_fk(path)
+    motion = em.read_bvh(path)  # for the joint map and the up axis only
+    jmap = find_joint_map(motion.skeleton)
+    up = quat.rotate(quat.conjugate(read_conventions(motion, jmap).rotation()), np.array([0.0, 1.0, 0.0]))
+    p = fk.positions
+    knees = []
+    for side in ("left", "right"):
+        hip, knee, ankle = (p[:, jmap[f"{side}_{r}"]] for r in ("upper_leg", "lower_leg", "foot"))
+        thigh, shank = knee - hip, ankle - knee
+        cosine = np.sum(thigh * shank, -1) / np.linalg.norm(thigh, axis=-1) / np.linalg.norm(shank, axis=-1)
+        knees.append(np.degrees(np.arccos(np.clip(cosine, -1, 1))).max())
+    leans = []
+    for low, high in (("hips", "chest"), ("chest", "head")):
+        line = p[:, jmap[high]] - p[:, jmap[low]]
+        leans.append(np.degrees(np.arccos(np.clip(line @ up / np.linalg.norm(line, axis=-1), -1, 1))).mean())
+    return float(np.mean(knees)), float(leans[0]), float(leans[1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--other", type=Path, default=REPO.parent / "shared" / "data" / "other")
+    parser.add_argument("--data", type=Path, default=Path.home() / ".cache" / "motion-data")
+    args = parser.parse_args()
+    found = subprocess.run(
+        [str(REPO.parent / "shared" / "data" / "unpack"), str(args.data)], capture_output=True, text=True, check=True
+    )
+    dataset = Path(found.stdout.strip().splitlines()[-1]) / "Bandai-Namco-Research-Motiondataset-2" / "data"
+    styles = ("exhausted", "normal", "active")
+    people = [[em.read_bvh(dataset / f"dataset-2_walk_{s}_{p:03d}.bvh") for s in styles] for p in range(1, 9)]
+    walks = [dataset / f"dataset-2_walk_normal_{t:03d}.bvh" for t in TAKES]
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        model = work / "walks.npz"
+        train(people, (1.0, 2.0, 3.0)).save(model)
+        targets: dict[str, Path | None] = {"bandai": None}
+        for rig in SYNTHETIC:
+            targets[rig] = work / f"{rig}.bvh"
+            em.write_bvh(synthetic_walk(rig).motion, targets[rig])
+        for name in REAL:
+            targets[name] = args.other / f"{name}.bvh"
+        changes: dict[str, np.ndarray] = {}
+        for rig, target in targets.items():
+            rows = []
+            for walk in walks:
+                source = walk
+                if target is not None:
+                    source = work / f"{rig}_{walk.name}"
+                    run("retarget", walk, "--to", target, "-o", source)
+                before = np.array(measures(source))
+                row = []
+                for level in LEVELS:
+                    out = work / f"{rig}_{level}_{walk.name}"
+                    run("exaggerate", "--model", model, "--input", source, "--to", level, "--no-timing", "-o", out)
+                    row.append(np.array(measures(out)) - before)
+                rows.append(np.concatenate(row))
+            changes[rig] = np.mean(rows, axis=0)  # (knee, lower lean, upper lean) to 4, then to 0
+        print(
+            "| rig | to 4: knee | hips-chest | chest-head | to 0: knee | hips-chest | chest-head "
+            "| worst ratio to Bandai's |"
+        )
+        print("|---|---|---|---|---|---|---|---|")
+        bandai = changes["bandai"]
+        telling = np.abs(bandai) >= 2.0
+        for rig, c in changes.items():
+            ratio = c[telling] / bandai[telling]
+            worst = ratio[np.argmax(np.abs(ratio - 1))]
+            cells = " | ".join(f"{v:+.1f}" for v in c)
+            print(f"| {rig} | {cells} | {worst:.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
