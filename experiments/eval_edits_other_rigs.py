@@ -26,9 +26,6 @@ Database; deep-motion-editing demo files (BSD-2); the 21-joint walks of the shar
 
 from __future__ import annotations
 
-import argparse
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -37,18 +34,13 @@ import numpy as np
 import expressive_mocap as em
 from expressive_mocap.body.contacts import contact_intervals, foot_contacts
 from expressive_mocap.body.conventions import read_conventions, upright
-from expressive_mocap.exaggeration import train
 from expressive_mocap.rotations import quat
 from independent import read_fk
+from setting import arguments, bandai_dir, run, walks_model
 
-REPO = Path(__file__).resolve().parent.parent
 WALKS = ("m21_walk", "m21_female-walk", "cmu_scaled_131_03", "cmu_01_01", "dme_comp_3d_2")
 STILL = 0.02  # x actor height per second: a stance foot slower than this is still
 GESTURE = "dataset-2_wave-left-hand_normal_001.bvh"
-
-
-def run(*args) -> None:
-    subprocess.run([sys.executable, "-m", "expressive_mocap.cli", *map(str, args)], check=True, capture_output=True)
 
 
 def edits(walk: Path, model: Path, gesture: Path, work: Path) -> dict[str, Path]:
@@ -118,20 +110,12 @@ def measure(walk: Path, edited: Path) -> tuple[float, float, float, float, float
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--other", type=Path, default=REPO.parent / "shared" / "data" / "other")
-    parser.add_argument("--data", type=Path, default=Path.home() / ".cache" / "motion-data")
-    args = parser.parse_args()
-    found = subprocess.run(
-        [str(REPO.parent / "shared" / "data" / "unpack"), str(args.data)], capture_output=True, text=True, check=True
-    )
-    dataset = Path(found.stdout.strip().splitlines()[-1]) / "Bandai-Namco-Research-Motiondataset-2" / "data"
-    styles = ("exhausted", "normal", "active")
-    people = [[em.read_bvh(dataset / f"dataset-2_walk_{s}_{p:03d}.bvh") for s in styles] for p in range(1, 9)]
+    args = arguments(__doc__)
+    dataset = bandai_dir(args.data)
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         model = work / "walks.npz"
-        train(people, (1.0, 2.0, 3.0)).save(model)
+        walks_model(dataset).save(model)
         print(
             "| walk | edit | edit: largest joint turn (deg, mean) | stance speed, median / worst contact (x input) "
             "| feet turned (deg) | below the input's feet (%) |"

@@ -25,10 +25,6 @@ Database; the 21-joint walks of the shared folder.
 
 from __future__ import annotations
 
-import argparse
-import contextlib
-import os
-import subprocess
 import tempfile
 from pathlib import Path
 
@@ -37,24 +33,15 @@ import numpy as np
 import expressive_mocap as em
 from expressive_mocap.body.conventions import read_conventions
 from expressive_mocap.body.jointmap import find_joint_map
-from expressive_mocap.cli import main as cli
-from expressive_mocap.exaggeration import train
 from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons import synthetic_walk
 from independent import read_fk
+from setting import arguments, bandai_dir, run, walks_model
 
-REPO = Path(__file__).resolve().parent.parent
 SYNTHETIC = ("cmu", "mixamo", "game", "smpl", "lafan")
 REAL = ("m21_walk", "cmu_01_01", "cmu_scaled_131_03")
 TAKES = (10, 11, 12, 13)
 LEVELS = (4, 0)
-
-
-def run(*args) -> None:
-    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):
-        code = cli([*map(str, args)])
-    if code != 0:
-        raise SystemExit(f"expressive-mocap {' '.join(map(str, args))} failed")
 
 
 def measures(path: Path) -> tuple[float, float, float]:
@@ -79,21 +66,13 @@ def measures(path: Path) -> tuple[float, float, float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--other", type=Path, default=REPO.parent / "shared" / "data" / "other")
-    parser.add_argument("--data", type=Path, default=Path.home() / ".cache" / "motion-data")
-    args = parser.parse_args()
-    found = subprocess.run(
-        [str(REPO.parent / "shared" / "data" / "unpack"), str(args.data)], capture_output=True, text=True, check=True
-    )
-    dataset = Path(found.stdout.strip().splitlines()[-1]) / "Bandai-Namco-Research-Motiondataset-2" / "data"
-    styles = ("exhausted", "normal", "active")
-    people = [[em.read_bvh(dataset / f"dataset-2_walk_{s}_{p:03d}.bvh") for s in styles] for p in range(1, 9)]
+    args = arguments(__doc__)
+    dataset = bandai_dir(args.data)
     walks = [dataset / f"dataset-2_walk_normal_{t:03d}.bvh" for t in TAKES]
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         model = work / "walks.npz"
-        train(people, (1.0, 2.0, 3.0)).save(model)
+        walks_model(dataset).save(model)
         targets: dict[str, Path | None] = {"bandai": None}
         for rig in SYNTHETIC:
             targets[rig] = work / f"{rig}.bvh"

@@ -21,10 +21,6 @@ Database; deep-motion-editing demo files (BSD-2).
 
 from __future__ import annotations
 
-import argparse
-import subprocess
-from pathlib import Path
-
 import numpy as np
 
 import expressive_mocap as em
@@ -34,8 +30,8 @@ from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.rotations import quat
 from expressive_mocap.skeletons.canonical import onto_canonical
 from expressive_mocap.skeletons.retargeting import retarget
+from setting import arguments, bandai_dir
 
-REPO = Path(__file__).resolve().parent.parent
 WALKS = ("m21_walk", "m21_female-walk", "cmu_scaled_131_03", "cmu_01_01", "dme_comp_3d_2")
 
 
@@ -84,15 +80,8 @@ def apart(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--other", type=Path, default=REPO.parent / "shared" / "data" / "other")
-    parser.add_argument("--data", type=Path, default=Path.home() / ".cache" / "motion-data")
-    args = parser.parse_args()
-    found = subprocess.run(
-        [str(REPO.parent / "shared" / "data" / "unpack"), str(args.data)], capture_output=True, text=True, check=True
-    )
-    dataset = Path(found.stdout.strip().splitlines()[-1])
-    bandai = em.read_bvh(dataset / "Bandai-Namco-Research-Motiondataset-2" / "data" / "dataset-2_walk_normal_001.bvh")
+    args = arguments(__doc__)
+    bandai = em.read_bvh(bandai_dir(args.data) / "dataset-2_walk_normal_001.bvh")
     own = stance(bandai, foot_contacts(bandai))
     print(f"dataset-2 walk: stance ankle {own[0]:.1f} cm, toe {own[1]:.1f} cm, pitch {own[2]:.1f} deg")
     print(
