@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use crate::error::{positive, KernelError, Result};
 use crate::rotations::PARALLEL_MIN_ITEMS;
+use crate::smooth::{gaussian_weights, smooth_frames};
 
 /// The angle of a unit quaternion's rotation, in `[0, pi]`.
 #[must_use]
@@ -88,34 +89,112 @@ pub fn decouple(
     Ok((expressive, recovered, activities))
 }
 
-/// As [`decouple`] with the activity `A` `[F, J]` given (one the caller smoothed in time, or
-/// computed with per-joint thresholds): returns `(E*, B')` with `E* = (O B^-1)^A`, `B' = E*^-1 O`.
+/// How a clip's split is smoothed in time and its activity read: the Gaussians' widths in frames
+/// (0: none) over the predicted body mechanics and over the activity, and per joint the angle
+/// `E` is divided by before the activity index reads it (a calibrated model's thresholds).
+pub struct Smoothing<'a> {
+    pub body_sigma: f64,
+    pub activity_sigma: f64,
+    pub scale: &'a [f64],
+}
+
+/// [`decouple`] of one clip (`[F, J, 4]`, `J = scale.len()`) with `B` and `A` smoothed in time:
+/// `B` (each joint's quaternions put on their predecessor's hemisphere) filtered over frames and
+/// normalised, `A` read from `angle(O B^-1) / scale` and filtered, then `E* = (O B^-1)^A`,
+/// `B' = E*^-1 O`. Returns `(E*, B', A)`; `E* B' = O` still holds exactly.
 ///
 /// # Errors
-/// `KernelError::Argument` when the arrays differ in shape or an activity is not in `[0, 1]`.
-pub fn decouple_with_activity(
+/// `KernelError::Argument` when the arrays differ in shape or do not hold `J` joints a frame, or a
+/// parameter is not a finite number (positive: `gain`, `exponent`, `scale`; at least 0: sigmas).
+pub fn split(
     original: &[f64],
     body: &[f64],
-    activity: &[f64],
-) -> Result<(Vec<f64>, Vec<f64>)> {
+    gain: f64,
+    exponent: f64,
+    smoothing: &Smoothing,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
     check_pair("body", original, body)?;
-    if activity.len() * 4 != original.len() {
+    positive("gain", gain)?;
+    positive("exponent", exponent)?;
+    let joints = smoothing.scale.len();
+    if joints == 0 || original.len() % (4 * joints) != 0 {
         return Err(KernelError::argument(
-            "activity",
+            "scale",
             format!(
-                "expected one value per rotation ({}), got {}",
-                original.len() / 4,
-                activity.len()
+                "expected one value per joint of [F, J, 4] rotations, got {joints} for {} values",
+                original.len()
             ),
         ));
     }
-    if let Some(bad) = activity.iter().find(|a| !(0.0..=1.0).contains(*a)) {
-        return Err(KernelError::argument(
-            "activity",
-            format!("expected values in [0, 1], got {bad}"),
-        ));
+    for &value in smoothing.scale {
+        positive("scale", value)?;
     }
-    Ok(filter(original, body, activity))
+    for (name, sigma) in [
+        ("body_sigma", smoothing.body_sigma),
+        ("activity_sigma", smoothing.activity_sigma),
+    ] {
+        if !(sigma.is_finite() && sigma >= 0.0) {
+            return Err(KernelError::argument(
+                name,
+                format!("must be a number >= 0, got {sigma}"),
+            ));
+        }
+    }
+    let frames = original.len() / 4 / joints;
+    let smoothed = if smoothing.body_sigma > 0.0 && frames > 1 {
+        smoothed_rotations(body, joints, smoothing.body_sigma)
+    } else {
+        body.to_vec()
+    };
+    let mut activities: Vec<f64> = (0..frames * joints)
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|i| {
+            let o = DQuat::from_slice(&original[4 * i..4 * i + 4]);
+            let b = DQuat::from_slice(&smoothed[4 * i..4 * i + 4]);
+            activity(
+                angle(o * b.conjugate()) / smoothing.scale[i % joints],
+                gain,
+                exponent,
+            )
+        })
+        .collect();
+    if smoothing.activity_sigma > 0.0 && frames > 1 {
+        activities = smooth_frames(
+            &activities,
+            joints,
+            &gaussian_weights(smoothing.activity_sigma),
+        );
+        for a in &mut activities {
+            *a = a.clamp(0.0, 1.0);
+        }
+    }
+    let (expressive, recovered) = filter(original, &smoothed, &activities);
+    Ok((expressive, recovered, activities))
+}
+
+/// Unit quaternions `[F, J, 4]` smoothed over frames by a Gaussian of `sigma` frames: each joint's
+/// put on its predecessor's hemisphere, the components filtered, then normalised.
+fn smoothed_rotations(quats: &[f64], joints: usize, sigma: f64) -> Vec<f64> {
+    let mut aligned = quats.to_vec();
+    let width = 4 * joints;
+    for frame in 1..aligned.len() / width {
+        let (before, now) = aligned.split_at_mut(frame * width);
+        let previous = &before[(frame - 1) * width..];
+        for (q, p) in now[..width].chunks_mut(4).zip(previous.chunks(4)) {
+            if q.iter().zip(p).map(|(a, b)| a * b).sum::<f64>() < 0.0 {
+                for v in q.iter_mut() {
+                    *v = -*v;
+                }
+            }
+        }
+    }
+    let mut out = smooth_frames(&aligned, width, &gaussian_weights(sigma));
+    out.chunks_mut(4).for_each(|q| {
+        let unit = DQuat::from_slice(q).normalize();
+        unit.write_to_slice(q);
+    });
+    out
 }
 
 /// `E* = (O B^-1)^A` and `B' = E*^-1 O` per rotation.
@@ -209,9 +288,14 @@ mod tests {
         }
         // 2 degrees apart: (tanh(0.035) * 2)^4 ~ 2.4e-5; far apart: fully active.
         assert!(a[0] < 1e-4 && (a[1] - 1.0).abs() < 1e-12, "{a:?}");
-        // The activity it computed, given back, gives the same split.
-        let (e2, b3) = decouple_with_activity(&flat(&o), &flat(&b), &a).unwrap();
-        assert_eq!((e2, b3), (e, b2));
+        // Unsmoothed and unscaled, the split of one clip is the same.
+        let plain = Smoothing {
+            body_sigma: 0.0,
+            activity_sigma: 0.0,
+            scale: &[1.0, 1.0],
+        };
+        let (e2, b3, a2) = split(&flat(&o), &flat(&b), 2.0, 4.0, &plain).unwrap();
+        assert_eq!((e2, b3, a2), (e, b2, a));
     }
 
     #[test]
@@ -219,8 +303,23 @@ mod tests {
         assert!(decouple(&[0.0; 8], &[0.0; 4], 2.0, 4.0).is_err());
         assert!(decouple(&[0.0; 4], &[0.0; 4], 0.0, 4.0).is_err());
         assert!(compose(&[0.0; 4], &[0.0; 4], f64::NAN).is_err());
-        assert!(decouple_with_activity(&[0.0; 8], &[0.0; 8], &[0.5]).is_err());
-        assert!(decouple_with_activity(&[0.0; 4], &[0.0; 4], &[1.5]).is_err());
-        assert!(decouple_with_activity(&[0.0; 4], &[0.0; 4], &[f64::NAN]).is_err());
+        let three = Smoothing {
+            body_sigma: 1.0,
+            activity_sigma: 1.0,
+            scale: &[1.0; 3],
+        };
+        assert!(split(&[0.0; 8], &[0.0; 8], 2.0, 4.0, &three).is_err());
+        let bad = Smoothing {
+            body_sigma: f64::NAN,
+            activity_sigma: 1.0,
+            scale: &[1.0],
+        };
+        assert!(split(&[0.0; 4], &[0.0; 4], 2.0, 4.0, &bad).is_err());
+        let zero = Smoothing {
+            body_sigma: 1.0,
+            activity_sigma: 1.0,
+            scale: &[0.0],
+        };
+        assert!(split(&[0.0; 4], &[0.0; 4], 2.0, 4.0, &zero).is_err());
     }
 }

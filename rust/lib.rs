@@ -18,6 +18,7 @@ pub mod parse;
 pub mod planting;
 pub mod retarget;
 pub mod rotations;
+pub mod smooth;
 pub mod trig;
 pub mod zeroable;
 

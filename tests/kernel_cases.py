@@ -118,9 +118,9 @@ CORE = {
         lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0),
         ["original", "body"],
     ),
-    "decouple_with_activity": (
-        lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), RNG.uniform(size=(f, 3))),
-        ["original", "body", "activity"],
+    "split_rotations": (
+        lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0, np.ones(3), 1.5, 3.0),
+        ["original", "body", None, None, "scale", None, None],
     ),
     "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
     "retarget_transfer": (transfer_args, ["world", "positions", None]),

@@ -28,7 +28,6 @@ __all__ = [
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
-    "decouple_with_activity",
     "dynamic_features",
     "euler_to_quat",
     "foot_contacts",
@@ -44,6 +43,7 @@ __all__ = [
     "read_motion_blocks",
     "repeated_headers",
     "retarget_transfer",
+    "split_rotations",
     "two_bone_ik",
 ]
 
@@ -149,8 +149,10 @@ def decouple_rotations(original: _F64, body: _F64, gain: float, exponent: float)
     """``(E*, B', A)`` of rotations ``original`` and ``body`` ``[F, J, 4]``: filtered expressive rotations, recovered
     body mechanics and the activity ``[F, J]``."""
 
-def decouple_with_activity(original: _F64, body: _F64, activity: _F64) -> tuple[_F64, _F64]:
-    """``(E*, B')`` of rotations ``original`` and ``body`` ``[F, J, 4]`` for a given activity ``[F, J]``."""
+def split_rotations(
+    original: _F64, body: _F64, gain: float, exponent: float, scale: _F64, body_sigma: float, activity_sigma: float
+) -> tuple[_F64, _F64, _F64]:
+    """One clip's ``(E*, B', A)`` with the body mechanics and the activity smoothed over frames."""
 
 def compose_rotations(expressive: _F64, body: _F64, scale: float = 1.0) -> _F64:
     """``expressive^scale * body`` for rotations ``[F, J, 4]``."""

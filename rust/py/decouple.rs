@@ -1,7 +1,7 @@
 //! Bindings of `crate::decouple`.
 
 use numpy::{
-    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -45,15 +45,25 @@ fn decouple_rotations<'py>(
     ))
 }
 
-/// As `decouple_rotations` with the activity [F, J] given (in [0, 1]): returns E* and B'.
+/// One clip's split with the body mechanics and the activity smoothed in time: `original` and
+/// `body` [F, J, 4], `scale` [J] (the angle's divisor per joint), the Gaussians' widths in frames
+/// (0: none). Returns E* [F, J, 4], B' [F, J, 4] and the activity [F, J].
 #[pyfunction]
-#[allow(clippy::type_complexity)]
-fn decouple_with_activity<'py>(
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn split_rotations<'py>(
     py: Python<'py>,
     original: PyReadonlyArray3<'py, f64>,
     body: PyReadonlyArray3<'py, f64>,
-    activity: PyReadonlyArray2<'py, f64>,
-) -> PyResult<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray3<f64>>)> {
+    gain: f64,
+    exponent: f64,
+    scale: PyReadonlyArray1<'py, f64>,
+    body_sigma: f64,
+    activity_sigma: f64,
+) -> PyResult<(
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray2<f64>>,
+)> {
     let shape = original.shape().to_vec();
     if shape[2] != 4 || body.shape() != shape.as_slice() {
         return Err(shape_error(
@@ -62,23 +72,30 @@ fn decouple_with_activity<'py>(
             body.shape(),
         ));
     }
-    if activity.shape() != &shape[..2] {
+    if scale.shape() != [shape[1]] {
         return Err(shape_error(
-            "activity",
-            &format!("{:?} (one value per rotation of `original`)", &shape[..2]),
-            activity.shape(),
+            "scale",
+            &format!("[{}] (one value per joint of `original`)", shape[1]),
+            scale.shape(),
         ));
     }
-    let (o, b, a) = (
+    let (o, b, s) = (
         contiguous("original", &original)?,
         contiguous("body", &body)?,
-        contiguous("activity", &activity)?,
+        contiguous("scale", &scale)?,
     );
-    let (e, recovered) = py.detach(|| crate::decouple::decouple_with_activity(o, b, a))?;
+    let smoothing = crate::decouple::Smoothing {
+        body_sigma,
+        activity_sigma,
+        scale: s,
+    };
+    let (e, recovered, a) =
+        py.detach(|| crate::decouple::split(o, b, gain, exponent, &smoothing))?;
     let dims = (shape[0], shape[1], 4);
     Ok((
         array(e, dims)?.into_pyarray(py),
         array(recovered, dims)?.into_pyarray(py),
+        array(a, (shape[0], shape[1]))?.into_pyarray(py),
     ))
 }
 
@@ -109,7 +126,7 @@ fn compose_rotations<'py>(
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(decouple_rotations, m)?)?;
-    m.add_function(wrap_pyfunction!(decouple_with_activity, m)?)?;
+    m.add_function(wrap_pyfunction!(split_rotations, m)?)?;
     m.add_function(wrap_pyfunction!(compose_rotations, m)?)?;
     Ok(())
 }

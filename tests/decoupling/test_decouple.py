@@ -120,6 +120,32 @@ def test_rust_matches_numpy_twin():
     np.testing.assert_allclose(
         _core.compose_rotations(original, body, 0.7), reference.compose_rotations(original, body, 0.7), atol=1e-12
     )
+    # A clip's smoothed split, against the twin's SciPy Gaussians, with per-joint thresholds.
+    scale = np.random.default_rng(5).uniform(1.0, 2.0, 20)
+    for sigmas in ((1.5, 3.0), (6.0, 12.0), (0.0, 0.0)):
+        rust = _core.split_rotations(original, body, 2.0, 4.0, scale, *sigmas)
+        twin = reference.split_rotations(original, body, 2.0, 4.0, scale, *sigmas)
+        for a, b in zip(rust[:2], twin[:2]):  # quaternions: either sign is the rotation
+            np.testing.assert_allclose(np.abs(np.sum(a * b, axis=-1)), 1.0, atol=1e-12)
+        np.testing.assert_allclose(rust[2], twin[2], atol=1e-12)
+        np.testing.assert_allclose(np.abs(np.sum(quat.mul(rust[0], rust[1]) * original, axis=-1)), 1.0, atol=1e-12)
+
+
+def test_the_smoothed_split_holds_a_steady_prediction_and_removes_a_pop(backend):
+    """B smoothed over frames: a prediction that is steady stays (away from the held ends, the
+    split is the unsmoothed one), and one frame's 20-degree jump shrinks to a fifth or less."""
+    from expressive_mocap.ops import split_rotations
+
+    steady = np.tile(Rotation.from_euler("x", 40, degrees=True).as_quat(), (30, 2, 1))
+    original = Rotation.from_euler("x", np.linspace(30, 60, 60)[:, None], degrees=True).as_quat().reshape(30, 2, 4)
+    plain = split_rotations(original, steady, 2.0, 4.0)
+    smooth = split_rotations(original, steady, 2.0, 4.0, None, 1.5, 0.0)
+    np.testing.assert_allclose(np.abs(np.sum(plain[1] * smooth[1], axis=-1)), 1.0, atol=1e-12)
+    popped = steady.copy()
+    popped[15, 0] = Rotation.from_euler("x", 60, degrees=True).as_quat()
+    body = split_rotations(original, popped, 2.0, 4.0, None, 1.5, 0.0)[1]
+    jump = np.degrees(quat.angle(quat.mul(body[1:, 0], quat.conjugate(body[:-1, 0])))).max()
+    assert jump < 4.0, jump
 
 
 def test_activity_index_formula(backend):

@@ -24,7 +24,7 @@ import numpy as np
 from ..body.take import Take
 from ..errors import ModelError
 from ..motion import Motion
-from ..ops import compose_rotations, decouple_rotations, decouple_with_activity
+from ..ops import compose_rotations, decouple_rotations, split_rotations
 from ..rotations import quat
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
@@ -70,16 +70,8 @@ def split(
         )
     if activity_scale is None and fps is None:
         return decouple_rotations(original, predicted, gain, exponent)
-    if fps is not None:
-        predicted = quat.smooth(predicted, BODY_SMOOTHING * fps)
-    # The kernel's steps with the activity read here: E = O B^-1, A, E* = E^A, B' = E*^-1 O.
-    angle = quat.angle(quat.mul(original, quat.conjugate(predicted)))
-    activity = np.clip((np.tanh(angle / (1.0 if activity_scale is None else activity_scale)) * gain) ** exponent, 0, 1)
-    if fps is not None and len(activity) > 1:
-        from scipy.ndimage import gaussian_filter1d  # here: SciPy takes a tenth of a second to import
-
-        activity = np.clip(gaussian_filter1d(activity, ACTIVITY_SMOOTHING * fps, axis=0, mode="nearest"), 0.0, 1.0)
-    return (*decouple_with_activity(original, predicted, activity), activity)
+    sigmas = (0.0, 0.0) if fps is None else (BODY_SMOOTHING * fps, ACTIVITY_SMOOTHING * fps)
+    return split_rotations(original, predicted, gain, exponent, activity_scale, *sigmas)
 
 
 def split_from_features(

@@ -56,12 +56,12 @@ from .rotations import (
     compose_rotations,
     decode_channels,
     decouple_rotations,
-    decouple_with_activity,
     euler_to_quat,
     forward_kinematics,
     forward_kinematics_many,
     matrix_columns,
     quat_to_euler,
+    split_rotations,
 )
 
 __all__ = [
@@ -84,7 +84,6 @@ __all__ = [
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
-    "decouple_with_activity",
     "dynamic_features",
     "euler_to_quat",
     "foot_contacts",
@@ -98,6 +97,7 @@ __all__ = [
     "read_motion_blocks",
     "repeated_headers",
     "retarget_transfer",
+    "split_rotations",
     "stored_rotations",
     "two_bone_ik",
 ]

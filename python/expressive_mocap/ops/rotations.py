@@ -92,18 +92,19 @@ def decouple_rotations(original, body, gain: float, exponent: float) -> tuple[np
     return e.reshape(original.shape), b.reshape(original.shape), a.reshape(batch)
 
 
-def decouple_with_activity(original, body, activity) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`decouple_rotations` with the activity ``[F, J]`` given (one smoothed in time, or read
-    with per-joint thresholds): returns ``(E*, B')``."""
+def split_rotations(
+    original, body, gain: float, exponent: float, scale=None, body_sigma: float = 0.0, activity_sigma: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One clip's :func:`decouple_rotations` (``[F, J, 4]``) with ``body`` smoothed over
+    ``body_sigma`` frames and the activity, read from ``angle(E) / scale`` (``[J]``, None: 1),
+    over ``activity_sigma`` frames (Gaussians, the ends held; 0: none). Returns ``(E*, B', A)``."""
     original, body = _f64("original", original, 4), _f64("body", body, 4)
-    activity = _array("activity", activity, np.float64)
-    if activity.shape != original.shape[:-1]:
-        raise ArgumentError(
-            f"argument `activity`: expected shape {list(original.shape[:-1])}, got {list(activity.shape)}"
-        )
-    frames = _frames(original)
-    e, b = kernels().decouple_with_activity(frames, _frames(body), activity.reshape(frames.shape[:2]))
-    return e.reshape(original.shape), b.reshape(original.shape)
+    if original.ndim != 3:
+        raise ArgumentError(f"argument `original`: expected shape [F, J, 4] (one clip), got {list(original.shape)}")
+    scale = np.ones(original.shape[1]) if scale is None else _array("scale", scale, np.float64)
+    return kernels().split_rotations(
+        original, body, float(gain), float(exponent), scale, float(body_sigma), float(activity_sigma)
+    )
 
 
 def compose_rotations(expressive, body, scale: float = 1.0) -> np.ndarray:
@@ -126,7 +127,7 @@ __all__ = [
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
-    "decouple_with_activity",
+    "split_rotations",
     "euler_to_quat",
     "forward_kinematics",
     "forward_kinematics_many",

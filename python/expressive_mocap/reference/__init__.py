@@ -20,7 +20,6 @@ _TWINS = {
     "compose_rotations": "decouple",
     "decode_channels": "motion_block",
     "decouple_rotations": "decouple",
-    "decouple_with_activity": "decouple",
     "dynamic_features": "features",
     "euler_to_quat": "rotations",
     "foot_contacts": "footsteps",
@@ -34,6 +33,7 @@ _TWINS = {
     "quat_to_euler": "rotations",
     "read_motion_blocks": "motion_block",
     "repeated_headers": "clip",
+    "split_rotations": "decouple",
     "retarget_transfer": "retarget",
     "two_bone_ik": "ik",
 }
