@@ -139,22 +139,20 @@ def _runs(members: list[int], motions: list[Motion]) -> list[list[int]]:
 
 def _retarget_run(run: list[int], motions: list[Motion], source: Rig, goal: Rig, plant_feet: bool, out: list) -> None:
     """The clips ``run`` of ``motions`` (one skeleton, ``source``'s) retargeted together, into ``out``."""
-    members = run
-    if True:
-        clips = [motions[k] for k in members]
-        bounds = np.cumsum([0] + [c.n_frames for c in clips])
-        together = Motion(
-            clips[0].skeleton,
-            np.concatenate([c.rotations for c in clips]),
-            np.concatenate([c.translations for c in clips]),
-            clips[0].frame_time,
+    clips = [motions[k] for k in run]
+    bounds = np.cumsum([0] + [c.n_frames for c in clips])
+    together = Motion(
+        clips[0].skeleton,
+        np.concatenate([c.rotations for c in clips]),
+        np.concatenate([c.translations for c in clips]),
+        clips[0].frame_time,
+    )
+    moved = _retarget_frames(Take(together), bounds, source, goal, None, plant_feet, clips)
+    for k, a, b, clip in zip(run, bounds[:-1], bounds[1:], clips):
+        out[k] = (
+            Motion(goal.skeleton, moved.rotations[a:b], moved.translations[a:b], clip.frame_time),
+            source.jmap,
         )
-        moved = _retarget_frames(Take(together), bounds, source, goal, None, plant_feet, clips)
-        for k, a, b, clip in zip(members, bounds[:-1], bounds[1:], clips):
-            out[k] = (
-                Motion(goal.skeleton, moved.rotations[a:b], moved.translations[a:b], clip.frame_time),
-                source.jmap,
-            )
 
 
 def _retarget_frames(
