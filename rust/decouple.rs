@@ -54,8 +54,9 @@ fn check_pair(name: &'static str, first: &[f64], second: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// Decouple original rotations `O` from body-mechanics rotations `B` (both `[F, J, 4]`):
-/// returns `(E*, B', A)` with `E*` and `B'` `[F, J, 4]` and the activity `A` `[F, J]`.
+/// Decouple original rotations `O` from body-mechanics rotations `B` (both `[F, J, 4]`), each
+/// frame on its own: [`split`] unsmoothed and unscaled. Returns `(E*, B', A)` with `E*` and `B'`
+/// `[F, J, 4]` and the activity `A` `[F, J]`.
 ///
 /// # Errors
 /// `KernelError::Argument` when the arrays differ in shape, are not quaternions, or `gain` or
@@ -66,27 +67,13 @@ pub fn decouple(
     gain: f64,
     exponent: f64,
 ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
-    check_pair("body", original, body)?;
-    positive("gain", gain)?;
-    positive("exponent", exponent)?;
-    let count = original.len() / 4;
-    let mut activities = vec![0.0; count];
-    let per_rotation = |(i, a_out): (usize, &mut f64)| {
-        let o = DQuat::from_slice(&original[4 * i..4 * i + 4]);
-        let b = DQuat::from_slice(&body[4 * i..4 * i + 4]);
-        *a_out = activity(angle(o * b.conjugate()), gain, exponent);
+    // One "joint" a frame: with no smoothing and no scale, the joints need not be told apart.
+    let per_frame = Smoothing {
+        body_sigma: 0.0,
+        activity_sigma: 0.0,
+        scale: &[1.0],
     };
-    if count >= PARALLEL_MIN_ITEMS {
-        activities
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(1024)
-            .for_each(per_rotation);
-    } else {
-        activities.iter_mut().enumerate().for_each(per_rotation);
-    }
-    let (expressive, recovered) = filter(original, body, &activities);
-    Ok((expressive, recovered, activities))
+    split(original, body, gain, exponent, &per_frame)
 }
 
 /// How a clip's split is smoothed in time and its activity read: the Gaussians' widths in frames

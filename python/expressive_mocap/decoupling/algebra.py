@@ -24,7 +24,7 @@ import numpy as np
 from ..body.take import Take
 from ..errors import ModelError
 from ..motion import Motion
-from ..ops import compose_rotations, decouple_rotations, split_rotations
+from ..ops import compose_rotations, split_rotations
 from ..rotations import quat
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
@@ -68,8 +68,6 @@ def split(
         raise ModelError(
             f"the model predicted rotations {list(predicted.shape)} for a motion of {list(np.shape(original))}"
         )
-    if activity_scale is None and fps is None:
-        return decouple_rotations(original, predicted, gain, exponent)
     sigmas = (0.0, 0.0) if fps is None else (BODY_SMOOTHING * fps, ACTIVITY_SMOOTHING * fps)
     return split_rotations(original, predicted, gain, exponent, activity_scale, *sigmas)
 

@@ -19,12 +19,7 @@ def decouple_rotations(original: np.ndarray, body: np.ndarray, gain: float = 2.0
     """``E = O B^-1``, ``A = clip((tanh(angle(E)) gain)^exponent, 0, 1)``, ``E* = E^A``,
     ``B' = E*^-1 O``: returns ``(E*, B', A)``."""
     _check("body", original, body)
-    for name, value in (("gain", gain), ("exponent", exponent)):
-        if not (np.isfinite(value) and value > 0):
-            raise ArgumentError(f"argument `{name}`: must be a positive number, got {value}")
-    expressive = quat.mul(original, quat.conjugate(body))
-    activity = np.clip((np.tanh(quat.angle(expressive)) * gain) ** exponent, 0.0, 1.0)
-    return (*_filtered(original, body, activity), activity)
+    return split_rotations(original, body, gain, exponent, np.ones(original.shape[1]), 0.0, 0.0)
 
 
 def split_rotations(
@@ -39,8 +34,6 @@ def split_rotations(
     """One clip's ``(E*, B', A)`` with ``B`` smoothed over ``body_sigma`` frames (each joint's
     quaternions on their predecessor's hemisphere, filtered, normalised) and ``A``, read from
     ``angle(O B^-1) / scale [J]``, over ``activity_sigma`` frames (Gaussians, the ends held; 0: none)."""
-    from scipy.ndimage import gaussian_filter1d  # here: SciPy takes a tenth of a second to import
-
     _check("body", original, body)
     if np.shape(scale) != original.shape[1:2]:
         raise ArgumentError(
@@ -56,16 +49,14 @@ def split_rotations(
     smooth = len(original) > 1
     if body_sigma > 0 and smooth:
         body = quat.smooth(body, body_sigma)
-    angle = quat.angle(quat.mul(original, quat.conjugate(body))) / scale
-    activity = np.clip((np.tanh(angle) * gain) ** exponent, 0.0, 1.0)
+    expressive = quat.mul(original, quat.conjugate(body))  # E = O B^-1
+    activity = np.clip((np.tanh(quat.angle(expressive) / scale) * gain) ** exponent, 0.0, 1.0)
     if activity_sigma > 0 and smooth:
+        from scipy.ndimage import gaussian_filter1d  # here: SciPy takes a tenth of a second to import
+
         activity = np.clip(gaussian_filter1d(activity, activity_sigma, axis=0, mode="nearest"), 0.0, 1.0)
-    return (*_filtered(original, body, activity), activity)
-
-
-def _filtered(original: np.ndarray, body: np.ndarray, activity: np.ndarray):
-    filtered = quat.power(quat.mul(original, quat.conjugate(body)), activity)
-    return filtered, quat.mul(quat.conjugate(filtered), original)
+    filtered = quat.power(expressive, activity)  # E* = E^A
+    return filtered, quat.mul(quat.conjugate(filtered), original), activity  # B' = E*^-1 O
 
 
 def compose_rotations(expressive: np.ndarray, body: np.ndarray, scale: float = 1.0) -> np.ndarray:
