@@ -182,9 +182,10 @@ def _retarget_frames(
     turn = source.conventions.rotation()
     upright = positions if np.array_equal(turn, [0.0, 0.0, 0.0, 1.0]) else quat.rotate(turn, positions)
     contacts = source_contacts(clips or [motion], source, upright, bounds)
-    out, lift = _stand_on_floor(out, contacts, goal, bounds)
+    placed = out.positions()  # before the lift, which moves every joint alike
+    out, lift = _stand_on_floor(out, placed, contacts, goal, bounds)
     if plant_feet:
-        ankles = _ankle_guides(out, positions, source, goal, floor, bounds) + lift[:, None, :]
+        ankles = _ankle_guides(placed, out.frame_time, positions, source, goal, floor, bounds) + lift[:, None, :]
         out = plant(out, goal.jmap, contacts, ankles, starts=bounds)
     return out
 
@@ -192,9 +193,12 @@ def _retarget_frames(
 STILL = 0.05  # actor heights a second: slower, a joint is standing still
 
 
-def _ankle_guides(out: Motion, positions: np.ndarray, source: Rig, goal: Rig, floor: np.ndarray, bounds) -> np.ndarray:
+def _ankle_guides(
+    placed: np.ndarray, frame_time: float, positions: np.ndarray, source: Rig, goal: Rig, floor: np.ndarray, bounds
+) -> np.ndarray:
     """Where each of the target's ankles ``[F, 2, 3]`` should move during a contact (target
-    world, before the lift): the source's ankle carried over, or, as the foot rolls onto its toe,
+    world, before the lift; ``placed``: the retarget's joint positions, ``positions``: the
+    source's): the source's ankle carried over, or, as the foot rolls onto its toe,
     the ankle that puts the target's toe where the source's toe is carried (the target's foot
     keeps its own orientation), weighted per frame by how much faster the source's ankle moves
     than its toe (the toe is then the foot's pivot; a joint under STILL stands). A rig whose
@@ -208,15 +212,14 @@ def _ankle_guides(out: Motion, positions: np.ndarray, source: Rig, goal: Rig, fl
         return ankles
     toes, goal_toes = [source.jmap[r] for r in sides], [goal.jmap[r] for r in sides]
     source_toes = carried(positions[:, toes], source, goal, floor)
-    placed = out.positions()
     goal_feet = [goal.jmap[f"{side}_foot"] for side in ("left", "right")]
     reach = placed[:, goal_toes] - placed[:, goal_feet]  # [F, 2, 3]: the target's foot, ankle to toe
     by_toe = source_toes - reach
     # Blend the two paths' steps, not the paths: they stand apart by the rigs' different feet.
     heel_step, toe_step = np.diff(ankles, axis=0), np.diff(by_toe, axis=0)
-    heel = np.linalg.norm(np.diff(ankles, axis=0), axis=-1)
+    heel = np.linalg.norm(heel_step, axis=-1)
     toe = np.linalg.norm(np.diff(source_toes, axis=0), axis=-1)
-    still = STILL * goal.body.actor_height * out.frame_time  # a step this short is standing
+    still = STILL * goal.body.actor_height * frame_time  # a step this short is standing
     toe_pivot = np.clip((heel - toe) / (heel + toe + still), 0.0, 1.0)[..., None]
     steps = (1.0 - toe_pivot) * heel_step + toe_pivot * toe_step
     guides = ankles.copy()
@@ -225,17 +228,19 @@ def _ankle_guides(out: Motion, positions: np.ndarray, source: Rig, goal: Rig, fl
     return guides
 
 
-def _stand_on_floor(out: Motion, contacts: np.ndarray, goal: Rig, bounds) -> tuple[Motion, np.ndarray]:
-    """``out`` with its path raised or lowered, clip by clip, so that its stance feet (the lower
-    of each foot's ankle and toe joints through the source's ``contacts``, median over the clip)
-    stand where the target's own do (:func:`~.rig.stance_level`; else on its floor), and that
-    lift ``[F, 3]`` (target axes). The leg lengths' ratio
-    places the hips, but rigs set their ankles at different heights above their soles: a walk of
-    a rig with low-set ankles stood 4-5 cm above the Bandai-Namco floor, one with high-set ankles
-    sank."""
+def _stand_on_floor(
+    out: Motion, placed: np.ndarray, contacts: np.ndarray, goal: Rig, bounds
+) -> tuple[Motion, np.ndarray]:
+    """``out`` (its joint positions ``placed``) with its path raised or lowered, clip by clip, so
+    that its stance feet (the lower of each foot's ankle and toe joints through the source's
+    ``contacts``, median over the clip) stand where the target's own do
+    (:func:`~.rig.stance_level`; else on its floor), and that lift ``[F, 3]`` (target axes). The
+    leg lengths' ratio places the hips, but rigs set their ankles at different heights above
+    their soles: a walk of a rig with low-set ankles stood 4-5 cm above the Bandai-Namco floor,
+    one with high-set ankles sank."""
     jmap, skeleton = goal.jmap, goal.skeleton
     up = np.array(_axis(goal.conventions.up), float)
-    heights = out.positions() @ up  # [F, J]
+    heights = placed @ up  # [F, J]
     lowest = []
     for side in ("left", "right"):
         joints = [jmap[f"{side}_{part}"] for part in ("foot", "toes") if f"{side}_{part}" in jmap]
