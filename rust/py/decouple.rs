@@ -7,49 +7,72 @@ use pyo3::prelude::*;
 
 use super::{array, contiguous, shape_error};
 
+/// A split's outputs: E* and B' [F, J, 4], the activity [F, J].
+type Split<'py> = (
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
+/// The shape [F, J, 4] two arrays of rotations share (each given with its argument's name), or
+/// an error naming the second.
+fn same_quaternions(
+    (first_name, first): (&str, &PyReadonlyArray3<'_, f64>),
+    (second_name, second): (&str, &PyReadonlyArray3<'_, f64>),
+) -> PyResult<Vec<usize>> {
+    let shape = first.shape().to_vec();
+    if shape[2] != 4 || second.shape() != shape.as_slice() {
+        return Err(shape_error(
+            second_name,
+            &format!("{shape:?} like `{first_name}` (quaternions [F, J, 4])"),
+            second.shape(),
+        ));
+    }
+    Ok(shape)
+}
+
+/// A kernel's `(E*, B', A)` as arrays of a clip of `shape` [F, J, 4].
+fn split_arrays<'py>(
+    py: Python<'py>,
+    expressive: Vec<f64>,
+    recovered: Vec<f64>,
+    activity: Vec<f64>,
+    shape: &[usize],
+) -> PyResult<Split<'py>> {
+    let dims = (shape[0], shape[1], 4);
+    Ok((
+        array(expressive, dims)?.into_pyarray(py),
+        array(recovered, dims)?.into_pyarray(py),
+        array(activity, (shape[0], shape[1]))?.into_pyarray(py),
+    ))
+}
+
 /// Decouple `original` from `body` rotations (both [F, J, 4], x y z w): returns the filtered
 /// expressive rotations E* [F, J, 4], the recovered body mechanics B' [F, J, 4] and the
 /// activity index [F, J]. `gain` and `exponent` have no default here: the package's are
 /// `expressive_mocap.decouple.GAIN` and `EXPONENT`, passed by `expressive_mocap.ops`.
 #[pyfunction]
-#[allow(clippy::type_complexity)]
 fn decouple_rotations<'py>(
     py: Python<'py>,
     original: PyReadonlyArray3<'py, f64>,
     body: PyReadonlyArray3<'py, f64>,
     gain: f64,
     exponent: f64,
-) -> PyResult<(
-    Bound<'py, PyArray3<f64>>,
-    Bound<'py, PyArray3<f64>>,
-    Bound<'py, PyArray2<f64>>,
-)> {
-    let shape = original.shape().to_vec();
-    if shape[2] != 4 || body.shape() != shape.as_slice() {
-        return Err(shape_error(
-            "body",
-            &format!("{shape:?} like `original` (quaternions [F, J, 4])"),
-            body.shape(),
-        ));
-    }
+) -> PyResult<Split<'py>> {
+    let shape = same_quaternions(("original", &original), ("body", &body))?;
     let (o, b) = (
         contiguous("original", &original)?,
         contiguous("body", &body)?,
     );
     let (e, recovered, a) = py.detach(|| crate::decouple::decouple(o, b, gain, exponent))?;
-    let dims = (shape[0], shape[1], 4);
-    Ok((
-        array(e, dims)?.into_pyarray(py),
-        array(recovered, dims)?.into_pyarray(py),
-        array(a, (shape[0], shape[1]))?.into_pyarray(py),
-    ))
+    split_arrays(py, e, recovered, a, &shape)
 }
 
 /// One clip's split with the body mechanics and the activity smoothed in time: `original` and
 /// `body` [F, J, 4], `scale` [J] (the angle's divisor per joint), the Gaussians' widths in frames
 /// (0: none). Returns E* [F, J, 4], B' [F, J, 4] and the activity [F, J].
 #[pyfunction]
-#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+#[allow(clippy::too_many_arguments)]
 fn split_rotations<'py>(
     py: Python<'py>,
     original: PyReadonlyArray3<'py, f64>,
@@ -59,19 +82,8 @@ fn split_rotations<'py>(
     scale: PyReadonlyArray1<'py, f64>,
     body_sigma: f64,
     activity_sigma: f64,
-) -> PyResult<(
-    Bound<'py, PyArray3<f64>>,
-    Bound<'py, PyArray3<f64>>,
-    Bound<'py, PyArray2<f64>>,
-)> {
-    let shape = original.shape().to_vec();
-    if shape[2] != 4 || body.shape() != shape.as_slice() {
-        return Err(shape_error(
-            "body",
-            &format!("{shape:?} like `original` (quaternions [F, J, 4])"),
-            body.shape(),
-        ));
-    }
+) -> PyResult<Split<'py>> {
+    let shape = same_quaternions(("original", &original), ("body", &body))?;
     if scale.shape() != [shape[1]] {
         return Err(shape_error(
             "scale",
@@ -91,12 +103,7 @@ fn split_rotations<'py>(
     };
     let (e, recovered, a) =
         py.detach(|| crate::decouple::split(o, b, gain, exponent, &smoothing))?;
-    let dims = (shape[0], shape[1], 4);
-    Ok((
-        array(e, dims)?.into_pyarray(py),
-        array(recovered, dims)?.into_pyarray(py),
-        array(a, (shape[0], shape[1]))?.into_pyarray(py),
-    ))
+    split_arrays(py, e, recovered, a, &shape)
 }
 
 /// Recompose `expressive^scale * body` for rotations [F, J, 4].
@@ -108,14 +115,7 @@ fn compose_rotations<'py>(
     body: PyReadonlyArray3<'py, f64>,
     scale: f64,
 ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-    let shape = body.shape().to_vec();
-    if shape[2] != 4 || expressive.shape() != shape.as_slice() {
-        return Err(shape_error(
-            "expressive",
-            &format!("{shape:?} like `body` (quaternions [F, J, 4])"),
-            expressive.shape(),
-        ));
-    }
+    let shape = same_quaternions(("body", &body), ("expressive", &expressive))?;
     let (e, b) = (
         contiguous("expressive", &expressive)?,
         contiguous("body", &body)?,
