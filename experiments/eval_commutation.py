@@ -30,12 +30,9 @@ import numpy as np
 import expressive_mocap as em
 from expressive_mocap.body.conventions import read_conventions
 from expressive_mocap.body.jointmap import find_joint_map
-from expressive_mocap.skeletons import synthetic_walk
 from independent import read_fk
-from setting import arguments, bandai_dir, run, walks_model
+from setting import arguments, bandai_dir, rig_targets, run, walks_model
 
-SYNTHETIC = ("cmu", "mixamo", "game", "smpl", "lafan")
-REAL = ("m21_walk", "cmu_01_01", "cmu_scaled_131_03")
 WALK, WAVE = "dataset-2_walk_normal_010.bvh", "dataset-2_wave-left-hand_normal_001.bvh"
 
 
@@ -76,12 +73,7 @@ def main() -> None:
         work = Path(tmp)
         model = work / "walks.npz"
         walks_model(dataset).save(model)
-        targets = {}
-        for rig in SYNTHETIC:
-            targets[rig] = work / f"{rig}.bvh"
-            em.write_bvh(synthetic_walk(rig).motion, targets[rig])
-        for name in REAL:
-            targets[name] = args.other / f"{name}.bvh"
+        targets = rig_targets(args.other, work)
         walk, wave = dataset / WALK, dataset / WAVE
         edited = {e: edit(e, walk, wave, model, work / f"bandai_{e.replace(' ', '_')}.bvh") for e in EDITS}
         print("| rig | " + " | ".join(EDITS) + " |")

@@ -34,12 +34,9 @@ import expressive_mocap as em
 from expressive_mocap.body.conventions import read_conventions
 from expressive_mocap.body.jointmap import find_joint_map
 from expressive_mocap.rotations import quat
-from expressive_mocap.skeletons import synthetic_walk
 from independent import read_fk
-from setting import arguments, bandai_dir, run, walks_model
+from setting import arguments, bandai_dir, rig_targets, run, walks_model
 
-SYNTHETIC = ("cmu", "mixamo", "game", "smpl", "lafan")
-REAL = ("m21_walk", "cmu_01_01", "cmu_scaled_131_03")
 TAKES = (10, 11, 12, 13)
 LEVELS = (4, 0)
 
@@ -73,12 +70,7 @@ def main() -> None:
         work = Path(tmp)
         model = work / "walks.npz"
         walks_model(dataset).save(model)
-        targets: dict[str, Path | None] = {"bandai": None}
-        for rig in SYNTHETIC:
-            targets[rig] = work / f"{rig}.bvh"
-            em.write_bvh(synthetic_walk(rig).motion, targets[rig])
-        for name in REAL:
-            targets[name] = args.other / f"{name}.bvh"
+        targets: dict[str, Path | None] = {"bandai": None, **rig_targets(args.other, work)}
         changes: dict[str, np.ndarray] = {}
         for rig, target in targets.items():
             rows = []

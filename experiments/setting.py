@@ -16,10 +16,14 @@ from pathlib import Path
 import expressive_mocap as em
 from expressive_mocap.cli import main as cli
 from expressive_mocap.exaggeration import train
+from expressive_mocap.skeletons import synthetic_walk
 
 REPO = Path(__file__).resolve().parent.parent
 
-__all__ = ["REPO", "arguments", "bandai_dir", "run", "walks_model"]
+__all__ = ["REAL", "REPO", "SYNTHETIC", "arguments", "bandai_dir", "rig_targets", "run", "walks_model"]
+
+SYNTHETIC = ("cmu", "mixamo", "game", "smpl", "lafan")  # the package's synthetic rigs
+REAL = ("m21_walk", "cmu_01_01", "cmu_scaled_131_03")  # the shared folder's skeletons (dme_* is cmu_01_01's)
 
 
 def arguments(doc: str) -> argparse.Namespace:
@@ -44,6 +48,16 @@ def walks_model(dataset: Path):
     styles = ("exhausted", "normal", "active")
     people = [[em.read_bvh(dataset / f"dataset-2_walk_{s}_{p:03d}.bvh") for s in styles] for p in range(1, 9)]
     return train(people, (1.0, 2.0, 3.0))
+
+
+def rig_targets(other: Path, work: Path) -> dict[str, Path]:
+    """Rig name -> a BVH file of it to retarget onto (``retarget --to``): each synthetic rig's walk,
+    written into ``work``, and the walks of :data:`REAL` in ``other``."""
+    targets = {}
+    for rig in SYNTHETIC:
+        targets[rig] = work / f"{rig}.bvh"
+        em.write_bvh(synthetic_walk(rig).motion, targets[rig])
+    return targets | {name: other / f"{name}.bvh" for name in REAL}
 
 
 def run(*args) -> None:
