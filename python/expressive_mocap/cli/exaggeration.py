@@ -276,13 +276,15 @@ def cmd_exaggerate(args) -> int:
 
         original = retime_like(original, timing)
         _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
+    # On the model's skeleton the edit locked the feet itself; carried back from its body, they
+    # are locked again on the file's own skeleton.
     on_model = original.skeleton.names == motion.skeleton.names
-    written = back(out, plant_feet=not args.no_foot_lock and on_model)
+    written = back(out)
     if not args.no_foot_lock and not on_model:
         written = _locked_on_own_skeleton(original, written, args.blend, joint_map(args))
     write_bvh(written, args.output)
     print(report.text())
-    if original.skeleton.names != motion.skeleton.names:  # edited on the model's body: say what the file got
+    if not on_model:  # edited on the model's body: say what the file got
         print(on_own_skeleton(original, written))
     print(f"wrote {args.output}")
     return 0
