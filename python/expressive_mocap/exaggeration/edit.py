@@ -27,12 +27,11 @@ from .timing import (
     PREDICTABLE,
     Timing,
     cycle_timing,
+    held_still,
     mapped_timing,
-    planted_ankles,
     retime,
     time_warp,
     timing_factors,
-    warped_contacts,
 )
 
 
@@ -295,15 +294,14 @@ def _retimed(
         return same
     span = (cycles[0].start, cycles[-1].end)
     warp = time_warp(motion.n_frames, cycles, float(factors[0]))
-    held, shift = retime(motion, roles, warp, span, float(factors[1]))
     out, _ = retime(edited, roles, warp, span, float(factors[1]))
-    new_contacts = warped_contacts(contacts, warp)
     seconds, travel = np.exp(own).mean(axis=0) * [1.0, take.body.actor_height]
     timing = Timing(
         float(factors[0]), float(factors[1]), clamped, (seconds, travel),
         (seconds * factors[0], travel * factors[1]), warp, span,
     )  # fmt: skip
-    return _Retimed(held, out, new_contacts, planted_ankles(held, new_contacts, roles, shift), timing)
+    held, new_contacts, ankles = held_still(motion, contacts, roles, timing)
+    return _Retimed(held, out, new_contacts, ankles, timing)
 
 
 def _own_reference(motion: Motion, hips: int, cycles: Sequence[Cycle], yaw: np.ndarray) -> np.ndarray:

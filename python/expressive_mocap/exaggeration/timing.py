@@ -203,6 +203,18 @@ def _run_means(values: np.ndarray, contact: np.ndarray) -> np.ndarray:
     return np.where((run >= 0)[:, None], means[np.maximum(run, 0)], means[nearest])
 
 
+def held_still(
+    motion: Motion, contacts: np.ndarray, roles: JointRoles, timing: Timing
+) -> tuple[Motion, np.ndarray, np.ndarray]:
+    """What an edit's foot lock holds at ``timing``: ``motion`` (the input, on any skeleton of
+    ``roles``) retimed alike, its ``contacts [F, 2]`` at the new frames, and its ankles held still
+    through them (:func:`planted_ankles`): a retimed input's own feet slide where its travel
+    was stretched."""
+    retimed, shift = retime(motion, roles, timing.warp, timing.span, timing.travel)
+    new_contacts = warped_contacts(contacts, timing.warp)
+    return retimed, new_contacts, planted_ankles(retimed, new_contacts, roles, shift)
+
+
 def planted_ankles(motion: Motion, contacts: np.ndarray, roles: JointRoles, shift: np.ndarray) -> np.ndarray:
     """``[F, 2, 3]``: the ankles of the retimed input ``motion`` without the part of the travel's
     ``shift [F, 3]`` that grows during each run of ``contacts`` (held at its mean over the run):
@@ -220,6 +232,7 @@ __all__ = [
     "TimingFit",
     "cycle_timing",
     "fit_timing",
+    "held_still",
     "mapped_timing",
     "planted_ankles",
     "retime",
