@@ -91,3 +91,25 @@ def test_exaggeration_bends_the_knees_of_another_rig_as_on_the_bandai_body(banda
         run("exaggerate", "--model", model, "--input", source, "--to", "4", "--no-timing", "-o", out)
         changes.append(largest_knee_flexion(out) - largest_knee_flexion(source))
     assert changes[0] > 10 and abs(changes[1] / changes[0] - 1) <= 0.25, changes
+
+
+@pytest.mark.real_data
+def test_a_retimed_exaggeration_keeps_another_rigs_stance_feet(bandai2_dir, walks_model, tmp_path):
+    """Exaggerated to 4 at its new timing (fewer frames, a longer stride) and carried back onto
+    the CMU-like rig, a walk's stance feet move no faster than the input's own (1.2x at most,
+    through each file's own contacts): they are held as the edit holds them on the model's body.
+    Locked where the input retimed alike has them, whose feet slide with the stretched travel,
+    they moved 3.3x."""
+    from expressive_mocap.body.contacts import foot_contacts
+    from expressive_mocap.body.conventions import upright
+    from expressive_mocap.exaggeration.edit import stance_foot_speed
+
+    model, target, walk, out = (tmp_path / n for n in ("walks.npz", "target.bvh", "walk.bvh", "out.bvh"))
+    walks_model.save(model)
+    em.write_bvh(synthetic_walk("cmu").motion, target)
+    run("retarget", bandai2_dir / "dataset-2_walk_normal_010.bvh", "--to", target, "-o", walk)
+    run("exaggerate", "--model", model, "--input", walk, "--to", "4", "-o", out)
+    before, after = em.read_bvh(walk), em.read_bvh(out)
+    assert after.n_frames != before.n_frames  # retimed
+    speeds = [stance_foot_speed(m, foot_contacts(upright(m))) for m in (before, after)]
+    assert speeds[1] <= 1.2 * speeds[0], speeds

@@ -271,17 +271,18 @@ def cmd_exaggerate(args) -> int:
         timing=not args.no_timing,
     )
     timing = report.timing
+    # On the model's skeleton the edit locked the feet itself; carried back from its body, they
+    # are locked again on the file's own skeleton, held as the edit holds them.
+    on_model = original.skeleton.names == motion.skeleton.names
+    held = None if args.no_foot_lock or on_model else _held(original, timing, joint_map(args))
     if timing is not None:  # carried back onto the input retimed alike, frame for frame
         from ..exaggeration.timing import retime_like
 
-        original = retime_like(original, timing)
+        original = held[0] if held is not None else retime_like(original, timing)
         _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
-    # On the model's skeleton the edit locked the feet itself; carried back from its body, they
-    # are locked again on the file's own skeleton.
-    on_model = original.skeleton.names == motion.skeleton.names
     written = back(out)
-    if not args.no_foot_lock and not on_model:
-        written = _locked_on_own_skeleton(original, written, args.blend, joint_map(args))
+    if held is not None:
+        written = _locked(held, written, args.blend)
     write_bvh(written, args.output)
     print(report.text())
     if not on_model:  # edited on the model's body: say what the file got
@@ -290,22 +291,34 @@ def cmd_exaggerate(args) -> int:
     return 0
 
 
-def _locked_on_own_skeleton(original: Motion, written: Motion, blend: float, user_map) -> Motion:
-    """``written`` (an edit carried back onto ``original``'s skeleton) with its stance feet locked
-    there as the edit locks them on the model's body: where ``original`` has them through its own
-    contacts, eased in and out over ``blend`` seconds, the swing left as the edit made it. (The
-    decoupling edits' planting also moves the swing toward the next contact: on an exaggerated
-    walk that took 6 of the knees' 19 extra degrees.) A leg that is not two bones from hip to
-    ankle is left as it is."""
+def _held(original: Motion, timing, user_map) -> tuple:
+    """What the foot lock holds on ``original``'s own skeleton: (the input at the edit's
+    ``timing``, its contacts there, its ankles held still through them or None when not
+    retimed, its roles). Retimed, the input's own feet slide where its travel was stretched:
+    holding them there slid a retimed exaggeration's stance feet 3.6x the input's."""
     from ..body.body import Body
     from ..body.contacts import foot_contacts
     from ..body.conventions import upright
-    from ..exaggeration.footlock import lock_stance_feet
+    from ..exaggeration.timing import held_still
 
     contacts = foot_contacts(upright(original))  # read Y up, as the edit's own are
     roles = Body.of(original.skeleton, user_map).roles
+    if timing is None:
+        return original, contacts, None, roles
+    return (*held_still(original, contacts, roles, timing), roles)
+
+
+def _locked(held: tuple, written: Motion, blend: float) -> Motion:
+    """``written`` (an edit carried back onto the skeleton of ``held``: see :func:`_held`) with its
+    stance feet locked there as the edit locks them on the model's body: eased in and out over
+    ``blend`` seconds, the swing left as the edit made it. (The decoupling edits' planting also
+    moves the swing toward the next contact: on an exaggerated walk that took 6 of the knees' 19
+    extra degrees.) A leg that is not two bones from hip to ankle is left as it is."""
+    from ..exaggeration.footlock import lock_stance_feet
+
+    motion, contacts, ankles, roles = held
     try:
-        return lock_stance_feet(original, written, contacts, roles, int(round(blend * original.fps)))[0]
+        return lock_stance_feet(motion, written, contacts, roles, int(round(blend * motion.fps)), ankles)[0]
     except ArgumentError:
         return written
 
