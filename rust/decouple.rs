@@ -3,7 +3,7 @@
 //! the filtered component `E* = E^A` and the recovered body mechanics `B' = E*^-1 * O`, so that
 //! `E* * B' = O` exactly; and recomposition `E*^s * B'` (modulation).
 
-use glam::DQuat;
+use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 
 use crate::error::{positive, KernelError, Result};
@@ -72,22 +72,82 @@ pub fn decouple(
         body_sigma: 0.0,
         activity_sigma: 0.0,
         scale: &[1.0],
+        trunk: None,
     };
     split(original, body, gain, exponent, &per_frame)
 }
 
 /// How a clip's split is smoothed in time and its activity read: the Gaussians' widths in frames
-/// (0: none) over the predicted body mechanics and over the activity, and per joint the angle
-/// `E` is divided by before the activity index reads it (a calibrated model's thresholds).
+/// (0: none) over the predicted body mechanics and over the activity, per joint the angle
+/// `E` is divided by before the activity index reads it (a calibrated model's thresholds), and
+/// optionally the trunk read as one chain.
 pub struct Smoothing<'a> {
     pub body_sigma: f64,
     pub activity_sigma: f64,
     pub scale: &'a [f64],
+    pub trunk: Option<Trunk<'a>>,
+}
+
+/// The trunk read as one chain. A lean is spread over its joints, a few degrees each, which the
+/// steep activity index reads as nothing; read as the chain's, it counts. `joints`: the chain
+/// from the hips up, each the parent of the next; `bones[k]`: the bone that joint `k` carries
+/// (the next joint's rest offset, the last one's: the neck's), so that the trunk line runs from
+/// the chain's first joint to the neck; the angle between the trunk lines of `O` and `B` (a lean,
+/// forward or sideways; a twist about the line does not count) divided by `scale` gives each
+/// joint of the chain at least that activity.
+pub struct Trunk<'a> {
+    pub joints: &'a [usize],
+    pub bones: &'a [DVec3],
+    pub scale: f64,
+}
+
+impl Trunk<'_> {
+    fn check(&self, joints: usize) -> Result<()> {
+        if let Some(&j) = self.joints.iter().find(|&&j| j >= joints) {
+            return Err(KernelError::argument(
+                "trunk_joints",
+                format!("joint {j} is not one of the {joints} joints"),
+            ));
+        }
+        let line: DVec3 = self.bones.iter().sum();
+        if self.bones.len() != self.joints.len()
+            || !self.bones.iter().all(|b| b.is_finite())
+            || line.length() <= 1e-12
+        {
+            return Err(KernelError::argument(
+                "trunk_bones",
+                format!(
+                    "expected one finite bone per trunk joint ({}), not all of zero length, got {:?}",
+                    self.joints.len(),
+                    self.bones
+                ),
+            ));
+        }
+        positive("trunk_scale", self.scale)
+    }
+
+    /// The trunk line of one frame's local rotations `[J, 4]`, in the chain's parent's frame.
+    fn line(&self, rotations: &[f64]) -> DVec3 {
+        let mut turn = DQuat::IDENTITY;
+        let mut line = DVec3::ZERO;
+        for (&j, &bone) in self.joints.iter().zip(self.bones) {
+            turn *= DQuat::from_slice(&rotations[4 * j..4 * j + 4]);
+            line += turn * bone;
+        }
+        line
+    }
+
+    /// The angle between the trunk lines of `original` and `body` in one frame `[J, 4]`.
+    fn lean(&self, original: &[f64], body: &[f64]) -> f64 {
+        let (o, b) = (self.line(original), self.line(body));
+        o.cross(b).length().atan2(o.dot(b))
+    }
 }
 
 /// [`decouple`] of one clip (`[F, J, 4]`, `J = scale.len()`) with `B` and `A` smoothed in time:
 /// `B` (each joint's quaternions put on their predecessor's hemisphere) filtered over frames and
-/// normalised, `A` read from `angle(O B^-1) / scale` and filtered, then `E* = (O B^-1)^A`,
+/// normalised, `A` read from `angle(O B^-1) / scale` (the trunk's joints at least their chain's,
+/// see [`Trunk`]) and filtered, then `E* = (O B^-1)^A`,
 /// `B' = E*^-1 O`. Returns `(E*, B', A)`; `E* B' = O` still holds exactly.
 ///
 /// # Errors
@@ -115,6 +175,9 @@ pub fn split(
     }
     for &value in smoothing.scale {
         positive("scale", value)?;
+    }
+    if let Some(trunk) = &smoothing.trunk {
+        trunk.check(joints)?;
     }
     for (name, sigma) in [
         ("body_sigma", smoothing.body_sigma),
@@ -146,6 +209,17 @@ pub fn split(
             )
         })
         .collect();
+    if let Some(trunk) = &smoothing.trunk {
+        let width = 4 * joints;
+        for (frame, row) in activities.chunks_mut(joints).enumerate() {
+            let span = frame * width..(frame + 1) * width;
+            let lean = trunk.lean(&original[span.clone()], &smoothed[span]);
+            let chain = activity(lean / trunk.scale, gain, exponent);
+            for &j in trunk.joints {
+                row[j] = row[j].max(chain);
+            }
+        }
+    }
     if smoothing.activity_sigma > 0.0 && frames > 1 {
         activities = smooth_frames(
             &activities,
@@ -280,9 +354,58 @@ mod tests {
             body_sigma: 0.0,
             activity_sigma: 0.0,
             scale: &[1.0, 1.0],
+            trunk: None,
         };
         let (e2, b3, a2) = split(&flat(&o), &flat(&b), 2.0, 4.0, &plain).unwrap();
         assert_eq!((e2, b3, a2), (e, b2, a));
+    }
+
+    #[test]
+    fn a_lean_spread_over_the_trunk_reads_as_the_chains() {
+        // Two trunk joints leaning 8 degrees each about X, the trunk line along Y (all of it in
+        // the second joint's bone): each joint's
+        // own activity is tiny, the chain's 16 degrees read with scale 0.5 as 32: fully active.
+        // A twist about the trunk line (Y) does not count.
+        let flat = |qs: &[DQuat]| qs.iter().flat_map(DQuat::to_array).collect::<Vec<f64>>();
+        let lean = flat(&[
+            about(DVec3::X, 8.0),
+            about(DVec3::X, 8.0),
+            about(DVec3::Z, 8.0),
+        ]);
+        let twist = flat(&[
+            about(DVec3::Y, 30.0),
+            about(DVec3::Y, 30.0),
+            DQuat::IDENTITY,
+        ]);
+        let neutral = flat(&[DQuat::IDENTITY; 3]);
+        let trunk = Smoothing {
+            body_sigma: 0.0,
+            activity_sigma: 0.0,
+            scale: &[1.0; 3],
+            trunk: Some(Trunk {
+                joints: &[0, 1],
+                bones: &[DVec3::ZERO, DVec3::Y],
+                scale: 0.5,
+            }),
+        };
+        let (_, _, a) = split(&lean, &neutral, 2.0, 4.0, &trunk).unwrap();
+        let own = activity(8f64.to_radians(), 2.0, 4.0);
+        assert!(
+            own < 0.01 && a[0] > 0.99 && a[1] > 0.99 && a[2] == own,
+            "{a:?}"
+        );
+        let (_, _, a) = split(&twist, &neutral, 2.0, 4.0, &trunk).unwrap();
+        let (_, _, own) = decouple(&twist, &neutral, 2.0, 4.0).unwrap();
+        assert_eq!(a, own);
+        let beyond = Smoothing {
+            trunk: Some(Trunk {
+                joints: &[0, 3],
+                bones: &[DVec3::ZERO, DVec3::Y],
+                scale: 0.5,
+            }),
+            ..trunk
+        };
+        assert!(split(&lean, &neutral, 2.0, 4.0, &beyond).is_err());
     }
 
     #[test]
@@ -294,18 +417,21 @@ mod tests {
             body_sigma: 1.0,
             activity_sigma: 1.0,
             scale: &[1.0; 3],
+            trunk: None,
         };
         assert!(split(&[0.0; 8], &[0.0; 8], 2.0, 4.0, &three).is_err());
         let bad = Smoothing {
             body_sigma: f64::NAN,
             activity_sigma: 1.0,
             scale: &[1.0],
+            trunk: None,
         };
         assert!(split(&[0.0; 4], &[0.0; 4], 2.0, 4.0, &bad).is_err());
         let zero = Smoothing {
             body_sigma: 1.0,
             activity_sigma: 1.0,
             scale: &[0.0],
+            trunk: None,
         };
         assert!(split(&[0.0; 4], &[0.0; 4], 2.0, 4.0, &zero).is_err());
     }

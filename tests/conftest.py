@@ -206,3 +206,23 @@ class FixedFloor:
 
     def predict(self, motion):
         return self.model.predict(motion, floor=self.floor)
+
+    def predict_streamed(self, motion, window: int | None = None):
+        """Each frame's prediction as a stream keeping ``window`` frames (None: all) makes it: the
+        spine carried onto the pelvis posture of the frames it holds."""
+        from expressive_mocap.decoupling.pelvis import mean_posture
+
+        features, pelvis = self.model.features(motion, floor=self.floor), self.model.pelvis
+        rotations = motion.rotations
+        return np.concatenate(
+            [
+                self.model.predict_from_features(
+                    rotations[f : f + 1],
+                    features[f : f + 1],
+                    None
+                    if pelvis is None
+                    else mean_posture(rotations[max(0, f + 1 - (window or f + 1)) : f + 1], pelvis.path),
+                )
+                for f in range(len(rotations))
+            ]
+        )

@@ -150,9 +150,19 @@ def decouple_rotations(original: _F64, body: _F64, gain: float, exponent: float)
     body mechanics and the activity ``[F, J]``."""
 
 def split_rotations(
-    original: _F64, body: _F64, gain: float, exponent: float, scale: _F64, body_sigma: float, activity_sigma: float
+    original: _F64,
+    body: _F64,
+    gain: float,
+    exponent: float,
+    scale: _F64,
+    body_sigma: float,
+    activity_sigma: float,
+    trunk_joints: Sequence[int] = ...,
+    trunk_bones: Sequence[tuple[float, float, float]] = ...,
+    trunk_scale: float = ...,
 ) -> tuple[_F64, _F64, _F64]:
-    """One clip's ``(E*, B', A)`` with the body mechanics and the activity smoothed over frames."""
+    """One clip's ``(E*, B', A)`` with the body mechanics and the activity smoothed over frames,
+    the trunk joints read at least as active as their chain's lean."""
 
 def compose_rotations(expressive: _F64, body: _F64, scale: float = 1.0) -> _F64:
     """``expressive^scale * body`` for rotations ``[F, J, 4]``."""

@@ -1,5 +1,6 @@
 //! Bindings of `crate::decouple`.
 
+use glam::DVec3;
 use numpy::{
     IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods,
 };
@@ -70,9 +71,13 @@ fn decouple_rotations<'py>(
 
 /// One clip's split with the body mechanics and the activity smoothed in time: `original` and
 /// `body` [F, J, 4], `scale` [J] (the angle's divisor per joint), the Gaussians' widths in frames
-/// (0: none). Returns E* [F, J, 4], B' [F, J, 4] and the activity [F, J].
+/// (0: none), and the trunk chain read as one (`trunk_joints` from the hips up, empty: none;
+/// `trunk_bones` [n, 3] the bone each carries, the last one's to the neck; `trunk_scale` its
+/// lean's divisor).
+/// Returns E* [F, J, 4], B' [F, J, 4] and the activity [F, J].
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (original, body, gain, exponent, scale, body_sigma, activity_sigma, trunk_joints=vec![], trunk_bones=vec![], trunk_scale=1.0))]
 fn split_rotations<'py>(
     py: Python<'py>,
     original: PyReadonlyArray3<'py, f64>,
@@ -82,6 +87,9 @@ fn split_rotations<'py>(
     scale: PyReadonlyArray1<'py, f64>,
     body_sigma: f64,
     activity_sigma: f64,
+    trunk_joints: Vec<usize>,
+    trunk_bones: Vec<[f64; 3]>,
+    trunk_scale: f64,
 ) -> PyResult<Split<'py>> {
     let shape = same_quaternions(("original", &original), ("body", &body))?;
     if scale.shape() != [shape[1]] {
@@ -96,10 +104,17 @@ fn split_rotations<'py>(
         contiguous("body", &body)?,
         contiguous("scale", &scale)?,
     );
+    let bones: Vec<DVec3> = trunk_bones.into_iter().map(DVec3::from_array).collect();
+    let trunk = (!trunk_joints.is_empty()).then(|| crate::decouple::Trunk {
+        joints: &trunk_joints,
+        bones: &bones,
+        scale: trunk_scale,
+    });
     let smoothing = crate::decouple::Smoothing {
         body_sigma,
         activity_sigma,
         scale: s,
+        trunk,
     };
     let (e, recovered, a) =
         py.detach(|| crate::decouple::split(o, b, gain, exponent, &smoothing))?;

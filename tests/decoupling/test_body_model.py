@@ -126,7 +126,8 @@ def test_streaming_matches_offline_decoupling_frame_by_frame(model, walks):
     """The stream splits each frame as it comes: the offline split without its smoothing in time
     (which needs the frames after)."""
     walk = walks[2][:45]
-    offline = Decomposition(walk, *split(walk.rotations, FixedFloor(model, 0.0).predict(walk)))
+    predicted = FixedFloor(model, 0.0).predict_streamed(walk)
+    offline = Decomposition(walk, *split(walk.rotations, predicted, trunk=model.trunk))
     stream = StreamingDecoupler(model, walk.skeleton, walk.frame_time, floor=0.0, history=2.0)
     for f in range(walk.n_frames):
         body, expressive, activity = stream.push(walk.rotations[f], walk.translations[f])

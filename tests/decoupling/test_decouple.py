@@ -129,6 +129,14 @@ def test_rust_matches_numpy_twin():
             np.testing.assert_allclose(np.abs(np.sum(a * b, axis=-1)), 1.0, atol=1e-12)
         np.testing.assert_allclose(rust[2], twin[2], atol=1e-12)
         np.testing.assert_allclose(np.abs(np.sum(quat.mul(rust[0], rust[1]) * original, axis=-1)), 1.0, atol=1e-12)
+    # The trunk read as one chain (three joints, a slanted trunk line).
+    trunk = ([4, 5, 6], [(0.0, 1.0, 0.1), (0.3, 2.0, 0.0), (0.2, 1.0, -0.1)], 0.4)
+    rust = _core.split_rotations(original, body, 2.0, 4.0, scale, 1.5, 3.0, *trunk)
+    twin = reference.split_rotations(original, body, 2.0, 4.0, scale, 1.5, 3.0, *trunk)
+    plain = reference.split_rotations(original, body, 2.0, 4.0, scale, 1.5, 3.0)
+    np.testing.assert_allclose(rust[2], twin[2], atol=1e-12)
+    assert np.all(twin[2] >= plain[2] - 1e-12) and np.abs(twin[2][:, 4:7] - plain[2][:, 4:7]).max() > 0.1
+    np.testing.assert_array_equal(twin[2][:, :4], plain[2][:, :4])
 
 
 def test_the_smoothed_split_holds_a_steady_prediction_and_removes_a_pop(backend):

@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from conftest import scipy_positions
+from conftest import FixedFloor, scipy_positions
 from expressive_mocap.cli import main
 from expressive_mocap.decoupling.algebra import GAIN, decompose, split
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.errors import ModelError
+from expressive_mocap.ops import Trunk
 from expressive_mocap.procedural import walk_and_wave
 from expressive_mocap.rotations import quat
 
@@ -56,6 +57,20 @@ def test_activity_scale_reads_each_angle_divided_by_it():
         np.testing.assert_allclose(np.abs(a), np.abs(b), atol=1e-12)
 
 
+def test_a_lean_spread_over_the_trunk_reads_as_the_chains_and_a_twist_does_not(backend):
+    # Spine and chest each leaning 9 degrees forward: alone, activity 0.01 each; as the chain's
+    # 18 degrees read with scale 0.5 (36 degrees), fully active. Twisted 20 degrees each about
+    # the trunk line (X here, as on the Bandai skeleton), the chain adds nothing.
+    identity = np.tile([0.0, 0.0, 0.0, 1.0], (1, 3, 1))
+    trunk = Trunk((0, 1), ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)), 0.5)
+    leaning = np.stack([quat.about("Z", 9.0), quat.about("Z", 9.0), quat.about("Z", 9.0)])[None]
+    alone = split(leaning, identity)[2][0]
+    chain = split(leaning, identity, trunk=trunk)[2][0]
+    assert alone.max() < 0.02 and chain[0] == chain[1] == pytest.approx(1.0) and chain[2] == alone[2]
+    twisted = np.stack([quat.about("X", 20.0), quat.about("X", 20.0), quat.about("Z", 1.0)])[None]
+    np.testing.assert_array_equal(split(twisted, identity, trunk=trunk)[2], split(twisted, identity)[2])
+
+
 def test_calibration_raises_thresholds_only_above_the_residue_and_saves_them(model, tmp_path):
     walks = [walk_and_wave(seconds=2.0, speed=s).walk for s in (0.8, 1.2)]
     calibrated = model.calibrated(walks)
@@ -63,6 +78,14 @@ def test_calibration_raises_thresholds_only_above_the_residue_and_saves_them(mod
     assert model.calibrated(walks, threshold=False).activity_scale is None
     calibrated.save(tmp_path / "cal.npz")
     np.testing.assert_array_equal(BodyModel.load(tmp_path / "cal.npz").activity_scale, calibrated.activity_scale)
+    # The trunk's threshold: saved, never below the model's own, and a bad one refused.
+    assert calibrated.trunk.joints == model.trunk.joints and calibrated.trunk.scale >= model.trunk.scale
+    assert BodyModel.load(tmp_path / "cal.npz").trunk == calibrated.trunk
+    trunkless = dict(np.load(tmp_path / "cal.npz"))
+    trunkless["trunk_scale"] = np.array(-1.0)
+    np.savez(tmp_path / "bad_trunk.npz", **trunkless)
+    with pytest.raises(ModelError, match="bad_trunk.npz: trunk_bones must make a trunk of some length and trunk_scale"):
+        BodyModel.load(tmp_path / "bad_trunk.npz")
     arrays = dict(np.load(tmp_path / "cal.npz"))
     arrays["activity_scale"] = np.full(22, 0.5)
     np.savez(tmp_path / "bad.npz", **arrays)
@@ -77,24 +100,14 @@ def test_the_streaming_decoupler_uses_the_calibrated_thresholds(model):
     calibrated = model.calibrated([walk_and_wave(seconds=2.0, speed=0.8).walk])
     calibrated = replace(calibrated, activity_scale=np.full(22, 1.5))  # raised everywhere, to tell it apart
     waving = pair.waving[:30]
-    predicted = _Floor0(calibrated).predict(waving)
+    predicted = FixedFloor(calibrated, 0.0).predict_streamed(waving)
     # The stream splits frame by frame: the offline split without its smoothing in time.
-    offline = split(waving.rotations, predicted, activity_scale=calibrated.activity_scale)[2]
-    assert np.abs(offline - split(waving.rotations, predicted)[2]).max() > 0.05
+    offline = split(waving.rotations, predicted, activity_scale=calibrated.activity_scale, trunk=calibrated.trunk)[2]
+    assert np.abs(offline - split(waving.rotations, predicted, trunk=calibrated.trunk)[2]).max() > 0.05
     stream = StreamingDecoupler(calibrated, waving.skeleton, waving.frame_time, floor=0.0)
     for f in range(waving.n_frames):
         _, _, activity = stream.push(waving.rotations[f], waving.translations[f])
         np.testing.assert_allclose(activity, offline[f], atol=1e-9)
-
-
-class _Floor0:
-    """``model`` with the floor at 0, as the streaming decoupler uses it."""
-
-    def __init__(self, model):
-        self.model, self.activity_scale = model, model.activity_scale
-
-    def predict(self, motion):
-        return self.model.predict(motion, floor=0.0)
 
 
 def test_calibrate_command_sets_thresholds_unless_told_not_to(tmp_path, capsys):
@@ -124,8 +137,9 @@ def _hand_motion(motion: em.Motion, model, hand: str) -> float:
 
 def test_another_sessions_neutral_walk_stays_out_of_the_expressive_component(model, bandai1_dir):
     # Calibrated on four neutral clips of dataset-1, the fifth (a walk to the left) against a
-    # right-hand "bye" of the same session. Measured: walk's hands 1.4 / 0.7 cm, bye's waving hand
-    # 27 cm, its idle hand 0.4 cm; with a constant calibration only 5.9 / 2.5, 36 and 4.8 cm.
+    # right-hand "bye" of the same session. Measured: walk's hands at most 1.2 cm, bye's waving
+    # hand 28 cm, its idle hand 2.7 cm (0.4 with the network trained before the spine was learned
+    # for a reference pelvis); with a constant calibration only 4.8, 39 and 15 cm.
     def clip(name):
         return em.read_bvh(bandai1_dir / f"dataset-1_{name}_001.bvh")
 
@@ -136,6 +150,6 @@ def test_another_sessions_neutral_walk_stays_out_of_the_expressive_component(mod
         walking = max(_hand_motion(walk, calibrated, h) for h in ("Hand_L", "Hand_R"))
         waving, idle = _hand_motion(bye, calibrated, "Hand_R"), _hand_motion(bye, calibrated, "Hand_L")
         if threshold:
-            assert walking < 0.1 * waving and waving > 20.0 and idle < 2.0, (walking, waving, idle)
+            assert walking < 0.1 * waving and waving > 20.0 and idle < 3.0, (walking, waving, idle)
         else:  # what the threshold fixes
             assert walking > 0.1 * waving and idle > 3.0, (walking, waving, idle)

@@ -235,7 +235,8 @@ def test_the_streaming_decoupler_takes_another_skeleton():
     carried = Carried(game, source=Rig.of(game[:1])._replace(untrusted=frozenset()))
     # The stream splits each frame as it comes: the offline split without its smoothing in time.
     on_body = carried.body
-    offline = Decomposition(on_body, *split(on_body.rotations, FixedFloor(model, 0.0).predict(on_body)))
+    predicted = FixedFloor(model, 0.0).predict_streamed(on_body, stream.capacity)
+    offline = Decomposition(on_body, *split(on_body.rotations, predicted, trunk=model.trunk))
     np.testing.assert_allclose(activity, offline.activity, atol=1e-9)
     assert body.shape == game.rotations.shape
     np.testing.assert_allclose(body, carried.back(offline.body_motion()).rotations, atol=1e-9)

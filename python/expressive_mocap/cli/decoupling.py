@@ -439,9 +439,9 @@ def add_calibrate(commands) -> None:
 def cmd_calibrate(args) -> int:
     from ..decoupling.body_model import BodyModel
 
-    model = BodyModel.load(args.model)
-    neutral = [read_for_model(path, model, BODY_MODEL_FIX, joint_map(args)) for path in args.neutral]
-    model = model.calibrated(neutral, threshold=not args.no_threshold)
+    uncalibrated = BodyModel.load(args.model)
+    neutral = [read_for_model(path, uncalibrated, BODY_MODEL_FIX, joint_map(args)) for path in args.neutral]
+    model = uncalibrated.calibrated(neutral, threshold=not args.no_threshold)
     model.save(args.output)
     angles = model.calibration_angles()
     largest = sorted(angles.items(), key=lambda kv: -kv[1])[:5]
@@ -454,6 +454,8 @@ def cmd_calibrate(args) -> int:
             "activity thresholds raised above the neutral clips' residue: "
             + (", ".join(f"{n} x{s:.2f}" for s, n in raised) if raised else "none")
         )
+    if model.trunk is not None and uncalibrated.trunk is not None and model.trunk.scale > uncalibrated.trunk.scale:
+        print(f"trunk lean threshold raised x{model.trunk.scale / uncalibrated.trunk.scale:.2f} above the model's own")
     return 0
 
 

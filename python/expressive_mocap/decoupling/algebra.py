@@ -24,8 +24,9 @@ import numpy as np
 from ..body.take import Take
 from ..errors import ModelError
 from ..motion import Motion
-from ..ops import compose_rotations, split_rotations
+from ..ops import Trunk, compose_rotations, split_rotations
 from ..rotations import quat
+from .pelvis import mean_posture
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
 EXPONENT = 4.0  # b
@@ -45,8 +46,11 @@ class BodyMechanicsModel(Protocol):
 
 
 class FeatureModel(Protocol):
-    def predict_from_features(self, rotations: np.ndarray, features: np.ndarray) -> np.ndarray:
-        """Body-mechanics local rotations ``[F, J, 4]`` from ``features [F, 19]`` and the motion's ``rotations``."""
+    def predict_from_features(
+        self, rotations: np.ndarray, features: np.ndarray, posture: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Body-mechanics local rotations ``[F, J, 4]`` from ``features [F, 19]`` and the motion's
+        ``rotations`` (``posture``: the pelvis posture to carry the spine onto, per frame or one)."""
 
 
 def split(
@@ -56,6 +60,7 @@ def split(
     exponent: float = EXPONENT,
     activity_scale: np.ndarray | None = None,
     fps: float | None = None,
+    trunk: Trunk | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(expressive E*, body B', activity A)`` of ``original [F, J, 4]`` given the model's
     ``predicted [F, J, 4]`` (:class:`~expressive_mocap.errors.ModelError` if their shapes differ).
@@ -69,15 +74,22 @@ def split(
             f"the model predicted rotations {list(predicted.shape)} for a motion of {list(np.shape(original))}"
         )
     sigmas = (0.0, 0.0) if fps is None else (BODY_SMOOTHING * fps, ACTIVITY_SMOOTHING * fps)
-    return split_rotations(original, predicted, gain, exponent, activity_scale, *sigmas)
+    return split_rotations(original, predicted, gain, exponent, activity_scale, *sigmas, trunk)
 
 
 def split_from_features(
-    rotations: np.ndarray, features: np.ndarray, model: FeatureModel, gain: float = GAIN, exponent: float = EXPONENT
+    rotations: np.ndarray,
+    features: np.ndarray,
+    model: FeatureModel,
+    gain: float = GAIN,
+    exponent: float = EXPONENT,
+    posture: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`split` of ``rotations [F, J, 4]`` with the model's prediction from ``features [F, 19]``."""
-    predicted = model.predict_from_features(rotations, features)
-    return split(rotations, predicted, gain, exponent, getattr(model, "activity_scale", None))
+    """:func:`split` of ``rotations [F, J, 4]`` with the model's prediction from ``features [F, 19]``
+    (``posture``: the pelvis posture the model carries the spine onto; None: ``rotations``')."""
+    predicted = model.predict_from_features(rotations, features, posture)
+    scale, trunk = getattr(model, "activity_scale", None), getattr(model, "trunk", None)
+    return split(rotations, predicted, gain, exponent, scale, trunk=trunk)
 
 
 @dataclass(frozen=True)
@@ -123,7 +135,8 @@ def decompose(
     scale = getattr(model, "activity_scale", None)
     predict_take = getattr(model, "predict_take", None)
     predicted = predict_take(take) if predict_take is not None else model.predict(take.motion)
-    expressive, body, activity = split(take.motion.rotations, predicted, gain, exponent, scale, take.motion.fps)
+    trunk = getattr(model, "trunk", None)
+    expressive, body, activity = split(take.motion.rotations, predicted, gain, exponent, scale, take.motion.fps, trunk)
     return Decomposition(take.motion, expressive, body, activity)
 
 
@@ -145,12 +158,21 @@ def decompose_many(
     if not rotations:
         return []
     inputs = np.concatenate(features)
-    predicted = model.predict_from_features(np.concatenate(rotations), inputs.astype(np.float32) if float32 else inputs)
+    # Each clip's spine carried onto its own pelvis posture, whatever clips share the call.
+    pelvis = getattr(model, "pelvis", None)
+    posture = (
+        None
+        if pelvis is None
+        else np.concatenate([np.tile(mean_posture(r, pelvis.path), (len(r), 1)) for r in rotations])
+    )
+    predicted = model.predict_from_features(
+        np.concatenate(rotations), inputs.astype(np.float32) if float32 else inputs, posture
+    )
     cuts = np.cumsum([len(r) for r in rotations])[:-1]
-    scale = getattr(model, "activity_scale", None)
+    scale, trunk = getattr(model, "activity_scale", None), getattr(model, "trunk", None)
     out = []
     for original, body, rate in zip(rotations, np.split(predicted, cuts), fps):
-        expressive, recovered, activity = split(original, body, GAIN, EXPONENT, scale, rate)
+        expressive, recovered, activity = split(original, body, GAIN, EXPONENT, scale, rate, trunk)
         out.append({"activity": activity, "body": recovered, "expressive": expressive})
     return out
 

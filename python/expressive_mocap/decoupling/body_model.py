@@ -30,10 +30,14 @@ from ..body.contacts import floor_of
 from ..body.take import Take
 from ..errors import ArgumentError, ModelError
 from ..motion import Motion, Skeleton
+from ..ops import Trunk
 from ..rotations import quat
+from .algebra import BODY_SMOOTHING
 from .features import FEATURE_NAMES, dynamic_features
 from .network import Mlp
+from .pelvis import Pelvis, mean_posture, upright
 from .records import BodyModelSettings, TrainingReport
+from .trunk import trunk_threshold
 
 FORMAT = "expressive-mocap body model"
 VERSION = 1
@@ -58,7 +62,10 @@ class BodyModel:
     None: ``Q_j`` applied to the prediction as ``Q_j * B_j``; ``activity_scale [J]`` or None: per
     joint, the angle of the expressive component is divided by it before the activity index
     reads it (at least 1; set by calibration); ``feature_range [2, 19]`` or None:
-    the lowest and highest feature values the network is trusted with (inputs are clipped into it).
+    the lowest and highest feature values the network is trusted with (inputs are clipped into it);
+    ``trunk`` or None: the trunk chain read as one, with its threshold; ``pelvis`` or None: the
+    spine is predicted for the training clips' pelvis posture and carried onto the motion's
+    (both: :mod:`~expressive_mocap.decoupling.trunk`).
     ``settings`` and ``report``: what training was run with and how every stage scored
     (:class:`~expressive_mocap.decoupling.records.BodyModelSettings`,
     :class:`~expressive_mocap.decoupling.records.TrainingReport`; fields a file lacks are None).
@@ -74,6 +81,8 @@ class BodyModel:
     calibration: np.ndarray | None = None
     feature_range: np.ndarray | None = None
     activity_scale: np.ndarray | None = None
+    trunk: Trunk | None = None
+    pelvis: Pelvis | None = None
 
     def __repr__(self) -> str:
         # One line: the dataclass default prints every weight.
@@ -119,14 +128,22 @@ class BodyModel:
         """:meth:`predict` of a take (what :func:`~expressive_mocap.decoupling.decompose` calls)."""
         return self.predict(take)
 
-    def predict_from_features(self, rotations: np.ndarray, features: np.ndarray) -> np.ndarray:
-        """As :meth:`predict`, from ``features [F, 19]`` and the motion's ``rotations [F, J, 4]``."""
+    def predict_from_features(
+        self, rotations: np.ndarray, features: np.ndarray, posture: np.ndarray | None = None
+    ) -> np.ndarray:
+        """As :meth:`predict`, from ``features [F, 19]`` and the motion's ``rotations [F, J, 4]``.
+        ``posture``: the pelvis posture the spine is carried onto, ``[4]`` or per frame ``[F, 4]``
+        (None: the mean of ``rotations``' frames, one clip's; see :mod:`.trunk`)."""
         if self.feature_range is not None:
             low, high = self.feature_range.astype(features.dtype)
             features = np.clip(features, low, high)
         out = self.network.forward(features).reshape(len(features), len(self.predicted), 4)
         body = np.array(rotations, dtype=np.float64, copy=True)
         body[:, self.predicted] = quat.normalize(out)
+        if self.pelvis is not None:
+            held = mean_posture(rotations, self.pelvis.path) if posture is None else np.asarray(posture)
+            c = upright(held, self.pelvis)
+            body[:, self.pelvis.spine] = quat.mul(c if c.ndim == 2 else c[None], body[:, self.pelvis.spine])
         if self.calibration is not None:
             body = quat.mul(self.calibration[None], body)
         return body
@@ -139,7 +156,8 @@ class BodyModel:
         ``threshold`` also each joint's activity threshold: what calibration leaves of the
         neutral clips' expressive angle (its NEUTRAL_PERCENTILE-th percentile over their frames)
         is read as NEUTRAL_ANGLE degrees, little activity; ``activity_scale`` = the larger of 1
-        and that angle / NEUTRAL_ANGLE, so joints the model already fits keep the default."""
+        and that angle / NEUTRAL_ANGLE, so joints the model already fits keep the default; and
+        the trunk chain's, its lean read by the same rule (never below the model's own)."""
         if not neutral:
             raise ArgumentError("calibration needs at least one neutral clip")
         model = replace(self, calibration=None, activity_scale=None)
@@ -151,8 +169,21 @@ class BodyModel:
         if threshold:
             residue = quat.angle(quat.mul(original, quat.conjugate(quat.mul(q[None], predicted))))
             angle = np.degrees(np.percentile(residue, NEUTRAL_PERCENTILE, axis=0))
-            model = replace(model, activity_scale=np.maximum(1.0, angle / NEUTRAL_ANGLE))
+            scale = np.maximum(1.0, angle / NEUTRAL_ANGLE)
+            model = replace(model, activity_scale=scale, trunk=self._session_trunk(model, neutral))
         return model
+
+    def _session_trunk(self, calibrated: BodyModel, neutral: Sequence[Motion]) -> Trunk | None:
+        """The trunk's threshold for a session: the lean the calibrated model leaves on its
+        neutral clips, read as each joint's residue is, never below this model's own."""
+        if self.trunk is None:
+            return None
+        chain = (self.trunk.joints, self.trunk.bones)
+        sigmas = [BODY_SMOOTHING * m.fps for m in neutral]
+        predictions = [calibrated.predict(m) for m in neutral]
+        originals = [m.rotations for m in neutral]
+        session = trunk_threshold(chain, originals, predictions, sigmas, NEUTRAL_PERCENTILE, NEUTRAL_ANGLE)
+        return session if session.scale > self.trunk.scale else self.trunk
 
     def calibration_angles(self) -> dict[str, float]:
         """Degrees of each joint's calibration rotation (empty when uncalibrated)."""
@@ -184,6 +215,14 @@ class BodyModel:
             arrays["feature_range"] = self.feature_range
         if self.activity_scale is not None:
             arrays["activity_scale"] = self.activity_scale
+        if self.pelvis is not None:
+            arrays["pelvis_path"] = np.array(self.pelvis.path, dtype=np.int64)
+            arrays["pelvis_spine"] = np.array(self.pelvis.spine, dtype=np.int64)
+            arrays["pelvis_reference"] = self.pelvis.reference
+        if self.trunk is not None:
+            arrays["trunk_joints"] = np.array(self.trunk.joints, dtype=np.int64)
+            arrays["trunk_bones"] = np.array(self.trunk.bones, dtype=np.float64)
+            arrays["trunk_scale"] = np.array(self.trunk.scale, dtype=np.float64)
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()
@@ -257,6 +296,12 @@ class BodyModel:
                 "calibration",
                 "feature_range",
                 "activity_scale",
+                "trunk_joints",
+                "trunk_bones",
+                "trunk_scale",
+                "pelvis_path",
+                "pelvis_spine",
+                "pelvis_reference",
                 "network.activations",
                 *layers,
             ],
@@ -281,6 +326,8 @@ class BodyModel:
             else None,
             feature_range=_feature_range(arrays, name),
             activity_scale=_activity_scale(arrays, name, len(joint_names)),
+            trunk=_trunk(arrays, name, predicted),
+            pelvis=_pelvis(arrays, name, predicted, len(joint_names)),
         )
 
 
@@ -300,6 +347,35 @@ def _activity_scale(arrays: dict, name: str, n_joints: int) -> np.ndarray | None
     if np.any(values < 1.0):
         raise ModelError(f"{name}: activity_scale must be at least 1 for every joint")
     return values
+
+
+def _trunk(arrays: dict, name: str, predicted: np.ndarray) -> Trunk | None:
+    keys = ("trunk_joints", "trunk_bones", "trunk_scale")
+    if not any(k in arrays for k in keys):
+        return None  # a model file from before the trunk was read as a chain
+    joints = finite_array(arrays, "trunk_joints", name, kinds="iu")
+    if joints.ndim != 1 or not len(joints) or not set(joints.tolist()) <= set(predicted.tolist()):
+        raise ModelError(f"{name}: trunk_joints must be a list of predicted joints")
+    bones = finite_array(arrays, "trunk_bones", name, (len(joints), 3), kinds="f")
+    scale = float(finite_array(arrays, "trunk_scale", name, (), kinds="f"))
+    if np.linalg.norm(bones.sum(axis=0)) <= 1e-9 or scale <= 0:
+        raise ModelError(f"{name}: trunk_bones must make a trunk of some length and trunk_scale be a positive number")
+    carried = tuple((float(x), float(y), float(z)) for x, y, z in bones)
+    return Trunk(tuple(int(j) for j in joints), carried, scale)
+
+
+def _pelvis(arrays: dict, name: str, predicted: np.ndarray, n_joints: int) -> Pelvis | None:
+    keys = ("pelvis_path", "pelvis_spine", "pelvis_reference")
+    if not any(k in arrays for k in keys):
+        return None  # a model file from before the spine was predicted for a reference pelvis
+    path = finite_array(arrays, "pelvis_path", name, kinds="iu")
+    spine = int(finite_array(arrays, "pelvis_spine", name, (), kinds="iu"))
+    reference = finite_array(arrays, "pelvis_reference", name, (4,), kinds="f")
+    if path.ndim != 1 or not len(path) or path.min() < 0 or path.max() >= n_joints or path[0] != 0:
+        raise ModelError(f"{name}: pelvis_path must list joints from the root (0) to the hips")
+    if spine not in set(predicted.tolist()) or abs(np.linalg.norm(reference) - 1.0) > 1e-6:
+        raise ModelError(f"{name}: pelvis_spine must be a predicted joint and pelvis_reference a unit quaternion")
+    return Pelvis(tuple(int(j) for j in path), spine, reference)
 
 
 def poor_fit(report: TrainingReport) -> str | None:

@@ -9,6 +9,7 @@ import numpy as np
 from ..motion import Motion
 from ..rotations import quat
 from .algebra import EXPONENT, GAIN, split_from_features
+from .pelvis import mean_posture
 
 
 class StreamingDecoupler:
@@ -19,7 +20,8 @@ class StreamingDecoupler:
     time of any step) and returns, for each new frame, its body-mechanics rotations, filtered
     expressive rotations and activity per joint. The floor is given (default 0), not estimated.
     Each frame is split on its own: without the offline split's smoothing in time (of the
-    prediction and of the activity), which needs the frames after.
+    prediction and of the activity), which needs the frames after; the pelvis posture the model
+    carries the spine onto is the window's mean (offline: the clip's).
 
     A ``skeleton`` other than the model's (any humanoid one; ``joint_map`` as for
     :func:`~expressive_mocap.body.find_joint_map`) is read from the first frame (its
@@ -85,8 +87,10 @@ class StreamingDecoupler:
         skeleton = frame.skeleton
         window = Motion(skeleton, np.stack(self._rotations), np.stack(self._translations), self.frame_time)
         features = self.model.features(window, floor=floor)[-1:]
+        pelvis = getattr(self.model, "pelvis", None)
+        posture = None if pelvis is None else mean_posture(window.rotations, pelvis.path)  # the window's
         expressive, recovered, activity = split_from_features(
-            window.rotations[-1:], features, self.model, self.gain, self.exponent
+            window.rotations[-1:], features, self.model, self.gain, self.exponent, posture
         )
         return recovered[0], expressive[0], activity[0]
 

@@ -41,7 +41,9 @@ from .features import FEATURE_NAMES
 from .lbfgs import Log, Params, fit_lbfgs, init_params
 from .lbfgs import stderr_log as _stderr
 from .network import Layer, Mlp
+from .pelvis import carried, find_pelvis
 from .records import BodyModelSettings, Split, StageScores, TrainingReport
+from .trunk import with_trunk
 
 # --- splitting ---------------------------------------------------------------------------------
 
@@ -407,12 +409,15 @@ def train_body_model(
             raise ArgumentError("every training clip must have the same skeleton (joint names) as the first")
     roles = Body.of(skeleton).roles
     predicted = np.array([j for j in range(skeleton.n_joints) if skeleton.parents[j] >= 0 and j != roles.hips])
-    rotations = np.concatenate([m.rotations for m in neutral])
+    # The poses the network learns: each clip's spine as if its pelvis held the training clips' posture.
+    pelvis = find_pelvis(skeleton, roles, [m.rotations for m in neutral])
+    poses = [carried(m.rotations, pelvis, inverse=True) for m in neutral]
+    rotations = np.concatenate(poses)
     hemispheres = quat.mean_rotation(rotations[:, predicted])
     thigh_reference = quat.mean_rotation(rotations[:, list(roles.upper_legs)])
 
     X = np.concatenate([model_features(m, thigh_reference) for m in neutral])
-    P = np.concatenate([pose_vectors(m.rotations, predicted, hemispheres) for m in neutral])
+    P = np.concatenate([pose_vectors(r, predicted, hemispheres) for r in poses])
     groups = np.concatenate([np.full(m.n_frames, k) for k, m in enumerate(neutral)])
     # The same split train_stacked_network makes: its test clips stay out of the autoencoder and
     # of the feature range.
@@ -421,7 +426,9 @@ def train_body_model(
     if unlabelled:
         test_clips = {_fingerprint(neutral[k]) for k in np.unique(groups[test_rows])}
         kept = [
-            pose_vectors(m.rotations, predicted, hemispheres) for m in unlabelled if _fingerprint(m) not in test_clips
+            pose_vectors(carried(m.rotations, pelvis, inverse=True), predicted, hemispheres)
+            for m in unlabelled
+            if _fingerprint(m) not in test_clips
         ]
         pool = np.concatenate(kept) if kept else np.zeros((0, P.shape[1]))
         drawn = np.random.default_rng(seed).choice(len(pool), size=min(unlabelled_frames, len(pool)), replace=False)
@@ -441,7 +448,7 @@ def train_body_model(
         features="causal; floor = 5th percentile of toe heights; thigh hemisphere = training mean",
         feature_range=FEATURE_RANGE,
     )
-    return BodyModel(
+    model = BodyModel(
         tuple(skeleton.names),
         predicted,
         hemispheres,
@@ -450,7 +457,9 @@ def train_body_model(
         settings,
         report,
         feature_range=feature_range(X[train_rows]),
+        pelvis=pelvis,
     )
+    return with_trunk(model, skeleton, [neutral[k] for k in np.unique(groups[test_rows])])
 
 
 FEATURE_RANGE = "lowest and highest of the training clips' features; thigh rotations not limited"

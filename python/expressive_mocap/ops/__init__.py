@@ -53,6 +53,7 @@ from .posing import (
     two_bone_ik,
 )
 from .rotations import (
+    Trunk,
     compose_rotations,
     decode_channels,
     decouple_rotations,
@@ -65,6 +66,7 @@ from .rotations import (
 )
 
 __all__ = [
+    "Trunk",
     "ACTIVATIONS",
     "ChannelLayout",
     "ClipArrays",

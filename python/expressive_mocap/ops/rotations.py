@@ -3,6 +3,8 @@ channel decoding, the decoupling algebra's per-joint products, rotation matrix c
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..backend import kernels
@@ -92,18 +94,48 @@ def decouple_rotations(original, body, gain: float, exponent: float) -> tuple[np
     return e.reshape(original.shape), b.reshape(original.shape), a.reshape(batch)
 
 
+class Trunk(NamedTuple):
+    """The trunk read as one chain by :func:`split_rotations`: ``joints`` from the hips up (each
+    the parent of the next), ``bones`` the bone each carries (the next one's rest offset; the
+    last one's, the neck's), so that the trunk line runs from the first to the neck; ``scale``
+    the divisor of the angle between the original's and the body mechanics' trunk lines before
+    the activity index reads it."""
+
+    joints: tuple[int, ...]
+    bones: tuple[tuple[float, float, float], ...]
+    scale: float
+
+
 def split_rotations(
-    original, body, gain: float, exponent: float, scale=None, body_sigma: float = 0.0, activity_sigma: float = 0.0
+    original,
+    body,
+    gain: float,
+    exponent: float,
+    scale=None,
+    body_sigma: float = 0.0,
+    activity_sigma: float = 0.0,
+    trunk: Trunk | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One clip's :func:`decouple_rotations` (``[F, J, 4]``) with ``body`` smoothed over
     ``body_sigma`` frames and the activity, read from ``angle(E) / scale`` (``[J]``, None: 1),
-    over ``activity_sigma`` frames (Gaussians, the ends held; 0: none). Returns ``(E*, B', A)``."""
+    over ``activity_sigma`` frames (Gaussians, the ends held; 0: none). ``trunk``: its joints are
+    at least as active as the chain's lean reads (a lean spread over several joints, a few degrees
+    each, counts as the chain's). Returns ``(E*, B', A)``."""
     original, body = _f64("original", original, 4), _f64("body", body, 4)
     if original.ndim != 3:
         raise ArgumentError(f"argument `original`: expected shape [F, J, 4] (one clip), got {list(original.shape)}")
     scale = np.ones(original.shape[1]) if scale is None else _array("scale", scale, np.float64)
+    chain = (
+        {}
+        if trunk is None
+        else {
+            "trunk_joints": [int(j) for j in trunk.joints],
+            "trunk_bones": [tuple(float(v) for v in bone) for bone in trunk.bones],
+            "trunk_scale": float(trunk.scale),
+        }
+    )
     return kernels().split_rotations(
-        original, body, float(gain), float(exponent), scale, float(body_sigma), float(activity_sigma)
+        original, body, float(gain), float(exponent), scale, float(body_sigma), float(activity_sigma), **chain
     )
 
 
@@ -124,6 +156,7 @@ def matrix_columns(quats, columns: int) -> np.ndarray:
 
 
 __all__ = [
+    "Trunk",
     "compose_rotations",
     "decode_channels",
     "decouple_rotations",
