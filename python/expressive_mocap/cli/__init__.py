@@ -30,7 +30,7 @@ COMMANDS = {
     "files": ("info", "positions", "convert", "render"),
     "skeletons": ("skeleton", "retarget"),
     "decoupling": ("decouple", "modulate", "mix", "blend", "train", "calibrate"),
-    "exaggeration": ("rank", "exaggerate", "validate"),
+    "exaggeration": ("rank", "exaggerate", "validate", "models"),
     "data": ("footsteps", "preprocess"),
     "demo": ("demo",),
 }

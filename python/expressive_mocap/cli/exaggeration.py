@@ -1,5 +1,5 @@
-"""Commands of the exaggeration method (Davis & Kannappan): ``rank``, ``exaggerate`` and
-``validate``."""
+"""Commands of the exaggeration method (Davis & Kannappan): ``rank``, ``exaggerate``,
+``validate`` and ``models`` (the shipped ones)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from ..exaggeration import exaggerate, swap_test, train
 from ..motion import Motion
 from .common import add_map_option, default, finite, joint_map, positive, read_all, read_on_model
 
-__all__ = ["EXAGGERATION_MODEL_FIX", "add_parsers", "cmd_exaggerate", "cmd_rank", "cmd_validate"]
+__all__ = ["EXAGGERATION_MODEL_FIX", "add_parsers", "cmd_exaggerate", "cmd_models", "cmd_rank", "cmd_validate"]
 
 EXAGGERATION_MODEL_FIX = (
     "an exaggeration model applies to its own skeleton only; train one on clips of this skeleton "
@@ -177,8 +177,17 @@ def cmd_rank(args) -> int:
 
 
 def add_exaggerate(commands) -> None:
-    p = commands.add_parser("exaggerate", help="exaggerate or diminish a motion with a model from `rank -o MODEL.npz`")
-    p.add_argument("--model", required=True, metavar="MODEL.npz", help="exaggeration model")
+    p = commands.add_parser(
+        "exaggerate", help="exaggerate or diminish a motion with a shipped model or one from `rank -o MODEL.npz`"
+    )
+    p.add_argument(
+        "--model",
+        metavar="MODEL.npz",
+        help="exaggeration model (default: the shipped model that fits the input best; `expressive-mocap models` "
+        "lists them)",
+    )
+    p.add_argument("--action", help="without --model: choose among the shipped models of this action only")
+    p.add_argument("--axis", help="without --model: choose among the shipped models of this style axis only")
     p.add_argument("--input", required=True, metavar="IN.bvh", help="the motion (same skeleton and action)")
     p.add_argument(
         "--from",
@@ -249,8 +258,8 @@ def cmd_exaggerate(args) -> int:
 
     if (args.baseline is None) != (args.baseline_level is None):
         raise ArgumentError("--baseline and --baseline-level go together: a clip of the same actor and its intensity")
-    model = ExaggerationModel.load(args.model)
     original = read_bvh(args.input)
+    model = ExaggerationModel.load(args.model) if args.model else _shipped_for(args, original)
     motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
     baseline = None
     if args.baseline is not None:
@@ -289,6 +298,27 @@ def cmd_exaggerate(args) -> int:
         print(on_own_skeleton(original, written))
     print(f"wrote {args.output}")
     return 0
+
+
+def _shipped_for(args, original: Motion):
+    """The shipped model that fits the input best (among ``--action``, ``--axis``), said."""
+    from ..exaggeration.zoo import candidates, choose
+
+    if args.baseline is not None:
+        raise ArgumentError("--baseline needs --model: a baseline is measured against one model")
+    models = candidates(args.action, args.axis)
+    # Every shipped model is of the canonical skeleton: the input is carried onto it once.
+    first = models[0].load()
+    motion, _ = read_on_model(args.input, first, EXAGGERATION_MODEL_FIX, joint_map(args), original)
+    shipped, model, ranked = choose(motion, models, explicit=args.action is not None)
+    others = ", ".join(f"{s.name} {r:.2f}" for s, r in ranked if s is not shipped)
+    styles = " < ".join(f"{style} {k}" for k, style in enumerate(shipped.styles, start=1))
+    residual = next(r for s, r in ranked if s is shipped)
+    print(
+        f"model: the shipped {shipped.name} ({styles}), fit residual {residual:.2f}"
+        + (f"; others: {others}" if others else "")
+    )
+    return model
 
 
 def _held(original: Motion, timing, user_map) -> tuple:
@@ -380,7 +410,35 @@ def cmd_validate(args) -> int:
     return 0
 
 
+def add_models(commands) -> None:
+    p = commands.add_parser("models", help="list the shipped exaggeration models, their training and validation")
+    p.set_defaults(run=cmd_models)
+
+
+def cmd_models(args) -> int:
+    from ..exaggeration.zoo import index_records
+
+    records = index_records()
+    if not records:
+        print("this installation ships no exaggeration model")
+        return 0
+    print("Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0): takes 1-8 of each style trained, the later held out")
+    header = ("action", "axis", "styles (1 < 2 < 3)", "swap", "warp", "estimate", "chosen")
+    print("{:<20} {:<7} {:<28} {:>5} {:>5} {:>9} {:>7}  shipped".format(*header))
+    for r in records:
+        shipped = "yes" if r["shipped"] else "no (" + "; ".join(f.split(" (")[0] for f in r["failed"]) + ")"
+        print(
+            f"{r['action']:<20} {r['axis']:<7} {' < '.join(r['styles']):<28} {r['swap_ratio']:>5.2f} "
+            f"{r['warp_ratio_worst']:>5.2f} {100 * r['estimate_within']:>8.0f}% "
+            f"{100 * r['chosen_right']:>6.0f}%  {shipped}"
+        )
+    print("swap: the paper's swap test over DOFs; warp: leave one person out, the worst; estimate: held-out takes")
+    print("within 0.3 of their intensity; chosen: held-out takes whose best fit is their own action's model.")
+    print("The card: expressive_mocap/data/exaggeration/MODEL_CARD.md; rebuilt by benches/build_models.py.")
+    return 0
+
+
 def add_parsers(commands) -> None:
     """The subparsers of this module's commands, in the order ``--help`` lists them."""
-    for add in (add_rank, add_exaggerate, add_validate):
+    for add in (add_rank, add_exaggerate, add_validate, add_models):
         add(commands)

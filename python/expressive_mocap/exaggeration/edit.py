@@ -362,6 +362,17 @@ def _baseline_offsets(
     return measured.estimated.mean(axis=0) - at_level, shift, as_is
 
 
+def current_intensity(
+    model: ExaggerationModel, motion: Motion | Take, cycles: Sequence[Cycle] | None = None
+) -> IntensityEstimate:
+    """``motion``'s current intensity as :func:`exaggerate` estimates it by default (its
+    ``cycles``, else its gait cycles or the whole clip): with the fit residual that tells how much
+    the motion is like the model's training performances (about 1 alike, above
+    :data:`~expressive_mocap.exaggeration.estimate.POOR_FIT` unlike)."""
+    measured = _measure(model, Take.of(motion), EDITING, cycles)
+    return model.estimate(measured.estimated.mean(axis=0), measured.estimated)
+
+
 # Over 60 lines with its docstring, which documents every option; the body is about 45.
 def exaggerate(
     model: ExaggerationModel,
@@ -475,4 +486,4 @@ def _one_of(settings: EditSettings | None, keywords: EditSettings) -> EditSettin
     return settings
 
 
-__all__ = ["ExaggerationReport", "exaggerate", "motion_dofs", "stance_foot_speed"]
+__all__ = ["ExaggerationReport", "current_intensity", "exaggerate", "motion_dofs", "stance_foot_speed"]
