@@ -159,15 +159,16 @@ def main() -> None:
         elif path.exists():
             path.unlink()
     atomic_write(OUT / INDEX, (json.dumps(records, indent=1) + "\n").encode())
-    # The package's own choice, among the models that ship: a take of a shipped action should get
-    # its model, a take of another action none (a refusal, not another action's edit).
+    # The package's own choice, among the models that ship: a take of an action a model ships for
+    # should get a model of that action, a take of another action none (a refusal, not another
+    # action's edit).
     ships = [(r["action"], r["axis"]) for r in records if r["shipped"]]
     outcome = {"right": 0, "refused": 0, "wrong": 0}
-    for job, own in clips.items():
-        for _, _, path in own:
+    for (action, _), own in clips.items():
+        for _, _, path in {p[2]: p for p in own}.values():
             fitting = [s for s in ships if s in admitted[path] and fits[s][path][1] <= CHOICE_FIT]
-            picked = min(fitting, key=lambda s: fits[s][path][1]) if fitting else None
-            expected = job if job in ships else None
+            picked = min(fitting, key=lambda s: fits[s][path][1])[0] if fitting else None
+            expected = action if any(a == action for a, _ in ships) else None
             outcome["right" if picked == expected else "refused" if picked is None else "wrong"] += 1
     card = model_card(records, outcome)
     atomic_write(OUT / "MODEL_CARD.md", card.encode())
@@ -193,11 +194,11 @@ Rebuilt with `python benches/build_models.py` ({size:.1f} MB in all).
 Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022; Kobayashi et
 al., arXiv:2306.08861), licensed **CC BY-NC 4.0**: these models are derivatives of that data and
 are for non-commercial use under the same licence. Each model: one action, takes 1-8 of each of
-three styles as eight people at intensities 1, 2, 3 (energy: exhausted 1 < normal 2 < active 3);
-the later takes are held out. Locomotion: every gait cycle of each clip (their mean is the
-performance); the arm actions: the whole clip. Settings: the package's defaults
-(`expressive_mocap.exaggeration.TRAINING`). Stored compact: two training cycles per performance,
-trajectories in half precision.
+three styles as eight people at intensities 1, 2, 3 along an axis (energy: exhausted 1 < normal 2
+< active 3; age: elderly 1 < normal 2 < youthful 3); the later takes are held out. Locomotion:
+every gait cycle of each clip (their mean is the performance); the arm actions: the whole clip.
+Settings: the package's defaults (`expressive_mocap.exaggeration.TRAINING`). Stored compact: two
+training cycles per performance, trajectories in half precision.
 
 ## Validation
 Swap test: the union of the people's key sets swapped from the lightest performance to the

@@ -45,7 +45,10 @@ ACTIONS = (
     "wave-both-hands",
 )
 LOCOMOTION = ("walk", "walk-turn-left", "walk-turn-right", "run")  # gait cycles; the arm actions: the whole clip
-AXES = {"energy": ("exhausted", "normal", "active")}  # styles at intensities 1, 2, 3
+AXES = {  # styles at intensities 1, 2, 3 (every model of both is validated; those that pass ship)
+    "energy": ("exhausted", "normal", "active"),
+    "age": ("elderly", "normal", "youthful"),
+}
 PEOPLE = tuple(range(1, 9))  # takes 1-8 of each style, as eight people; the later takes are held out
 INDEX = "index.json"
 # How far beyond its training clips' range a motion's signature may lie for a model to be a candidate.
