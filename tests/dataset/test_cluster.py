@@ -146,10 +146,13 @@ def dask_cluster(folder: Path, workers: int = 2):
             "127.0.0.1:0", "--scheduler-file", str(scheduler_file), "--idle-timeout", "600",
         )  # fmt: skip
         deadline = time.monotonic() + STARTUP_S
-        while not scheduler_file.exists():
+        address = None
+        while address is None:  # Dask writes the file in place: it may exist empty or half written a moment
             assert scheduler.poll() is None and time.monotonic() < deadline, (folder / "dask.log").read_text()
-            time.sleep(0.1)
-        address = json.loads(scheduler_file.read_text())["address"]
+            try:
+                address = json.loads(scheduler_file.read_text())["address"]
+            except (FileNotFoundError, json.JSONDecodeError, KeyError):
+                time.sleep(0.1)
         preload = folder / "preload_marks.py"
         preload.write_text(PRELOAD)
         started = [
