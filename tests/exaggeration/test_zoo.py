@@ -80,6 +80,10 @@ def test_a_motion_of_no_shipped_action_is_refused_with_every_residual(tmp_path, 
     assert not out.exists()
     with pytest.raises(em.errors.ArgumentError, match="no shipped model of action juggle"):
         candidates("juggle")
+    argv = ["exaggerate", "--input", str(tmp_path / "wave.bvh"), "--to", "3", "-o", str(out), "--action", "juggle"]
+    assert main(argv) != 0 and "no shipped model of action juggle" in capsys.readouterr().err
+    assert main([*argv, "--model", str(tmp_path / "m.npz")]) != 0
+    assert "give them without --model" in capsys.readouterr().err and not out.exists()
 
 
 def test_the_models_command_lists_every_model_and_why_it_did_not_ship(capsys):

@@ -258,6 +258,8 @@ def cmd_exaggerate(args) -> int:
 
     if (args.baseline is None) != (args.baseline_level is None):
         raise ArgumentError("--baseline and --baseline-level go together: a clip of the same actor and its intensity")
+    if args.model and (args.action or args.axis):
+        raise ArgumentError("--action and --axis choose among the shipped models: give them without --model")
     original = read_bvh(args.input)
     model = ExaggerationModel.load(args.model) if args.model else _shipped_for(args, original)
     motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
