@@ -136,6 +136,19 @@ def scipy_positions(skeleton: em.Skeleton, values: np.ndarray) -> np.ndarray:
     return scipy_fk(skeleton, values)[1]
 
 
+def forward_lean(motion: em.Motion, neck: str, legs: tuple[str, str]) -> float:
+    """Mean angle (degrees, SciPy FK) of the line from the joint "Hips" to ``neck`` from
+    vertical, towards the facing (the horizontal normal of the line between the upper ``legs``)."""
+    p = scipy_positions(motion.skeleton, motion.channel_values())
+    at = motion.skeleton.index
+    trunk = p[:, at(neck)] - p[:, at("Hips")]
+    side = p[:, at(legs[0])] - p[:, at(legs[1])]
+    side[:, 1] = 0.0
+    forward = np.cross(side, [0.0, 1.0, 0.0])
+    forward /= np.linalg.norm(forward, axis=1, keepdims=True)
+    return float(np.degrees(np.arctan2(np.sum(trunk * forward, axis=1), trunk[:, 1])).mean())
+
+
 def stick_walker(hips, left_foot, right_foot, fps: float = 30.0, prefix: str = "") -> em.Motion:
     """A 9-joint CMU-named figure (``prefix`` e.g. "mixamorig:") whose hips and ankles go
     exactly where told: ``hips``, ``left_foot``, ``right_foot`` are world positions ``[F, 3]``

@@ -6,11 +6,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import numpy as np
 import pytest
 
 import expressive_mocap as em
-from conftest import scipy_positions
+from conftest import forward_lean
 from expressive_mocap.decoupling import BodyModel, decompose
 
 TRUNK = ["Spine", "Chest"]
@@ -23,14 +22,7 @@ def model() -> BodyModel:
 
 def lean(motion: em.Motion) -> float:
     """Mean angle of the hips-to-neck line from vertical, towards the facing direction, degrees."""
-    p = scipy_positions(motion.skeleton, motion.channel_values())
-    at = motion.skeleton.index
-    trunk = p[:, at("Neck")] - p[:, at("Hips")]
-    side = p[:, at("UpperLeg_L")] - p[:, at("UpperLeg_R")]
-    side[:, 1] = 0.0
-    forward = np.cross(side, [0.0, 1.0, 0.0])
-    forward /= np.linalg.norm(forward, axis=1, keepdims=True)
-    return float(np.degrees(np.arctan2(np.sum(trunk * forward, axis=1), trunk[:, 1])).mean())
+    return forward_lean(motion, "Neck", ("UpperLeg_L", "UpperLeg_R"))
 
 
 def trunk_reading(motion: em.Motion, model: BodyModel) -> tuple[float, float]:

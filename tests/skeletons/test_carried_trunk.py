@@ -4,10 +4,8 @@ forward kinematics on the written files."""
 
 from __future__ import annotations
 
-import numpy as np
-
 import expressive_mocap as em
-from conftest import scipy_positions
+from conftest import forward_lean
 from expressive_mocap.cli import main
 
 
@@ -19,15 +17,7 @@ def test_a_leaning_walk_of_another_rig_stands_up_on_its_own_skeleton(other_dir, 
     source = other_dir / "dme_demo_3d_2.bvh"
 
     def lean_of(path):
-        motion = em.read_bvh(path)
-        p = scipy_positions(motion.skeleton, motion.channel_values())
-        at = motion.skeleton.index
-        trunk = p[:, at("Neck")] - p[:, at("Hips")]
-        side = p[:, at("LeftUpLeg")] - p[:, at("RightUpLeg")]
-        side[:, 1] = 0.0
-        forward = np.cross(side, [0.0, 1.0, 0.0])
-        forward /= np.linalg.norm(forward, axis=1, keepdims=True)
-        return float(np.degrees(np.arctan2(np.sum(trunk * forward, axis=1), trunk[:, 1])).mean())
+        return forward_lean(em.read_bvh(path), "Neck", ("LeftUpLeg", "RightUpLeg"))
 
     for scale in ("0", "1"):
         assert main(["modulate", str(source), "--scale", scale, "-o", str(tmp_path / f"s{scale}.bvh")]) == 0
