@@ -7,7 +7,7 @@ measured with the gait measures of experiments/exaggeration_sessions.py (this fo
 and SciPy forward kinematics). Each held-out normal take is exaggerated to 3 and diminished to 1
 by the shipped model as `exaggerate` without --model chooses it (the default settings, without
 retiming: `--no-timing`); per measure, how far its mean moves from the normal takes' towards the active (to 3)
-or the exhausted (to 1) takes' (1: all the way; the issue's bar: at least 0.5). Also: stance feet
+or the exhausted (to 1) takes' (1: all the way; the bar a shipped model is held to: at least 0.5). Also: stance feet
 (the edit's mean stance-foot speed over the input's, through the input's contacts; bar 1.2x) and
 hinges (the largest knee or elbow angle past straight, degrees: 0 when none bends backwards).
 
