@@ -65,7 +65,7 @@ class BodyModel:
     the lowest and highest feature values the network is trusted with (inputs are clipped into it);
     ``trunk`` or None: the trunk chain read as one, with its threshold; ``pelvis`` or None: the
     spine is predicted for the training clips' pelvis posture and carried onto the motion's
-    (both: :mod:`~expressive_mocap.decoupling.trunk`).
+    (:mod:`~expressive_mocap.decoupling.trunk`, :mod:`~expressive_mocap.decoupling.pelvis`).
     ``settings`` and ``report``: what training was run with and how every stage scored
     (:class:`~expressive_mocap.decoupling.records.BodyModelSettings`,
     :class:`~expressive_mocap.decoupling.records.TrainingReport`; fields a file lacks are None).
@@ -133,7 +133,7 @@ class BodyModel:
     ) -> np.ndarray:
         """As :meth:`predict`, from ``features [F, 19]`` and the motion's ``rotations [F, J, 4]``.
         ``posture``: the pelvis posture the spine is carried onto, ``[4]`` or per frame ``[F, 4]``
-        (None: the mean of ``rotations``' frames, one clip's; see :mod:`.trunk`)."""
+        (None: the mean of ``rotations``' frames, one clip's; see :mod:`.pelvis`)."""
         if self.feature_range is not None:
             low, high = self.feature_range.astype(features.dtype)
             features = np.clip(features, low, high)
@@ -162,7 +162,8 @@ class BodyModel:
             raise ArgumentError("calibration needs at least one neutral clip")
         model = replace(self, calibration=None, activity_scale=None)
         original = np.concatenate([m.rotations for m in neutral])
-        predicted = np.concatenate([model.predict(m) for m in neutral])
+        per_clip = [model.predict(m) for m in neutral]
+        predicted = np.concatenate(per_clip)
         q = quat.mean_rotation(quat.mul(original, quat.conjugate(predicted)))
         q[[j for j in range(len(self.joint_names)) if j not in set(self.predicted.tolist())]] = [0.0, 0.0, 0.0, 1.0]
         model = replace(model, calibration=q)
@@ -170,17 +171,17 @@ class BodyModel:
             residue = quat.angle(quat.mul(original, quat.conjugate(quat.mul(q[None], predicted))))
             angle = np.degrees(np.percentile(residue, NEUTRAL_PERCENTILE, axis=0))
             scale = np.maximum(1.0, angle / NEUTRAL_ANGLE)
-            model = replace(model, activity_scale=scale, trunk=self._session_trunk(model, neutral))
+            calibrated = [quat.mul(q[None], p) for p in per_clip]  # what the calibrated model predicts
+            model = replace(model, activity_scale=scale, trunk=self._session_trunk(neutral, calibrated))
         return model
 
-    def _session_trunk(self, calibrated: BodyModel, neutral: Sequence[Motion]) -> Trunk | None:
-        """The trunk's threshold for a session: the lean the calibrated model leaves on its
-        neutral clips, read as each joint's residue is, never below this model's own."""
+    def _session_trunk(self, neutral: Sequence[Motion], predictions: Sequence[np.ndarray]) -> Trunk | None:
+        """The trunk's threshold for a session: the lean the calibrated model's ``predictions``
+        leave on its ``neutral`` clips, read as each joint's residue is, never below this model's own."""
         if self.trunk is None:
             return None
         chain = (self.trunk.joints, self.trunk.bones)
         sigmas = [BODY_SMOOTHING * m.fps for m in neutral]
-        predictions = [calibrated.predict(m) for m in neutral]
         originals = [m.rotations for m in neutral]
         session = trunk_threshold(chain, originals, predictions, sigmas, NEUTRAL_PERCENTILE, NEUTRAL_ANGLE)
         return session if session.scale > self.trunk.scale else self.trunk
