@@ -133,13 +133,19 @@ class Carried:
         for j in range(skeleton.n_joints):  # parents come before their children
             which[j] = mapped.get(j, which[parents[j]] if parents[j] >= 0 else len(roles))
         bodies = [self.target.jmap[role] for role in roles]
-        change = _turned(turn, _mul(after[:, bodies], quat.conjugate(before[:, bodies])))  # the user's axes
+        on_body = _mul(after[:, bodies], quat.conjugate(before[:, bodies]))  # each role's change, the body's axes
         # The user's spine segments below the chest have no role: they turn as one piece, as the
         # body's hips-to-chest line does (else they kept the hips' change only, and a lean taken
         # off the body stayed in the user's lower back: 36.9 degrees left where the body kept 23).
-        segments, spine_change = self._spine_change(before, after, edited_positions, turn)
-        which[segments] = len(roles) + 1
-        change = np.concatenate([change, np.broadcast_to(_IDENTITY, (len(world), 1, 4)), spine_change], axis=1)
+        hips, chest = self.target.jmap["hips"], self.target.jmap["chest"]
+        lines = (
+            body_positions[:, chest] - body_positions[:, hips],
+            edited_positions[:, chest] - edited_positions[:, hips],
+        )
+        spine = _line_turn(on_body[:, roles.index("hips")], *lines)
+        which[list(self.source.jmap.spine)[:-1]] = len(roles) + 1
+        identity = np.broadcast_to(_IDENTITY, (len(world), 1, 4))
+        change = _turned(turn, np.concatenate([on_body, identity, spine[:, None]], axis=1))  # the user's axes
 
         def turned(joints) -> np.ndarray:  # the joints' new world rotations
             return _mul(change[:, which[joints]], world[:, joints])
@@ -167,25 +173,15 @@ class Carried:
             translations[:, mover] += quat.rotate(quat.conjugate(frame), shift)
         return Motion(skeleton, rotations, translations, self.original.frame_time)
 
-    def _spine_change(
-        self, before: np.ndarray, after: np.ndarray, moved: np.ndarray, turn: np.ndarray
-    ) -> tuple[list[int], np.ndarray]:
-        """The user's spine joints below the chest and their change of world orientation
-        ``[F, 1, 4]`` (the user's axes), from the body's world rotations ``before`` and ``after``
-        the edit and its edited positions ``moved``: the hips' change, then the least rotation
-        that takes the body's hips-to-chest line where the edit has it. The body's spine joints
-        need not match the user's in number or in rest directions."""
-        from ..rotations import quat
 
-        mine = list(self.source.jmap.spine)[:-1]
-        if not mine:
-            return [], np.broadcast_to(_IDENTITY, (len(before), 1, 4))
-        hips, chest = self.target.jmap["hips"], self.target.jmap["chest"]
-        _, at_rest = self._body_take.fk
-        hips_change = _mul(after[:, hips], quat.conjugate(before[:, hips]))
-        line_before = quat.rotate(hips_change, at_rest[:, chest] - at_rest[:, hips])
-        change = _mul(quat.between(line_before, moved[:, chest] - moved[:, hips]), hips_change)
-        return mine, _turned(turn, change[:, None])
+def _line_turn(hips_change: np.ndarray, line: np.ndarray, edited_line: np.ndarray) -> np.ndarray:
+    """The change of world orientation ``[F, 4]`` that takes a body's hips-to-chest ``line`` where
+    the edit has it (``edited_line``): the hips' change, then the least rotation left. The user's
+    spine below the chest turns by it as one piece, whatever its joints in number or rest
+    directions."""
+    from ..rotations import quat
+
+    return _mul(quat.between(quat.rotate(hips_change, line), edited_line), hips_change)
 
 
 def carried_for(motion: Motion, model, user_map: dict | None = None) -> Carried | None:
