@@ -261,8 +261,8 @@ def cmd_exaggerate(args) -> int:
     if args.model and (args.action or args.axis):
         raise ArgumentError("--action and --axis choose among the shipped models: give them without --model")
     original = read_bvh(args.input)
-    model = ExaggerationModel.load(args.model) if args.model else _shipped_for(args, original)
-    motion, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
+    model, carried = (ExaggerationModel.load(args.model), None) if args.model else _shipped_for(args, original)
+    motion, back = carried or read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
     baseline = None
     if args.baseline is not None:
         baseline, _ = read_on_model(args.baseline, model, EXAGGERATION_MODEL_FIX, joint_map(args))
@@ -302,17 +302,17 @@ def cmd_exaggerate(args) -> int:
     return 0
 
 
-def _shipped_for(args, original: Motion):
-    """The shipped model that fits the input best (among ``--action``, ``--axis``), said."""
+def _shipped_for(args, original: Motion) -> tuple:
+    """The shipped model that fits the input best (among ``--action``, ``--axis``), said; with
+    the input carried onto it when the choice was read there (None: carry it onto the model)."""
     from ..exaggeration.zoo import candidates, choose
 
     if args.baseline is not None:
         raise ArgumentError("--baseline needs --model: a baseline is measured against one model")
     models = candidates(args.action, args.axis)
     # Every shipped model is of the canonical skeleton: the input is carried onto it once.
-    first = models[0].load()
-    motion, _ = read_on_model(args.input, first, EXAGGERATION_MODEL_FIX, joint_map(args), original)
-    shipped, model, ranked = choose(motion, models, explicit=args.action is not None)
+    carried = read_on_model(args.input, models[0].load(), EXAGGERATION_MODEL_FIX, joint_map(args), original)
+    shipped, model, ranked = choose(carried[0], models, explicit=args.action is not None)
     others = ", ".join(f"{s.name} {r:.2f}" for s, r in ranked if s is not shipped)
     styles = " < ".join(f"{style} {k}" for k, style in enumerate(shipped.styles, start=1))
     residual = next(r for s, r in ranked if s is shipped)
@@ -320,7 +320,7 @@ def _shipped_for(args, original: Motion):
         f"model: the shipped {shipped.name} ({styles}), fit residual {residual:.2f}"
         + (f"; others: {others}" if others else "")
     )
-    return model
+    return model, (carried if shipped is models[0] else None)
 
 
 def _held(original: Motion, timing, user_map) -> tuple:

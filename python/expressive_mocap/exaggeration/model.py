@@ -285,10 +285,10 @@ class ExaggerationModel:
         """The file's bytes; ``compact``: :meth:`compact` first, and :data:`COMPACT_ARRAYS` in half
         precision (read back as float64)."""
         if compact:
-            return self.compact().to_bytes_as(np.float16)
-        return self.to_bytes_as(np.float64)
+            return self.compact()._to_bytes(np.float16)
+        return self._to_bytes(np.float64)
 
-    def to_bytes_as(self, dtype) -> bytes:
+    def _to_bytes(self, dtype) -> bytes:
         meta = {
             "format": FORMAT,
             "version": VERSION,

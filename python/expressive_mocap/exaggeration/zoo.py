@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from functools import cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,7 @@ import numpy as np
 from ..body.take import Take
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion
+from ..reference.features import heading_yaw
 from .cycles import choose_cycles
 from .edit import current_intensity
 from .estimate import IntensityEstimate
@@ -76,7 +78,8 @@ class ShippedModel:
         return f"{self.action} ({self.axis})"
 
     def load(self) -> ExaggerationModel:
-        return ExaggerationModel.load(_folder().joinpath(self.file).read_bytes())
+        """The model (read once a process: choosing one loads every candidate)."""
+        return _load(self.file)
 
     def admits(self, found: dict[str, float]) -> bool:
         """Whether a motion of :func:`signature` ``found`` could be this model's action."""
@@ -89,6 +92,11 @@ class ShippedModel:
 
 def _folder():
     return resources.files("expressive_mocap") / "data" / "exaggeration"
+
+
+@cache
+def _load(file: str) -> ExaggerationModel:
+    return ExaggerationModel.load(_folder().joinpath(file).read_bytes())
 
 
 def index_records() -> list[dict[str, Any]]:
@@ -127,8 +135,7 @@ def signature(motion: Motion | Take) -> dict[str, float]:
     roles, (_, positions) = take.body.roles, take.fk
     seconds = max(take.motion.duration, 1e-9)
     travel = np.linalg.norm(np.diff(positions[:, roles.hips][:, [0, 2]], axis=0), axis=1).sum()
-    side = positions[:, roles.upper_legs[0]] - positions[:, roles.upper_legs[1]]
-    yaw = np.unwrap(np.arctan2(side[:, 0], side[:, 2]))
+    yaw = np.unwrap(heading_yaw(positions[:, roles.upper_legs[0]], positions[:, roles.upper_legs[1]]))
     jmap = take.body.joint_map
     paths = []
     for hand, shoulder in (("left_hand", "left_upper_arm"), ("right_hand", "right_upper_arm")):
