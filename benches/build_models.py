@@ -23,13 +23,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 
 import expressive_mocap as em
+from bench_archive import find_data
 from expressive_mocap._utils.files import atomic_write
 from expressive_mocap._utils.progress import Progress
 from expressive_mocap.exaggeration import leave_one_out, swap_test
@@ -70,13 +70,6 @@ def failed_bars(record: dict) -> list[str]:
     ]
 
 
-def dataset_dir(data: Path) -> Path:
-    found = subprocess.run(
-        [str(REPO.parent / "shared" / "data" / "unpack"), str(data)], capture_output=True, text=True, check=True
-    )
-    return Path(found.stdout.strip().splitlines()[-1]) / "Bandai-Namco-Research-Motiondataset-2" / "data"
-
-
 def held_out(dataset: Path, action: str, axis: str, count: int) -> list[tuple[str, float, Path]]:
     """(style, intensity, file) of the first ``count`` held-out takes of each of the axis' styles."""
     out = []
@@ -89,8 +82,7 @@ def held_out(dataset: Path, action: str, axis: str, count: int) -> list[tuple[st
 def figures(model, clips, fits_of) -> dict:
     swap = swap_test(model)[-1]
     warp = max(r.ratio for r in leave_one_out(model))
-    estimates = [fits_of[path][0] for _, _, path in clips]
-    errors = np.abs(np.array([e for e in estimates]) - np.array([k for _, k, _ in clips]))
+    errors = np.abs(np.array([fits_of[path][0] - k for _, k, path in clips]))
     return {
         "swap_ratio": round(float(swap.ratio), 3),
         "swap_ratio_positions": round(float(swap.ratio_positions), 3),
@@ -104,10 +96,12 @@ def figures(model, clips, fits_of) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, default=Path.home() / ".cache" / "motion-data")
+    parser.add_argument(
+        "--data", help="folder of dataset-2 .bvh files, or the unpack root (default: run ../shared/data/unpack)"
+    )
     parser.add_argument("--held-out", type=int, default=5, help="held-out takes per style measured (default 5)")
     args = parser.parse_args()
-    dataset = dataset_dir(args.data)
+    dataset = find_data(args.data)
     jobs = [(action, axis) for axis in AXES for action in ACTIONS]
     models, clips, shipped = {}, {}, {}
     with Progress(len(jobs), "training", "models") as bar:
