@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from setting import REPO, arguments, bandai_dir, rig_targets, run
+from setting import REPO, arguments, bandai_dir, described, rig_targets, run
 
 TAKES = (2, 3, 6, 12, 14, 17, 24)  # the shipped model's held-out walks (its training split)
 
@@ -62,7 +62,7 @@ def main() -> None:
     lines = [
         "# Uncalibrated neutral walks on any rig",
         "",
-        __doc__.split("\n\n", 2)[2].rsplit("\n\nData:", 1)[0].replace("\n", " "),
+        described(__doc__),
         "",
         "`python experiments/eval_baseline.py`. Data: " + __doc__.rsplit("Data: ", 1)[1].strip().replace("\n", " "),
         "",

@@ -28,7 +28,7 @@ from expressive_mocap.exaggeration.edit import stance_foot_speed
 from expressive_mocap.exaggeration.zoo import PEOPLE, candidates, choose
 from expressive_mocap.viz.render import render_poses
 from hinge_limits import BANDAI, Measure, summary
-from setting import REPO, arguments, bandai_dir
+from setting import REPO, arguments, bandai_dir, described
 
 
 def main() -> None:
@@ -57,7 +57,7 @@ def main() -> None:
     lines = [
         "# The shipped walks model on held-out walks",
         "",
-        __doc__.split("\n\n", 2)[2].rsplit("\n\nData:", 1)[0].replace("\n", " "),
+        described(__doc__),
         "",
         f"`python experiments/eval_shipped_walks.py`: {len(takes['normal'])} normal takes edited; held-out "
         f"exhausted / active takes: {len(takes['exhausted'])} / {len(takes['active'])}. Data: Bandai-Namco-"

@@ -26,7 +26,7 @@ import expressive_mocap as em
 from expressive_mocap.decoupling import BodyModel, decompose
 from expressive_mocap.viz.render import render_poses
 from independent import read_fk
-from setting import REPO, arguments, bandai_dir
+from setting import REPO, arguments, bandai_dir, described
 
 LEANING = ("old", "tired", "sad", "not-confident")
 SIDESTEPS = ("walk-left", "walk-right", "walk-back")
@@ -87,7 +87,7 @@ def main() -> None:
     lines = [
         "# The trunk's lean in the expressive component",
         "",
-        __doc__.split("\n\n", 2)[2].rsplit("\n\nData:", 1)[0].replace("\n", " "),
+        described(__doc__),
         "",
         f"Chain thresholds: the shipped model's {shipped.trunk.scale:.3f} (the lean it leaves on its held-out "
         f"neutral clips at the 95th percentile reads as 10 degrees); calibrated on dataset-1's sidesteps "

@@ -20,7 +20,7 @@ from expressive_mocap.skeletons import synthetic_walk
 
 REPO = Path(__file__).resolve().parent.parent
 
-__all__ = ["REAL", "REPO", "SYNTHETIC", "arguments", "bandai_dir", "rig_targets", "run", "walks_model"]
+__all__ = ["REAL", "REPO", "SYNTHETIC", "arguments", "bandai_dir", "described", "rig_targets", "run", "walks_model"]
 
 SYNTHETIC = ("cmu", "mixamo", "game", "smpl", "lafan")  # the package's synthetic rigs
 REAL = ("m21_walk", "cmu_01_01", "cmu_scaled_131_03")  # the shared folder's skeletons (dme_* is cmu_01_01's)
@@ -33,6 +33,12 @@ def arguments(doc: str) -> argparse.Namespace:
     parser.add_argument("--other", type=Path, default=REPO.parent / "shared" / "data" / "other")
     parser.add_argument("--data", type=Path, default=Path.home() / ".cache" / "motion-data")
     return parser.parse_args()
+
+
+def described(doc: str) -> str:
+    """What a script measures, for its write-up: its docstring's third paragraph on, up to its
+    "Data:" paragraph, as one line (the first two are its title and its command line)."""
+    return doc.split("\n\n", 2)[2].rsplit("\n\nData:", 1)[0].replace("\n", " ")
 
 
 def bandai_dir(data: Path, number: int = 2) -> Path:
