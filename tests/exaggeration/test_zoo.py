@@ -94,13 +94,10 @@ def test_the_models_command_lists_every_model_and_why_it_did_not_ship(capsys):
     assert "yes" in said and "no (" in said
 
 
-@pytest.fixture(scope="module")
-def walk_data(bandai2_dir):
-    return bandai2_dir
-
-
-def test_the_recipe_rebuilds_the_shipped_walk_model(walk_data):
-    rebuilt = ExaggerationModel.load(build(training_clips(walk_data, "walk", "energy"), "walk").to_bytes(compact=True))
+def test_the_recipe_rebuilds_the_shipped_walk_model(bandai2_dir):
+    rebuilt = ExaggerationModel.load(
+        build(training_clips(bandai2_dir, "walk", "energy"), "walk").to_bytes(compact=True)
+    )
     shipped = ExaggerationModel.load((DATA / file_name("walk", "energy")).read_bytes())
     for name in ("basis", "mappings", "lower", "upper", "reference", "overall"):
         np.testing.assert_allclose(getattr(rebuilt, name), getattr(shipped, name), rtol=1e-9, atol=1e-9, err_msg=name)
@@ -109,17 +106,17 @@ def test_the_recipe_rebuilds_the_shipped_walk_model(walk_data):
     np.testing.assert_allclose(rebuilt.trajectories, shipped.trajectories, rtol=1e-3, atol=1e-4)
 
 
-def test_held_out_walks_get_the_walk_model_on_any_rig_and_waves_none(walk_data):
+def test_held_out_walks_get_the_walk_model_on_any_rig_and_waves_none(bandai2_dir):
     from expressive_mocap.skeletons import retarget, synthetic_walk
     from expressive_mocap.skeletons.canonical import carried_for
 
     models = shipped_models()
     first = models[0].load()
     for style in ("exhausted", "normal", "active"):
-        walk = em.read_bvh(walk_data / f"dataset-2_walk_{style}_020.bvh")  # take 20: held out
+        walk = em.read_bvh(bandai2_dir / f"dataset-2_walk_{style}_020.bvh")  # take 20: held out
         assert choose(walk, models)[0].action == "walk"
         on_cmu = retarget(walk, synthetic_walk("cmu").motion)  # as `exaggerate` carries another rig's file
         assert choose(carried_for(on_cmu, first).body, models)[0].action == "walk"
-    wave = em.read_bvh(walk_data / "dataset-2_wave-left-hand_normal_020.bvh")
+    wave = em.read_bvh(bandai2_dir / "dataset-2_wave-left-hand_normal_020.bvh")
     with pytest.raises(em.errors.MocapError, match="no shipped model fits"):
         choose(wave, models)
