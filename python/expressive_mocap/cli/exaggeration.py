@@ -72,7 +72,8 @@ def _add_training_options(p, model: bool = False) -> None:
         "--cycle",
         default=cycle,
         help=f"cycles of each clip: {cycle} (default: their mean is the performance, predictability is measured over "
-        "every one), middle (the paper's single cycle), first, whole (not a walk), or an index",
+        "every one), middle (the paper's single cycle), first, whole (not a walk), gesture (a gesture's strokes, "
+        "else the span its hand moves in), or an index",
     )
     foot = FEET[default(train, "foot")]
     p.add_argument(

@@ -70,8 +70,9 @@ def check_cycle_choice(cycle: CycleChoice) -> None:
 
 def choose_cycles(motion: Motion | Take, cycle: CycleChoice, foot: int = TRAINING.foot) -> list[Cycle]:
     """The cycles of a training clip for ``cycle`` = "all" (every one), "middle" (the one nearest the
-    clip's middle: steady walking), "first", "whole" (the clip), an index, or a ``(start, end)``
-    frame range; walking cycles run from one footstrike of ``foot`` to the next."""
+    clip's middle: steady walking), "first", "whole" (the clip), "gesture" (a gesture's strokes or
+    span: :func:`~expressive_mocap.exaggeration.gestures.find_gesture_cycles`), an index, or a
+    ``(start, end)`` frame range; walking cycles run from one footstrike of ``foot`` to the next."""
     take = Take.of(motion)
     motion = take.motion
     if isinstance(cycle, tuple):
@@ -79,6 +80,10 @@ def choose_cycles(motion: Motion | Take, cycle: CycleChoice, foot: int = TRAININ
         return [Cycle(start, end)]
     if cycle == "whole":
         return [Cycle(0, motion.n_frames - 1)]
+    if cycle == "gesture":
+        from .gestures import find_gesture_cycles  # it builds on Cycle
+
+        return find_gesture_cycles(take)
     check_cycle_choice(cycle)
     cycles = find_cycles(take, foot=foot)
     if not cycles:
@@ -97,6 +102,16 @@ def choose_cycles(motion: Motion | Take, cycle: CycleChoice, foot: int = TRAININ
     if not -len(cycles) <= cycle < len(cycles):
         raise MocapError(f"cycle {cycle}: the clip has {len(cycles)} cycles")
     return [cycles[cycle]]
+
+
+def cycles_for(motion: Motion | Take, cycle: CycleChoice, foot: int = TRAINING.foot) -> list[Cycle]:
+    """The cycles an edit or an intensity estimate reads in ``motion`` for a model trained with
+    the cycle choice ``cycle``: a gesture's for "gesture", the whole clip for "whole", else the gait
+    cycles of ``foot`` (the whole clip when that foot never strikes twice)."""
+    take = Take.of(motion)
+    if cycle in ("whole", "gesture"):
+        return choose_cycles(take, cycle)
+    return find_cycles(take, foot=foot) or [Cycle(0, take.motion.n_frames - 1)]
 
 
 # --------------------------------------------------------------------------- heading
@@ -168,6 +183,7 @@ __all__ = [
     "check_cycle_choice",
     "choose_cycles",
     "cycle_heading",
+    "cycles_for",
     "find_cycles",
     "frame_yaw",
     "normalise_cycle",

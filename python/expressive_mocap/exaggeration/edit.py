@@ -17,7 +17,7 @@ from ..errors import ArgumentError, ModelError
 from ..motion import Motion
 from ..rotations import quat
 from ..rotations.quat import mean_rotation
-from .cycles import Cycle, SampledCycles, find_cycles, frame_yaw, sample_cycles, to_cycle_timing, without_heading
+from .cycles import Cycle, SampledCycles, cycles_for, frame_yaw, sample_cycles, to_cycle_timing, without_heading
 from .dofs import dofs_to_rotations, rotations_to_dofs, sampled_dofs
 from .estimate import POOR_FIT, IntensityEstimate
 from .footlock import IDENTITY, lock_stance_feet
@@ -337,7 +337,7 @@ def _measure(
 ) -> _Measured:
     motion = take.motion
     if cycles is None:
-        cycles = find_cycles(take, foot=model.settings.foot) or [Cycle(0, motion.n_frames - 1)]
+        cycles = cycles_for(take, model.settings.cycle, model.settings.foot)
     cycles = list(cycles)
     yaw = frame_yaw(take, cycles)
     own = _own_reference(motion, take.body.roles.hips, cycles, yaw)

@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import ArgumentError
 
 REPRESENTATIONS = ("rotvec", "euler")
-CYCLE_CHOICES = ("all", "middle", "first", "whole")
+CYCLE_CHOICES = ("all", "middle", "first", "whole", "gesture")
 REFERENCES = ("model", "own")
 
 CycleChoice = Union[str, int, tuple]

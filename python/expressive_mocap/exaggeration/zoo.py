@@ -29,7 +29,7 @@ from ..body.take import Take
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion
 from ..reference.features import heading_yaw
-from .cycles import choose_cycles
+from .cycles import cycles_for
 from .edit import current_intensity
 from .estimate import IntensityEstimate
 from .model import ExaggerationModel
@@ -151,13 +151,10 @@ def signature(motion: Motion | Take) -> dict[str, float]:
 
 def fit(model: ExaggerationModel, motion: Motion | Take) -> IntensityEstimate:
     """How ``motion`` (on the model's skeleton) fits ``model``: its intensity estimate, measured
-    over the cycles the model was trained on (gait cycles, or the whole clip of an arm action)."""
+    over the cycles the model was trained on (gait cycles, or a gesture's strokes or span; a clip
+    with no gait cycle is read whole, and then fits a gait model poorly)."""
     take = Take.of(motion)
-    try:
-        cycles = choose_cycles(take, "whole" if model.settings.cycle == "whole" else "all", model.settings.foot)
-    except MocapError:  # no gait cycle: the whole clip, which then fits a gait model poorly
-        cycles = choose_cycles(take, "whole")
-    return current_intensity(model, take, cycles)
+    return current_intensity(model, take, cycles_for(take, model.settings.cycle, model.settings.foot))
 
 
 def choose(
