@@ -11,7 +11,6 @@ import expressive_mocap as em
 from expressive_mocap.body.take import Take
 from expressive_mocap.exaggeration import exaggerate, train
 from expressive_mocap.exaggeration.cycles import choose_cycles, cycles_for
-from expressive_mocap.exaggeration.gestures import find_gesture_cycles
 from expressive_mocap.procedural import walk_and_wave
 from expressive_mocap.rotations import quat
 
@@ -35,7 +34,7 @@ def _standing_wave(frequency: float, side: str = "right", seconds: float = 4.0) 
 @pytest.mark.parametrize("side", ["left", "right"])
 def test_a_procedural_wave_comes_apart_into_strokes_of_its_own_period(frequency, side):
     wave = _standing_wave(frequency, side)
-    cycles = find_gesture_cycles(Take(wave))
+    cycles = choose_cycles(wave, "gesture")
     period = wave.fps / frequency
     lengths = np.array([c.end - c.start for c in cycles])
     assert len(cycles) >= 4.0 * frequency - 2  # four seconds of waving: all but the strokes cut at its ends
@@ -49,7 +48,7 @@ def test_strokes_start_at_the_same_end_of_the_hand_path():
     hand = points[:, jmap["left_hand"]] - points[:, jmap["chest"]]
     left = points[:, jmap["left_upper_arm"]] - points[:, jmap["right_upper_arm"]]
     sideways = np.sum(hand * left, axis=1) / np.linalg.norm(left, axis=1)
-    starts = [c.start for c in find_gesture_cycles(take)]
+    starts = [c.start for c in choose_cycles(take, "gesture")]
     # Each stroke starts where the hand is farthest to the body's left, not at the other end.
     assert np.all(sideways[starts] >= np.percentile(sideways, 80))
 
@@ -59,7 +58,7 @@ def test_a_motion_without_a_gesture_is_one_cycle():
     still = em.Motion(
         walk.skeleton, np.repeat(walk.rotations[:1], 30, 0), np.repeat(walk.translations[:1], 30, 0), walk.frame_time
     )
-    assert [(c.start, c.end) for c in find_gesture_cycles(Take(still))] == [(0, 29)]
+    assert [(c.start, c.end) for c in choose_cycles(still, "gesture")] == [(0, 29)]
 
 
 def _dataset_clip(folder, action, style, take):
@@ -72,7 +71,7 @@ def test_real_waves_come_apart_into_strokes_that_quicken_with_energy(bandai2_dir
         found = []
         for take in (9, 10):
             motion = _dataset_clip(bandai2_dir, "wave-right-hand", style, take)
-            cycles = find_gesture_cycles(Take(motion))
+            cycles = choose_cycles(motion, "gesture")
             assert len(cycles) >= 2 and 0 < cycles[0].start and cycles[-1].end < motion.n_frames - 1
             found += [c.end - c.start for c in cycles]
         lengths[style] = np.mean(found)
@@ -82,7 +81,7 @@ def test_real_waves_come_apart_into_strokes_that_quicken_with_energy(bandai2_dir
 def test_a_real_raise_is_one_cycle_over_the_frames_the_hand_moves_in(bandai2_dir):
     motion = _dataset_clip(bandai2_dir, "raise-up-right-hand", "normal", 9)
     take = Take(motion)
-    (cycle,) = find_gesture_cycles(take)
+    (cycle,) = choose_cycles(take, "gesture")
     hand = take.positions[:, take.body.joint_map["right_hand"]]
     height = hand[:, 1] - hand[0, 1]
     top = int(np.argmax(height))

@@ -14,6 +14,7 @@ from ..body.take import Take
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion
 from ..rotations import quat
+from .gestures import gesture_cycles
 from .settings import CYCLE_CHOICES, TRAINING, CycleChoice
 
 
@@ -71,7 +72,7 @@ def check_cycle_choice(cycle: CycleChoice) -> None:
 def choose_cycles(motion: Motion | Take, cycle: CycleChoice, foot: int = TRAINING.foot) -> list[Cycle]:
     """The cycles of a training clip for ``cycle`` = "all" (every one), "middle" (the one nearest the
     clip's middle: steady walking), "first", "whole" (the clip), "gesture" (a gesture's strokes or
-    span: :func:`~expressive_mocap.exaggeration.gestures.find_gesture_cycles`), an index, or a
+    span: :func:`~expressive_mocap.exaggeration.gestures.gesture_cycles`), an index, or a
     ``(start, end)`` frame range; walking cycles run from one footstrike of ``foot`` to the next."""
     take = Take.of(motion)
     motion = take.motion
@@ -81,9 +82,7 @@ def choose_cycles(motion: Motion | Take, cycle: CycleChoice, foot: int = TRAININ
     if cycle == "whole":
         return [Cycle(0, motion.n_frames - 1)]
     if cycle == "gesture":
-        from .gestures import find_gesture_cycles  # it builds on Cycle
-
-        return find_gesture_cycles(take)
+        return [Cycle(first, last) for first, last in gesture_cycles(take)]
     check_cycle_choice(cycle)
     cycles = find_cycles(take, foot=foot)
     if not cycles:

@@ -16,7 +16,6 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.signal import find_peaks
 
 from ..body.take import Take
-from .cycles import Cycle
 
 MOVING = 0.3  # the span: frames where the hand is this share of its farthest from rest, or more
 SLOW_SECONDS = 0.5  # motion slower than this (the raise, a drift) is not a stroke
@@ -71,8 +70,8 @@ def _signed(direction: np.ndarray, take: Take, start: int, end: int) -> np.ndarr
     return direction if direction @ axis >= 0 else -direction
 
 
-def find_gesture_cycles(motion: Take) -> list[Cycle]:
-    """The cycles of a gesture: one per stroke of a repeated gesture (peak to peak along the
+def gesture_cycles(motion: Take) -> list[tuple[int, int]]:
+    """The cycles of a gesture, as (first, last) frames: one per stroke of a repeated gesture (peak to peak along the
     hand's main stroke direction, the longest run of strokes about one period long, at least
     two; each stroke starts at the end of its path nearest the body's left, or its top), else one
     cycle over the span the hand moves in."""
@@ -80,7 +79,7 @@ def find_gesture_cycles(motion: Take) -> list[Cycle]:
     fps = take.motion.fps
     path, away = moving_hand(take)
     start, end = gesture_span(away)
-    span = [Cycle(start, end)] if end > start else [Cycle(0, take.motion.n_frames - 1)]
+    span = [(start, end)] if end > start else [(0, take.motion.n_frames - 1)]
     part = path[start : end + 1] - path[start : end + 1].mean(axis=0)
     if len(part) < 4:
         return span
@@ -91,14 +90,14 @@ def find_gesture_cycles(motion: Take) -> list[Cycle]:
     direction = _signed(np.linalg.svd(strokes, full_matrices=False)[2][0], take, start, end)
     along = gaussian_filter1d(strokes @ direction, 1.0)
     peaks, _ = find_peaks(along, distance=max(2, int(PERIOD_SPREAD[0] * period)))
-    runs: list[list[Cycle]] = [[]]
+    runs: list[list[tuple[int, int]]] = [[]]
     for a, b in zip(peaks[:-1], peaks[1:]):
         if PERIOD_SPREAD[0] * period <= b - a <= PERIOD_SPREAD[1] * period:
-            runs[-1].append(Cycle(int(a) + start, int(b) + start))
+            runs[-1].append((int(a) + start, int(b) + start))
         elif runs[-1]:
             runs.append([])
     longest = max(runs, key=len)
     return longest if len(longest) >= 2 else span
 
 
-__all__ = ["find_gesture_cycles", "gesture_span", "moving_hand", "stroke_period"]
+__all__ = ["gesture_cycles", "gesture_span", "moving_hand", "stroke_period"]
