@@ -65,3 +65,24 @@ def test_dataset1_walks_are_estimated_near_their_own_intensity(bandai1_dir):
     model = train([clips], [1, 2, 3])
     k = [exaggerate(model, clip, 2.0, lock_feet=False)[1].estimate.k for clip in clips]
     np.testing.assert_allclose(k, [1, 2, 3], atol=0.2)
+
+
+@pytest.mark.parametrize("degree", [2, 3])
+def test_a_curved_mapping_is_inverted_at_its_exact_least_squares_intensity(degree):
+    """Mappings of degree 2 or more: the intensity minimising the weighted error is found exactly
+    (the roots of its derivative), as a grid of 200,001 points over the searched range finds it,
+    and coefficients made at an intensity give that intensity back."""
+    from expressive_mocap.exaggeration.estimate import weighted_intensity
+    from expressive_mocap.exaggeration.fitting import mapped
+
+    rng = np.random.default_rng(degree)
+    levels = np.array([1.0, 2.0, 3.0])
+    mappings, weights = rng.normal(size=(7, 4, degree + 1)), rng.uniform(0.1, 1.0, size=(7, 4))
+    truth = rng.uniform(0.0, 4.0, size=40)
+    noisy = mapped(mappings, truth) + 0.3 * rng.normal(size=(40, 7, 4))
+    k = weighted_intensity(mappings, weights, noisy, levels)
+    grid = np.linspace(-3.0, 7.0, 200_001)  # the trained range widened by twice its span
+    errors = np.einsum("nr,bgnr->bg", weights, (mapped(mappings, grid)[None] - noisy[:, None]) ** 2)
+    found = np.einsum("nr,bnr->b", weights, (mapped(mappings, k) - noisy) ** 2)
+    assert np.all(found <= errors.min(axis=1) + 1e-9)
+    assert np.allclose(weighted_intensity(mappings, weights, mapped(mappings, truth), levels), truth, atol=1e-6)

@@ -71,8 +71,10 @@ class IntensityEstimate:
 
 def weighted_intensity(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, levels: np.ndarray) -> np.ndarray:
     """Weighted least-squares intensities ``[B]`` of coefficients ``c [B, n, r]`` under polynomial
-    ``mappings [n, r, degree + 1]`` with ``weights [n, r]``: closed form for lines; otherwise the
-    best of a grid over the trained range widened by twice its span, refined by Gauss-Newton."""
+    ``mappings [n, r, degree + 1]`` (highest power first) with ``weights [n, r]``: closed form for
+    lines; otherwise the exact minimum over the trained range widened by twice its span, among
+    the real roots of the error's derivative (a polynomial of degree ``2 degree - 1``) and the
+    range's ends."""
     degree = mappings.shape[-1] - 1
     if degree == 0:
         return np.full(len(c), float(np.mean(levels)))
@@ -83,16 +85,33 @@ def weighted_intensity(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray,
             return np.full(len(c), float(np.mean(levels)))
         return np.sum(weights * slope * (c - intercept), axis=(1, 2)) / denominator
     span = float(levels[-1] - levels[0])
-    grid = np.linspace(levels[0] - 2 * span, levels[-1] + 2 * span, 401)
-    errors = np.einsum("nr,bgnr->bg", weights, (mapped(mappings, grid)[None] - c[:, None]) ** 2)
-    k = grid[np.argmin(errors, axis=1)]
+    low, high = levels[0] - 2 * span, levels[-1] + 2 * span
+    candidates = np.concatenate([_stationary(mappings, weights, c, low, high), np.tile([low, high], (len(c), 1))], 1)
+    errors = np.einsum("nr,bknr->bk", weights, (mapped(mappings, candidates) - c[:, None]) ** 2)
+    return candidates[np.arange(len(c)), np.argmin(errors, axis=1)]
+
+
+def _stationary(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, low: float, high: float) -> np.ndarray:
+    """Where the weighted error ``sum w (f(k) - c)^2`` is flat, per row of ``c [B, n, r]``:
+    ``[B, 2 degree - 1]`` real roots of ``sum w (f(k) - c) f'(k)`` (clipped to ``low``-``high``;
+    a complex root stands in as its clipped real part: one more point tried, never a wrong one)."""
+    degree = mappings.shape[-1] - 1
+    gap = np.broadcast_to(mappings, c.shape + (degree + 1,)).copy()
+    gap[..., -1] -= c
     derivative = mappings[..., :-1] * np.arange(degree, 0, -1)
-    for _ in range(8):
-        gap, slope = mapped(mappings, k) - c, mapped(derivative, k)  # [B, n, r]
-        denominator = np.einsum("nr,bnr->b", weights, slope * slope)
-        step = np.einsum("nr,bnr->b", weights, slope * gap) / np.where(denominator > 0, denominator, 1.0)
-        k = k - np.where(denominator > 0, step, 0.0)
-    return k
+    product = np.zeros((len(c), 2 * degree))  # highest power first
+    for i in range(degree + 1):
+        for j in range(degree):
+            product[:, i + j] += np.einsum("nr,bnr,nr->b", weights, gap[..., i], derivative[..., j])
+    lead = product[:, :1]
+    safe = np.abs(lead) > 1e-12 * np.abs(product).max(axis=1, keepdims=True)
+    monic = product[:, 1:] / np.where(safe, lead, 1.0)
+    size = 2 * degree - 1
+    companion = np.zeros((len(c), size, size))
+    companion[:, 0, :] = -monic
+    companion[:, np.arange(1, size), np.arange(size - 1)] = 1.0
+    roots = np.linalg.eigvals(companion).real
+    return np.clip(np.where(safe, roots, low), low, high)
 
 
 def _jackknife(key: np.ndarray, mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, levels: np.ndarray) -> float:
