@@ -17,12 +17,14 @@ from expressive_mocap.exaggeration.model import COMPACT_CYCLES
 from expressive_mocap.exaggeration.zoo import (
     ACTIONS,
     AXES,
+    SIGNATURE_MARGINS,
     build,
     candidates,
     choose,
     file_name,
     index_records,
     shipped_models,
+    signature,
     training_clips,
 )
 from expressive_mocap.procedural import walk_and_wave
@@ -120,3 +122,18 @@ def test_held_out_walks_get_the_walk_model_on_any_rig_and_waves_none(bandai2_dir
     wave = em.read_bvh(bandai2_dir / "dataset-2_wave-left-hand_normal_020.bvh")
     with pytest.raises(em.errors.MocapError, match="no shipped model fits"):
         choose(wave, models)
+
+
+def test_the_signature_tells_runs_from_walks_and_waves_from_raises(bandai2_dir):
+    """Flight (no foot down) is a run's, repeated strokes a wave's: what the fit alone confused
+    (a right-hand wave fitted the right-hand raise model; slow runs the walks model)."""
+
+    def found(action: str, style: str) -> dict[str, float]:
+        return signature(em.read_bvh(bandai2_dir / f"dataset-2_{action}_{style}_020.bvh"))  # held out
+
+    for style in ("exhausted", "normal", "active"):
+        assert found("walk", style)["flight"] <= SIGNATURE_MARGINS["flight"]
+        assert found("raise-up-right-hand", style)["repeats"] <= SIGNATURE_MARGINS["repeats"]
+        assert found("wave-right-hand", style)["repeats"] >= 2 * SIGNATURE_MARGINS["repeats"]
+    assert found("run", "normal")["flight"] >= 0.2 and found("run", "active")["flight"] >= 0.2
+

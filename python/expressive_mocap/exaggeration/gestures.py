@@ -42,21 +42,39 @@ def gesture_span(away: np.ndarray) -> tuple[int, int]:
     return int(on[0]), int(on[-1])
 
 
-def stroke_period(strokes: np.ndarray, fps: float) -> int | None:
-    """The period in frames of ``strokes`` ``[F, 3]`` (the hand's fast motion): the first lag in
-    :data:`PERIOD_SECONDS` where its autocorrelation peaks at :data:`REPEATS` or more; None when
-    nothing repeats."""
+def stroke_period(strokes: np.ndarray, fps: float) -> tuple[int | None, float]:
+    """The period in frames of ``strokes`` ``[F, 3]`` (the hand's fast motion) and how well it
+    repeats: the first lag in :data:`PERIOD_SECONDS` where its autocorrelation peaks at
+    :data:`REPEATS` or more, and the highest such peak (None and 0 when nothing repeats)."""
     n = len(strokes)
     power = float(np.mean(np.sum(strokes * strokes, axis=1)))
     shortest, longest = int(PERIOD_SECONDS[0] * fps), min(n // 2, int(PERIOD_SECONDS[1] * fps))
     if power <= 0 or longest <= shortest:
-        return None
+        return None, 0.0
     lags = np.arange(longest + 1)
     # Each lag's mean product over the frames it overlaps (unbiased: long lags are not shrunk).
     correlation = np.array([np.sum(strokes[: n - k] * strokes[k:]) / (n - k) for k in lags]) / power
     peaks, _ = find_peaks(correlation)
     peaks = peaks[(peaks >= shortest) & (correlation[peaks] >= REPEATS)]
-    return int(peaks[0]) if len(peaks) else None
+    return (int(peaks[0]), float(correlation[peaks].max())) if len(peaks) else (None, 0.0)
+
+
+def _strokes(take: Take) -> tuple[int, int, np.ndarray, np.ndarray]:
+    """The moving hand's span (first and last frame), its path about the chest over the span
+    ``[S, 3]`` and that path's fast part (the slow raise removed)."""
+    path, away = moving_hand(take)
+    start, end = gesture_span(away)
+    part = path[start : end + 1] - path[start : end + 1].mean(axis=0)
+    if len(part) < 4:
+        return start, end, part, np.zeros_like(part)
+    return start, end, part, part - gaussian_filter1d(part, SLOW_SECONDS * take.motion.fps, axis=0, mode="nearest")
+
+
+def repetition(motion: Take) -> float:
+    """How well the moving hand's strokes repeat (:func:`stroke_period`'s peak): near 1 for a
+    wave, 0 for a single raise."""
+    take = Take.of(motion)
+    return stroke_period(_strokes(take)[3], take.motion.fps)[1]
 
 
 def _signed(direction: np.ndarray, take: Take, start: int, end: int) -> np.ndarray:
@@ -76,15 +94,9 @@ def gesture_cycles(motion: Take) -> list[tuple[int, int]]:
     two; each stroke starts at the end of its path nearest the body's left, or its top), else one
     cycle over the span the hand moves in."""
     take = Take.of(motion)
-    fps = take.motion.fps
-    path, away = moving_hand(take)
-    start, end = gesture_span(away)
+    start, end, part, strokes = _strokes(take)
     span = [(start, end)] if end > start else [(0, take.motion.n_frames - 1)]
-    part = path[start : end + 1] - path[start : end + 1].mean(axis=0)
-    if len(part) < 4:
-        return span
-    strokes = part - gaussian_filter1d(part, SLOW_SECONDS * fps, axis=0, mode="nearest")
-    period = stroke_period(strokes, fps)
+    period = stroke_period(strokes, take.motion.fps)[0] if len(part) >= 4 else None
     if period is None:
         return span
     direction = _signed(np.linalg.svd(strokes, full_matrices=False)[2][0], take, start, end)
@@ -100,4 +112,4 @@ def gesture_cycles(motion: Take) -> list[tuple[int, int]]:
     return longest if len(longest) >= 2 else span
 
 
-__all__ = ["gesture_cycles", "gesture_span", "moving_hand", "stroke_period"]
+__all__ = ["gesture_cycles", "gesture_span", "moving_hand", "repetition", "stroke_period"]

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..body.contacts import foot_contacts
 from ..body.take import Take
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion
@@ -32,6 +33,7 @@ from ..reference.features import heading_yaw
 from .cycles import cycles_for
 from .edit import current_intensity
 from .estimate import IntensityEstimate
+from .gestures import repetition
 from .model import ExaggerationModel
 
 ACTIONS = (
@@ -54,8 +56,9 @@ AXES = {  # styles at intensities 1, 2, 3 (every model of both is validated; tho
 PEOPLE = tuple(range(1, 9))  # takes 1-8 of each style, as eight people; the later takes are held out
 INDEX = "index.json"
 # How far beyond its training clips' range a motion's signature may lie for a model to be a candidate.
-# Speed: actor heights per second; turn: degrees per second; left hand: share of the hands' motion.
-SIGNATURE_MARGINS = {"speed": 0.1, "turn": 5.0, "left_hand": 0.1}
+# Speed: actor heights per second; turn: degrees per second; left hand: share of the hands' motion;
+# flight: share of frames; repeats: an autocorrelation (a raise reads 0-0.02, a wave 0.4 or more).
+SIGNATURE_MARGINS = {"speed": 0.1, "turn": 5.0, "left_hand": 0.1, "flight": 0.02, "repeats": 0.2}
 # The fit residual above which a motion the signature admits is still refused: a walks model reads
 # walks of its own session at 0.7-1.2, another session's and other rigs' walks at 1.4-3.1, a
 # run at 2.6-4.6 and a wave at 5-6 (the estimate warns from 2, POOR_FIT).
@@ -130,7 +133,9 @@ def signature(motion: Motion | Take) -> dict[str, float]:
     """What tells actions apart that the fit does not see: ``speed``, the hips' horizontal path
     per second in actor heights; ``turn``, the heading's change per second (degrees, left
     positive; from the line between the upper legs); ``left_hand``, the left hand's share of both
-    hands' paths about their shoulders (0.5: both alike)."""
+    hands' paths about their shoulders (0.5: both alike); ``flight``, the share of frames with
+    neither foot on the ground (a run's); ``repeats``, how well the moving hand's strokes repeat
+    (:func:`~expressive_mocap.exaggeration.gestures.repetition`: a wave's, not a raise's)."""
     take = Take.of(motion)
     roles, (_, positions) = take.body.roles, take.fk
     seconds = max(take.motion.duration, 1e-9)
@@ -146,6 +151,8 @@ def signature(motion: Motion | Take) -> dict[str, float]:
         "speed": float(travel / seconds / take.body.actor_height),
         "turn": float(np.degrees(yaw[-1] - yaw[0]) / seconds),
         "left_hand": paths[0] / total if total > 0 else 0.5,
+        "flight": float(np.mean(~foot_contacts(take).any(axis=1))),
+        "repeats": repetition(take),
     }
 
 
