@@ -69,9 +69,9 @@ def test_dataset1_walks_are_estimated_near_their_own_intensity(bandai1_dir):
 
 @pytest.mark.parametrize("degree", [2, 3])
 def test_a_curved_mapping_is_inverted_at_its_exact_least_squares_intensity(degree):
-    """Mappings of degree 2 or more: the intensity minimising the weighted error is found exactly
-    (the roots of its derivative), as a grid of 200,001 points over the searched range finds it,
-    and coefficients made at an intensity give that intensity back."""
+    """Mappings of degree 2 or more (continued along their tangents beyond the levels): the
+    intensity minimising the weighted error is found exactly, as a grid of 200,001 points over
+    the searched range finds it, and coefficients made at an intensity give that intensity back."""
     from expressive_mocap.exaggeration.estimate import weighted_intensity
     from expressive_mocap.exaggeration.fitting import mapped
 
@@ -79,10 +79,28 @@ def test_a_curved_mapping_is_inverted_at_its_exact_least_squares_intensity(degre
     levels = np.array([1.0, 2.0, 3.0])
     mappings, weights = rng.normal(size=(7, 4, degree + 1)), rng.uniform(0.1, 1.0, size=(7, 4))
     truth = rng.uniform(0.0, 4.0, size=40)
-    noisy = mapped(mappings, truth) + 0.3 * rng.normal(size=(40, 7, 4))
+    noisy = mapped(mappings, truth, levels) + 0.3 * rng.normal(size=(40, 7, 4))
     k = weighted_intensity(mappings, weights, noisy, levels)
     grid = np.linspace(-3.0, 7.0, 200_001)  # the trained range widened by twice its span
-    errors = np.einsum("nr,bgnr->bg", weights, (mapped(mappings, grid)[None] - noisy[:, None]) ** 2)
-    found = np.einsum("nr,bnr->b", weights, (mapped(mappings, k) - noisy) ** 2)
+    errors = np.einsum("nr,bgnr->bg", weights, (mapped(mappings, grid, levels)[None] - noisy[:, None]) ** 2)
+    found = np.einsum("nr,bnr->b", weights, (mapped(mappings, k, levels) - noisy) ** 2)
     assert np.all(found <= errors.min(axis=1) + 1e-9)
-    assert np.allclose(weighted_intensity(mappings, weights, mapped(mappings, truth), levels), truth, atol=1e-6)
+    clean = mapped(mappings, truth, levels)
+    assert np.allclose(weighted_intensity(mappings, weights, clean, levels), truth, atol=1e-6)
+
+
+def test_a_curved_mapping_goes_on_straight_beyond_the_levels():
+    """A parabola through three levels turns back past its vertex; beyond the trained levels the
+    mapping follows the tangent at the nearer end instead: continuous there, with the end's slope,
+    and straight."""
+    from expressive_mocap.exaggeration.fitting import mapped
+
+    levels = np.array([1.0, 2.0, 3.0])
+    mappings = np.array([[[1.0, -3.0, 2.0]]])  # (k - 1)(k - 2): its vertex at 1.5, back up below it
+    inside = mapped(mappings, levels, levels)[..., 0, 0]
+    assert np.allclose(inside, [0.0, 0.0, 2.0])  # the polynomial itself within the levels
+    below = mapped(mappings, np.array([0.0, 0.5, 1.0 - 1e-9]), levels)[..., 0, 0]
+    assert np.allclose(below, [1.0, 0.5, 0.0], atol=1e-8)  # slope -1 at 1: it goes on rising as k falls
+    above = mapped(mappings, np.array([3.0 + 1e-9, 4.0, 5.0]), levels)[..., 0, 0]
+    assert np.allclose(above, [2.0, 5.0, 8.0], atol=1e-8)  # slope 3 at 3
+    assert np.allclose(mapped(mappings, 0.0)[..., 0, 0], 2.0)  # without the levels: the parabola

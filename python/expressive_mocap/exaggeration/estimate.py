@@ -71,28 +71,49 @@ class IntensityEstimate:
 
 def weighted_intensity(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, levels: np.ndarray) -> np.ndarray:
     """Weighted least-squares intensities ``[B]`` of coefficients ``c [B, n, r]`` under polynomial
-    ``mappings [n, r, degree + 1]`` (highest power first) with ``weights [n, r]``: closed form for
-    lines; otherwise the exact minimum over the trained range widened by twice its span, among
-    the real roots of the error's derivative (a polynomial of degree ``2 degree - 1``) and the
-    range's ends."""
+    ``mappings [n, r, degree + 1]`` (highest power first; a curved one continued along its tangents
+    beyond ``levels``, as :func:`~expressive_mocap.exaggeration.fitting.mapped` continues it) with
+    ``weights [n, r]``: closed form for lines; otherwise the exact minimum over the trained range
+    widened by twice its span, among the real roots of the error's derivative within the levels,
+    the closed form on each tangent and the range's ends."""
     degree = mappings.shape[-1] - 1
     if degree == 0:
         return np.full(len(c), float(np.mean(levels)))
     if degree == 1:
-        slope, intercept = mappings[..., 0], mappings[..., 1]
-        denominator = float(np.sum(weights * slope * slope))
-        if denominator <= 0:
-            return np.full(len(c), float(np.mean(levels)))
-        return np.sum(weights * slope * (c - intercept), axis=(1, 2)) / denominator
-    span = float(levels[-1] - levels[0])
-    low, high = levels[0] - 2 * span, levels[-1] + 2 * span
-    candidates = np.concatenate([_stationary(mappings, weights, c, low, high), np.tile([low, high], (len(c), 1))], 1)
-    errors = np.einsum("nr,bknr->bk", weights, (mapped(mappings, candidates) - c[:, None]) ** 2)
+        return _on_line(mappings, weights, c, levels)
+    first, last = float(levels[0]), float(levels[-1])
+    span = last - first
+    low, high = first - 2 * span, last + 2 * span
+    slopes = mappings[..., :-1] * np.arange(degree, 0, -1)
+    tangents = [  # each end's tangent as a line [n, r, 2]: slope, intercept
+        np.stack([mapped(slopes, end), mapped(mappings, end) - mapped(slopes, end) * end], axis=-1)
+        for end in (first, last)
+    ]
+    candidates = np.concatenate(
+        [
+            _stationary(mappings, weights, c, first, last),
+            np.clip(_on_line(tangents[0], weights, c, levels), low, first)[:, None],
+            np.clip(_on_line(tangents[1], weights, c, levels), last, high)[:, None],
+            np.tile([low, high], (len(c), 1)),
+        ],
+        axis=1,
+    )
+    errors = np.einsum("nr,bknr->bk", weights, (mapped(mappings, candidates, levels) - c[:, None]) ** 2)
     return candidates[np.arange(len(c)), np.argmin(errors, axis=1)]
 
 
+def _on_line(lines: np.ndarray, weights: np.ndarray, c: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """The weighted least-squares intensities ``[B]`` under straight mappings ``lines [n, r, 2]``
+    (the levels' mean where they are flat)."""
+    slope, intercept = lines[..., 0], lines[..., 1]
+    denominator = float(np.sum(weights * slope * slope))
+    if denominator <= 0:
+        return np.full(len(c), float(np.mean(levels)))
+    return np.sum(weights * slope * (c - intercept), axis=(1, 2)) / denominator
+
+
 def _stationary(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, low: float, high: float) -> np.ndarray:
-    """Where the weighted error ``sum w (f(k) - c)^2`` is flat, per row of ``c [B, n, r]``:
+    """Where the weighted error ``sum w (f(k) - c)^2`` of the polynomial is flat, per row of ``c [B, n, r]``:
     ``[B, 2 degree - 1]`` real roots of ``sum w (f(k) - c) f'(k)`` (clipped to ``low``-``high``;
     a complex root stands in as its clipped real part: one more point tried, never a wrong one)."""
     degree = mappings.shape[-1] - 1
@@ -159,7 +180,7 @@ def estimate_intensity(
     mappings = np.einsum("ij,njp->nip", project, model.mappings[key])
     c = np.asarray(coefficients, dtype=np.float64)[key] @ project
     trained = np.einsum("tr,pktd->pkdr", model.basis, model.trajectories)[:, :, key] @ project  # [P, K, n, r]
-    spread = ((trained - mapped(mappings, levels)[None]) ** 2).mean(axis=(0, 1))
+    spread = ((trained - mapped(mappings, levels, levels)[None]) ** 2).mean(axis=(0, 1))
     # No coefficient counts as predicted better than to a tenth of the typical change over the
     # trained range: training data exactly on the lines (one noiseless person) would otherwise
     # weigh in without bound; with that floor alone the weights are equal (plain least squares).
@@ -177,7 +198,7 @@ def estimate_intensity(
     training = float(np.sqrt(np.mean((trained_k - np.tile(levels, P)) ** 2)))
 
     def misfit(c: np.ndarray, k: np.ndarray) -> np.ndarray:  # weighted RMS distance from the mapping at k
-        return np.sqrt(np.einsum("nr,bnr->b", weights, (mapped(mappings, k) - c) ** 2) / weights.sum())
+        return np.sqrt(np.einsum("nr,bnr->b", weights, (mapped(mappings, k, levels) - c) ** 2) / weights.sum())
 
     # The residual in units of the training performances' own (at least the floor's tenth of the change).
     typical = max(float(np.sqrt(np.mean(misfit(trained, trained_k) ** 2))), np.sqrt(floor))

@@ -29,8 +29,25 @@ class FitResult:
     mappings: np.ndarray
 
 
-def mapped(mappings: np.ndarray, k) -> np.ndarray:
-    """``f(k) [..., D, r]``: polynomial mappings ``[D, r, degree + 1]`` (highest power first) at ``k``."""
+def mapped(mappings: np.ndarray, k, levels=None) -> np.ndarray:
+    """``f(k) [..., D, r]``: polynomial mappings ``[D, r, degree + 1]`` (highest power first) at
+    ``k``. Given the trained ``levels``, a curved mapping is continued beyond them along its
+    tangent at the nearer end: a parabola through three styles would otherwise turn back (a walk
+    taken below its lightest style, past the parabola's vertex, came out livelier)."""
+    k = np.asarray(k, dtype=np.float64)
+    out = _polynomial(mappings, k)
+    degree = mappings.shape[-1] - 1
+    if levels is None or degree < 2:
+        return out
+    slopes = mappings[..., :-1] * np.arange(degree, 0, -1)
+    for end, beyond in ((float(np.min(levels)), k < np.min(levels)), (float(np.max(levels)), k > np.max(levels))):
+        if np.any(beyond):
+            tangent = _polynomial(mappings, end) + _polynomial(slopes, end) * (k - end)[..., None, None]
+            out = np.where(beyond[..., None, None], tangent, out)
+    return out
+
+
+def _polynomial(mappings: np.ndarray, k) -> np.ndarray:
     k = np.asarray(k, dtype=np.float64)
     return np.einsum("dip,...p->...di", mappings, k[..., None] ** np.arange(mappings.shape[-1] - 1, -1, -1))
 

@@ -228,8 +228,9 @@ class ExaggerationModel:
         return [self.dof_names[d] for d in np.argsort(-self.overall) if self.key[d]]
 
     def predict_coefficients(self, k) -> np.ndarray:
-        """``f(k) [..., D, r]``: the mapped coefficients at intensity ``k`` (scalar or array)."""
-        return mapped(self.mappings, k)
+        """``f(k) [..., D, r]``: the mapped coefficients at intensity ``k`` (scalar or array; a curved
+        mapping continues along its tangent beyond the trained levels)."""
+        return mapped(self.mappings, k, self.levels)
 
     def coefficient_spread(self) -> np.ndarray:
         """``[D, r]``: the mean square distance of the training performances' coefficients from the
