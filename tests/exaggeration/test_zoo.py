@@ -137,3 +137,17 @@ def test_the_signature_tells_runs_from_walks_and_waves_from_raises(bandai2_dir):
         assert found("wave-right-hand", style)["repeats"] >= 2 * SIGNATURE_MARGINS["repeats"]
     assert found("run", "normal")["flight"] >= 0.2 and found("run", "active")["flight"] >= 0.2
 
+
+def test_held_out_takes_get_their_own_action_or_none(bandai2_dir):
+    """Every shipped action's held-out takes (take 20 of each style) get a model of that action;
+    a run, a wave or a raise, whose actions ship no model, is refused, not edited by a walk's or
+    another gesture's model."""
+    models = shipped_models()
+    shipped = {m.action: m for m in models}
+    for action, model in shipped.items():
+        for style in model.styles:
+            take = em.read_bvh(bandai2_dir / f"dataset-2_{action}_{style}_020.bvh")
+            assert choose(take, models)[0].action == action, (action, style)
+    for other in sorted(set(ACTIONS) - set(shipped)):
+        with pytest.raises(em.errors.MocapError, match="no shipped model fits"):
+            choose(em.read_bvh(bandai2_dir / f"dataset-2_{other}_normal_020.bvh"), models)

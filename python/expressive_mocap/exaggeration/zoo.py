@@ -52,8 +52,13 @@ LOCOMOTION = ("walk", "walk-turn-left", "walk-turn-right", "run")  # gait cycles
 AXES = {  # styles at intensities 1, 2, 3 (every model of both is validated; those that pass ship)
     "energy": ("exhausted", "normal", "active"),
     "age": ("elderly", "normal", "youthful"),
+    "masculinity": ("feminine", "normal", "masculine"),
 }
 PEOPLE = tuple(range(1, 9))  # takes 1-8 of each style, as eight people; the later takes are held out
+# The mappings' degree: a parabola through the three styles' coefficients, not a line. The styles
+# are not evenly spaced (the exhausted walk is not less of the active one), and a line through
+# all three moved held-out normal walks taken to 3 less than halfway to the active ones.
+DEGREE = 2
 INDEX = "index.json"
 # How far beyond its training clips' range a motion's signature may lie for a model to be a candidate.
 # Speed: actor heights per second; turn: degrees per second; left hand: share of the hands' motion;
@@ -210,7 +215,7 @@ def build(clips: list[list[Motion]], action: str) -> ExaggerationModel:
     was (what ``benches/build_models.py`` runs)."""
     from .training import train
 
-    return train(clips, (1.0, 2.0, 3.0), cycle="all" if action in LOCOMOTION else "whole")
+    return train(clips, (1.0, 2.0, 3.0), cycle="all" if action in LOCOMOTION else "whole", degree=DEGREE)
 
 
 def signature_ranges(clips: list[list[Motion]]) -> dict[str, list[float]]:
