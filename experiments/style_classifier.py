@@ -1,4 +1,4 @@
-"""Does an independent style classifier read the shipped walks model's edits as the style it aims at?
+"""Does an independent style classifier read the shipped models' edits as the style they aim at?
 
     python experiments/style_classifier.py [--data DIR]
 
@@ -6,14 +6,14 @@ A multinomial logistic regression (L2, fitted with SciPy's L-BFGS; no part of th
 two-second windows (half a second apart) of a walk: the mean and spread of each joint's rotation
 in its parent's axes (rotation vector; spine, neck, head, arms and legs) and of the gait (the
 hips' horizontal speed and height over the actor's height, both hands' swing along the facing
-direction), read with this folder's own BVH reader and SciPy forward kinematics. A clip's style
-is the one its windows' summed log-probabilities favour. It is trained on dataset-2's held-out
-walks only (takes 9-16 of exhausted, normal and active: never in the shipped model's training,
-never edited motion) and tested on the later held-out takes: unedited, and the normal ones
-exaggerated to 3 and diminished to 1 by the shipped model as `exaggerate` without --model
-chooses it (default settings, its timing included, and with `--no-timing`), and beyond: to 4
-and to 0. The bar of a shipped model: at least 70 % of the edits to 3 and to 1 read as the style
-aimed at.
+direction), read with this folder's own BVH reader and SciPy forward kinematics (a Bandai-Namco skeleton's
+joint names). A clip's style
+is the one its windows' summed log-probabilities favour. For each shipped model it is trained
+on dataset-2's held-out takes of the model's action only (takes 9-16 of its three styles: never
+in the model's training, never edited motion) and tested on the later held-out takes: unedited,
+and those of the middle style exaggerated to 3 and diminished to 1 by the model (`exaggerate
+--action A --axis X`, default settings, its timing included), and beyond: to 4 and to 0. The bar
+of a shipped model: at least 70 % of the edits to 3 and to 1 read as the style aimed at.
 
 Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0).
 """
@@ -29,15 +29,15 @@ from scipy.optimize import minimize
 
 import expressive_mocap as em
 from expressive_mocap.exaggeration import exaggerate
-from expressive_mocap.exaggeration.zoo import PEOPLE, candidates, choose
+from expressive_mocap.exaggeration.zoo import PEOPLE, ShippedModel, shipped_models
 from independent import parse_bvh, scipy_fk
 from setting import REPO, arguments, bandai_dir, described
 
-STYLES = ("exhausted", "normal", "active")
 TRAINING_TAKES = 8  # held-out takes 9-16 of each style train the classifier; the later ones test it
 WINDOW, HOP = 2.0, 0.5  # seconds
 JOINTS = ("Spine", "Chest", "Neck", "Head", "UpperArm", "LowerArm", "UpperLeg", "LowerLeg", "Foot")
 L2 = 1e-2  # the penalty on the weights, per training window
+CLASSES = 3  # a model's three styles
 
 
 def clip_features(path: Path) -> np.ndarray:
@@ -74,10 +74,10 @@ class Classifier:
         self.mean, self.scale = x.mean(0), x.std(0) + 1e-9
         x = (x - self.mean) / self.scale
         x = np.column_stack([x, np.ones(len(x))])
-        onehot = np.eye(len(STYLES))[y]
+        onehot = np.eye(CLASSES)[y]
 
         def loss(flat: np.ndarray) -> tuple[float, np.ndarray]:
-            w = flat.reshape(x.shape[1], len(STYLES))
+            w = flat.reshape(x.shape[1], CLASSES)
             logits = x @ w
             logits -= logits.max(1, keepdims=True)
             log_p = logits - np.log(np.exp(logits).sum(1, keepdims=True))
@@ -86,8 +86,8 @@ class Classifier:
             grad[:-1] += 2 * L2 * w[:-1]
             return float(value), grad.ravel()
 
-        start = np.zeros(x.shape[1] * len(STYLES))
-        self.weights = minimize(loss, start, jac=True, method="L-BFGS-B").x.reshape(x.shape[1], len(STYLES))
+        start = np.zeros(x.shape[1] * CLASSES)
+        self.weights = minimize(loss, start, jac=True, method="L-BFGS-B").x.reshape(x.shape[1], CLASSES)
 
     def style(self, features: np.ndarray) -> int:
         x = np.column_stack([(features - self.mean) / self.scale, np.ones(len(features))])
@@ -103,56 +103,58 @@ class Classifier:
 def main() -> None:
     args = arguments(__doc__)
     dataset = bandai_dir(args.data)
-    held = {s: sorted(dataset.glob(f"dataset-2_walk_{s}_*.bvh"))[len(PEOPLE) :] for s in STYLES}
-    train = {s: paths[:TRAINING_TAKES] for s, paths in held.items()}
-    test = {s: paths[TRAINING_TAKES:] for s, paths in held.items()}
-    classifier = Classifier(
-        [clip_features(p) for s in STYLES for p in train[s]],
-        [k for k, s in enumerate(STYLES) for _ in train[s]],
-    )
-    rows = []
-    for k, style in enumerate(STYLES):
-        read = [classifier.style(clip_features(p)) for p in test[style]]
-        rows.append((f"unedited {style} takes", len(read), np.mean(np.array(read) == k), _counts(read)))
-    models = candidates("walk", "energy")
-    with tempfile.TemporaryDirectory() as work:
-        for to, timing in ((3.0, True), (1.0, True), (3.0, False), (1.0, False), (4.0, True), (0.0, True)):
-            aim = 2 if to > 2.0 else 0
-            read = []
-            for path in test["normal"]:
-                walk = em.read_bvh(path)
-                _, model, _ = choose(walk, models)
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    out, _ = exaggerate(model, walk, to, timing=timing)
-                written = Path(work) / "edit.bvh"
-                em.write_bvh(out, written)
-                read.append(classifier.style(clip_features(written)))
-            label = f"normal takes {'exaggerated' if to > 2.0 else 'diminished'} to {to:g}" + (
-                "" if timing else " (--no-timing)"
-            )
-            rows.append((label, len(read), np.mean(np.array(read) == aim), _counts(read)))
-            print(rows[-1], flush=True)
     lines = [
-        "# An independent style classifier on the shipped walks model's edits",
+        "# An independent style classifier on the shipped models' edits",
         "",
         described(__doc__),
         "",
-        f"`python experiments/style_classifier.py`: trained on {sum(len(v) for v in train.values())} held-out "
-        f"takes, tested on {sum(len(v) for v in test.values())}. Data: Bandai-Namco-Research-Motiondataset-2 "
-        "(CC BY-NC 4.0).",
-        "",
-        "| clips | n | read as aimed (unedited: as their own style) | read as exhausted / normal / active |",
-        "|---|---|---|---|",
+        "`python experiments/style_classifier.py`. Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0).",
     ]
-    for label, n, share, counts in rows:
-        lines.append(f"| {label} | {n} | {100 * share:.0f} % | {counts} |")
+    for shipped in shipped_models():
+        lines += ["", *model_rows(dataset, shipped)]
+        print(shipped.name, flush=True)
     (REPO / "experiments" / "STYLE_CLASSIFIER.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
 
-def _counts(read: list[int]) -> str:
-    return " / ".join(str(read.count(k)) for k in range(len(STYLES)))
+def model_rows(dataset: Path, shipped: ShippedModel) -> list[str]:
+    """The classifier's readings for one shipped model: its table's lines."""
+    styles = shipped.styles
+    held = {s: sorted(dataset.glob(f"dataset-2_{shipped.action}_{s}_*.bvh"))[len(PEOPLE) :] for s in styles}
+    train = {s: paths[:TRAINING_TAKES] for s, paths in held.items()}
+    test = {s: paths[TRAINING_TAKES:] for s, paths in held.items()}
+    classifier = Classifier(
+        [clip_features(p) for s in styles for p in train[s]], [k for k, s in enumerate(styles) for _ in train[s]]
+    )
+    rows = []
+    for k, style in enumerate(styles):
+        read = [classifier.style(clip_features(p)) for p in test[style]]
+        rows.append((f"unedited {style} takes", read, k))
+    model = shipped.load()
+    with tempfile.TemporaryDirectory() as work:
+        for to in (3.0, 1.0, 4.0, 0.0):
+            read = []
+            for path in test[styles[1]]:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    out, _ = exaggerate(model, em.read_bvh(path), to)
+                written = Path(work) / "edit.bvh"
+                em.write_bvh(out, written)
+                read.append(classifier.style(clip_features(written)))
+            rows.append(
+                (f"{styles[1]} takes {'exaggerated' if to > 2.0 else 'diminished'} to {to:g}", read, 2 * (to > 2))
+            )
+    lines = [
+        f"## {shipped.name}: trained on {sum(len(v) for v in train.values())} held-out takes, "
+        f"tested on {sum(len(v) for v in test.values())}",
+        "",
+        f"| clips | n | read as aimed (unedited: as their own style) | read as {' / '.join(styles)} |",
+        "|---|---|---|---|",
+    ]
+    for label, read, aim in rows:
+        counts = " / ".join(str(read.count(k)) for k in range(len(styles)))
+        lines.append(f"| {label} | {len(read)} | {100 * np.mean(np.array(read) == aim):.0f} % | {counts} |")
+    return lines
 
 
 if __name__ == "__main__":
