@@ -42,6 +42,7 @@ PAGES = [
     "docs/decoupling-results.md",
     "docs/exaggeration.md",
     "docs/exaggeration-results.md",
+    "docs/models.md",
     "docs/preprocessing.md",
     "docs/training.md",
     "docs/cluster.md",
