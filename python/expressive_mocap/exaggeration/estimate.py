@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .fitting import mapped
+from .fitting import derivative, mapped
 
 if TYPE_CHECKING:
     from .model import ExaggerationModel
@@ -84,7 +84,7 @@ def weighted_intensity(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray,
     first, last = float(levels[0]), float(levels[-1])
     span = last - first
     low, high = first - 2 * span, last + 2 * span
-    slopes = mappings[..., :-1] * np.arange(degree, 0, -1)
+    slopes = derivative(mappings)
     tangents = [  # each end's tangent as a line [n, r, 2]: slope, intercept
         np.stack([mapped(slopes, end), mapped(mappings, end) - mapped(slopes, end) * end], axis=-1)
         for end in (first, last)
@@ -119,11 +119,11 @@ def _stationary(mappings: np.ndarray, weights: np.ndarray, c: np.ndarray, low: f
     degree = mappings.shape[-1] - 1
     gap = np.broadcast_to(mappings, c.shape + (degree + 1,)).copy()
     gap[..., -1] -= c
-    derivative = mappings[..., :-1] * np.arange(degree, 0, -1)
+    slopes = derivative(mappings)
     product = np.zeros((len(c), 2 * degree))  # highest power first
     for i in range(degree + 1):
         for j in range(degree):
-            product[:, i + j] += np.einsum("nr,bnr,nr->b", weights, gap[..., i], derivative[..., j])
+            product[:, i + j] += np.einsum("nr,bnr,nr->b", weights, gap[..., i], slopes[..., j])
     lead = product[:, :1]
     safe = np.abs(lead) > 1e-12 * np.abs(product).max(axis=1, keepdims=True)
     monic = product[:, 1:] / np.where(safe, lead, 1.0)

@@ -36,15 +36,21 @@ def mapped(mappings: np.ndarray, k, levels=None) -> np.ndarray:
     taken below its lightest style, past the parabola's vertex, came out livelier)."""
     k = np.asarray(k, dtype=np.float64)
     out = _polynomial(mappings, k)
-    degree = mappings.shape[-1] - 1
-    if levels is None or degree < 2:
+    if levels is None or mappings.shape[-1] < 3:  # lines go on as they are
         return out
-    slopes = mappings[..., :-1] * np.arange(degree, 0, -1)
+    slopes = derivative(mappings)
     for end, beyond in ((float(np.min(levels)), k < np.min(levels)), (float(np.max(levels)), k > np.max(levels))):
         if np.any(beyond):
             tangent = _polynomial(mappings, end) + _polynomial(slopes, end) * (k - end)[..., None, None]
             out = np.where(beyond[..., None, None], tangent, out)
     return out
+
+
+def derivative(mappings: np.ndarray) -> np.ndarray:
+    """The mappings' derivatives ``[..., degree]`` (highest power first) of polynomial mappings
+    ``[..., degree + 1]``."""
+    degree = mappings.shape[-1] - 1
+    return mappings[..., :-1] * np.arange(degree, 0, -1)
 
 
 def _polynomial(mappings: np.ndarray, k) -> np.ndarray:

@@ -59,22 +59,22 @@ def stroke_period(strokes: np.ndarray, fps: float) -> tuple[int | None, float]:
     return (int(peaks[0]), float(correlation[peaks].max())) if len(peaks) else (None, 0.0)
 
 
-def _strokes(take: Take) -> tuple[int, int, np.ndarray, np.ndarray]:
-    """The moving hand's span (first and last frame), its path about the chest over the span
-    ``[S, 3]`` and that path's fast part (the slow raise removed)."""
+def _strokes(take: Take) -> tuple[int, int, np.ndarray]:
+    """The moving hand's span (first and last frame) and the fast part ``[S, 3]`` of its path
+    about the chest over the span (the slow raise removed; none in a span of under 4 frames)."""
     path, away = moving_hand(take)
     start, end = gesture_span(away)
     part = path[start : end + 1] - path[start : end + 1].mean(axis=0)
     if len(part) < 4:
-        return start, end, part, np.zeros_like(part)
-    return start, end, part, part - gaussian_filter1d(part, SLOW_SECONDS * take.motion.fps, axis=0, mode="nearest")
+        return start, end, np.zeros_like(part)
+    return start, end, part - gaussian_filter1d(part, SLOW_SECONDS * take.motion.fps, axis=0, mode="nearest")
 
 
 def repetition(motion: Take) -> float:
     """How well the moving hand's strokes repeat (:func:`stroke_period`'s peak): near 1 for a
     wave, 0 for a single raise."""
     take = Take.of(motion)
-    return stroke_period(_strokes(take)[3], take.motion.fps)[1]
+    return stroke_period(_strokes(take)[2], take.motion.fps)[1]
 
 
 def _signed(direction: np.ndarray, take: Take, start: int, end: int) -> np.ndarray:
@@ -94,9 +94,9 @@ def gesture_cycles(motion: Take) -> list[tuple[int, int]]:
     two; each stroke starts at the end of its path nearest the body's left, or its top), else one
     cycle over the span the hand moves in."""
     take = Take.of(motion)
-    start, end, part, strokes = _strokes(take)
+    start, end, strokes = _strokes(take)
     span = [(start, end)] if end > start else [(0, take.motion.n_frames - 1)]
-    period = stroke_period(strokes, take.motion.fps)[0] if len(part) >= 4 else None
+    period = stroke_period(strokes, take.motion.fps)[0]
     if period is None:
         return span
     direction = _signed(np.linalg.svd(strokes, full_matrices=False)[2][0], take, start, end)
