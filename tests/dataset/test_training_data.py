@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from types import SimpleNamespace
 
 import numpy as np
@@ -119,7 +120,7 @@ def _records(names, mirrored=False):
 NAMES = [f"dataset-2_{c}_{s}_{t:03d}" for c in ("walk", "run", "walk-left") for s in "abcdefg" for t in range(1, 6)]
 
 
-@pytest.mark.parametrize("by", ["clip", "take", "style", "content"])
+@pytest.mark.parametrize("by", ["performance", "clip", "take", "style", "content"])
 def test_splits_are_disjoint_cover_all_and_keep_mirrored_copies_together(by):
     data = _records(NAMES, mirrored=True)
     labels = Labels.from_names(data)
@@ -131,10 +132,15 @@ def test_splits_are_disjoint_cover_all_and_keep_mirrored_copies_together(by):
         if "mirror_of" in record:
             assert where[i] == where[data.names.index(record["mirror_of"])]
     if by != "clip":
+        value = (
+            (lambda i: (labels.values["content"][i], labels.values["style"][i]))
+            if by == "performance"
+            else (lambda i: labels.values[by][i])
+        )
         for name, idx in parts.items():  # a group never straddles two splits
             for other, rest in parts.items():
                 if other != name:
-                    assert not {labels.values[by][i] for i in idx} & {labels.values[by][i] for i in rest}
+                    assert not {value(i) for i in idx} & {value(i) for i in rest}
     assert {k: list(v) for k, v in split(data, by=by, seed=7, labels=labels).items()} == {
         k: list(v) for k, v in parts.items()
     }
@@ -142,29 +148,74 @@ def test_splits_are_disjoint_cover_all_and_keep_mirrored_copies_together(by):
 
 def test_hash_splits_are_stable_under_adding_clips_and_follow_the_seed():
     old, new = NAMES[:60], NAMES  # more clips later
-    before, after = split(old, seed=1, method="hash"), split(new, seed=1, method="hash")
+    before, after = split(old, "clip", seed=1, method="hash"), split(new, "clip", seed=1, method="hash")
     placed = {new[i]: name for name, idx in after.items() for i in idx}
     for name, idx in before.items():
         assert all(placed[old[i]] == name for i in idx)
     sizes = {k: len(v) for k, v in after.items()}
     assert abs(sizes["train"] / len(new) - 0.8) < 0.1 and sizes["val"] and sizes["test"]
-    assert any(not np.array_equal(split(new, seed=2, method="hash")[k], after[k]) for k in after)
+    assert any(not np.array_equal(split(new, "clip", seed=2, method="hash")[k], after[k]) for k in after)
 
 
 @pytest.mark.parametrize("groups", [3, 10, 11, 57])
 def test_rank_splits_give_each_split_its_share_of_groups(groups):
     names = [f"clip{i:03d}" for i in range(groups)]
-    parts = split(names, fractions=(0.8, 0.1, 0.1), seed=4)
+    parts = split(names, "clip", fractions=(0.8, 0.1, 0.1), seed=4)
     sizes = [len(parts[k]) for k in ("train", "val", "test")]
     assert sum(sizes) == groups and min(sizes) >= 1  # nothing lost, no split left empty
     assert all(abs(size - f * groups) < 1 + 1e-9 for size, f in zip(sizes[1:], (0.1, 0.1)) if groups >= 10)
     same = {k: list(v) for k, v in parts.items()}
-    assert {k: list(v) for k, v in split(names, fractions=(0.8, 0.1, 0.1), seed=4).items()} == same
-    assert any({k: list(v) for k, v in split(names, seed=s).items()} != same for s in range(5, 10))
-    grown = split(names + ["extra"], fractions=(0.8, 0.1, 0.1), seed=4)
+    assert {k: list(v) for k, v in split(names, "clip", fractions=(0.8, 0.1, 0.1), seed=4).items()} == same
+    assert any({k: list(v) for k, v in split(names, "clip", seed=s).items()} != same for s in range(5, 10))
+    grown = split(names + ["extra"], "clip", fractions=(0.8, 0.1, 0.1), seed=4)
     placed = {i: k for k, idx in grown.items() for i in idx}
     moved = sum(placed[i] != k for k, idx in parts.items() for i in idx)
     assert moved <= 2  # one more group shifts at most the two boundaries
+
+
+def test_the_default_split_keeps_every_take_of_a_performance_together():
+    """Takes of one dataset, content and style are repetitions: never in two splits, whatever the
+    seed; other datasets' clips of the same content and style are other performances."""
+    names = NAMES + [n.replace("dataset-2_", "dataset-1_") for n in NAMES[:35]]
+    data = _records(names, mirrored=True)
+    for seed in range(6):
+        parts = split(data, seed=seed)
+        assert {k: list(v) for k, v in parts.items()} == {
+            k: list(v) for k, v in split(data, "performance", seed=seed, labels=Labels.from_names(data)).items()
+        }
+        where = {}
+        for name, idx in parts.items():
+            assert len(idx)
+            for i in idx:
+                performance = data.names[i].removesuffix("@mirrored").rsplit("_", 1)[0]
+                assert where.setdefault(performance, name) == name
+        assert len(where) == 21 + 7 and len(set(where.values())) == 3
+    originals = split(data, seed=0, mirrored=False)
+    assert all(not data.names[i].endswith("@mirrored") for idx in originals.values() for i in idx)
+    assert {k: [data.names[i] for i in v] for k, v in originals.items()} == {
+        k: [data.names[i] for i in v if not data.names[i].endswith("@mirrored")] for k, v in split(data).items()
+    }
+
+
+def test_names_that_are_not_bandai_names_split_alone_with_a_warning():
+    names = [f"s{a}_{e}_t{t}" for a in "12" for e in ("happy", "sad") for t in range(4)] + ["dataset-2_run_normal_001"]
+    with pytest.warns(UserWarning, match=r"16 of 17 clip names \(e.g. 's1_happy_t0'\).*by='clip'"):
+        parts = split(names, seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert {k: list(v) for k, v in split(names, "clip", seed=0).items()} == {k: list(v) for k, v in parts.items()}
+        labels = Labels.from_names(names[:16], "s{actor}_{emotion}_t{take}")
+        grouped = split(names[:16], seed=0, labels=labels)
+        for idx in grouped.values():  # four takes of one actor and emotion go together
+            assert len(idx) % 4 == 0 and len({names[i].rsplit("_", 1)[0] for i in idx}) == len(idx) // 4
+        by_content = split(NAMES, "content", seed=0)  # Bandai labels read from the names
+    assert [len({NAMES[i].split("_")[1] for i in idx}) for idx in by_content.values()] == [1, 1, 1]
+    with pytest.raises(ArgumentError, match="no such field"):
+        split(names[:16], "performance", labels=Labels.from_names(names[:16], "s{actor}_{emotion}_{rest}"))
+    with pytest.raises(DatasetError, match="'s1_happy_t0'.*splitting by 'content'"):
+        split(names, "content")
+    with pytest.raises(ArgumentError, match="argument `by`"):
+        split(names, ["clip"])  # type: ignore[arg-type]
 
 
 def test_held_out_groups_are_exact_and_checked():
@@ -176,7 +227,7 @@ def test_held_out_groups_are_exact_and_checked():
     with pytest.raises(ArgumentError, match="'elderly'"):
         split(NAMES, by="style", held_out={"test": ["elderly"]}, labels=labels)
     with pytest.raises(ArgumentError, match="labels"):
-        split(NAMES, by="style")
+        split(NAMES, by="actor")
 
 
 # Labels
