@@ -12,8 +12,6 @@ stroke, peak to peak along the stroke's main direction.
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
-from scipy.signal import find_peaks
 
 from ..body.take import Take
 
@@ -54,6 +52,8 @@ def stroke_period(strokes: np.ndarray, fps: float) -> tuple[int | None, float]:
     lags = np.arange(longest + 1)
     # Each lag's mean product over the frames it overlaps (unbiased: long lags are not shrunk).
     correlation = np.array([np.sum(strokes[: n - k] * strokes[k:]) / (n - k) for k in lags]) / power
+    from scipy.signal import find_peaks  # here: scipy.signal takes a second to import
+
     peaks, _ = find_peaks(correlation)
     peaks = peaks[(peaks >= shortest) & (correlation[peaks] >= REPEATS)]
     return (int(peaks[0]), float(correlation[peaks].max())) if len(peaks) else (None, 0.0)
@@ -67,6 +67,8 @@ def _strokes(take: Take) -> tuple[int, int, np.ndarray]:
     part = path[start : end + 1] - path[start : end + 1].mean(axis=0)
     if len(part) < 4:
         return start, end, np.zeros_like(part)
+    from scipy.ndimage import gaussian_filter1d  # here: SciPy takes a tenth of a second to import
+
     return start, end, part - gaussian_filter1d(part, SLOW_SECONDS * take.motion.fps, axis=0, mode="nearest")
 
 
@@ -100,6 +102,9 @@ def gesture_cycles(motion: Take) -> list[tuple[int, int]]:
     if period is None:
         return span
     direction = _signed(np.linalg.svd(strokes, full_matrices=False)[2][0], take, start, end)
+    from scipy.ndimage import gaussian_filter1d
+    from scipy.signal import find_peaks
+
     along = gaussian_filter1d(strokes @ direction, 1.0)
     peaks, _ = find_peaks(along, distance=max(2, int(PERIOD_SPREAD[0] * period)))
     runs: list[list[tuple[int, int]]] = [[]]
