@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from expressive_mocap._utils import files as em_io
+from expressive_mocap._utils import model_files as em_io
 from expressive_mocap.decoupling import body_model as em_model
 from expressive_mocap.exaggeration.model import FORMAT, VERSION
 from expressive_mocap.exaggeration.settings import REPRESENTATIONS

@@ -17,7 +17,6 @@ from collections.abc import Iterator
 from types import ModuleType
 from typing import Any, cast
 
-from . import reference
 from .errors import MocapError
 
 _core: ModuleType | None
@@ -56,7 +55,7 @@ def set_backend(name: str) -> None:
 
 def get_backend() -> str:
     """The backend in use: ``"rust"`` or ``"numpy"``."""
-    return "numpy" if kernels() is reference else "rust"
+    return "rust" if kernels() is _counted else "numpy"
 
 
 @contextlib.contextmanager
@@ -77,6 +76,8 @@ def kernels() -> ModuleType:
     if _selected not in BACKENDS:
         _selected = _checked(_selected, f"the environment variable {ENV_VAR}")
     if _selected == "numpy" or (_selected == "auto" and _core is None):
+        from . import reference  # here: the NumPy twins load only when they are used
+
         return reference
     if _core is None:
         raise MocapError(

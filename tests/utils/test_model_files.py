@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap._utils.files import MAX_MODEL_BYTES
+from expressive_mocap._utils.model_files import MAX_MODEL_BYTES
 from expressive_mocap.decoupling.body_model import BodyModel
 from expressive_mocap.exaggeration import ExaggerationModel
 from model_files import npz, small_models

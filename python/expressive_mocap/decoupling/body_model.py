@@ -25,7 +25,8 @@ from importlib import resources
 
 import numpy as np
 
-from .._utils.files import atomic_write, check_keys, finite_array, read_model_file
+from .._utils.files import atomic_write
+from .._utils.model_files import check_keys, finite_array, read_model_file
 from ..body.contacts import floor_of
 from ..body.take import Take
 from ..errors import ArgumentError, ModelError

@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from .._utils.files import atomic_write, check_keys, finite_array, read_model_file
+from .._utils.files import atomic_write
+from .._utils.model_files import check_keys, finite_array, read_model_file
 from ..body.body import Body
 from ..body.hinges import HingeLimits, learn_hinge_limits
 from ..body.take import Take
