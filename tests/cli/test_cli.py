@@ -165,3 +165,36 @@ def test_the_command_groups_list_every_command_and_a_command_line_loads_only_its
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert "expressive_mocap.dataset.run" in loaded
     assert "expressive_mocap.exaggeration" not in loaded and "expressive_mocap.decoupling.training" not in loaded
+
+
+def _modules_loaded_by(*words: str) -> set[str]:
+    """The modules a command line loads, in a fresh interpreter (the command run to its end)."""
+    code = (
+        "import sys; from expressive_mocap.cli import main\n"
+        f"try: main({list(words)!r})\n"
+        "except SystemExit: pass\n"
+        "print(' '.join(sorted(sys.modules)), file=sys.stderr)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return set(done.stderr.split())
+
+
+def test_the_quick_commands_load_only_what_they_use(mixed_path):
+    """Start-up time is imports: --version loads no NumPy and no command's code, info on a file
+    reads it without the methods, SciPy or the pictures' code (before, scipy.signal alone took a
+    second of every command line through the exaggeration models' gesture cycles)."""
+    version = _modules_loaded_by("--version")
+    assert "numpy" not in version and "expressive_mocap.bvh" not in version
+    assert not {m for m in version if m.startswith("expressive_mocap.cli.") and m != "expressive_mocap.cli.common"}
+    info = _modules_loaded_by("info", str(mixed_path))
+    assert "expressive_mocap.bvh.reader" in info  # it did read the file
+    for heavy in (
+        "scipy",
+        "matplotlib",
+        "expressive_mocap.decoupling",
+        "expressive_mocap.exaggeration",
+        "expressive_mocap.viz",
+        "expressive_mocap.dataset",
+        "expressive_mocap.reference",
+    ):
+        assert heavy not in info

@@ -1,9 +1,10 @@
 """The ``expressive-mocap`` command: a thin layer over the package's functions.
 
 Each group of commands is a module that adds its subparsers next to its command functions
-(:mod:`.files`, :mod:`.skeletons`, :mod:`.decoupling`, :mod:`.exaggeration`, :mod:`.data`, :mod:`.demo`); this one
-builds the parser and runs a command: outputs are checked before any work, and bad input ends the
-command with a one-line message on stderr and a non-zero exit, never a traceback.
+(:mod:`.files`, :mod:`.pictures`, :mod:`.skeletons`, :mod:`.decoupling`, :mod:`.exaggeration`,
+:mod:`.data`, :mod:`.demo`); this one builds the parser and runs a command: outputs are checked
+before any work, and bad input ends the command with a one-line message on stderr and a non-zero
+exit, never a traceback.
 """
 
 from __future__ import annotations
@@ -27,7 +28,8 @@ __all__ = ["COMMANDS", "DEMO_FILES", "PROG", "build_parser", "main"]
 # builds only its command's group: the others import what their commands need (the methods,
 # training, pictures), a third of the CLI's start-up time, for nothing.
 COMMANDS = {
-    "files": ("info", "positions", "convert", "render"),
+    "files": ("info", "positions", "convert"),
+    "pictures": ("render",),
     "skeletons": ("skeleton", "retarget"),
     "decoupling": ("decouple", "modulate", "mix", "blend", "train", "calibrate"),
     "exaggeration": ("rank", "exaggerate", "validate", "models"),
@@ -48,9 +50,10 @@ def _command_of(argv: list[str]) -> str | None:
     return None
 
 
-def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+def build_parser(command: str | None = None, commands_needed: bool = True) -> argparse.ArgumentParser:
     """The command line's parser: every command's, or only those of ``command``'s group (as
-    :func:`main` builds it for a command line naming one)."""
+    :func:`main` builds it for a command line naming one), or none when not ``commands_needed``
+    (``--version`` alone: no command's code is loaded)."""
     parser = Parser(prog=PROG, description="Find, measure and edit the expressive part of motion capture (BVH files).")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument(
@@ -59,7 +62,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         help=f"kernels to use (default: ${backend.ENV_VAR} or auto = Rust when built)",
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser, required=True)
-    groups = [group for group, names in COMMANDS.items() if command in names] or list(COMMANDS)
+    groups = [group for group, names in COMMANDS.items() if command in names]
+    if not groups and commands_needed:
+        groups = list(COMMANDS)
     for group in groups:
         importlib.import_module(f".{group}", __name__).add_parsers(commands)
     # --backend is also taken after the command (`info FILE --backend numpy`); SUPPRESS keeps a
@@ -154,7 +159,9 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line ``argv`` (default: the process's); returns the exit status."""
-    args = build_parser(_command_of(sys.argv[1:] if argv is None else argv)).parse_args(argv)
+    words = sys.argv[1:] if argv is None else argv
+    command = _command_of(words)
+    args = build_parser(command, commands_needed=command is not None or "--version" not in words).parse_args(argv)
     with warnings.catch_warnings():  # the package's warnings as one line each, like its errors
         warnings.showwarning = _show_warning
         return _run(args)

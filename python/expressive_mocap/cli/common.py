@@ -6,11 +6,12 @@ from __future__ import annotations
 import argparse
 import inspect
 import math
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
-from ..bvh import read_bvh
 from ..errors import MocapError
-from ..motion import Motion
+
+if TYPE_CHECKING:
+    from ..motion import Motion
 
 __all__ = [
     "DECOUPLE_SUFFIXES",
@@ -114,6 +115,7 @@ def read_on_model(
     skeleton (the identity when the file is on the model's skeleton already; otherwise
     :class:`~expressive_mocap.skeletons.canonical.Carried`). ``motion``: the file's motion when
     already read, or changed (an edit that retimed it carries back onto it retimed alike)."""
+    from ..bvh import read_bvh  # here, as in every function below: building the parser reads no BVH
     from ..skeletons.canonical import carried_for
 
     motion = read_bvh(path) if motion is None else motion
@@ -137,6 +139,7 @@ def read_on_model(
 def read_all(paths: list[str], what: str, quiet: bool = False) -> list[Motion]:
     """BVH files read one after the other, with a progress bar on stderr (see progress.Progress)."""
     from .._utils.progress import Progress
+    from ..bvh import read_bvh
 
     with Progress(len(paths), f"reading {what}", "files", enabled=bool(paths) and not quiet) as bar:
         motions = []
