@@ -1,0 +1,151 @@
+#!/usr/bin/env python
+"""How ``expressive-mocap preprocess`` scales with cores: whole processes, pinned.
+
+    python benches/bench_scaling.py [--data DIR] [--rounds 5] [--cores 1,2,...] [--write-results]
+
+Each run is the command line itself (``python -m expressive_mocap.cli preprocess DATA -o OUT``,
+start-up, imports and exit included), in a fresh process pinned to the first N cores with
+``sched_setaffinity`` before it starts (Rust's thread pool sizes itself from that set, and the
+Python threads share it), with and without ``--model``. The core counts are alternated round
+after round (their order rotated), and each configuration's median is compared with the 1-core
+median of the same run: the speed-up ``t(1) / t(N)``, and the parallel efficiency
+``speed-up / N``. Before the figures are written, every run is checked to have written every clip
+with no failure and the same frames. ``--cores`` defaults to 1, 2, 4, ... up to this machine's.
+
+Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
+The repository never contains it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from harness import check, check_equal, clock, commit, cpu_name, log, median, memory_gib, rotated
+from results import write_section
+
+REPO = Path(__file__).resolve().parents[1]
+DEFAULT_DATA = Path.home() / ".cache/motion-data/dataset/Bandai-Namco-Research-Motiondataset-2/data"
+TITLE = "Scaling with cores: `benches/bench_scaling.py`"
+TARGET_2_CORES = 1.85  # the whole process on 2 cores against 1
+
+
+def run(data: Path, out: Path, cores: int, model: bool) -> dict:
+    """One preprocess command line pinned to ``cores`` cores: its wall seconds (measured here,
+    around the whole process) and the dataset it wrote, checked."""
+    shutil.rmtree(out, ignore_errors=True)
+    allowed = sorted(os.sched_getaffinity(0))[:cores]
+    command = [sys.executable, "-m", "expressive_mocap.cli", "preprocess", str(data), "-o", str(out)]
+    command += ["--model"] if model else []
+    environment = {**os.environ, "PYTHONPATH": str(REPO / "python")}
+    environment.pop("EXPRESSIVE_MOCAP_BACKEND", None)
+    started = clock()
+    done = subprocess.run(
+        command,
+        env=environment,
+        capture_output=True,
+        text=True,
+        preexec_fn=lambda: os.sched_setaffinity(0, allowed),
+    )
+    seconds = clock() - started
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(command)} on {cores} cores failed:\n{done.stderr}")
+    manifest = json.loads((out / "manifest.json").read_text())
+    figures = {
+        "seconds": seconds,
+        "clips": len(manifest["clips"]),
+        "failed": len(manifest.get("failures", [])),
+        "frames": sum(clip["frames"] for clip in manifest["clips"]),
+    }
+    shutil.rmtree(out, ignore_errors=True)
+    return figures
+
+
+def core_counts(given: str | None) -> list[int]:
+    available = len(os.sched_getaffinity(0))
+    if given:
+        counts = sorted({int(c) for c in given.split(",")})
+        check(all(1 <= c <= available for c in counts), f"--cores {given}: this machine lets us use 1-{available}")
+        return counts
+    counts, c = [], 1
+    while c <= available:
+        counts.append(c)
+        c *= 2
+    return counts if counts[-1] == available else [*counts, available]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", type=Path, default=DEFAULT_DATA, help=f"folder of BVH files (default {DEFAULT_DATA})")
+    parser.add_argument("--rounds", type=int, default=5, help="runs of each configuration (default 5)")
+    parser.add_argument("--cores", help="comma-separated core counts (default 1, 2, 4, ... up to this machine's)")
+    parser.add_argument("--no-model", action="store_true", help="skip the runs with --model")
+    parser.add_argument("--write-results", action="store_true", help=f"rewrite the section {TITLE!r} of RESULTS.md")
+    args = parser.parse_args()
+    counts = core_counts(args.cores)
+    clips = sorted(args.data.glob("*.bvh"))
+    check(bool(clips), f"no .bvh files in {args.data}")
+    for path in clips:  # warm the page cache: every run reads from memory
+        path.read_bytes()
+    load, when, t0 = os.getloadavg(), datetime.datetime.now(), clock()
+    models = [False] if args.no_model else [False, True]
+    configs = [(cores, model) for model in models for cores in counts]
+    runs: dict[tuple, list[dict]] = {config: [] for config in configs}
+    work = Path(tempfile.mkdtemp(prefix="bench-scaling-"))
+    try:
+        for r in range(args.rounds):
+            for cores, model in rotated(configs, r):
+                figures = run(args.data, work / "out", cores, model)
+                log(f"round {r + 1}: {cores} cores{' --model' if model else ''}: {figures['seconds']:.2f} s")
+                runs[(cores, model)].append(figures)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    for config, figures in runs.items():
+        for f in figures:
+            check_equal((f["clips"], f["failed"]), (len(clips), 0), f"{config}: clips written and failed")
+    check(len({f["frames"] for fs in runs.values() for f in fs}) == 1, "the runs wrote different frames")
+
+    lines = [
+        f"- date: {when:%Y-%m-%d %H:%M} (the run took {(clock() - t0) / 60:.1f} min)",
+        f"- machine: {cpu_name()}, {os.cpu_count()} cores, {memory_gib():.1f} GiB RAM; Python "
+        f"{sys.version.split()[0]}; commit {commit(REPO)}; load average at the start "
+        f"{load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}",
+        f"- command: `python benches/bench_scaling.py --rounds {args.rounds}"
+        f"{f' --cores {args.cores}' if args.cores else ''}`: `python -m expressive_mocap.cli preprocess DATA -o OUT"
+        " [--model]`, whole processes pinned to the first N cores, medians",
+        f"- data: {len(clips)} clips, {sum(p.stat().st_size for p in clips) / 1e6:.1f} MB "
+        "(Bandai-Namco-Research-Motiondataset, CC BY-NC 4.0)",
+        "",
+        "| run | cores | wall s (median) | runs | speed-up over 1 core | efficiency |",
+        "|---|---|---|---|---|---|",
+    ]
+    verdicts = []
+    for model in models:
+        one = median(f["seconds"] for f in runs[(counts[0], model)]) if counts[0] == 1 else None
+        for cores in counts:
+            seconds = median(f["seconds"] for f in runs[(cores, model)])
+            speedup = one / seconds if one else float("nan")
+            name = "--model" if model else "default"
+            lines.append(
+                f"| {name} | {cores} | {seconds:.2f} | {len(runs[(cores, model)])} | {speedup:.2f}x | "
+                f"{speedup / cores:.0%} |"
+            )
+            if cores == 2 and one:
+                verdict = "pass" if speedup >= TARGET_2_CORES else "FAIL"
+                verdicts.append(f"{name}: 2 cores {speedup:.2f}x 1 core (target {TARGET_2_CORES}x): **{verdict}**")
+    text = "\n".join([*lines, "", *(f"- {v}" for v in verdicts)]) + "\n"
+    print(text)
+    if args.write_results:
+        write_section(TITLE, text, REPO / "benches" / "RESULTS.md")
+        log(f"wrote the section {TITLE!r} of benches/RESULTS.md")
+
+
+if __name__ == "__main__":
+    main()
