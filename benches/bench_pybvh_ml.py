@@ -1,6 +1,7 @@
 """expressive-mocap preprocess against pybvh-ml's preprocess_directory, on the same files.
 
     python benches/bench_pybvh_ml.py [--data DIR] [--limit N] [--rounds 3] [--work DIR] [--write-results]
+    python benches/bench_pybvh_ml.py --other-rig FILE.bvh [--clips 500] [--seconds 5] ...
 
 pybvh-ml 0.6.0 (``pip install -r benches/requirements-pybvh-ml.txt``) turns a folder of BVH
 files into one .npz of per-clip arrays: rotations (6D here), joint velocities, foot contacts.
@@ -16,6 +17,11 @@ joint_Root folded into Hips (the new root, 6 channels), the other joints rotatio
 the first clip's first frame as the rest pose of all (offsets and local rotations re-expressed
 so every joint's world position is unchanged, to rounding; one skeleton for all, as in the
 originals). Both programs are timed on those files.
+
+``--other-rig FILE.bvh`` measures an archive of another skeleton instead: a file pybvh reads as it
+is (a CMU clip: 31 joints, 120 fps, position channels on the root only) cut into ``--clips``
+overlapping windows of ``--seconds`` each, evenly spread over it, written once with our writer;
+its own section of the results.
 
 Each run is a fresh child process (imports included in its wall time; the call itself is also
 timed inside the child), pybvh-ml and ours alternated round after round; medians. Both packages
@@ -52,6 +58,7 @@ from harness import Stopwatch, check, check_equal, commit, cpu_name, memory_gib,
 DATA = Path.home() / ".cache" / "motion-data" / "dataset" / "Bandai-Namco-Research-Motiondataset-2" / "data"
 RESULTS = Path(__file__).parent / "RESULTS.md"
 SECTION = "Preprocessing against pybvh-ml: `benches/bench_pybvh_ml.py`"
+SECTION_OTHER = "Preprocessing against pybvh-ml, another rig: `benches/bench_pybvh_ml.py --other-rig`"
 ROTATION_CHANNELS = ("Zrotation", "Xrotation", "Yrotation")
 ROOT_CHANNELS = ("Xposition", "Yposition", "Zposition", *ROTATION_CHANNELS)
 SANITY_CM = 1e-3  # pybvh on a converted clip against ours on the original: 2e-06 cm recorded
@@ -116,16 +123,37 @@ def convert(paths: list[Path], folder: Path) -> dict:
     return record
 
 
-def sanity(original: Path, converted: Path) -> dict:
+def cut(path: Path, clips: int, seconds: float, folder: Path) -> dict:
+    """``clips`` windows of ``seconds`` of one file, evenly spread over it, written into ``folder``
+    (kept between runs of the bench): an archive of that file's skeleton and frame rate."""
+    done = folder / "cut.json"
+    key = {"source": str(path), "clips": clips, "seconds": seconds}
+    if done.exists() and {k: json.loads(done.read_text()).get(k) for k in key} == key:
+        return json.loads(done.read_text())
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True)
+    motion = em.read_bvh(path)
+    length = round(seconds * motion.fps)
+    check(length < motion.n_frames, f"{path} has {motion.n_frames} frames, fewer than --seconds {seconds:g}")
+    starts = np.linspace(0, motion.n_frames - length, clips).round().astype(int)
+    with Stopwatch() as watch:
+        for number, start in enumerate(starts):
+            em.write_bvh(motion[start : start + length], folder / f"{path.stem}_{number:04d}.bvh", decimals=6)
+    record = {**key, "seconds_taken": watch.seconds, "mb": sum(p.stat().st_size for p in folder.glob("*.bvh")) / 1e6}
+    done.write_text(json.dumps(record))
+    return record
+
+
+def sanity(original: Path | None, converted: Path) -> dict:
     """World positions of one clip (cm): pybvh on the converted file against ours on the
-    original (joint_Root dropped) and on the converted file."""
+    original (joint_Root dropped; when there is one) and on the converted file."""
     import pybvh
 
     theirs = pybvh.read_bvh_file(converted, world_up="+y").joint_positions()
-    ours_original = em.read_bvh(original).positions()[:, 1:]
     ours_converted = em.read_bvh(converted).positions()
+    ours_original = ours_converted if original is None else em.read_bvh(original).positions()[:, 1:]
     return {
-        "clip": original.stem,
+        "clip": converted.stem,
         "frames": len(theirs),
         "vs_original": float(np.abs(theirs - ours_original).max()),
         "vs_converted": float(np.abs(theirs - ours_converted).max()),
@@ -226,18 +254,44 @@ def main() -> None:
     parser.add_argument("--limit", type=int, help="the first N clips only")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--work", type=Path, default=Path("/tmp/bench_pybvh_ml"))
+    parser.add_argument("--other-rig", type=Path, metavar="FILE.bvh", help="an archive cut from this file instead")
+    parser.add_argument("--clips", type=int, default=500, help="--other-rig: clips to cut (default 500)")
+    parser.add_argument("--seconds", type=float, default=5.0, help="--other-rig: seconds a clip (default 5)")
     parser.add_argument("--write-results", action="store_true", help=f"rewrite the section {SECTION!r}")
     args = parser.parse_args()
 
     import pybvh
     import pybvh_ml
 
-    paths = sorted(args.data.glob("*.bvh"))[: args.limit]
-    converted = args.work / "converted"
-    conversion = convert(paths, converted)
-    print(f"converted {conversion['clips']} clips ({conversion['mb']:.1f} MB) in {conversion['seconds']:.1f} s")
-    middle = paths[len(paths) // 2]  # not the clip the rest pose comes from
-    sane = sanity(middle, converted / middle.name)
+    if args.other_rig:
+        source = args.work / f"cut_{args.other_rig.stem}"
+        made = cut(args.other_rig, args.clips, args.seconds, source)
+        paths = sorted(source.glob("*.bvh"))
+        print(
+            f"cut {len(paths)} clips ({made['mb']:.1f} MB) from {args.other_rig.name} in {made['seconds_taken']:.1f} s"
+        )
+        sane = sanity(None, paths[len(paths) // 2])
+        data_line = (
+            f"- data: {len(paths)} windows of {args.seconds:g} s, evenly spread over {args.other_rig.name} "
+            f"(written once with our writer, {made['mb']:.1f} MB; not timed)"
+        )
+        section, mode = (
+            SECTION_OTHER,
+            f" --other-rig {args.other_rig.name} --clips {args.clips} --seconds {args.seconds:g}",
+        )
+    else:
+        paths = sorted(args.data.glob("*.bvh"))[: args.limit]
+        source = args.work / "converted"
+        conversion = convert(paths, source)
+        print(f"converted {conversion['clips']} clips ({conversion['mb']:.1f} MB) in {conversion['seconds']:.1f} s")
+        middle = paths[len(paths) // 2]  # not the clip the rest pose comes from
+        sane = sanity(middle, source / middle.name)
+        data_line = (
+            f"- data: {len(paths)} clips of dataset-2, converted once with our writer "
+            f"({conversion['mb']:.1f} MB, {conversion['seconds']:.1f} s, not timed; see the script's docstring); "
+            "Bandai-Namco-Research-Motiondataset (Bandai Namco Research Inc., 2022), CC BY-NC 4.0"
+        )
+        section, mode = SECTION, f" --limit {args.limit}" if args.limit else ""
     print(f"sanity, {sane['clip']}: pybvh vs ours {sane['vs_original']:.2g} cm (original file), "
           f"{sane['vs_converted']:.2g} cm (converted)")  # fmt: skip
     for key in ("vs_original", "vs_converted"):
@@ -254,7 +308,7 @@ def main() -> None:
     for round_ in range(args.rounds):
         for kind in rotated(["pybvh-ml", "ours"], round_):
             options = PYBVH_ML if kind == "pybvh-ml" else ours_options
-            times[kind].append(run(kind, converted, outputs[kind], options))
+            times[kind].append(run(kind, source, outputs[kind], options))
             print(f"round {round_ + 1}: {kind:8s} {times[kind][-1]['wall']:.2f} s")
     elapsed = watch.elapsed()
     outputs_check = check_outputs(outputs["ours"], outputs["pybvh-ml"], ours_note == "same kinds")
@@ -273,14 +327,12 @@ def main() -> None:
         f"{platform.python_version()}, NumPy {np.__version__}; pybvh-ml {pybvh_ml.__version__}, pybvh "
         f"{pybvh.__version__}, expressive-mocap {em.__version__}; load average at the start "
         f"{load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}, at the end {', '.join(f'{x:.1f}' for x in os.getloadavg())}",
-        f"- command: `python benches/bench_pybvh_ml.py{f' --limit {args.limit}' if args.limit else ''} "
+        f"- command: `python benches/bench_pybvh_ml.py{mode} "
         f"--rounds {args.rounds} --write-results`; each run a fresh child process, the two alternated "
         "round after round; medians",
-        f"- data: {len(paths)} clips of dataset-2, {frames:,} frames, converted once with our writer "
-        f"({conversion['mb']:.1f} MB, {conversion['seconds']:.1f} s, not timed; see the script's docstring); "
-        "Bandai-Namco-Research-Motiondataset (Bandai Namco Research Inc., 2022), CC BY-NC 4.0",
-        f"- sanity: world positions of {sane['clip']} ({sane['frames']} frames), pybvh on the converted file "
-        f"against ours on the original: max {sane['vs_original']:.2g} cm",
+        f"{data_line}; {frames:,} frames",
+        f"- sanity: world positions of {sane['clip']} ({sane['frames']} frames), pybvh against ours: max "
+        f"{max(sane['vs_original'], sane['vs_converted']):.2g} (the file's units)",
         f"- pybvh-ml: `preprocess_directory(SRC, OUT.npz, {', '.join(f'{k}={v!r}' for k, v in PYBVH_ML.items())})`",
         f"- ours: `expressive-mocap preprocess SRC -o OUT {' '.join(ours_options)} -q` ({ours_note})",
         "- bytecode: every module of both packages byte-compiled before timing, as pip leaves an installed "
@@ -308,7 +360,7 @@ def main() -> None:
         sys.path.insert(0, str(Path(__file__).parent))
         from results import write_section
 
-        write_section(SECTION, "\n".join(lines), RESULTS)
+        write_section(section, "\n".join(lines), RESULTS)
 
 
 if __name__ == "__main__":
