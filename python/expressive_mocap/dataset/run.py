@@ -244,6 +244,7 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
     try:
         todo, total_bytes, total_files = _todo(source, state.done)
         bar = Progress(total_bytes, "preprocess", "B", enabled=settings.progress)
+        files = summary.clips_resumed  # BVH files done, mirror images not counted: the unit of total_files
         stopped: list[bool] = []
         flushes: list[Future] = []
         # Clips decoded into arrays in Python (to resample or mirror them) take ~4x the memory of
@@ -261,7 +262,7 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
             record, nbytes, write_s = _write_batch(state, batch, outcomes, settings, syncer, flushes)
             del outcomes  # hold no batch's arrays while the next one is taken
             _count(summary, record, nbytes, headers_s, kernels_s, write_s)
-            files = len(state.clips) + len(state.failures)
+            files += len(batch)
             frames = sum(c["frames"] for c in state.clips)
             bar.update(nbytes, f"{files}{f'/{total_files}' if total_files else ''} files, {frames:,} frames")
         if not stopped:

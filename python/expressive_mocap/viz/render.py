@@ -13,12 +13,14 @@ from __future__ import annotations
 import io
 import math
 import os
+import sys
 from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
 
 from .._utils.files import atomic_write, output_target
+from .._utils.progress import Progress
 from ..body.take import Take
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion
@@ -220,10 +222,13 @@ def render_animation(
     titles: Sequence[str] | None = None,
     view: str = "side",
     speed: float = 1.0,
+    progress: bool | None = None,
 ) -> str:
     """Animated GIF, one panel per motion, the camera following each walker's hips horizontally.
     Motions play on one clock at ``speed`` x real time (each its own frame rate, see
-    :func:`gif_timing`); shorter ones hold their last pose. Returns a line saying how it plays."""
+    :func:`gif_timing`); shorter ones hold their last pose. Returns a line saying how it plays.
+    ``progress``: a bar of the GIF frames drawn on stderr (:class:`~expressive_mocap._utils.
+    progress.Progress`); None: only when stderr is a terminal."""
     # Layout, timing, drawing and writing of one GIF in order: a little over 60 lines, kept whole.
     from PIL import Image
 
@@ -255,6 +260,7 @@ def render_animation(
     clock = fig.text(0.02, 0.02, "", fontsize=8, color="0.4")
     fig.tight_layout()
     images = []
+    bar = Progress(len(times), "render", "frames", enabled=_progress_wanted(progress))
     for k, t in enumerate(times):
         for flat, panel in zip(projected, lines):
             for (a, b), line in zip(flat[k], panel):
@@ -266,10 +272,13 @@ def render_animation(
                 "RGBA", fig.canvas.get_width_height(), fig.canvas.buffer_rgba(), "raw", "RGBA", 0, 1
             ).convert("RGB")
         )
+        bar.update(1, "drawing" if k + 1 < len(times) else "encoding the GIF")
     plt.close(fig)
     buffer = io.BytesIO()
     images[0].save(buffer, format="GIF", save_all=True, append_images=images[1:], duration=delays.tolist(), loop=0)
     atomic_write(path, buffer.getvalue())
+    bar.update(0, f"wrote {os.fspath(path)}")
+    bar.close()
     played = delays.sum() / 1000
     rates = " and ".join(sorted({f"{m.fps:.4g}" for m in motions}, key=float))
     taken = "every frame" if step == 1 else f"every {step} frames"
@@ -287,20 +296,29 @@ def render(
     *,
     poses: int = 8,
     speed: float = 1.0,
+    progress: bool | None = None,
 ) -> str | None:
     """Render to ``path``: a GIF animation if it ends in ``.gif`` (:func:`render_animation`, played
-    at ``speed`` x real time; returns how it plays), otherwise a PNG of ``poses`` poses per motion
-    (:func:`render_poses`). ``path`` is checked before drawing
+    at ``speed`` x real time; returns how it plays; ``progress``: a bar of its frames on stderr,
+    None: only on a terminal), otherwise a PNG of ``poses`` poses per motion
+    (:func:`render_poses`: one figure, no bar). ``path`` is checked before drawing
     (:func:`expressive_mocap._utils.files.output_target`)."""
     output_target(path)
     if isinstance(poses, bool) or not isinstance(poses, (int, np.integer)) or poses < 1:
         raise ArgumentError(f"argument `poses`: expected a whole number of poses >= 1, got {poses!r}")
     if str(path).lower().endswith(".gif"):
-        return render_animation(motions, path, titles, view, speed)
+        return render_animation(motions, path, titles, view, speed, progress)
     if str(path).lower().endswith(".png"):
         render_poses(motions, path, titles, int(poses), view)
         return None
     raise MocapError(f"render: the output must end in .png or .gif, got {path}")
+
+
+def _progress_wanted(progress: bool | None) -> bool:
+    """Whether to show a bar: as asked, or (None) when stderr is a terminal."""
+    if progress is None:
+        return bool(getattr(sys.stderr, "isatty", lambda: False)())
+    return bool(progress)
 
 
 def _save(fig, plt, path: str | os.PathLike) -> None:
