@@ -65,7 +65,9 @@ manifest checks, verification), :mod:`.lock`, :mod:`.folder` (whose folder it is
 
 For training (docs/training.md): :mod:`.stats` (:class:`Normaliser`), :mod:`.labels`
 (:class:`Labels` from names or a CSV), :mod:`.splits` (:func:`split`), :mod:`.windows`
-(:class:`Windows`, views), :mod:`.augment` (:class:`Augment`), :mod:`.batches`
+(:class:`Windows`, views), :mod:`.transforms` (per-sample augmentation: :class:`Compose` of
+:class:`RandomRotation`, :class:`Mirror`, :class:`Speed`, :class:`Noise`, :class:`JointDropout`),
+:mod:`.augment` (what they do to each kind; :class:`Augment`, a shorthand), :mod:`.batches`
 (:class:`WindowReader`, :class:`Batches`, :func:`window_batches`) and :mod:`.torch_dataset`
 (:class:`WindowDataset` for a PyTorch ``DataLoader``).
 """
@@ -88,6 +90,12 @@ _LAZY = {
     "Windows": "windows",
     "clip_windows": "windows",
     "Augment": "augment",
+    "Compose": "transforms",
+    "RandomRotation": "transforms",
+    "Mirror": "transforms",
+    "Speed": "transforms",
+    "Noise": "transforms",
+    "JointDropout": "transforms",
     "WindowReader": "batches",
     "Batches": "batches",
     "window_batches": "batches",
@@ -104,10 +112,16 @@ __all__ = [
     "Augment",
     "Batches",
     "Clip",
+    "Compose",
     "Dataset",
     "FolderLock",
+    "JointDropout",
     "Labels",
+    "Mirror",
+    "Noise",
     "Normaliser",
+    "RandomRotation",
+    "Speed",
     "Summary",
     "WindowDataset",
     "WindowReader",

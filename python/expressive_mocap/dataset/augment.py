@@ -1,5 +1,6 @@
-"""On-the-fly augmentation of windows read from a dataset: rotation about the vertical, speed
-perturbation and Gaussian noise (:class:`Augment`), each drawn per window from a seeded generator.
+"""How augmentation changes each kind of a window: rotation about the vertical, speed
+perturbation, Gaussian noise and joint dropout (the transforms and their draws:
+:mod:`.transforms`; :class:`Augment` is a shorthand for some of them, on every window).
 
 How each kind behaves (``manifest["options"]``: ``positions`` the frame of positions,
 ``rotations`` the form of rotations; a dataset without them has world positions and quaternions):
@@ -41,6 +42,7 @@ from ..rotations import quat
 from . import representations
 from .frames import turn_headings
 from .representations import decode, encode
+from .transforms import Compose, Draws, Noise, RandomRotation, Speed, Transform
 
 VECTOR_KINDS = ("positions", "velocities", "accelerations")  # rotated unless in the heading frame
 ROOT_ROTATION_KINDS = ("rotations",)
@@ -50,42 +52,68 @@ RATE_POWER = {"velocities": 1, "accelerations": 2, "root_velocity": 1, "angular_
 FEATURE_RATES = (0, 1, 2, 3, 4, 5)  # features' hips velocities (per second)
 FEATURE_TIMES = (8, 9)  # features' air times (seconds)
 QUATERNION_KINDS = ("body", "expressive")  # always (x, y, z, w)
+JOINT_KINDS = (  # kinds with a joint axis after the frames': what a joint dropout zeroes
+    "positions",
+    "rotations",
+    "velocities",
+    "accelerations",
+    "angular_velocities",
+    "activity",
+    "body",
+    "expressive",
+)
 
 
 @dataclass(frozen=True)
 class Augment:
-    """What to draw per window. ``rotate``: False, True (an angle uniform in [-pi, pi)) or a
-    number (uniform in [-rotate, rotate] radians); ``speed``: None or ``(low, high)`` factors,
-    drawn log-uniformly (``(0.8, 1.25)``: as often slower as faster); ``noise``: the std of
-    Gaussian noise added to every float kind (after normalisation, when the reader normalises:
-    then in units of each channel's std), or ``{kind: std}``."""
+    """A shorthand for a :class:`~expressive_mocap.dataset.transforms.Compose` applying to every
+    window: ``rotate`` False, True (an angle uniform in [-pi, pi)) or a number (uniform in
+    [-rotate, rotate] radians); ``speed`` None or ``(low, high)`` factors, drawn log-uniformly;
+    ``noise`` the std of Gaussian noise on every float kind, or ``{kind: std}``."""
 
     rotate: bool | float = False
     speed: tuple[float, float] | None = None
     noise: float | Mapping[str, float] = field(default=0.0)
 
     def __post_init__(self):
-        if self.speed is not None and not (0 < self.speed[0] <= self.speed[1]):
-            raise ArgumentError(f"argument `speed`: (low, high) with 0 < low <= high, got {self.speed}")
+        self.transforms()  # the transforms check their arguments
 
     @property
     def active(self) -> bool:
         return bool(self.rotate) or self.speed is not None or bool(self.noise)
 
-    def angles(self, rng: np.random.Generator, n: int) -> np.ndarray:
-        if self.rotate is False or self.rotate == 0:
-            return np.zeros(n)
-        limit = math.pi if self.rotate is True else float(self.rotate)
-        return rng.uniform(-limit, limit, n)
+    def transforms(self) -> Compose:
+        """The transforms this stands for, each with p = 1."""
+        chosen: list[Transform] = []
+        if self.rotate is not False and self.rotate != 0:
+            chosen.append(RandomRotation(math.pi if self.rotate is True else float(self.rotate)))
+        if self.speed is not None:
+            try:
+                chosen.append(Speed(self.speed))
+            except ArgumentError:
+                raise ArgumentError(f"argument `speed`: (low, high) with 0 < low <= high, got {self.speed}") from None
+        if self.noise:
+            chosen.append(Noise(self.noise))
+        return Compose(chosen)
 
-    def speeds(self, rng: np.random.Generator, n: int) -> np.ndarray:
-        if self.speed is None:
-            return np.ones(n)
-        low, high = np.log(self.speed[0]), np.log(self.speed[1])
-        return np.exp(rng.uniform(low, high, n)) if high > low else np.full(n, self.speed[0])
 
-    def noise_of(self, kind: str) -> float:
-        return float(self.noise.get(kind, 0.0)) if isinstance(self.noise, Mapping) else float(self.noise)
+def as_compose(augment) -> Compose | None:
+    """``augment`` (None, an :class:`Augment`, a transform, a list of them or a
+    :class:`~expressive_mocap.dataset.transforms.Compose`) as a Compose, or None when it does
+    nothing."""
+    if augment is None:
+        return None
+    if isinstance(augment, Augment):
+        augment = augment.transforms()
+    elif isinstance(augment, Transform):
+        augment = Compose([augment])
+    elif isinstance(augment, (list, tuple)):
+        augment = Compose(augment)
+    if not isinstance(augment, Compose):
+        raise ArgumentError(
+            f"argument `augment`: an Augment, a Compose of transforms or a list of them, got {type(augment).__name__}"
+        )
+    return augment if augment.active else None
 
 
 def rotation_form(manifest: Mapping) -> tuple[str, str]:
@@ -180,8 +208,56 @@ def scale_rates(kind: str, values: np.ndarray, speeds: np.ndarray) -> np.ndarray
     return values
 
 
+def rotate_some(batch: dict, angles: np.ndarray, manifest: Mapping, roots) -> None:
+    """:func:`rotate_window_kinds` on the windows whose angle is not 0, the others untouched."""
+    turned = angles != 0
+    if turned.all():
+        rotate_window_kinds(batch, angles, manifest, roots)
+    elif turned.any():
+        part = {kind: values[turned] for kind, values in batch.items()}
+        rotate_window_kinds(part, angles[turned], manifest, roots)
+        for kind, values in part.items():
+            batch[kind][turned] = values
+
+
+def add_noise(batch: dict, draws: Draws, noise: Noise) -> None:
+    """Gaussian noise on the float kinds of ``batch`` (not contacts), in place, for the windows
+    drawn to get it: each window's from its own generator (:meth:`Draws.noise_streams`)."""
+    kinds = [k for k in batch if k != "contacts" and noise.of(k)]
+    hit = np.flatnonzero(draws.noised)
+    if not kinds or not len(hit):
+        return
+    sizes = [int(np.prod(batch[k].shape[1:])) for k in kinds]
+    normal = np.empty((len(hit), sum(sizes)), dtype=np.float32)
+    for row, generator in zip(normal, draws.noise_streams(hit)):
+        generator.standard_normal(out=row, dtype=np.float32)
+    at = 0
+    for kind, size in zip(kinds, sizes):
+        part = normal[:, at : at + size].reshape((len(hit),) + batch[kind].shape[1:])
+        part *= noise.of(kind)
+        if len(hit) == len(draws.noised):
+            batch[kind] += part
+        else:
+            batch[kind][hit] += part
+        at += size
+
+
+def drop_joints(batch: dict, dropped: np.ndarray) -> None:
+    """Zero, in place, the joints ``dropped`` ``[B, J]`` of every kind with a joint axis."""
+    window, joint = np.nonzero(dropped)
+    if len(window):
+        for kind in JOINT_KINDS:
+            if kind in batch:
+                batch[kind][window, :, joint] = 0
+
+
 __all__ = [
+    "JOINT_KINDS",
     "Augment",
+    "add_noise",
+    "as_compose",
+    "drop_joints",
+    "rotate_some",
     "about_up",
     "interpolate",
     "rotate_root",

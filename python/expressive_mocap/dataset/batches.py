@@ -5,7 +5,8 @@ shuffled from a seed.
 A batch is a dict: each kind read ``float32 [B, T, ...]`` (``contacts`` as 0/1), ``clip`` (clip
 indices) ``[B]``, ``start`` (each window's first frame within its clip) ``[B]``, ``valid`` (frames
 that are the clip's own, the rest padding) ``[B]``, ``labels`` ``{field: int64 [B]}`` when the
-reader has labels, and ``angle``/``speed`` ``[B]`` when it augments. The windows of a batch come
+reader has labels, and when it augments what was drawn: ``angle``, ``speed``, ``mirrored``,
+``noised`` ``[B]`` and ``dropped`` ``[B, J]``. The windows of a batch come
 in the order of their rows, so that reading a kind is one gather of nearly sorted rows from its
 memory-mapped array (``array[rows]``), whatever the shuffle picked.
 """
@@ -16,11 +17,22 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
-from ..errors import ArgumentError
-from .augment import UNDEFINED_UNDER_ROTATION, Augment, interpolate, rotate_window_kinds, scale_rates
+from ..errors import ArgumentError, DatasetError
+from .augment import (
+    UNDEFINED_UNDER_ROTATION,
+    Augment,
+    add_noise,
+    as_compose,
+    drop_joints,
+    interpolate,
+    rotate_some,
+    scale_rates,
+)
+from .format import MIRRORED
 from .frames import check_window_frame, to_window_frame
 from .labels import Labels
 from .stats import Normaliser, float_kinds
+from .transforms import Compose, Transform
 from .windows import Windows
 
 MAX_BATCH_BYTES = 4 << 30  # of one batch's arrays, float32 (a bound, not a tuning: real batches are MBs)
@@ -29,29 +41,32 @@ MAX_BATCH_BYTES = 4 << 30  # of one batch's arrays, float32 (a bound, not a tuni
 class WindowReader:
     """Reads windows of ``dataset`` (``kinds``: all by default) as batches: :meth:`read`.
 
-    ``augment``: an :class:`~expressive_mocap.dataset.augment.Augment`; ``normaliser``: a
+    ``augment``: a :class:`~expressive_mocap.dataset.transforms.Compose` of transforms (or a list
+    of them, one transform, or an :class:`~expressive_mocap.dataset.augment.Augment`), drawn per
+    window from ``(seed, epoch, window index)``; ``normaliser``: a
     :class:`~expressive_mocap.dataset.stats.Normaliser` applied to the kinds it has statistics
     of (after augmentation, before noise); ``labels``: :class:`~expressive_mocap.dataset.labels.Labels`
     of the dataset's clips; ``frame``: ``"stored"`` (as the dataset holds them) or ``"window"``
     (each window in its first frame's heading frame, :mod:`~expressive_mocap.dataset.frames`,
-    before the rotation augmentation)."""
+    before the rotation augmentation); ``seed``: of the draws, when :meth:`read` is given none."""
 
     def __init__(
         self,
         dataset,
         windows: Windows,
         kinds: Sequence[str] | None = None,
-        augment: Augment | None = None,
+        augment: Augment | Compose | Transform | Sequence[Transform] | None = None,
         normaliser: Normaliser | None = None,
         labels: Labels | None = None,
         frame: str = "stored",
+        seed: int = 0,
     ):
         kinds = list(dataset.arrays) if kinds is None else list(kinds)
         if frame not in ("stored", "window"):
             raise ArgumentError(f"argument `frame`: 'stored' or 'window', got {frame!r}")
         if frame == "window":
             check_window_frame(dataset.manifest, dataset.arrays)
-        self.frame, self.offsets = frame, dataset.offsets
+        self.frame, self.offsets, self.seed = frame, dataset.offsets, _seed(seed)
         self.heading = dataset.arrays.get("heading")
         unknown = [k for k in kinds if k not in dataset.arrays]
         if unknown:
@@ -61,10 +76,15 @@ class WindowReader:
         self.arrays = {k: dataset.arrays[k] for k in kinds}
         self.manifest = dataset.manifest
         self.roots = [i for i, p in enumerate(dataset.skeleton["parents"]) if p < 0]
-        self.windows, self.augment, self.normaliser, self.labels = windows, augment, normaliser, labels
+        self.windows, self.normaliser, self.labels = windows, normaliser, labels
+        self.augment = as_compose(augment)
         undefined = [k for k in UNDEFINED_UNDER_ROTATION if k in kinds]
-        if augment is not None and augment.rotate and undefined:  # fail now, not in the first batch
+        if self.augment is not None and self.augment.rotates and undefined:  # fail now, not in the first batch
             raise ArgumentError(f"rotation augmentation is not defined for {', '.join(undefined)}")
+        names = list(dataset.skeleton["names"])
+        dropout = self.augment.dropout if self.augment is not None else None
+        self.droppable = dropout.droppable(names) if dropout is not None else np.zeros(len(names), dtype=bool)
+        self.partner = mirror_partners(dataset, windows) if self.augment is not None and self.augment.mirrors else None
 
     def check_batch(self, count: int) -> None:
         """Refuse (ArgumentError) a batch of ``count`` windows over :data:`MAX_BATCH_BYTES` in
@@ -78,27 +98,45 @@ class WindowReader:
             )
 
     def _gather(self, kind: str, array, rows: np.ndarray, frac, speeds: np.ndarray) -> np.ndarray:
-        """``array``'s rows ``rows`` (``[B, T]``, or ``[2, B, T]`` mixed at ``frac`` when resampled)."""
+        """``array``'s rows ``rows`` (``[B, T]``, or ``[2, B, T]`` mixed at ``frac`` when resampled;
+        windows at speed 1 then as read)."""
         values = array[rows.ravel()].reshape(rows.shape + array.shape[1:])
         if frac is not None:
-            values = interpolate(kind, values[0], values[1], frac, self.manifest)
-            values = scale_rates(kind, values, speeds)
+            mixed = interpolate(kind, values[0], values[1], frac, self.manifest)
+            mixed = scale_rates(kind, mixed, speeds)
+            same = speeds == 1.0
+            if same.any():
+                mixed[same] = values[0][same]
+            values = mixed
         return values.astype(np.float32, copy=False)
 
-    def read(self, indices, rng: np.random.Generator | None = None) -> dict:
+    def read(self, indices, epoch: int = 0, seed: int | None = None) -> dict:
         """The windows ``indices`` (of ``self.windows``) as one batch, in the order of their rows
-        (``batch["window"]`` says which is which); ``rng`` draws the augmentation."""
+        (``batch["window"]`` says which is which), augmented with the draws of ``(seed, epoch,
+        window index)`` (``seed``: the reader's by default)."""
+        if isinstance(epoch, bool) or not isinstance(epoch, (int, np.integer)):
+            raise ArgumentError(
+                f"argument `epoch`: a whole number (draws come from the seed, the epoch and each window's index), "
+                f"got {type(epoch).__name__}"
+            )
         w, length = self.windows, self.windows.length
         idx = np.asarray(indices, dtype=np.int64)
         self.check_batch(len(idx))
-        idx = idx[np.argsort(w.start[idx], kind="stable")]
-        start, end, count = w.start[idx], w.end[idx], len(idx)
-        augment = self.augment if self.augment is not None and self.augment.active else None
-        speeds, angles = np.ones(count), np.zeros(count)
+        augment = self.augment
+        draws = None
+        clips, offset = w.clip[idx], w.offset[idx]
         if augment is not None:
-            if rng is None:
-                raise ArgumentError("argument `rng`: augmentation draws from a generator")
-            speeds, angles = augment.speeds(rng, count), augment.angles(rng, count)
+            draws = augment.draw(self.seed if seed is None else _seed(seed), int(epoch), idx, self.droppable)
+            if self.partner is not None and draws.mirrored.any():
+                clips = np.where(draws.mirrored, self.partner[clips], clips)
+        start = self.offsets[clips] + offset
+        order = np.argsort(start, kind="stable")
+        idx, clips, offset, start = idx[order], clips[order], offset[order], start[order]
+        end, count = self.offsets[clips + 1], len(idx)
+        speeds = np.ones(count)
+        if draws is not None:
+            draws = draws.take(order)
+            speeds = draws.speed
         steps = np.arange(length)
         remaining = end - start  # frames of the clip from the window's first
         if np.all(speeds == 1.0):
@@ -121,42 +159,79 @@ class WindowReader:
                 f"a batch of {count} windows of {length:,} frames does not fit in memory: a shorter `length` or a "
                 "smaller `batch_size`"
             ) from None
-        clips = w.clip[idx]
         if self.frame == "window":
             heading = batch.get("heading")
             if heading is None:
                 heading = self._gather("heading", self.heading, rows, frac, speeds)
             clip_heading = np.asarray(self.heading[self.offsets[clips]])
             to_window_frame(batch, heading, clip_heading, self.manifest["options"]["positions"])
-        if np.any(angles):
-            rotate_window_kinds(batch, angles, self.manifest, self.roots)
+        if draws is not None:
+            rotate_some(batch, draws.angle, self.manifest, self.roots)
         if self.normaliser is not None:
             for kind in batch:
                 if kind in self.normaliser.mean:
                     batch[kind] = self.normaliser.normalise(kind, batch[kind], out=batch[kind])  # fresh arrays
-        for kind in batch:
-            sigma = augment.noise_of(kind) if augment is not None and kind != "contacts" else 0.0
-            if sigma and rng is not None:
-                noise = rng.standard_normal(batch[kind].shape, dtype=np.float32)
-                batch[kind] = np.add(batch[kind], np.multiply(noise, sigma, out=noise), out=noise)
+        if draws is not None and augment is not None:
+            if augment.noise is not None:
+                add_noise(batch, draws, augment.noise)
+            drop_joints(batch, draws.dropped)
         if w.padding == "zero" and np.any(valid < length):
             padded = steps >= valid[:, None]
             for kind in batch:
                 batch[kind] = np.where(padded.reshape(padded.shape + (1,) * (batch[kind].ndim - 2)), 0, batch[kind])
-        batch.update(window=idx, clip=clips, start=w.offset[idx], valid=valid)
+        batch.update(window=idx, clip=clips, start=offset, valid=valid)
         if self.labels is not None:
             batch["labels"] = {f: c[clips] for f, c in self.labels.codes.items()}
-        if augment is not None:
-            batch.update(angle=angles, speed=speeds)
+        if draws is not None:
+            batch.update(
+                angle=draws.angle,
+                speed=draws.speed,
+                mirrored=draws.mirrored,
+                noised=draws.noised,
+                dropped=draws.dropped,
+            )
         return batch
+
+
+def mirror_partners(dataset, windows: Windows) -> np.ndarray:
+    """For each clip of ``dataset``, its mirror image's index (``X`` <-> ``X@mirrored``; -1 when
+    it has none); an error when a clip of ``windows`` has none, or one of another length."""
+    names = list(dataset.names)
+    index = {name: i for i, name in enumerate(names)}
+    partner = np.full(len(names), -1, dtype=np.int64)
+    for i, record in enumerate(dataset.clips):
+        original = record.get("mirror_of") if isinstance(record.get("mirror_of"), str) else None
+        if original is None and names[i].endswith(MIRRORED):
+            original = names[i][: -len(MIRRORED)]
+        if original is not None and original in index:
+            partner[i], partner[index[original]] = index[original], i
+    lengths = np.diff(dataset.offsets)
+    for c in np.unique(windows.clip):
+        if partner[c] < 0:
+            raise ArgumentError(
+                f"argument `augment`: Mirror reads each clip's mirror image, and clip {names[c]!r} has none "
+                "(preprocess with --mirror)"
+            )
+        if lengths[c] != lengths[partner[c]]:
+            raise DatasetError(
+                f"clip {names[c]!r} and its mirror image have {lengths[c]} and {lengths[partner[c]]} frames"
+            )
+    return partner
+
+
+def _seed(seed) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ArgumentError(f"argument `seed`: a non-negative whole number, got {seed!r}")
+    return int(seed)
 
 
 class Batches:
     """An epoch's batches of ``batch_size`` windows, read by ``reader`` (a :class:`WindowReader`).
 
     ``batches.epoch(n)``: the batches of epoch ``n``, the windows shuffled (``shuffle=True``) by
-    ``seed`` and ``n`` and each batch's augmentation drawn from ``(seed, n, batch number)``: the
-    same seed gives the same batches, whatever was read before. ``for batch in batches`` runs the
+    ``seed`` and ``n`` and each window's augmentation drawn from ``(seed, n, window index)``: the
+    same seed gives the same batches and draws, whatever was read before and whatever the batch
+    size. ``for batch in batches`` runs the
     next epoch (0, 1, ...). ``drop_last`` leaves out a last smaller batch."""
 
     def __init__(
@@ -165,6 +240,7 @@ class Batches:
         if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
             raise ArgumentError(f"argument `batch_size`: a positive whole number of windows, got {batch_size!r}")
         reader.check_batch(int(batch_size))
+        seed = _seed(seed)
         self.reader, self.batch_size, self.shuffle, self.seed, self.drop_last = (
             reader,
             batch_size,
@@ -183,7 +259,7 @@ class Batches:
         order = np.random.default_rng([self.seed, number]).permutation(n) if self.shuffle else np.arange(n)
         for b in range(len(self)):
             picked = order[b * self.batch_size : (b + 1) * self.batch_size]
-            yield self.reader.read(picked, np.random.default_rng([self.seed, number, b, 1]))
+            yield self.reader.read(picked, number, self.seed)
 
     def __iter__(self) -> Iterator[dict]:
         number, self.next_epoch = self.next_epoch, self.next_epoch + 1
@@ -198,7 +274,7 @@ def window_batches(
     kinds: Sequence[str] | None = None,
     clips=None,
     padding: str = "drop",
-    augment: Augment | None = None,
+    augment: Augment | Compose | Transform | Sequence[Transform] | None = None,
     normalise: bool | Normaliser = False,
     labels: Labels | None = None,
     shuffle: bool = True,
@@ -213,7 +289,7 @@ def window_batches(
     kinds = list(dataset.arrays) if kinds is None else list(kinds)
     floats = [k for k in float_kinds(dataset) if k in kinds]
     normaliser = Normaliser.of(dataset, floats) if normalise is True else normalise
-    reader = WindowReader(dataset, windows, kinds, augment, normaliser or None, labels, frame)
+    reader = WindowReader(dataset, windows, kinds, augment, normaliser or None, labels, frame, seed)
     return Batches(reader, batch_size, shuffle, seed, drop_last)
 
 

@@ -19,6 +19,7 @@ from .augment import Augment
 from .batches import WindowReader
 from .labels import BANDAI, Labels
 from .stats import Normaliser, float_kinds
+from .transforms import Compose, Transform
 from .windows import Windows
 
 
@@ -27,14 +28,16 @@ class WindowDataset:
     :class:`~expressive_mocap.dataset.windows.Windows`) of the dataset in ``folder``, of its clips
     ``clips`` (indices, e.g. a split's; all by default), ``kinds`` (all by default).
 
-    ``augment``: an :class:`~expressive_mocap.dataset.augment.Augment`, drawn from ``(seed,
-    epoch, index)`` (call :meth:`set_epoch` each epoch for fresh draws; with ``__getitems__``,
-    from the batch's first index); ``normalise``: True for the dataset's statistics, or a
+    ``augment``: a :class:`~expressive_mocap.dataset.transforms.Compose` of transforms (or a
+    list of them, or an :class:`~expressive_mocap.dataset.augment.Augment`), drawn per window
+    from ``(seed, epoch, index)``: the same whether a window is fetched alone or in a batch (call
+    :meth:`set_epoch` each epoch for fresh draws); ``normalise``: True for the dataset's statistics, or a
     :class:`~expressive_mocap.dataset.stats.Normaliser`; ``labels``: a name pattern (``"bandai"``
     for :data:`~expressive_mocap.dataset.labels.BANDAI`) or :class:`~expressive_mocap.dataset.labels.Labels`.
 
     An item: each kind ``float32 [T, ...]``, ``clip``, ``start``, ``valid`` (int64), ``labels``
-    ``{field: int64}``, and ``angle``/``speed`` when augmenting."""
+    ``{field: int64}``, and when augmenting ``angle``, ``speed``, ``mirrored``, ``noised`` and
+    ``dropped`` ``[J]``."""
 
     def __init__(
         self,
@@ -44,7 +47,7 @@ class WindowDataset:
         padding: str = "drop",
         kinds: Sequence[str] | None = None,
         clips: Sequence[int] | np.ndarray | None = None,
-        augment: Augment | None = None,
+        augment: Augment | Compose | Transform | Sequence[Transform] | None = None,
         normalise: bool | Normaliser = False,
         labels: str | Labels | None = None,
         seed: int = 0,
@@ -76,7 +79,9 @@ class WindowDataset:
             dataset = load_dataset(self.folder, check_times=self.check_times)
             windows = Windows(dataset, self.length, self.stride, self.padding, self.clips)
             labels = Labels.from_names(dataset, self.labels) if isinstance(self.labels, str) else self.labels
-            self._reader = WindowReader(dataset, windows, self.kinds, self.augment, self.normaliser, labels, self.frame)
+            self._reader = WindowReader(
+                dataset, windows, self.kinds, self.augment, self.normaliser, labels, self.frame, self.seed
+            )
             self._dataset = dataset
         return self._reader
 
@@ -94,22 +99,18 @@ class WindowDataset:
         collate."""
         if not isinstance(index, (int, np.integer)):
             wanted = np.asarray(index, dtype=np.int64) % max(len(self), 1)
-            return self.reader.read(wanted, self._rng(wanted))
+            return self.reader.read(wanted, self.epoch, self.seed)
         if not -len(self) <= index < len(self):
             raise IndexError(f"window {index} of {len(self)}")
         index = int(index) % len(self)
-        batch = self.reader.read([index], np.random.default_rng([self.seed, self.epoch, index]))
-        return _item(batch, 0)
+        return _item(self.reader.read([index], self.epoch, self.seed), 0)
 
     def __getitems__(self, indices: Sequence[int]) -> list[dict]:
         """The windows ``indices`` read as one batch, returned one dict per index, in order."""
         wanted = np.asarray(indices, dtype=np.int64) % max(len(self), 1)
-        batch = self.reader.read(wanted, self._rng(wanted))
+        batch = self.reader.read(wanted, self.epoch, self.seed)
         place = _places(wanted, batch["window"])
         return [_item(batch, int(j)) for j in place]
-
-    def _rng(self, wanted: np.ndarray) -> np.random.Generator:
-        return np.random.default_rng([self.seed, self.epoch, int(wanted[0]) if len(wanted) else 0, len(wanted)])
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
