@@ -28,7 +28,10 @@ def test_without_canonical_one_skeleton_and_a_message_that_says_why(mixed, tmp_p
     summary = preprocess(mixed, tmp_path / "one", progress=False)
     assert summary.clips_ok == 1 and summary.clips_failed == 3
     errors = [f["error"] for f in json.loads((tmp_path / "one" / "manifest.json").read_text())["failures"]]
-    assert all("another skeleton than the dataset's" in e and "--canonical" in e for e in errors)
+    assert all("another skeleton than the dataset's" in e and "--canonical" not in e for e in errors)
+    # What to do is said once, with the count, not once per clip.
+    said = "\n".join(summary.lines())
+    assert said.count("--canonical") == 1 and "3 of 4 clips are of other skeletons" in said
     assert any("24 joints against 22; joint 0 is 'pelvis' where the dataset has 'joint_Root'" in e for e in errors)
 
 

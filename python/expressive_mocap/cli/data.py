@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,7 @@ from ..body.contacts import HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
 from ..bvh import read_bvh
 from ..dataset import preprocess
 from ..errors import MocapError
-from .common import default, finite, positive
+from .common import PROG, default, finite, positive
 
 __all__ = ["add_parsers", "cmd_footsteps", "cmd_preprocess"]
 
@@ -209,6 +210,17 @@ def cmd_preprocess(args) -> int:
         else:
             found = "it holds no .bvh clips"
         raise MocapError(f"{args.source}: {found}; {args.output} holds no data")
+    if summary.finished and summary.most_failed:  # a dataset of the few clips that worked: not what was asked
+        ok = summary.clips_ok - summary.clips_mirrored
+        hint = (
+            " (of other skeletons: see --canonical above)" if summary.other_skeletons else " (see the failures above)"
+        )
+        print(
+            f"{PROG}: error: {summary.clips_failed} of the {ok + summary.clips_failed} clips of "
+            f"{args.source} failed{hint}; {args.output} holds the {ok} that worked",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 

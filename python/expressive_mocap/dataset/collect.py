@@ -38,11 +38,14 @@ def collect(
     record: JournalRecord,
     rows: int,
     taken: set,
+    majority: tuple | None = None,
 ) -> Collected:
     """The batch's outcomes in order: clips and failures into ``record`` (a clip of another
-    skeleton than the dataset's, the first parsed clip's, is a failure; so is a clip whose name
-    ``taken``, the names taken so far, already holds), their arrays per kind; a clip's mirror
-    image right after it, as a clip of its own (``{name}@mirrored``, ``mirror_of`` its name)."""
+    skeleton than the dataset's is a failure, its record naming its own skeleton; so is a clip
+    whose name ``taken``, the names taken so far, already holds), their arrays per kind; a clip's
+    mirror image right after it, as a clip of its own (``{name}@mirrored``, ``mirror_of`` its
+    name). The dataset's skeleton is the first parsed clip's of the hierarchy ``majority`` (names,
+    parents: the one most clips share, :meth:`.census.Census.majority`), or of any when None."""
     arrays: dict[str, list[np.ndarray]] = {k: [] for k in keep}
     totals: dict[str, list] = {}
     up = None
@@ -60,12 +63,19 @@ def collect(
         image = f"{item.name}{MIRRORED}"
         if outcome.mirrored is not None and error is None and image in taken:
             error = f"{item.source}: its mirror image's name {image!r} is already in the dataset"
+        other = None  # a clip of another hierarchy than the dataset's: its own, for its failure record
         if shape is not None:
-            if skeleton is None:
-                names, parents = list(shape[0]), list(shape[1])
+            names, parents = list(shape[0]), list(shape[1])
+            expected = skeleton or (
+                None if majority is None else {"names": list(majority[0]), "parents": list(majority[1])}
+            )
+            if expected is None or (skeleton is None and _same(shape, expected)):
                 skeleton = record.skeleton = {"names": names, "parents": parents, "bone_length": outcome.bone_length}
-            else:
-                error = _skeleton_error(item, shape, outcome.bone_length, skeleton, error)
+            elif not _same(shape, expected):
+                other = {"joints": len(names), "root": names[0] if names else None}
+                error = _skeleton_error(item, names, parents, expected)
+            elif error is None:
+                error = _units_error(item, outcome.bone_length, expected)
         # Sums go by hierarchy: a group of the dataset's adds its sums (carried by one of its clips,
         # even one failing here), and takes out those of its clips that fail here.
         ours = outcome.skeleton is not None and _same(outcome.skeleton, skeleton)
@@ -73,6 +83,8 @@ def collect(
             _add_sums(totals, outcome.sums)
         if error is not None:
             record.failures.append({"name": item.name, "source": item.source, "error": error})
+            if other is not None:
+                record.failures[-1]["skeleton"] = other
             if ours and outcome.error is None and outcome.values:  # its rows were in its group's sums
                 for values in (outcome.values, outcome.mirrored or {}):
                     own = {k: derive.totals([v]) for k, v in values.items() if k in keep and v.dtype.kind == "f"}
@@ -111,16 +123,11 @@ def _add_sums(totals: dict, sums: dict, sign: int = 1) -> None:
         total[0], total[1], total[2] = total[0] + sign * n, total[1] + sign * first, total[2] + sign * second
 
 
-def _skeleton_error(item: Item, shape: tuple, length: float, skeleton: dict, error: str | None) -> str | None:
-    """The error of a clip of joint names and parents ``shape`` whose own error is ``error``:
-    another hierarchy than the dataset's, else its own error, else bones in other units."""
-    names, parents = list(shape[0]), list(shape[1])
-    if names != skeleton["names"] or parents != skeleton["parents"]:
-        return (
-            f"{item.source}: another skeleton than the dataset's: {_difference(names, parents, skeleton)}; "
-            "one dataset holds one skeleton: --canonical (canonical=True) retargets every clip onto one body"
-        )
-    return _units_error(item, length, skeleton) if error is None else error
+def _skeleton_error(item: Item, names: list, parents: list, skeleton: dict) -> str:
+    """The error of a clip of another hierarchy (joint ``names``, ``parents``) than the dataset's
+    ``skeleton``. What to do about it (``--canonical``) the run's summary says once, with the count
+    of such clips (:class:`.summary.Summary`), not every failure."""
+    return f"{item.source}: another skeleton than the dataset's: {_difference(names, parents, skeleton)}"
 
 
 def _difference(names: list, parents: list, skeleton: dict) -> str:

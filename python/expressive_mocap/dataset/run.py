@@ -9,13 +9,14 @@ import os
 import time
 from collections import Counter
 from concurrent.futures import Future
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .._utils.files import atomic_write
 from .._utils.progress import Progress
 from ..backend import get_backend
 from ..errors import ArgumentError, DatasetError
+from .census import take_census
 from .cluster import client_for, on_cluster
 from .collect import collect
 from .derive import Options, RunOptions
@@ -103,6 +104,7 @@ def preprocess(
     finished_manifest(out)  # refuse a folder that is not ours before putting a lock file in it
     source = open_source(src)  # a bad SRC fails before OUT is touched
     try:
+        settings = _with_census(settings, source, bool(canonical))
         out.mkdir(parents=True, exist_ok=True)
         with FolderLock(out):  # held to the end: a second run on OUT fails at once
             manifest = finished_manifest(out)  # again: another run may have changed it meanwhile
@@ -130,6 +132,16 @@ class _Settings:
     cluster: object
     progress: bool
     shaping: Options
+    majority: tuple | None = None  # the hierarchy most clips share (without canonical)
+
+
+def _with_census(settings: _Settings, source: Source, canonical: bool) -> _Settings:
+    """``settings`` after the header scan of the source's clips (:mod:`.census`), before any is
+    processed: without ``canonical`` the dataset keeps the skeleton most clips share; with it,
+    every clip goes onto the canonical body."""
+    if canonical:
+        return settings
+    return replace(settings, majority=take_census(source).majority())
 
 
 @dataclass
@@ -188,7 +200,9 @@ def _summary_of(out: Path, manifest: dict, started: float) -> Summary:
     done = len(manifest["clips"]) + len(manifest["failures"])
     return Summary(str(out), clips_ok=len(manifest["clips"]), clips_failed=len(manifest["failures"]),
                    clips_resumed=done, failures=manifest["failures"], finished=True,
-                   seconds=time.perf_counter() - started)  # fmt: skip
+                   seconds=time.perf_counter() - started,
+                   clips_mirrored=sum("mirror_of" in clip for clip in manifest["clips"]),
+                   skeleton=manifest["skeleton"])  # fmt: skip
 
 
 def _resume(partial: Path, options: RunOptions, keep: tuple[str, ...], width: int) -> _State:
@@ -281,6 +295,7 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
     summary.clips_ok, summary.clips_failed = len(state.clips), len(state.failures)
     summary.clips_mirrored = sum("mirror_of" in clip for clip in state.clips)
     summary.failures = state.failures
+    summary.skeleton = state.skeleton
     summary.seconds = time.perf_counter() - started
     return summary
 
@@ -303,7 +318,7 @@ def _write_batch(
     record = JournalRecord(state.batches, [item.name for item in batch])
     nbytes = sum(outcome.bytes for outcome in outcomes)  # bytes read, not sizes declared
     start = time.perf_counter()
-    collected = collect(batch, outcomes, state.skeleton, keep, record, state.rows, state.taken)
+    collected = collect(batch, outcomes, state.skeleton, keep, record, state.rows, state.taken, settings.majority)
     state.rows, state.skeleton = collected.rows, collected.skeleton
     if collected.sums:
         state.sums = as_json(merged(state.sums, collected.sums))

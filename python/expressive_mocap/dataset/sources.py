@@ -95,6 +95,12 @@ def _member_bytes(item: Item) -> bytes:
     """A zip member's bytes, checked before decompressing: not encrypted, at most
     ``files.MAX_INPUT_BYTES`` declared, and no more than that read whatever it declares (a 1 MB zip
     can hold a 1 GiB member). Any problem is that clip's BVHError."""
+    return member_beginning(item, None)[0]
+
+
+def member_beginning(item: Item, length: int | None) -> tuple[bytes, int]:
+    """A zip member's first ``length`` bytes (None: all of it, as :func:`_member_bytes`) and its
+    declared size, checked as :func:`_member_bytes` checks it. Any problem is its BVHError."""
     assert item.path is not None and item.member is not None  # an item of a zip names both
     try:
         info = _zip(item.path).getinfo(item.member)
@@ -103,7 +109,9 @@ def _member_bytes(item: Item) -> bytes:
         if info.file_size > inputs.MAX_INPUT_BYTES:
             raise inputs.too_large(inputs.MAX_INPUT_BYTES, item.source, info.file_size)
         with _zip(item.path).open(info) as member:
-            return inputs.read_at_most(member, inputs.MAX_INPUT_BYTES, item.source)
+            if length is not None:
+                return member.read(length), info.file_size
+            return inputs.read_at_most(member, inputs.MAX_INPUT_BYTES, item.source), info.file_size
     except _MEMBER_ERRORS as error:  # a damaged member fails alone
         reason = error.strerror if isinstance(error, OSError) and error.strerror else error
         raise BVHError(item.source, None, f"cannot read the archive member: {reason}") from None
@@ -263,4 +271,4 @@ def _tar_kind(member: tarfile.TarInfo) -> str:
     return "a special file"
 
 
-__all__ = ["BytesRead", "Item", "Source", "open_source"]
+__all__ = ["BytesRead", "Item", "Source", "member_beginning", "open_source"]

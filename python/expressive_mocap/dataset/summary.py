@@ -30,6 +30,18 @@ class Summary:
     finished: bool = False
     failures: list = field(default_factory=list)
     clips_mirrored: int = 0  # of clips_ok, the mirror images (--mirror)
+    skeleton: dict | None = None  # the dataset's (manifest record: names, parents)
+
+    @property
+    def other_skeletons(self) -> int:
+        """The failed clips of another skeleton than the dataset's (their records name their own)."""
+        return sum("skeleton" in failure for failure in self.failures)
+
+    @property
+    def most_failed(self) -> bool:
+        """Whether more clips failed than were stored (mirror images not counted): the command
+        line exits 1 then, though the dataset of the clips that worked is written."""
+        return self.clips_failed > self.clips_ok - self.clips_mirrored
 
     @property
     def mb_per_s(self) -> float:
@@ -48,6 +60,15 @@ class Summary:
             f"{self.kernels_s:.2f} s, writing {self.write_s:.2f} s (headers and kernels run in two threads or on a "
             "cluster's workers, overlapping the writing)",
         ]
+        if self.other_skeletons:
+            skeleton = self.skeleton or {"names": []}
+            names = skeleton["names"]
+            ours = f"{len(names)} joints, root {names[0]!r}" if names else "the first readable clip's"
+            out.append(
+                f"  {self.other_skeletons} of {self.clips_ok - self.clips_mirrored + self.clips_failed} clips are "
+                f"of other skeletons than the dataset's ({ours}: the one most clips share) and failed; one dataset "
+                "holds one skeleton: --canonical (canonical=True) retargets every clip onto one body"
+            )
         for failure in self.failures[:10]:
             out.append(f"  failed: {failure['error']}")
         if len(self.failures) > 10:
