@@ -94,7 +94,10 @@ def test_canonical_takes_real_files_of_other_sources_beside_bandai(other_dir, ba
     assert summary.clips_failed == 0 and summary.clips_ok == len(others) + 3
     ds = load_dataset(tmp_path / "out")
     cmu = next(c for c in ds.manifest["clips"] if c["name"] == "cmu_scaled_131_03")
-    assert cmu["source_skeleton"]["joints"] == 31 and cmu["fps"] == pytest.approx(120, rel=1e-3)
+    assert cmu["source_skeleton"]["joints"] == 31 and cmu["source_fps"] == pytest.approx(120, rel=1e-3)
+    # Clips of 24 to 120 fps, stored at the rate most of them share, each its own rate recorded.
+    assert ds.manifest["fps"] == 30.0 and {c["fps"] for c in ds.manifest["clips"]} == {30.0}
+    assert {round(c["source_fps"]) for c in ds.manifest["clips"]} >= {30, 60, 120}
     # Real CMU walking, now in the canonical body's centimetres: the hips about a metre up.
     hips = ds.arrays["positions"][cmu["start"] : cmu["start"] + cmu["frames"], 1]
     assert 70 < np.median(hips[:, 1]) < 110
@@ -120,7 +123,8 @@ def test_a_map_file_reaches_every_clip_and_needs_canonical(mixed, tmp_path, caps
 def test_retargeted_clips_skip_the_text_and_store_what_the_text_gave(mixed, tmp_path, monkeypatch, keep, model):
     """The clips retargeted by ``--canonical`` reach the kernels as arrays: stored as the same
     clips written as BVH text on the canonical body and preprocessed from that text, every kind
-    kept (the model's too), to float32 rounding, contacts alike."""
+    kept (the model's too), to float32 rounding, contacts alike. Clips of 30 and 60 fps: both runs
+    store them at 30 fps (``--canonical`` takes the rate most clips share)."""
     import expressive_mocap.bvh as bvh
     from expressive_mocap.skeletons.canonical import many_onto_canonical
 
@@ -130,7 +134,9 @@ def test_retargeted_clips_skip_the_text_and_store_what_the_text_gave(mixed, tmp_
     as_text.mkdir()
     for name, (motion, _) in zip(foreign, moved):
         (as_text / f"{name}.bvh").write_bytes(bvh.bvh_bytes(motion))
-    expected = load_dataset(preprocess(as_text, tmp_path / "expected", keep=keep, model=model, progress=False).out)
+    expected = load_dataset(
+        preprocess(as_text, tmp_path / "expected", keep=keep, model=model, fps=30.0, progress=False).out
+    )
 
     def no_text(*args, **kwargs):
         raise AssertionError("a retargeted clip was written as BVH text")
@@ -141,7 +147,7 @@ def test_retargeted_clips_skip_the_text_and_store_what_the_text_gave(mixed, tmp_
     clips = {c["name"]: c for c in got.manifest["clips"]}
     for record in expected.manifest["clips"]:
         mine = clips[record["name"]]
-        assert (mine["frames"], mine["fps"]) == (record["frames"], record["fps"])
+        assert (mine["frames"], mine["fps"], mine["source_fps"]) == (record["frames"], 30.0, record["source_fps"])
         for kind in expected.arrays:
             want = expected.arrays[kind][record["start"] : record["start"] + record["frames"]]
             have = got.arrays[kind][mine["start"] : mine["start"] + mine["frames"]]

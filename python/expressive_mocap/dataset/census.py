@@ -8,13 +8,13 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from ..bvh import parse_header, read_header
 from ..bvh.header import Header
 from ..bvh.reader import HEADER_PREFIX
 from ..errors import BVHError
-from .derive import RATE_TOLERANCE
+from .derive import RATE_TOLERANCE, Options
 from .sources import Item, Source, member_beginning
 from .work import headers_ahead
 
@@ -30,6 +30,18 @@ def snapped(fps: float) -> float:
     if whole >= 1 and abs(fps - whole) <= RATE_TOLERANCE * fps:
         return float(whole)
     return float(f"{fps:.6g}")
+
+
+def rates_of(clips: list[dict]) -> Counter:
+    """The frame rates (:func:`snapped`) of a dataset's clip records -> how many clips (mirror
+    images not counted: they are their clip's rate)."""
+    return Counter(snapped(clip["fps"]) for clip in clips if "mirror_of" not in clip)
+
+
+def dataset_rate(clips: list[dict]) -> float | None:
+    """The rate every clip of a dataset is stored at, or None: clips of several rates (or none)."""
+    rates = rates_of(clips)
+    return next(iter(rates)) if len(rates) == 1 else None
 
 
 def shape_of(header: Header) -> tuple:
@@ -59,6 +71,21 @@ class Census:
             return None
         most = max(self.shapes.values())
         return next(shape for shape, count in self.shapes.items() if count == most)
+
+    def resampling(self, shaping: Options) -> Options:
+        """``shaping`` for an archive retargeted onto one body (``--canonical``): as given when it
+        names a rate (``--fps``) or every clip shares one, else resampling every clip to the rate
+        most clips share (:meth:`common_rate`; a tar's: its first clip's, whatever the others')."""
+        if shaping.fps is not None or (len(self.rates) < 2 and not self.first_only):
+            return shaping
+        return replace(shaping, fps=self.common_rate())
+
+    def common_rate(self) -> float | None:
+        """The frame rate most clips share; on a tie the higher (no clip loses frames to it).
+        None when no header was read."""
+        if not self.rates:
+            return None
+        return max(self.rates, key=lambda rate: (self.rates[rate], rate))
 
 
 def take_census(source: Source) -> Census:
@@ -131,4 +158,4 @@ def _member_header(item: Item) -> Header:
     return parse_header(data, item.source)
 
 
-__all__ = ["SCAN_CHUNK", "Census", "shape_of", "snapped", "take_census"]
+__all__ = ["SCAN_CHUNK", "Census", "dataset_rate", "rates_of", "shape_of", "snapped", "take_census"]

@@ -14,6 +14,7 @@ import numpy as np
 
 from .._utils.files import atomic_write
 from ..decoupling.features import FEATURE_NAMES
+from .census import dataset_rate
 from .derive import RunOptions
 from .folder import remove_partial
 from .format import FORMAT, MANIFEST, OFFSETS, PARTIAL, VERSION, data_file, file_record, read_manifest
@@ -25,7 +26,8 @@ def finish(
 ) -> None:
     """Headers into the data files, offsets and manifest (with each file's size and mtime) into
     .partial, then everything renamed into ``out``, manifest last. ``extra``: the positions'
-    ``up`` axis and the kinds' ``stats``."""
+    ``up`` axis and the kinds' ``stats``. The manifest's ``fps`` is the rate every clip is
+    stored at, null when they are of several (each clip's record has its own)."""
     from .. import __version__
 
     partial = out / PARTIAL
@@ -43,6 +45,7 @@ def finish(
         "options": options.record(),
         "skeleton": skeleton,
         "frames": rows,
+        "fps": dataset_rate(clips),  # every clip's rate, or null for clips of several
         "kinds": {
             k.name: {
                 "file": data_file(k.name),

@@ -118,6 +118,9 @@ def _options_problem(manifest: dict, kinds: dict) -> str | None:
         return f"rotations in an unknown form {form!r}"
     if "rotations" in kinds and kinds["rotations"]["shape"][-1:] != [ROTATION_WIDTHS[form]]:
         return f"rotations of shape {kinds['rotations']['shape']} are not in the form {form!r} it names"
+    fps = manifest.get("fps")
+    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float)) or not fps > 0):
+        return f"a frame rate (fps) that is not a positive number: {str(fps)[:80]}"
     for key in ("up", "rotations_up"):
         up = manifest.get(key)
         if up is not None and (not isinstance(up, list) or len(up) != 3):

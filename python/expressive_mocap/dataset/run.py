@@ -16,7 +16,7 @@ from .._utils.files import atomic_write
 from .._utils.progress import Progress
 from ..backend import get_backend
 from ..errors import ArgumentError, DatasetError
-from .census import take_census
+from .census import rates_of, take_census
 from .cluster import client_for, on_cluster
 from .collect import collect
 from .derive import Options, RunOptions
@@ -138,10 +138,14 @@ class _Settings:
 def _with_census(settings: _Settings, source: Source, canonical: bool) -> _Settings:
     """``settings`` after the header scan of the source's clips (:mod:`.census`), before any is
     processed: without ``canonical`` the dataset keeps the skeleton most clips share; with it,
-    every clip goes onto the canonical body."""
-    if canonical:
+    clips of several frame rates are resampled to the one most share, unless ``fps`` names one."""
+    if canonical and settings.shaping.fps is not None:
         return settings
-    return replace(settings, majority=take_census(source).majority())
+    census = take_census(source)
+    if not canonical:
+        return replace(settings, majority=census.majority())
+    shaping = census.resampling(settings.shaping)
+    return replace(settings, shaping=shaping, options=replace(settings.options, shaping=shaping))
 
 
 @dataclass
@@ -200,7 +204,7 @@ def _summary_of(out: Path, manifest: dict, started: float) -> Summary:
     done = len(manifest["clips"]) + len(manifest["failures"])
     return Summary(str(out), clips_ok=len(manifest["clips"]), clips_failed=len(manifest["failures"]),
                    clips_resumed=done, failures=manifest["failures"], finished=True,
-                   seconds=time.perf_counter() - started,
+                   seconds=time.perf_counter() - started, rates=dict(rates_of(manifest["clips"])),
                    clips_mirrored=sum("mirror_of" in clip for clip in manifest["clips"]),
                    skeleton=manifest["skeleton"])  # fmt: skip
 
@@ -295,7 +299,7 @@ def _run(source: Source, out: Path, settings: _Settings, started: float) -> Summ
     summary.clips_ok, summary.clips_failed = len(state.clips), len(state.failures)
     summary.clips_mirrored = sum("mirror_of" in clip for clip in state.clips)
     summary.failures = state.failures
-    summary.skeleton = state.skeleton
+    summary.rates, summary.skeleton = dict(rates_of(state.clips)), state.skeleton
     summary.seconds = time.perf_counter() - started
     return summary
 

@@ -30,6 +30,9 @@ class Summary:
     finished: bool = False
     failures: list = field(default_factory=list)
     clips_mirrored: int = 0  # of clips_ok, the mirror images (--mirror)
+    rates: dict = field(
+        default_factory=dict
+    )  # the stored clips' frame rates (snapped) -> clips, mirror images not counted
     skeleton: dict | None = None  # the dataset's (manifest record: names, parents)
 
     @property
@@ -68,6 +71,12 @@ class Summary:
                 f"  {self.other_skeletons} of {self.clips_ok - self.clips_mirrored + self.clips_failed} clips are "
                 f"of other skeletons than the dataset's ({ours}: the one most clips share) and failed; one dataset "
                 "holds one skeleton: --canonical (canonical=True) retargets every clip onto one body"
+            )
+        if len(self.rates) > 1:
+            counts = ", ".join(f"{n} at {rate:g} fps" for rate, n in sorted(self.rates.items()))
+            out.append(
+                f"  clips at {len(self.rates)} frame rates ({counts}), each stored at its own (the manifest's "
+                "fps is null, each clip's record has its own): --fps F resamples every clip to one"
             )
         for failure in self.failures[:10]:
             out.append(f"  failed: {failure['error']}")
