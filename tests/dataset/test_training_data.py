@@ -183,7 +183,7 @@ def test_the_default_split_keeps_every_take_of_a_performance_together():
         assert {k: list(v) for k, v in parts.items()} == {
             k: list(v) for k, v in split(data, "performance", seed=seed, labels=Labels.from_names(data)).items()
         }
-        where = {}
+        where: dict[str, str] = {}
         for name, idx in parts.items():
             assert len(idx)
             for i in idx:
