@@ -1,0 +1,283 @@
+"""expressive_mocap.dataset.torch_ops against the package's NumPy conventions and kernels: rotation
+conversions (random rotations, rotations near the identity and near a half turn, and the real
+rotations of dataset-2 clips), forward kinematics against the Rust kernel and its NumPy twin,
+gradients by ``torch.autograd.gradcheck`` in float64.
+Real clips: Bandai-Namco-Research-Motiondataset, CC BY-NC 4.0. Skipped without torch."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import expressive_mocap as em
+from expressive_mocap import ops
+from expressive_mocap.dataset.representations import decode, encode
+from expressive_mocap.rotations import quat
+
+torch = pytest.importorskip("torch")
+pytestmark = pytest.mark.torch
+
+from expressive_mocap.dataset import torch_ops as T  # noqa: E402  (after the skip)
+
+REPO = Path(__file__).resolve().parents[2]
+CLIPS = ["dataset-2_walk_normal_001", "dataset-2_run_elderly_002", "dataset-2_walk-turn-left_active_002"]
+BANDAI_PARENTS = [-1, 0, 1, 2, 3, 4, 3, 6, 7, 8, 3, 10, 11, 12, 1, 14, 15, 16, 1, 18, 19, 20]
+FLOAT32 = 1e-5  # parity in float32
+
+
+def random_quats(n: int, seed: int = 0) -> np.ndarray:
+    """Unit quaternions: uniform ones, then some within 1e-4 rad of the identity and of half turns."""
+    rng = np.random.default_rng(seed)
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    axes = rng.normal(size=(n // 4, 3))
+    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
+    small = rng.uniform(1e-7, 1e-4, size=(n // 4, 1))
+    near_identity = np.concatenate([axes * np.sin(small / 2), np.cos(small / 2)], axis=-1)
+    angle = np.pi - small  # within 1e-4 of a half turn, w > 0
+    near_pi = np.concatenate([axes * np.sin(angle / 2), np.cos(angle / 2)], axis=-1)
+    return np.concatenate([q, near_identity, near_pi, [[0.0, 0.0, 0.0, 1.0]]])
+
+
+def same_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``b`` on ``a``'s hemisphere (quaternions q and -q are one rotation)."""
+    return np.where(np.sum(a * b, axis=-1, keepdims=True) < 0, -b, b)
+
+
+def t32(x) -> torch.Tensor:
+    return torch.tensor(np.asarray(x), dtype=torch.float32)
+
+
+def t64(x, grad: bool = False) -> torch.Tensor:
+    return torch.tensor(np.asarray(x), dtype=torch.float64, requires_grad=grad)
+
+
+@pytest.fixture(scope="module")
+def real_quats(bandai2_dir) -> np.ndarray:
+    """The local rotations of three dataset-2 clips ``[N, 4]``."""
+    return np.concatenate([em.read_bvh(bandai2_dir / f"{n}.bvh").rotations.reshape(-1, 4) for n in CLIPS])
+
+
+@pytest.fixture(scope="module")
+def motions(bandai2_dir) -> list:
+    return [em.read_bvh(bandai2_dir / f"{n}.bvh") for n in CLIPS]
+
+
+# --------------------------------------------------------------------------- conversions: parity
+
+
+@pytest.mark.parametrize("form", ["quaternion", "6d", "matrix", "axis-angle"])
+def test_encoding_matches_the_numpy_forms_on_random_rotations(form):
+    q = random_quats(4000)
+    expected = encode(q, form)  # float64
+    got = T.from_quat(t32(q), form).numpy()
+    np.testing.assert_allclose(got, expected, atol=FLOAT32, rtol=0)
+
+
+@pytest.mark.parametrize("form", ["quaternion", "6d", "matrix", "axis-angle"])
+def test_decoding_matches_the_numpy_forms_on_random_rotations(form):
+    q = random_quats(4000, seed=1)
+    values = encode(q, form)
+    if form in ("quaternion", "6d"):  # a network's output is off its manifold: scale and skew it
+        values = values * np.random.default_rng(2).uniform(0.5, 2.0, size=values.shape[:-1] + (1,))
+    expected = decode(values, form)
+    got = T.to_quat(t32(values), form).numpy()
+    assert (got[:, 3] >= 0).all()
+    np.testing.assert_allclose(same_rotation(expected, got), expected, atol=FLOAT32, rtol=0)
+    # away from the half turn (w = 0, where q and -q swap) the sign is the package's too
+    clear = expected[:, 3] > 1e-3
+    np.testing.assert_allclose(got[clear], expected[clear], atol=FLOAT32, rtol=0)
+
+
+def test_the_conversions_match_the_numpy_ones_on_real_rotations(real_quats):
+    q = real_quats
+    for form in ("6d", "matrix", "axis-angle"):
+        np.testing.assert_allclose(T.from_quat(t32(q), form).numpy(), encode(q, form), atol=FLOAT32, rtol=0)
+        back = T.to_quat(t32(encode(q, form)), form).numpy()
+        np.testing.assert_allclose(same_rotation(q, back), q, atol=FLOAT32, rtol=0)
+    np.testing.assert_allclose(T.quat_to_matrix(t32(q)).numpy(), quat.to_matrix(q), atol=FLOAT32, rtol=0)
+    m = quat.to_matrix(q)
+    np.testing.assert_allclose(
+        T.matrix_to_quat(t32(m)).numpy(), decode(m.reshape(-1, 9), "matrix"), atol=FLOAT32, rtol=0
+    )
+
+
+def test_the_layouts_are_the_packages():
+    """A quarter turn about z: x goes to y. The 6D form is column 0 then column 1; the matrix form
+    is row after row; the quaternion is x, y, z, w."""
+    q = torch.tensor([0.0, 0.0, np.sin(np.pi / 4), np.cos(np.pi / 4)], dtype=torch.float64)
+    m = T.quat_to_matrix(q)
+    np.testing.assert_allclose(m.numpy() @ [1, 0, 0], [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(T.quat_to_sixd(q).numpy(), [0, 1, 0, -1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(T.from_quat(q, "matrix").numpy(), [0, -1, 0, 1, 0, 0, 0, 0, 1], atol=1e-12)
+    np.testing.assert_allclose(T.quat_to_axis_angle(q).numpy(), [0, 0, np.pi / 2], atol=1e-12)
+    np.testing.assert_allclose(T.quat_rotate(q, torch.tensor([1.0, 0, 0], dtype=torch.float64)), [0, 1, 0], atol=1e-12)
+
+
+def test_round_trips_and_the_algebra():
+    q = torch.tensor(random_quats(2000, seed=3))
+    for there, back in (
+        (T.quat_to_matrix, T.matrix_to_quat),
+        (T.quat_to_sixd, T.sixd_to_quat),
+        (T.quat_to_axis_angle, T.axis_angle_to_quat),
+    ):
+        again = back(there(q)).numpy()
+        np.testing.assert_allclose(same_rotation(q.numpy(), again), q.numpy(), atol=1e-12)
+    v = T.quat_to_axis_angle(q)
+    assert float(v.norm(dim=-1).max()) <= np.pi + 1e-12
+    np.testing.assert_allclose(T.matrix_to_axis_angle(T.axis_angle_to_matrix(v)).numpy(), v.numpy(), atol=1e-9)
+    np.testing.assert_allclose(T.sixd_to_matrix(T.matrix_to_sixd(T.quat_to_matrix(q))), T.quat_to_matrix(q), atol=1e-12)
+    # products: the Hamilton product is the matrices' product; conjugate is the inverse
+    a, b = q[:1000], q[1000:2000]
+    np.testing.assert_allclose(
+        T.quat_to_matrix(T.quat_mul(a, b)), T.quat_to_matrix(a) @ T.quat_to_matrix(b), atol=1e-12
+    )
+    np.testing.assert_allclose(
+        T.quat_mul(a, T.quat_conjugate(a)).numpy(), np.tile([0, 0, 0, 1.0], (1000, 1)), atol=1e-12
+    )
+    np.testing.assert_allclose(T.quat_mul(a, b).numpy(), quat.mul(a.numpy(), b.numpy()), atol=1e-12)
+
+
+def test_unnormalised_inputs_give_the_rotation_of_their_unit_one():
+    q = torch.tensor(random_quats(200, seed=4))
+    scaled = q * torch.linspace(0.2, 5.0, len(q))[:, None].double()
+    np.testing.assert_allclose(T.quat_to_matrix(scaled), T.quat_to_matrix(q), atol=1e-12)
+    # any two independent vectors make a rotation: orthonormal, determinant 1
+    m = T.sixd_to_matrix(torch.randn(500, 6, dtype=torch.float64))
+    np.testing.assert_allclose(m.transpose(-1, -2) @ m, torch.eye(3).expand(500, 3, 3).double(), atol=1e-12)
+    np.testing.assert_allclose(torch.linalg.det(m), np.ones(500), atol=1e-12)
+
+
+def test_leading_axes_of_any_number():
+    q = torch.tensor(random_quats(120, seed=5)[:120]).reshape(2, 3, 4, 5, 4)
+    flat = T.quat_to_sixd(q.reshape(-1, 4))
+    assert T.quat_to_sixd(q).shape == (2, 3, 4, 5, 6)
+    np.testing.assert_array_equal(T.quat_to_sixd(q).reshape(-1, 6), flat)
+    assert T.quat_to_matrix(q).shape == (2, 3, 4, 5, 3, 3)
+    assert T.to_quat(T.from_quat(q, "axis-angle"), "axis-angle").shape == q.shape
+
+
+def test_bad_inputs_are_value_errors_naming_the_argument():
+    with pytest.raises(ValueError, match="argument `q`.*\\[\\.\\.\\., 4\\]"):
+        T.quat_to_matrix(torch.zeros(3, 3))
+    with pytest.raises(ValueError, match="argument `form`.*quaternion, 6d"):
+        T.to_quat(torch.zeros(3), "euler")
+    with pytest.raises(ValueError, match="argument `values`"):
+        T.to_quat(torch.zeros(5, 4), "6d")
+    with pytest.raises(ValueError, match="argument `d`: expected a torch.Tensor"):
+        T.sixd_to_matrix(np.zeros(6))
+
+
+# --------------------------------------------------------------------------- conversions: gradients
+
+
+def _gradcheck(f, *inputs) -> None:
+    assert torch.autograd.gradcheck(f, inputs, eps=1e-6, atol=1e-6, rtol=1e-5)
+
+
+def test_every_conversion_has_the_gradients_of_its_values():
+    q = t64(random_quats(40, seed=6)[np.r_[0:10, 10:20, 20:30]], grad=True)  # plain, near identity, near pi
+    _gradcheck(T.quat_to_matrix, q)
+    _gradcheck(T.quat_to_sixd, q)
+    _gradcheck(T.quat_to_axis_angle, q)
+    _gradcheck(lambda x: T.to_quat(x, "quaternion"), q)
+    m = t64(quat.to_matrix(q.detach().numpy()), grad=True)
+    _gradcheck(T.matrix_to_quat, m)
+    _gradcheck(T.matrix_to_sixd, m)
+    _gradcheck(T.matrix_to_axis_angle, m)
+    d = t64(np.random.default_rng(7).normal(size=(20, 6)), grad=True)
+    _gradcheck(T.sixd_to_matrix, d)
+    _gradcheck(T.sixd_to_quat, d)
+    _gradcheck(T.quat_mul, q[:10], q[10:20])
+    _gradcheck(T.quat_rotate, q[:10], t64(np.random.default_rng(8).normal(size=(10, 3)), grad=True))
+
+
+def test_axis_angle_gradients_near_the_identity_and_near_a_half_turn():
+    rng = np.random.default_rng(9)
+    axes = rng.normal(size=(12, 3))
+    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
+    angles = np.array([0.0, 1e-9, 1e-7, 1e-5, 1e-3, 0.5, 2.0, np.pi - 1e-3, np.pi - 1e-5, np.pi, np.pi + 1e-3, 4.0])
+    v = t64(axes * angles[:, None], grad=True)
+    _gradcheck(T.axis_angle_to_quat, v)
+    _gradcheck(T.axis_angle_to_matrix, v)
+    # exactly the identity: finite gradients, the analytic ones (d q_xyz / d v = I / 2, d w / d v = 0)
+    zero = torch.zeros(3, dtype=torch.float64, requires_grad=True)
+    jacobian = torch.autograd.functional.jacobian(T.axis_angle_to_quat, zero)
+    np.testing.assert_allclose(jacobian.numpy(), np.vstack([np.eye(3) / 2, np.zeros((1, 3))]), atol=1e-12)
+    identity = torch.tensor([0.0, 0.0, 0.0, 1.0], dtype=torch.float64, requires_grad=True)
+    jacobian = torch.autograd.functional.jacobian(T.quat_to_axis_angle, identity)
+    np.testing.assert_allclose(jacobian.numpy(), np.hstack([2 * np.eye(3), np.zeros((3, 1))]), atol=1e-12)
+    # exactly a half turn (w = 0): finite gradients
+    half = torch.tensor([0.0, 0.6, 0.8, 0.0], dtype=torch.float64, requires_grad=True)
+    (grad,) = torch.autograd.grad(T.quat_to_axis_angle(half).square().sum(), half)
+    assert torch.isfinite(grad).all()
+    np.testing.assert_allclose(T.quat_to_axis_angle(half.detach()).norm().item(), np.pi, atol=1e-12)
+
+
+# --------------------------------------------------------------------------- forward kinematics
+
+
+@pytest.mark.parametrize("backend", ["rust", "numpy"])
+def test_fk_matches_the_kernel_and_its_numpy_twin_on_random_rotations(backend):
+    if backend == "rust" and not em.rust_available():
+        pytest.skip("the Rust extension is not built")
+    q = random_quats(6 * 22 * 8, seed=10)[: 6 * 22 * 8].reshape(6 * 8, 22, 4)
+    offsets = np.random.default_rng(11).normal(size=(22, 3)) * 20
+    with em.use_backend(backend):
+        world, positions = ops.forward_kinematics(q, np.broadcast_to(offsets, q.shape[:2] + (3,)), BANDAI_PARENTS)
+    got_q, got_p = T.forward_kinematics(t32(q).reshape(6, 8, 22, 4), t32(offsets), BANDAI_PARENTS)
+    assert got_q.shape == (6, 8, 22, 4) and got_p.shape == (6, 8, 22, 3)
+    np.testing.assert_allclose(got_q.reshape(-1, 22, 4).numpy(), world, atol=FLOAT32, rtol=0)  # the same signs
+    scale = np.abs(positions).max()
+    np.testing.assert_allclose(got_p.reshape(-1, 22, 3).numpy() / scale, positions / scale, atol=FLOAT32, rtol=0)
+    m, p = T.forward_kinematics(t32(q), t32(offsets), BANDAI_PARENTS, world="matrix")
+    np.testing.assert_allclose(m.numpy(), quat.to_matrix(world), atol=FLOAT32, rtol=0)
+
+
+def test_fk_matches_the_kernel_on_real_clips_in_every_form(motions):
+    for motion in motions:
+        parents = motion.skeleton.parents
+        world, positions = ops.forward_kinematics(motion.rotations, motion.translations, parents)
+        scale = np.abs(positions).max()
+        # per-frame translations, as the kernel takes them
+        got_q, got_p = T.forward_kinematics(t32(motion.rotations), t32(motion.translations), parents)
+        np.testing.assert_allclose(got_q.numpy(), world, atol=FLOAT32, rtol=0)
+        np.testing.assert_allclose(got_p.numpy() / scale, positions / scale, atol=FLOAT32, rtol=0)
+        # rest offsets and the hips' positions (the Bandai-Namco hips carry the motion)
+        for form in ("quaternion", "6d", "matrix", "axis-angle"):
+            local = t32(encode(motion.rotations, form))
+            _, p = T.forward_kinematics(
+                local, t32(motion.skeleton.offsets), parents, t32(positions[:, 1]), root=1, form=form
+            )
+            np.testing.assert_allclose(p.numpy() / scale, positions / scale, atol=FLOAT32, rtol=0, err_msg=form)
+
+
+def test_fk_gradients():
+    q = t64(random_quats(2 * 3 * 22, seed=12)[: 2 * 3 * 22].reshape(2, 3, 22, 4), grad=True)
+    offsets = t64(np.random.default_rng(13).normal(size=(22, 3)), grad=True)
+    hips = t64(np.random.default_rng(14).normal(size=(2, 3, 3)), grad=True)
+    _gradcheck(lambda r, o, h: T.forward_kinematics(r, o, BANDAI_PARENTS, h, root=1), q, offsets, hips)
+    _gradcheck(lambda r, o: T.forward_kinematics(r, o, BANDAI_PARENTS, world="matrix"), q, offsets)
+    per_frame = t64(np.random.default_rng(15).normal(size=(2, 3, 22, 3)), grad=True)
+    _gradcheck(lambda r, o: T.forward_kinematics(r, o, BANDAI_PARENTS), q, per_frame)
+    sixd = t64(np.random.default_rng(16).normal(size=(2, 22, 6)), grad=True)
+    _gradcheck(lambda r: T.forward_kinematics(r, offsets.detach(), BANDAI_PARENTS)[1], sixd)
+
+
+def test_fk_bad_inputs():
+    q = torch.zeros(5, 22, 4)
+    q[..., 3] = 1
+    with pytest.raises(ValueError, match="argument `rotations`.*22 joints"):
+        T.forward_kinematics(torch.zeros(5, 21, 4), torch.zeros(22, 3), BANDAI_PARENTS)
+    with pytest.raises(ValueError, match="argument `parents`: joint 1 has parent 2"):
+        T.forward_kinematics(torch.zeros(5, 3, 4), torch.zeros(3, 3), [-1, 2, 0])
+    with pytest.raises(ValueError, match="argument `offsets`"):
+        T.forward_kinematics(q, torch.zeros(21, 3), BANDAI_PARENTS)
+    with pytest.raises(ValueError, match="argument `form`"):
+        T.forward_kinematics(q, torch.zeros(22, 3), BANDAI_PARENTS, form="euler")
+    with pytest.raises(ValueError, match="argument `root_positions`"):
+        T.forward_kinematics(q, torch.zeros(22, 3), BANDAI_PARENTS, torch.zeros(4, 3))
+    with pytest.raises(ValueError, match="argument `root`"):
+        T.forward_kinematics(q, torch.zeros(22, 3), BANDAI_PARENTS, root=22)
