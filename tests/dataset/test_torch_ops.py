@@ -1,11 +1,15 @@
 """expressive_mocap.dataset.torch_ops against the package's NumPy conventions and kernels: rotation
 conversions (random rotations, rotations near the identity and near a half turn, and the real
-rotations of dataset-2 clips), forward kinematics against the Rust kernel and its NumPy twin,
-gradients by ``torch.autograd.gradcheck`` in float64.
+rotations of dataset-2 clips), forward kinematics against the Rust kernel and its NumPy twin, the
+skeleton graph of a preprocessed dataset, the loss terms against the stored velocities and
+contacts, gradients by ``torch.autograd.gradcheck`` in float64.
 Real clips: Bandai-Namco-Research-Motiondataset, CC BY-NC 4.0. Skipped without torch."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +17,7 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap import ops
+from expressive_mocap.dataset import load_dataset, preprocess
 from expressive_mocap.dataset.representations import decode, encode
 from expressive_mocap.rotations import quat
 
@@ -63,6 +68,25 @@ def real_quats(bandai2_dir) -> np.ndarray:
 @pytest.fixture(scope="module")
 def motions(bandai2_dir) -> list:
     return [em.read_bvh(bandai2_dir / f"{n}.bvh") for n in CLIPS]
+
+
+@pytest.fixture(scope="module")
+def folder(bandai2_dir, tmp_path_factory) -> Path:
+    """The three clips preprocessed as a model would train on them: 6D rotations, world positions,
+    their velocities and the contacts, in a folder named as docs/torch.md names it."""
+    root = tmp_path_factory.mktemp("torch_ops")
+    (root / "src").mkdir()
+    for name in CLIPS:
+        os.symlink(bandai2_dir / f"{name}.bvh", root / "src" / f"{name}.bvh")
+    summary = preprocess(
+        root / "src",
+        root / "bandai2",
+        keep="positions,rotations,velocities,contacts",
+        rotations="6d",
+        progress=False,
+    )
+    assert summary.clips_ok == len(CLIPS)
+    return root / "bandai2"
 
 
 # --------------------------------------------------------------------------- conversions: parity
@@ -281,3 +305,131 @@ def test_fk_bad_inputs():
         T.forward_kinematics(q, torch.zeros(22, 3), BANDAI_PARENTS, torch.zeros(4, 3))
     with pytest.raises(ValueError, match="argument `root`"):
         T.forward_kinematics(q, torch.zeros(22, 3), BANDAI_PARENTS, root=22)
+
+
+# --------------------------------------------------------------------------- the skeleton graph
+
+
+def test_the_graph_of_a_dataset(folder, motions):
+    ds = load_dataset(folder)
+    graph = T.skeleton_graph(folder)
+    skeleton = motions[0].skeleton
+    assert graph.names == skeleton.names and graph.parents.tolist() == ds.skeleton["parents"] == BANDAI_PARENTS
+    # the hips move below the fixed root joint: they carry the root motion
+    assert graph.moving.tolist() == [j == 1 for j in range(22)] and graph.root == 1
+    still = ~graph.moving
+    np.testing.assert_allclose(graph.bone_lengths[still], np.linalg.norm(skeleton.offsets, axis=-1)[still], atol=1e-3)
+    np.testing.assert_allclose(graph.offsets[2:], skeleton.offsets[2:], atol=1e-3)  # read through the 6D rotations
+    left, right = (skeleton.index(n) for n in ("Foot_L", "Foot_R"))
+    assert graph.feet.tolist() == [[left, skeleton.index("Toes_L")], [right, skeleton.index("Toes_R")]]
+    # the bones both ways, and the adjacency they make
+    edges = graph.edge_index()
+    assert edges.shape == (2, 2 * 21) and edges.dtype == np.int64
+    pairs = {tuple(e) for e in edges.T}
+    assert pairs == {(p, c) for c, p in enumerate(BANDAI_PARENTS) if p >= 0} | {
+        (c, p) for c, p in enumerate(BANDAI_PARENTS) if p >= 0
+    }
+    a = graph.adjacency()
+    np.testing.assert_array_equal(a, a.T)
+    np.testing.assert_array_equal(np.argwhere(a).tolist(), sorted(map(list, pairs)))
+    assert a[3].sum() == 4  # the chest: spine, neck and both shoulders
+    np.testing.assert_array_equal(np.diag(graph.adjacency(self_loops=True)), np.ones(22))
+    tensors = graph.tensors()
+    assert tensors["edge_index"].dtype == torch.int64 and tensors["adjacency"].dtype == torch.float32
+    # FK from the graph's offsets and the stored hips reproduces the stored positions
+    rotations, positions = t32(ds.rotations[:500]), t32(ds.positions[:500])
+    _, p = T.forward_kinematics(rotations, tensors["offsets"], graph.parents, positions[:, graph.root], root=graph.root)
+    np.testing.assert_allclose(p.numpy(), positions.numpy(), atol=2e-3)  # cm, float32 storage
+
+
+def test_the_graph_of_a_skeleton(motions):
+    skeleton = motions[0].skeleton
+    graph = T.skeleton_graph(skeleton)
+    np.testing.assert_array_equal(graph.offsets, skeleton.offsets)
+    assert graph.bone_lengths[0] == 0 and graph.root == 0 and graph.feet is not None
+    with pytest.raises(ValueError, match="argument `source`"):
+        T.skeleton_graph(42)
+
+
+# --------------------------------------------------------------------------- losses
+
+
+def test_finite_velocities_are_np_gradient():
+    p = np.random.default_rng(17).normal(size=(3, 20, 4, 3))
+    got = T.finite_velocities(torch.tensor(p), 30.0).numpy()
+    np.testing.assert_allclose(got, np.gradient(p, 1 / 30.0, axis=1), atol=1e-12)
+    per_window = T.finite_velocities(torch.tensor(p), torch.tensor([30.0, 60.0, 120.0])).numpy()
+    np.testing.assert_allclose(per_window[2], np.gradient(p[2], 1 / 120.0, axis=0), atol=1e-12)
+
+
+def test_the_velocity_loss_reads_the_stored_velocities(folder):
+    ds = load_dataset(folder)
+    fps = ds.clips[0]["fps"]
+    clip = ds[0]
+    windows = [slice(s, s + 32) for s in range(0, clip.frames - 32, 16)]
+    positions = t64(np.stack([clip.positions[w] for w in windows]))
+    velocities = t64(np.stack([clip.velocities[w] for w in windows]))
+    typical = float(velocities.square().sum(-1).mean())
+    assert T.velocity_loss(positions, velocities, fps) < 1e-6 * typical  # float32 storage alone
+    assert T.velocity_loss(positions, velocities, 2 * fps) > 0.1 * typical  # a wrong rate is seen
+    noisy = positions + 0.5 * torch.randn_like(positions)
+    assert T.velocity_loss(noisy, velocities, fps) > 1e-3 * typical
+    # frames past `valid` are left out: garbage there changes nothing
+    valid = torch.full((len(windows),), 20)
+    spoiled = positions.clone()
+    spoiled[:, 20:] = 1e6
+    assert T.velocity_loss(spoiled, velocities, fps, valid) < 1e-6 * typical
+    assert T.velocity_loss(spoiled, velocities, fps) > typical
+
+
+def test_the_foot_contact_loss_is_the_speed_of_planted_feet():
+    # one foot of two joints moving at 3 units a frame along x, the other still; 10 fps
+    positions = torch.zeros(1, 5, 4, 3, dtype=torch.float64)
+    positions[0, :, 0, 0] = positions[0, :, 1, 0] = 3.0 * torch.arange(5)
+    feet = [[0, 1], [2, 3]]
+    down = torch.tensor([[[1, 1], [1, 1], [1, 0], [1, 0], [0, 0]]])
+    # steps 0-1, 1-2, 2-3 have the left foot down at both ends (speed 30, squared 900); steps 0-1
+    # the right one (speed 0): (3 * 900 + 0) / 4
+    assert T.foot_contact_loss(positions, down, feet, 10.0).item() == pytest.approx(3 * 900 / 4)
+    assert T.foot_contact_loss(positions, torch.zeros_like(down), feet, 10.0).item() == 0.0
+    assert T.foot_contact_loss(positions, down, feet, 10.0, valid=[2]).item() == pytest.approx(900 / 2)
+    with pytest.raises(ValueError, match="argument `contacts`"):
+        T.foot_contact_loss(positions, down[..., :1], feet, 10.0)
+    with pytest.raises(ValueError, match="argument `feet`"):
+        T.foot_contact_loss(positions, down, [0, 1], 10.0)
+
+
+def test_the_stored_contacts_are_where_the_feet_rest(folder):
+    ds = load_dataset(folder)
+    graph = T.skeleton_graph(ds)
+    for clip in ds:  # one clip a window: no step across two clips
+        positions, contacts = t64(clip.positions)[None], torch.tensor(clip.contacts)[None]
+        assert contacts.any() and not contacts.all()
+        planted = T.foot_contact_loss(positions, contacts, graph.feet, clip.record["fps"])
+        flying = T.foot_contact_loss(positions, ~contacts, graph.feet, clip.record["fps"])
+        assert 0 < planted < 0.05 * flying, (clip.name, float(planted), float(flying))
+
+
+def test_loss_gradients():
+    rng = np.random.default_rng(18)
+    p = t64(rng.normal(size=(2, 6, 4, 3)), grad=True)
+    v = t64(rng.normal(size=(2, 6, 4, 3)))
+    contacts = torch.tensor(rng.uniform(size=(2, 6, 2)) < 0.6)
+    _gradcheck(lambda x: T.velocity_loss(x, v, 30.0, valid=[6, 4]), p)
+    _gradcheck(lambda x: T.foot_contact_loss(x, contacts, [[0, 1], [2, 3]], 30.0), p)
+    _gradcheck(lambda x: T.finite_velocities(x, 30.0), p)
+
+
+# --------------------------------------------------------------------------- packaging and docs
+
+
+def test_importing_the_package_does_not_import_torch():
+    code = (
+        "import sys, expressive_mocap, expressive_mocap.dataset\n"
+        "from expressive_mocap.dataset import load_dataset, window_batches\n"
+        "assert 'torch' not in sys.modules, 'torch imported'\n"
+        "import expressive_mocap.dataset.torch_ops\n"
+        "assert 'torch' in sys.modules\n"
+    )
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "python"), os.environ.get("PYTHONPATH", "")])}
+    subprocess.run([sys.executable, "-c", code], check=True, env=env)
