@@ -2,12 +2,13 @@
 conversions (random rotations, rotations near the identity and near a half turn, and the real
 rotations of dataset-2 clips), forward kinematics against the Rust kernel and its NumPy twin, the
 skeleton graph of a preprocessed dataset, the loss terms against the stored velocities and
-contacts, gradients by ``torch.autograd.gradcheck`` in float64.
+contacts, gradients by ``torch.autograd.gradcheck`` in float64, and the examples of docs/torch.md.
 Real clips: Bandai-Namco-Research-Motiondataset, CC BY-NC 4.0. Skipped without torch."""
 
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -433,3 +434,20 @@ def test_importing_the_package_does_not_import_torch():
     )
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "python"), os.environ.get("PYTHONPATH", "")])}
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
+
+
+def test_the_docs_examples_run(folder, monkeypatch):
+    """docs/torch.md's Python blocks, in order in one namespace, on the three-clip dataset."""
+    blocks = re.findall(r"```python\n(.*?)```", (REPO / "docs" / "torch.md").read_text(), re.S)
+    assert len(blocks) >= 3
+    monkeypatch.chdir(folder.parent)  # the pages name the dataset "bandai2"
+    namespace: dict = {"__name__": "torch_md"}
+    for k, block in enumerate(blocks):
+        exec(compile(block, f"docs/torch.md (block {k + 1})", "exec"), namespace)
+    # what the pages say they show: FK reproduces the stored positions, the loss reaches the rotations
+    positions, b, fps = namespace["positions"].detach(), namespace["b"], namespace["fps"]
+    assert float((positions - b["positions"]).abs().max()) < 5e-3
+    assert torch.isfinite(namespace["loss"])
+    assert T.velocity_loss(positions, b["velocities"], fps, b["valid"]) < 1e-4 * b["velocities"].square().sum(-1).mean()
+    assert namespace["rotations"].grad is not None and namespace["rotations"].grad.abs().sum() > 0
+    assert namespace["graph"].root == 1 and namespace["graph"].feet.tolist() == [[16, 17], [20, 21]]

@@ -45,6 +45,7 @@ PAGES = [
     "docs/models.md",
     "docs/preprocessing.md",
     "docs/training.md",
+    "docs/torch.md",
     "docs/cluster.md",
     "docs/ml_datasets.md",
     "docs/speed.md",
