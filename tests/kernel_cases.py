@@ -122,6 +122,18 @@ CORE = {
         lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 2.0, 4.0, np.ones(3), 1.5, 3.0),
         ["original", "body", None, None, "scale", None, None],
     ),
+    "split_rotations_many": (
+        lambda f: (
+            [quats(f, 3), quats(f + 1, 3)],
+            [quats(3, f).transpose(1, 0, 2).copy(), quats(3, f + 1).transpose(1, 0, 2).copy()],
+            2.0,
+            4.0,
+            np.ones(3),
+            [1.5, 0.0],
+            [3.0, 1.0],
+        ),
+        [None, None, None, None, "scale"],
+    ),
     "compose_rotations": (lambda f: (quats(f, 3), quats(3, f).transpose(1, 0, 2).copy(), 1.5), ["expressive", "body"]),
     "retarget_transfer": (transfer_args, ["world", "positions", None]),
     "plant_feet": (

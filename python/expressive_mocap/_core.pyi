@@ -44,6 +44,7 @@ __all__ = [
     "repeated_headers",
     "retarget_transfer",
     "split_rotations",
+    "split_rotations_many",
     "two_bone_ik",
 ]
 
@@ -163,6 +164,21 @@ def split_rotations(
 ) -> tuple[_F64, _F64, _F64]:
     """One clip's ``(E*, B', A)`` with the body mechanics and the activity smoothed over frames,
     the trunk joints read at least as active as their chain's lean."""
+
+def split_rotations_many(
+    originals: Sequence[_F64],
+    bodies: Sequence[_F64],
+    gain: float,
+    exponent: float,
+    scale: _F64,
+    body_sigmas: Sequence[float],
+    activity_sigmas: Sequence[float],
+    trunk_joints: Sequence[int] = ...,
+    trunk_bones: Sequence[tuple[float, float, float]] = ...,
+    trunk_scale: float = ...,
+) -> list[tuple[_F64, _F64, _F64]]:
+    """``split_rotations`` of many clips in one call, clips in parallel, each with its own
+    smoothing widths."""
 
 def compose_rotations(expressive: _F64, body: _F64, scale: float = 1.0) -> _F64:
     """``expressive^scale * body`` for rotations ``[F, J, 4]``."""

@@ -5,6 +5,7 @@ use numpy::{
     IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
+use rayon::prelude::*;
 
 use super::{array, contiguous, shape_error};
 
@@ -121,6 +122,84 @@ fn split_rotations<'py>(
     split_arrays(py, e, recovered, a, &shape)
 }
 
+/// [`split_rotations`] of many clips in one call, clips in parallel: `originals` and `bodies`
+/// (one [F, J, 4] array per clip, the same J for all), `body_sigmas` and `activity_sigmas` (one
+/// width per clip: each clip smoothed in its own time), the other arguments shared. Returns each
+/// clip's E*, B' and activity, in order, exactly as [`split_rotations`] gives them clip by clip.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (originals, bodies, gain, exponent, scale, body_sigmas, activity_sigmas, trunk_joints=vec![], trunk_bones=vec![], trunk_scale=1.0))]
+fn split_rotations_many<'py>(
+    py: Python<'py>,
+    originals: Vec<PyReadonlyArray3<'py, f64>>,
+    bodies: Vec<PyReadonlyArray3<'py, f64>>,
+    gain: f64,
+    exponent: f64,
+    scale: PyReadonlyArray1<'py, f64>,
+    body_sigmas: Vec<f64>,
+    activity_sigmas: Vec<f64>,
+    trunk_joints: Vec<usize>,
+    trunk_bones: Vec<[f64; 3]>,
+    trunk_scale: f64,
+) -> PyResult<Vec<Split<'py>>> {
+    let clips = originals.len();
+    for (name, count) in [
+        ("bodies", bodies.len()),
+        ("body_sigmas", body_sigmas.len()),
+        ("activity_sigmas", activity_sigmas.len()),
+    ] {
+        if count != clips {
+            return Err(shape_error(
+                name,
+                &format!("{clips} entries (one per clip of `originals`)"),
+                &[count],
+            ));
+        }
+    }
+    let s = contiguous("scale", &scale)?;
+    let mut jobs = Vec::with_capacity(clips);
+    for (original, body) in originals.iter().zip(&bodies) {
+        let shape = same_quaternions(("originals", original), ("bodies", body))?;
+        if shape[1] != s.len() {
+            return Err(shape_error(
+                "scale",
+                &format!("[{}] (one value per joint of each clip)", shape[1]),
+                scale.shape(),
+            ));
+        }
+        jobs.push((
+            contiguous("originals", original)?,
+            contiguous("bodies", body)?,
+            shape,
+        ));
+    }
+    let bones: Vec<DVec3> = trunk_bones.into_iter().map(DVec3::from_array).collect();
+    let results = py.detach(|| {
+        jobs.par_iter()
+            .zip(body_sigmas.par_iter().zip(&activity_sigmas))
+            .map(|((o, b, _), (&body_sigma, &activity_sigma))| {
+                let trunk = (!trunk_joints.is_empty()).then(|| crate::decouple::Trunk {
+                    joints: &trunk_joints,
+                    bones: &bones,
+                    scale: trunk_scale,
+                });
+                let smoothing = crate::decouple::Smoothing {
+                    body_sigma,
+                    activity_sigma,
+                    scale: s,
+                    trunk,
+                };
+                crate::decouple::split(o, b, gain, exponent, &smoothing)
+            })
+            .collect::<Result<Vec<_>, _>>()
+    })?;
+    results
+        .into_iter()
+        .zip(&jobs)
+        .map(|((e, recovered, a), (_, _, shape))| split_arrays(py, e, recovered, a, shape))
+        .collect()
+}
+
 /// Recompose `expressive^scale * body` for rotations [F, J, 4].
 #[pyfunction]
 #[pyo3(signature = (expressive, body, scale=1.0))]
@@ -142,6 +221,7 @@ fn compose_rotations<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(decouple_rotations, m)?)?;
     m.add_function(wrap_pyfunction!(split_rotations, m)?)?;
+    m.add_function(wrap_pyfunction!(split_rotations_many, m)?)?;
     m.add_function(wrap_pyfunction!(compose_rotations, m)?)?;
     Ok(())
 }

@@ -63,6 +63,7 @@ from .rotations import (
     matrix_columns,
     quat_to_euler,
     split_rotations,
+    split_rotations_many,
 )
 
 __all__ = [
@@ -100,6 +101,7 @@ __all__ = [
     "repeated_headers",
     "retarget_transfer",
     "split_rotations",
+    "split_rotations_many",
     "stored_rotations",
     "two_bone_ik",
 ]

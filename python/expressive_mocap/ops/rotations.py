@@ -125,18 +125,54 @@ def split_rotations(
     if original.ndim != 3:
         raise ArgumentError(f"argument `original`: expected shape [F, J, 4] (one clip), got {list(original.shape)}")
     scale = np.ones(original.shape[1]) if scale is None else _array("scale", scale, np.float64)
-    chain = (
-        {}
-        if trunk is None
-        else {
-            "trunk_joints": [int(j) for j in trunk.joints],
-            "trunk_bones": [tuple(float(v) for v in bone) for bone in trunk.bones],
-            "trunk_scale": float(trunk.scale),
-        }
-    )
     return kernels().split_rotations(
-        original, body, float(gain), float(exponent), scale, float(body_sigma), float(activity_sigma), **chain
+        original, body, float(gain), float(exponent), scale, float(body_sigma), float(activity_sigma), **_chain(trunk)
     )
+
+
+def split_rotations_many(
+    originals: list,
+    bodies: list,
+    gain: float,
+    exponent: float,
+    scale=None,
+    body_sigmas=None,
+    activity_sigmas=None,
+    trunk: Trunk | None = None,
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """:func:`split_rotations` of many clips (``originals``, ``bodies``: ``[F, J, 4]`` each, the
+    same joints) in one kernel call, clips in parallel, each smoothed over its own
+    ``body_sigmas`` and ``activity_sigmas`` frames (None: 0 for every clip); the same results
+    as clip by clip."""
+    originals = [_f64("originals", o, 4) for o in originals]
+    bodies = [_f64("bodies", b, 4) for b in bodies]
+    for o in originals:
+        if o.ndim != 3:
+            raise ArgumentError(f"argument `originals`: expected clips of shape [F, J, 4], got {list(o.shape)}")
+    joints = originals[0].shape[1] if originals else 0
+    scale = np.ones(joints) if scale is None else _array("scale", scale, np.float64)
+    zeros = [0.0] * len(originals)
+    return kernels().split_rotations_many(
+        originals,
+        bodies,
+        float(gain),
+        float(exponent),
+        scale,
+        zeros if body_sigmas is None else [float(s) for s in body_sigmas],
+        zeros if activity_sigmas is None else [float(s) for s in activity_sigmas],
+        **_chain(trunk),
+    )
+
+
+def _chain(trunk: Trunk | None) -> dict:
+    """A :class:`Trunk` as the kernels' keyword arguments (none without one)."""
+    if trunk is None:
+        return {}
+    return {
+        "trunk_joints": [int(j) for j in trunk.joints],
+        "trunk_bones": [tuple(float(v) for v in bone) for bone in trunk.bones],
+        "trunk_scale": float(trunk.scale),
+    }
 
 
 def compose_rotations(expressive, body, scale: float = 1.0) -> np.ndarray:
@@ -161,6 +197,7 @@ __all__ = [
     "decode_channels",
     "decouple_rotations",
     "split_rotations",
+    "split_rotations_many",
     "euler_to_quat",
     "forward_kinematics",
     "forward_kinematics_many",

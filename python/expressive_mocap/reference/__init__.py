@@ -34,6 +34,7 @@ _TWINS = {
     "read_motion_blocks": "motion_block",
     "repeated_headers": "clip",
     "split_rotations": "decouple",
+    "split_rotations_many": "decouple",
     "retarget_transfer": "retarget",
     "two_bone_ik": "ik",
 }

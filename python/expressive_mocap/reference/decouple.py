@@ -110,9 +110,29 @@ def compose_rotations(expressive: np.ndarray, body: np.ndarray, scale: float = 1
     return quat.mul(expressive if scale == 1.0 else quat.power(expressive, scale), body)
 
 
+def split_rotations_many(
+    originals: list,
+    bodies: list,
+    gain: float,
+    exponent: float,
+    scale: np.ndarray,
+    body_sigmas: list,
+    activity_sigmas: list,
+    trunk_joints=(),
+    trunk_bones=(),
+    trunk_scale: float = 1.0,
+) -> list:
+    """:func:`split_rotations` of each clip, in order (each with its own smoothing widths)."""
+    return [
+        split_rotations(o, b, gain, exponent, scale, bs, a_s, trunk_joints, trunk_bones, trunk_scale)
+        for o, b, bs, a_s in zip(originals, bodies, body_sigmas, activity_sigmas, strict=True)
+    ]
+
+
 __all__ = [
     "compose_rotations",
     "decouple_rotations",
     "split_rotations",
+    "split_rotations_many",
     "trunk_lean",
 ]
