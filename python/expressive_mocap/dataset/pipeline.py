@@ -1,5 +1,5 @@
 """Running the batches on this machine: a pipeline of threads (header threads, one kernel
-thread, the caller writing), results in order, memory bounded."""
+thread, one model thread with --model, the caller writing), results in order, memory bounded."""
 
 from __future__ import annotations
 
@@ -12,6 +12,8 @@ from collections.abc import Iterator
 from concurrent.futures import CancelledError, Future
 
 from . import work
+from .format import MODEL_KINDS
+from .model_step import run_model
 from .sources import Item
 
 
@@ -45,35 +47,44 @@ def local(
     kernels while they run. (When each thread did a whole batch, the threads fell into step,
     reading headers at the same time on one core and then running kernels at the same time:
     0.92 s for dataset-2 against 0.80 s.) Two header threads on two cores or more decompress
-    two batches of a zip at once."""
+    two batches of a zip at once. With the body-mechanics model, a model thread runs each
+    batch's model (:mod:`.model_step`) while the kernel thread runs the next batch's clips."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     in_flight = 3  # batches read ahead of the one being written: bounds memory
     running: deque = deque()
     header_pool, kernel_pool = Workers(min(2, cores), "headers"), Workers(1, "kernels")
-    # Held during each kernel call. A stopped run waits for the call under way (it ends: its reads
-    # never block) so that no thread is in Rust when the interpreter exits (one returning from
-    # Rust then aborts the process: "FATAL: exception not rethrown"), but it does not wait for
-    # a header thread (pure Python) or for batches not started.
-    in_kernels, stopping = threading.Lock(), threading.Event()
+    # The model (NumPy between its kernel calls, one core) in a thread of its own: one batch's
+    # model overlaps the next one's clip kernels. (In the kernel thread it held the other cores
+    # idle: 2 cores ran a --model run 1.3-1.5x faster than 1.)
+    model_pool = Workers(1, "model") if any(k in MODEL_KINDS for k in keep) else None
+    # Held during each kernel call. A stopped run waits for the calls under way (they end: their
+    # reads never block) so that no thread is in Rust when the interpreter exits (one returning
+    # from Rust then aborts the process: "FATAL: exception not rethrown"), but it does not wait
+    # for a header thread (pure Python) or for batches not started.
+    in_kernels, in_model, stopping = threading.Lock(), threading.Lock(), threading.Event()
 
     def compute(batch, prepared: Future):
         ready = prepared.result()
         with in_kernels:
             if stopping.is_set():
                 raise CancelledError
-            return work.run_kernels(batch, ready, keep, model, model_float32, options)
+            ran = work.run_clips(batch, ready, keep, model, options)
+        return ran if model_pool is not None else run_model(ran, keep, model, model_float32)
+
+    def compute_model(clips_ran: Future):
+        ran = clips_ran.result()
+        with in_model:
+            if stopping.is_set():
+                raise CancelledError
+            return run_model(ran, keep, model, model_float32)
 
     def submit_next() -> None:
         batch = next(batches, None)  # taken here, in order (a tar stream is read here)
-        if batch is not None:
-            running.append(
-                (
-                    batch,
-                    kernel_pool.submit(
-                        compute, batch, header_pool.submit(work.prepare, batch, keep, model, canonical, options)
-                    ),
-                )
-            )
+        if batch is None:
+            return
+        prepared = header_pool.submit(work.prepare, batch, keep, model, canonical, options)
+        computed = kernel_pool.submit(compute, batch, prepared)
+        running.append((batch, computed if model_pool is None else model_pool.submit(compute_model, computed)))
 
     try:
         for _ in range(in_flight):
@@ -89,9 +100,10 @@ def local(
             submit_next()
             yield (batch, *result)
     finally:  # done, or stopped by Ctrl-C or an error: the batches read ahead are dropped
-        header_pool.close()
-        kernel_pool.close()
-        with in_kernels:
+        for pool in (header_pool, kernel_pool, model_pool):
+            if pool is not None:
+                pool.close()
+        with in_kernels, in_model:
             stopping.set()
 
 

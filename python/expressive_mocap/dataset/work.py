@@ -1,8 +1,8 @@
 """The work on one batch of clips, one :class:`Outcome` per clip: :func:`prepare` (Python: the
-clips' headers, joint roles, body scales and the kernel's arguments) then :func:`run_kernels`
-(one Rust call per hierarchy, clips in parallel, then the body-mechanics model on the whole
-batch). The two run in different threads on this machine (:mod:`.pipeline`), or together on a
-cluster's worker (:func:`compute`)."""
+clips' headers, joint roles, body scales and the kernel's arguments), :func:`run_clips` (one
+Rust call per hierarchy, clips in parallel) and :func:`.model_step.run_model` (the
+body-mechanics model on the whole batch, the statistics' sums). They run in different threads
+on this machine (:mod:`.pipeline`), or together on a cluster's worker (:func:`compute`)."""
 
 from __future__ import annotations
 
@@ -18,12 +18,12 @@ from ..body.contacts import FLOOR_PERCENTILE, HEIGHT_THRESHOLD, MIN_DURATION, SP
 from ..bvh import block_error, parse_header, read_error
 from ..bvh.header import Header, header_template
 from ..bvh.reader import HEADER_PREFIX
-from ..decoupling.algebra import decompose_many
 from ..errors import BVHError, MocapError, ModelError
 from ..motion import Motion, Skeleton
 from .derive import Options, resampled
 from .format import MODEL_KINDS
-from .forms import add_sums, chunks, derive_group, heading_frames, mirror_values
+from .forms import chunks, derive_group, heading_frames, mirror_values
+from .model_step import Ran, run_model
 from .sources import Item
 
 PLAIN = Options()  # the stored forms of a run without model-ready options
@@ -376,12 +376,17 @@ def _group(members: list, needs_roles: bool, use_model: bool, model, mirrors: li
 def run_kernels(
     batch: list[Item], prepared: Prepared, keep: tuple[str, ...], model, model_float32: bool, options: Options = PLAIN
 ) -> tuple[list[Outcome], float, float]:
+    """:func:`run_clips`, then :func:`.model_step.run_model`: the outcomes, the seconds
+    :func:`prepare` took and the seconds taken here."""
+    return run_model(run_clips(batch, prepared, keep, model, options), keep, model, model_float32)
+
+
+def run_clips(batch: list[Item], prepared: Prepared, keep: tuple[str, ...], model, options: Options = PLAIN) -> Ran:
     """Everything else of each clip (reading the file, its MOTION block, FK, features, contacts)
     as one task of one kernel call per hierarchy, clips in parallel (``clip_pipeline_many``; the
     NumPy twin composes the other kernels' twins; mirror images ride along in the same call),
-    the stored forms of :mod:`.derive` per hierarchy, then the model on the whole batch, then
-    each clip's sums for the normalisation statistics. Returns the outcomes, the seconds
-    :func:`prepare` took and the seconds taken here."""
+    then the stored forms of :mod:`.derive` per hierarchy; what the model and the statistics
+    still need (:func:`.model_step.run_model`) with them."""
     start = time.perf_counter()
     outcomes = prepared.outcomes
     use_model = any(k in MODEL_KINDS for k in keep)
@@ -433,14 +438,7 @@ def run_kernels(
         if survivors:
             carrier = next(owner for owner in owners if owner.error is None)
             finished.append((carrier, survivors))
-    if use_model:
-        parts = decompose_many(
-            [r for _, r, _, _ in kept], [f for _, _, f, _ in kept], model, [fps for *_, fps in kept], model_float32
-        )
-        for (values, *_), clip_parts in zip(kept, parts):
-            values.update({kind: v.astype(np.float32) for kind, v in clip_parts.items() if kind in keep})
-    add_sums(finished, keep)
-    return outcomes, prepared.seconds, time.perf_counter() - start
+    return Ran(outcomes, kept, finished, prepared.seconds, time.perf_counter() - start)
 
 
 def _finish_clip(
