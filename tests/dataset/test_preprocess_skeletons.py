@@ -120,3 +120,21 @@ def test_an_interrupted_mixed_run_resumes_into_the_same_dataset(mixed_zip, tmp_p
     assert resumed.finished and (resumed.clips_ok, resumed.clips_failed) == (straight.clips_ok, straight.clips_failed)
     s, r = (json.loads((tmp_path / d / "manifest.json").read_text()) for d in ("s", "r"))
     assert s["clips"] == r["clips"] and s["failures"] == r["failures"] and s["skeleton"] == r["skeleton"]
+
+
+def test_a_tar_stream_keeps_its_first_clips_skeleton_and_says_so(bandai2_dir, other_dir, tmp_path, capsys):
+    """A tar is read once, as a stream (scanning it first would decompress it twice): its first
+    readable clip's skeleton is the dataset's even when most clips are of another, as the docs
+    say; the others fail, most of them here, so the command exits 1 with the dataset written."""
+    import tarfile
+
+    archive = tmp_path / "mixed.tar.gz"
+    with tarfile.open(archive, "w:gz") as tar:
+        tar.add(other_dir / "cmu_01_01.bvh", "a_cmu_01_01.bvh")  # first in the stream
+        for name, source in _bandai(bandai2_dir).items():
+            tar.add(source, name)
+    assert main(["preprocess", str(archive), "-o", str(tmp_path / "t"), "-q"]) == 1
+    ds = load_dataset(tmp_path / "t")
+    assert ds.names == ["a_cmu_01_01"] and len(ds.skeleton["names"]) == 31
+    assert sorted(f["name"] for f in ds.failures) == sorted(f"dataset-2_{c}" for c in BANDAI)
+    assert "3 of the 4 clips" in capsys.readouterr().err
