@@ -104,6 +104,12 @@ def read_joint_map(path) -> dict[str, object]:
             data = json.loads(text)
     except (ValueError, RecursionError) as error:  # RecursionError: nested past Python's stack
         raise MocapError(f"{path}: not a valid joint map ({_said(error)})") from None
+    return map_table(data, path)
+
+
+def map_table(data: object, path) -> dict[str, object]:
+    """A joint map's table (as a map file holds it) checked: role -> joint name, ``spine`` -> a
+    list of names; errors name ``path``."""
     if not isinstance(data, dict):
         raise MocapError(f"{path}: a joint map is a table of role -> joint name, got {type(data).__name__}")
     out: dict[str, object] = {}
@@ -462,4 +468,13 @@ def _between(parents: np.ndarray, top: int, bottom: int) -> list[int]:
     return list(reversed(chain))
 
 
-__all__ = ["CENTRE_ROLES", "REQUIRED", "ROLES", "SIDED_ROLES", "JointMap", "find_joint_map", "read_joint_map"]
+__all__ = [
+    "CENTRE_ROLES",
+    "REQUIRED",
+    "ROLES",
+    "SIDED_ROLES",
+    "JointMap",
+    "find_joint_map",
+    "map_table",
+    "read_joint_map",
+]
