@@ -40,6 +40,7 @@ _LAZY = {
     "dynamic_features": "decoupling.features",
     "euler_to_quat": "ops",
     "exaggerate": "exaggeration",
+    "fit_positions": "skeletons.fit",
     "foot_contacts": "body.contacts",
     "forward_kinematics": "ops",
     "forward_kinematics_many": "ops",
@@ -74,6 +75,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers and editors
     from .exaggeration import ExaggerationModel, exaggerate
     from .motion import Motion, Skeleton
     from .ops import euler_to_quat, forward_kinematics, forward_kinematics_many, mlp_forward, quat_to_euler
+    from .skeletons.fit import fit_positions
 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
@@ -110,6 +112,7 @@ __all__ = [
     "decompose",
     "dynamic_features",
     "euler_to_quat",
+    "fit_positions",
     "foot_contacts",
     "gait_many",
     "forward_kinematics",

@@ -3,6 +3,8 @@
 - :mod:`.retargeting`: a motion moved onto another skeleton (:func:`retarget`);
 - :mod:`.twist`: how a bone faces about itself, read from joint positions;
 - :mod:`.mirror`: a motion mirrored left for right (:func:`mirror`);
+- :mod:`.fit`: joint positions (:mod:`.layouts`) fitted as a motion on a chosen skeleton
+  (:func:`fit_positions`);
 - :mod:`.synthetic`: the demo's walk on six synthetic skeletons, with their ground truth.
 """
 
@@ -11,7 +13,9 @@ from __future__ import annotations
 from .._utils.lazy import lazy_exports
 
 _LAZY = {
+    "LAYOUTS": "layouts",
     "Rig": "retargeting",
+    "fit_positions": "fit",
     "retarget": "retargeting",
     "mirror": "mirror",
     "RIGS": "synthetic",
@@ -22,7 +26,9 @@ _LAZY = {
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 __all__ = [
+    "LAYOUTS",
     "RIGS",
+    "fit_positions",
     "Rig",
     "mirror",
     "retarget",
