@@ -83,17 +83,21 @@ def test_fit_onto_the_same_bandai_rig(bandai2_dir, clip, layout):
     # measured: 0.07-0.53 cm mean, 0.17-0.85 cm worst frame (h36m17's run the largest)
     assert report.mean_all < 1.0 and report.worst_frame < 2.5, (report.mean_all, report.worst_frame)
     assert len(report.roles) == (16 if layout == "h36m17" else 20)
-    if layout != "h36m17":  # hands and feet: the forearm's and shin's twists
-        twists = [
-            twist_error(out, motion, f"{side}_{role}", f"{side}_{child}")
-            for side in ("left", "right")
-            for role, child in (("forearm", "hand"), ("lower_leg", "foot"))
-        ]
-        # measured: forearms 6.5-13.4, shins 4.6-9.3 degrees, but the active run's right shin 15.6
-        if clip == "run_active_001":
-            assert max(twists) < 16.0, twists
-        else:
-            assert max(twists) < 15.0, twists
+
+
+@pytest.mark.parametrize("layout", ["humanml3d", "smpl24"])  # the layouts with hands and feet
+@pytest.mark.parametrize("clip", BANDAI_CLIPS)
+def test_forearm_and_shin_twists_on_the_same_rig(bandai2_dir, clip, layout, request):
+    if clip == "run_active_001":  # measured: the right shin 15.6 degrees
+        request.applymarker(pytest.mark.xfail(strict=True, reason="a shin twists 15.6 degrees on the run"))
+    motion = em.read_bvh(bandai2_dir / f"dataset-2_{clip}.bvh")
+    out, _ = fit_positions(to_layout(motion, layout), layout, motion, fps=motion.fps)
+    twists = {
+        (side, role): twist_error(out, motion, f"{side}_{role}", f"{side}_{child}")
+        for side in ("left", "right")
+        for role, child in (("forearm", "hand"), ("lower_leg", "foot"))
+    }
+    assert max(twists.values()) < 15.0, twists  # measured: forearms 6.5-10.8, shins 4.6-8.4
 
 
 OTHER_FILES = {  # file: whether it meets the targets with both layouts
