@@ -24,6 +24,8 @@ def inputs(tmp_path_factory):
     em.write_bvh(pair.walk, paths["walk"])
     em.write_bvh(pair.waving, paths["wave"])
     em.write_bvh(procedural_walk(seconds=2.0, speed=1.5), paths["fast"])
+    paths["positions"] = folder / "walk.npz"
+    assert main(["positions", str(paths["walk"]), "-o", str(paths["positions"])]) == 0
     for k in (1, 2):
         for p in (0, 1):
             paths[f"level{k}_{p}"] = folder / f"level{k}_{p}.bvh"
@@ -44,6 +46,7 @@ def command(name, i, out):
         "convert": (["convert", i["walk"], "-o", out / "c.bvh"], ["c.bvh"]),
         "retarget": (["retarget", i["walk"], "--to", i["wave"], "-o", out / "rt.bvh"], ["rt.bvh"]),
         "positions": (["positions", i["walk"], "-o", out / "p.npz"], ["p.npz"]),
+        "fit": (["fit", i["positions"], "--to", i["wave"], "-o", out / "fit.bvh"], ["fit.bvh"]),
         "render": (["render", i["walk"], "--poses", "2", "-o", out / "r.png"], ["r.png"]),
         "decouple": (["decouple", i["wave"], "-o", out / "d"], ["d_body.bvh", "d_expressive.bvh", "d_activity.csv"]),
         "modulate": (["modulate", i["wave"], "--scale", "1.5", "-o", out / "m.bvh"], ["m.bvh"]),
@@ -81,6 +84,7 @@ WRITERS = [
     "convert",
     "retarget",
     "positions",
+    "fit",
     "render",
     "decouple",
     "modulate",

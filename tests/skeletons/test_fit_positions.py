@@ -240,3 +240,68 @@ def test_shapes_are_read_and_bad_ones_named(tmp_path):
         as_frames(batch, 22, "x", sample=2)
     with pytest.raises(MocapError, match="layout"):
         fit_positions(frames, "smpl99", em.read_bvh)  # type: ignore[arg-type]
+
+
+def run_cli(*args):
+    """The installed command in a subprocess, as a user runs it."""
+    import subprocess
+    import sys
+
+    return subprocess.run(
+        [sys.executable, "-m", "expressive_mocap.cli", *map(str, args)], capture_output=True, text=True
+    )
+
+
+def test_cli_fits_an_npy_and_a_batch_npz(bandai2_dir, tmp_path):
+    walk = bandai2_dir / "dataset-2_walk_normal_001.bvh"
+    motion = em.read_bvh(walk)
+    positions = to_layout(motion, "humanml3d") / 100.0  # metres, as HumanML3D's
+    np.save(tmp_path / "walk.npy", positions)
+    batch = np.stack([np.moveaxis(positions, 0, -1) + 5.0, np.moveaxis(positions, 0, -1)])  # [N, J, 3, F]
+    np.savez(tmp_path / "batch.npz", motion=batch)
+    for name, extra in (("walk.npy", []), ("batch.npz", ["--sample", "1"])):
+        out = tmp_path / f"{name}.bvh"
+        result = run_cli(
+            "fit", tmp_path / name, "--layout", "humanml3d", "--to", walk, "-o", out, "--fps", "30", *extra
+        )
+        assert result.returncode == 0, result.stderr
+        assert "fit error: mean" in result.stdout and "roles fitted" in result.stdout
+        fitted = em.read_bvh(out)
+        assert fitted.skeleton.names == motion.skeleton.names and fitted.n_frames == motion.n_frames
+        assert abs(fitted.fps - 30.0) < 1e-6
+        jmap = Body.of(motion.skeleton).joint_map
+        hands = [jmap["left_hand"], jmap["right_hand"]]
+        lift = np.median(fitted.positions()[:, jmap["hips"]] - motion.positions()[:, jmap["hips"]], axis=0)
+        assert np.abs(fitted.positions()[:, hands] - lift - motion.positions()[:, hands]).mean() < 1.0  # cm
+
+
+def test_cli_fits_the_npz_of_the_positions_command(bandai2_dir, tmp_path):
+    walk = bandai2_dir / "dataset-2_walk_normal_001.bvh"
+    assert run_cli("positions", walk, "-o", tmp_path / "walk.npz").returncode == 0
+    result = run_cli("fit", tmp_path / "walk.npz", "--to", walk, "-o", tmp_path / "out.bvh")
+    assert result.returncode == 0, result.stderr
+    assert em.read_bvh(tmp_path / "out.bvh").n_frames == em.read_bvh(walk).n_frames
+
+
+def test_cli_bad_inputs_are_one_line_errors(bandai2_dir, tmp_path):
+    walk = bandai2_dir / "dataset-2_walk_normal_001.bvh"
+    np.save(tmp_path / "short.npy", np.zeros((10, 20, 3)))
+    np.savez(tmp_path / "empty.npz", names=np.array(["a"]))
+    (tmp_path / "text.npy").write_text("not an array")
+    cases = {
+        "short.npy": ("humanml3d", "found an array of shape [10, 20, 3]"),
+        "empty.npz": ("humanml3d", "no positions array"),
+        "text.npy": ("humanml3d", "not a NumPy .npy or .npz file"),
+        "short.npy ": ("nonsense", "expected humanml3d, smpl24, h36m17"),
+    }
+    for name, (layout, said) in cases.items():
+        out = tmp_path / "out.bvh"
+        result = run_cli("fit", tmp_path / name.strip(), "--layout", layout, "--to", walk, "-o", out)
+        assert result.returncode != 0 and not out.exists()
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
+        assert said in lines[0] and (layout == "nonsense" or name.strip() in lines[0]), lines[0]
+    missing = run_cli(
+        "fit", tmp_path / "short.npy", "--layout", "h36m17", "--to", walk, "-o", tmp_path / "no" / "o.bvh"
+    )
+    assert missing.returncode != 0 and "does not exist" in missing.stderr  # outputs checked before any work

@@ -30,7 +30,7 @@ __all__ = ["COMMANDS", "DEMO_FILES", "PROG", "build_parser", "main"]
 COMMANDS = {
     "files": ("info", "positions", "convert"),
     "pictures": ("render",),
-    "skeletons": ("skeleton", "retarget"),
+    "skeletons": ("skeleton", "retarget", "fit"),
     "decoupling": ("decouple", "modulate", "mix", "blend", "train", "calibrate"),
     "exaggeration": ("rank", "exaggerate", "validate", "models"),
     "data": ("footsteps", "preprocess"),
@@ -82,7 +82,7 @@ def build_parser(command: str | None = None, commands_needed: bool = True) -> ar
 # Commands whose one output may be standard output (`-o -` or `-o /dev/stdout`): a BVH or .npz
 # streamed as it is; their report lines then go to stderr. Pictures pick their format from the
 # name, decouple writes three files and demo/preprocess a folder, so they take none.
-_STREAMING = ("convert", "positions", "retarget", "modulate", "mix", "blend", "exaggerate", "calibrate", "train")
+_STREAMING = ("convert", "positions", "retarget", "fit", "modulate", "mix", "blend", "exaggerate", "calibrate", "train")
 _MAKE_FOLDERS = ("demo", "preprocess")  # their OUT is a folder, made if new
 
 

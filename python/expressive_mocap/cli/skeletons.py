@@ -1,5 +1,6 @@
 """Commands on skeletons: ``skeleton`` (what the package reads from a file: joint map and
-conventions) and ``retarget`` (a motion onto another skeleton)."""
+conventions), ``retarget`` (a motion onto another skeleton) and ``fit`` (joint positions as a
+motion on a chosen skeleton)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from ..bvh import read_bvh, write_bvh
 from ..errors import MocapError
 from .common import PROG, positive
 
-__all__ = ["add_parsers", "cmd_retarget", "cmd_skeleton"]
+__all__ = ["add_parsers", "cmd_fit", "cmd_retarget", "cmd_skeleton"]
 
 _AXES_HELP = "an axis: X, Y, Z, with a sign for facing (e.g. -Y)"
 
@@ -180,6 +181,81 @@ def cmd_retarget(args) -> int:
     return 0
 
 
+def add_fit(commands) -> None:
+    p = commands.add_parser(
+        "fit",
+        help="joint positions (.npy/.npz of a motion model or pose estimator) as a motion on TARGET's skeleton",
+        description="Builds the layout's skeleton from the positions (median bone lengths), reads each frame's "
+        "rotations from them (bone directions; twists from the hips' and shoulders' lines, the elbows' and knees' "
+        "planes, the feet), then retargets that motion onto TARGET (feet planted unless --no-plant-feet) and "
+        "reports how far its mapped joints fall from the positions.",
+    )
+    p.add_argument(
+        "file",
+        metavar="POSITIONS",
+        help=".npy or .npz ([F, J, 3], [N, J, 3, F] or [F, J*3]; .npz key: positions, "
+        "joints, motion, poses, data, arr_0 or its only array)",
+    )
+    p.add_argument(
+        "--layout",
+        metavar="NAME|LAYOUT.json",
+        help="the joints' order: humanml3d, smpl24, h36m17 or a JSON layout (joints, parents, map) "
+        "(default: the joints and parents an .npz of `positions` carries)",
+    )
+    p.add_argument("--to", required=True, metavar="TARGET.bvh", help="BVH file giving the skeleton and rest pose")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write the fitted motion")
+    p.add_argument("--to-map", metavar="MAP", help="joint map file for TARGET")
+    p.add_argument(
+        "--sample", type=int, default=0, metavar="K", help="which sample of an [N, J, 3, F] array (default 0)"
+    )
+    p.add_argument(
+        "--fps",
+        type=positive(float),
+        metavar="F",
+        help="the positions' frame rate (default: the file's, else the layout's)",
+    )
+    p.add_argument("--up", choices=("y", "z"), help="the positions' up axis (default: read from the data)")
+    p.add_argument(
+        "--unit", choices=("m", "cm", "mm", "in", "cmu"), help="the positions' length unit (default: guessed)"
+    )
+    p.add_argument(
+        "--no-plant-feet", dest="plant_feet", action="store_false", help="leave the feet where the bones put them"
+    )
+    p.set_defaults(run=cmd_fit)
+
+
+def cmd_fit(args) -> int:
+    from ..skeletons.fit import fit_positions
+
+    target = read_bvh(args.to)
+    out, report = fit_positions(
+        args.file,
+        args.layout,
+        target,
+        fps=args.fps,
+        up=args.up,
+        unit=args.unit,
+        sample=args.sample,
+        plant_feet=args.plant_feet,
+        target_map=_map_file(args.to_map),
+    )
+    write_bvh(out, args.output)
+    cm = 100.0 * report.metres_per_unit
+    print(
+        f"{args.output}: {out.n_frames} frames at {out.fps:.6g} fps on {args.to}'s skeleton "
+        f"({target.skeleton.n_joints} joints); {len(report.roles)} roles fitted (positions read {report.up} up)"
+        + ("; feet planted" if args.plant_feet else "")
+    )
+    print(
+        f"  fit error: mean {report.mean_all * cm:.2f} cm, worst frame {report.worst_frame * cm:.2f} cm "
+        f"(target joints vs the positions scaled by the legs' ratio)"
+    )
+    worst = sorted(report.mean, key=report.mean.__getitem__, reverse=True)[:3]
+    print("  largest: " + ", ".join(f"{report.roles[r]} {report.mean[r] * cm:.2f} cm" for r in worst))
+    return 0
+
+
 def add_parsers(commands) -> None:
     add_skeleton(commands)
     add_retarget(commands)
+    add_fit(commands)
