@@ -33,7 +33,7 @@ import numpy as np
 
 from ..body.jointmap import JointMap, find_joint_map
 from ..errors import MocapError
-from ..motion import Motion, Skeleton
+from ..motion import Motion, Skeleton, spread_frames
 from ..rotations import quat
 from . import twist
 from .layouts import Layout, layout_of, read_positions
@@ -224,9 +224,15 @@ def _flat_feet(positions: np.ndarray, jmap: JointMap, plan: _Plan) -> dict[int, 
     return out
 
 
+SAMPLED = 256
+
+
 def fit_skeleton(positions: np.ndarray, layout: Layout) -> tuple[Skeleton, dict[str, object], _Plan]:
     """The layout's skeleton built from ``positions [F, J, 3]`` (Y up), the joint map it is read
-    with (a user map naming every role) and the plan of its rotations."""
+    with (a user map naming every role) and the plan of its rotations. Its medians are over at
+    most :data:`SAMPLED` frames spread over the clip (a median over a clip's evenly spread frames is
+    as good: a fifth of the time of a 1,000-frame fit went to them)."""
+    positions = positions[spread_frames(len(positions), SAMPLED)]
     parents = np.array(layout.parents)
     lengths = np.median(np.linalg.norm(positions[:, 1:] - positions[:, parents[1:]], axis=-1), axis=0)
     jmap = find_joint_map(_draft(positions, layout), layout.joint_map)
