@@ -37,6 +37,7 @@ PAGES = [
     "docs/demo.md",
     "docs/bvh.md",
     "docs/skeletons.md",
+    "docs/positions.md",
     "docs/skeletons-results.md",
     "docs/decoupling.md",
     "docs/decoupling-results.md",
