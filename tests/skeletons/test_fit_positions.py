@@ -319,3 +319,14 @@ def test_cli_bad_inputs_are_one_line_errors(bandai2_dir, tmp_path):
         "fit", tmp_path / "short.npy", "--layout", "h36m17", "--to", walk, "-o", tmp_path / "no" / "o.bvh"
     )
     assert missing.returncode != 0 and "does not exist" in missing.stderr  # outputs checked before any work
+
+
+def test_z_up_metres_fit_as_y_up_centimetres(bandai2_dir):
+    motion = em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh")
+    positions = to_layout(motion, "humanml3d")
+    y_up, report = fit_positions(positions, "humanml3d", motion, fps=30.0)
+    z_up = np.stack([positions[..., 0], -positions[..., 2], positions[..., 1]], axis=-1) / 100.0  # AMASS-like
+    for up, unit in ((None, None), ("z", "m")):
+        fitted, z_report = fit_positions(z_up, "humanml3d", motion, fps=30.0, up=up, unit=unit)
+        assert z_report.up == "+Z" and report.up == "+Y"
+        assert np.abs(fitted.positions() - y_up.positions()).max() < 1e-4  # cm
