@@ -106,11 +106,21 @@ def add_convert(commands) -> None:
     p = commands.add_parser(
         "convert", help="rewrite a BVH file, optionally resampled, scaled or in another rotation order"
     )
-    p.add_argument("input", metavar="IN", help="BVH file")
+    p.add_argument("input", metavar="IN", help="BVH file, or an SMPL/AMASS parameter file (.npz, with --body-model)")
     p.add_argument(
         "-o", "--output", required=True, metavar="OUT.bvh", help="where to write (atomically; - for standard output)"
     )
-    p.add_argument("--fps", type=positive(float), help="resample to this frame rate (slerp)")
+    p.add_argument(
+        "--body-model",
+        metavar="MODEL.npz",
+        help="the SMPL-family body model (your own .npz: v_template, shapedirs, J_regressor, kintree_table) "
+        "an .npz input is read with",
+    )
+    p.add_argument(
+        "--fps",
+        type=positive(float),
+        help="resample to this frame rate (slerp); for an .npz without mocap_framerate, its frame rate",
+    )
     p.add_argument("--scale", type=positive(float), help="multiply every length, e.g. 0.01 for cm to m")
     p.add_argument(
         "--order", type=str.upper, choices=ORDERS, help="write every joint's rotation channels in this order"
@@ -132,8 +142,19 @@ def _option(path: str, option: str, value):
 
 
 def cmd_convert(args) -> int:
-    motion = read_bvh(args.input)
-    if args.fps:
+    if Path(args.input).suffix.lower() == ".npz":
+        if not args.body_model:
+            raise MocapError(f"{args.input}: an .npz parameter file (SMPL/AMASS) needs --body-model MODEL.npz")
+        from ..skeletons.smpl import read_smpl
+
+        motion = read_smpl(args.input, args.body_model, fps=args.fps)
+    elif args.body_model:
+        raise MocapError(
+            f"--body-model {args.body_model}: only for an SMPL/AMASS parameter file (.npz), not {args.input}"
+        )
+    else:
+        motion = read_bvh(args.input)
+    if args.fps and abs(args.fps - motion.fps) > 1e-9 * args.fps:
         with _option(args.input, "--fps", args.fps):
             motion = motion.resample(fps=args.fps)
     if args.scale:

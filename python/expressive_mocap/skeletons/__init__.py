@@ -5,6 +5,7 @@
 - :mod:`.mirror`: a motion mirrored left for right (:func:`mirror`);
 - :mod:`.fit`: joint positions (:mod:`.layouts`) fitted as a motion on a chosen skeleton
   (:func:`fit_positions`);
+- :mod:`.smpl`: SMPL-family parameter files (AMASS) on the user's body model (:func:`read_smpl`);
 - :mod:`.synthetic`: the demo's walk on six synthetic skeletons, with their ground truth.
 """
 
@@ -18,6 +19,7 @@ _LAZY = {
     "fit_positions": "fit",
     "retarget": "retargeting",
     "mirror": "mirror",
+    "read_smpl": "smpl",
     "RIGS": "synthetic",
     "synthetic_skeleton": "synthetic",
     "synthetic_walk": "synthetic",
@@ -31,6 +33,7 @@ __all__ = [
     "fit_positions",
     "Rig",
     "mirror",
+    "read_smpl",
     "retarget",
     "synthetic_skeleton",
     "synthetic_walk",
