@@ -6,50 +6,13 @@ its record; without it each keeps its own and the manifest names no one rate."""
 from __future__ import annotations
 
 import math
-import zipfile
-from pathlib import Path
 
 import pytest
 
 import expressive_mocap as em
-from expressive_mocap.bvh import read_header
 from expressive_mocap.cli import main
 from expressive_mocap.dataset import load_dataset, preprocess
-
-# Short dataset-2 clips (30 fps), and the CMU clips beside the archives (120 fps).
-BANDAI = ("raise-up-both-hands_active_022", "raise-up-both-hands_active_025", "wave-left-hand_active_011")
-CMU = ("cmu_01_01", "cmu_scaled_131_03")
-
-
-def _zip(path: Path, members: dict[str, Path]) -> Path:
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
-        for name, source in members.items():
-            archive.write(source, name)
-    return path
-
-
-def _bandai(bandai2_dir: Path, count: int = len(BANDAI)) -> dict[str, Path]:
-    return {f"dataset-2_{clip}.bvh": bandai2_dir / f"dataset-2_{clip}.bvh" for clip in BANDAI[:count]}
-
-
-def _cmu(other_dir: Path) -> dict[str, Path]:
-    return {f"{clip}.bvh": other_dir / f"{clip}.bvh" for clip in CMU}
-
-
-@pytest.fixture(scope="module")
-def mixed_zip(bandai2_dir, other_dir, tmp_path_factory) -> tuple[Path, dict[str, Path]]:
-    """3 Bandai clips at 30 fps and 2 CMU clips at 120 fps, the CMU clips first by name."""
-    members = {**_bandai(bandai2_dir), **_cmu(other_dir)}
-    return _zip(tmp_path_factory.mktemp("mixed") / "mixed.zip", members), members
-
-
-def _source_rates(members: dict[str, Path]) -> dict[str, tuple[int, float]]:
-    """Each clip's (frames, frame rate) as its own file's header says."""
-    out = {}
-    for name, path in members.items():
-        header = read_header(path)[0]
-        out[name[:-4]] = (header.frames, 1.0 / header.frame_time)
-    return out
+from mixed_archives import BANDAI, source_rates
 
 
 def test_canonical_stores_every_clip_at_the_rate_most_share_keeping_durations(mixed_zip, tmp_path, capsys):
@@ -57,7 +20,7 @@ def test_canonical_stores_every_clip_at_the_rate_most_share_keeping_durations(mi
     assert main(["preprocess", str(archive), "-o", str(tmp_path / "one"), "--canonical", "-q"]) == 0
     manifest = load_dataset(tmp_path / "one").manifest
     assert manifest["fps"] == 30.0 and manifest["options"]["fps"] == 30.0  # 3 clips at 30 fps, 2 at 120
-    source = _source_rates(members)
+    source = source_rates(members)
     assert {c["name"] for c in manifest["clips"]} == set(source) and not manifest["failures"]
     for clip in manifest["clips"]:
         frames, rate = source[clip["name"]]
@@ -74,7 +37,7 @@ def test_canonical_with_fps_given_takes_that_rate(mixed_zip, tmp_path):
     archive, members = mixed_zip
     assert main(["preprocess", str(archive), "-o", str(tmp_path / "f"), "--canonical", "--fps", "60", "-q"]) == 0
     manifest = load_dataset(tmp_path / "f").manifest
-    source = _source_rates(members)
+    source = source_rates(members)
     assert manifest["fps"] == 60.0 and {c["fps"] for c in manifest["clips"]} == {60.0}
     for clip in manifest["clips"]:
         frames, rate = source[clip["name"]]

@@ -6,50 +6,12 @@ are of others and what to do, and the command fails when most clips did."""
 from __future__ import annotations
 
 import json
-import zipfile
-from pathlib import Path
 
 import numpy as np
-import pytest
 
-from expressive_mocap.bvh import read_header
 from expressive_mocap.cli import main
 from expressive_mocap.dataset import load_dataset, preprocess
-
-# Short dataset-2 clips (30 fps), and the CMU clips beside the archives (120 fps).
-BANDAI = ("raise-up-both-hands_active_022", "raise-up-both-hands_active_025", "wave-left-hand_active_011")
-CMU = ("cmu_01_01", "cmu_scaled_131_03")
-
-
-def _zip(path: Path, members: dict[str, Path]) -> Path:
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
-        for name, source in members.items():
-            archive.write(source, name)
-    return path
-
-
-def _bandai(bandai2_dir: Path, count: int = len(BANDAI)) -> dict[str, Path]:
-    return {f"dataset-2_{clip}.bvh": bandai2_dir / f"dataset-2_{clip}.bvh" for clip in BANDAI[:count]}
-
-
-def _cmu(other_dir: Path) -> dict[str, Path]:
-    return {f"{clip}.bvh": other_dir / f"{clip}.bvh" for clip in CMU}
-
-
-@pytest.fixture(scope="module")
-def mixed_zip(bandai2_dir, other_dir, tmp_path_factory) -> tuple[Path, dict[str, Path]]:
-    """3 Bandai clips at 30 fps and 2 CMU clips at 120 fps, the CMU clips first by name."""
-    members = {**_bandai(bandai2_dir), **_cmu(other_dir)}
-    return _zip(tmp_path_factory.mktemp("mixed") / "mixed.zip", members), members
-
-
-def _source_rates(members: dict[str, Path]) -> dict[str, tuple[int, float]]:
-    """Each clip's (frames, frame rate) as its own file's header says."""
-    out = {}
-    for name, path in members.items():
-        header = read_header(path)[0]
-        out[name[:-4]] = (header.frames, 1.0 / header.frame_time)
-    return out
+from mixed_archives import BANDAI, CMU, bandai_members, cmu_members, zip_of
 
 
 def test_the_skeleton_most_clips_share_is_kept_whatever_comes_first(mixed_zip, bandai2_dir, tmp_path, capsys):
@@ -73,8 +35,8 @@ def test_when_most_clips_fail_the_command_says_so_and_exits_1_with_the_dataset_w
     """2 Bandai clips and 3 clips of three other skeletons (the two CMU clips name their joints
     differently, an m21 rig): the Bandai clips are most, yet 3 of 5 failed: status 1, said on
     stderr, and the 2 clips that worked are still a dataset."""
-    members = {**_cmu(other_dir), **_bandai(bandai2_dir, 2), "m21_walk.bvh": other_dir / "m21_walk.bvh"}
-    archive = _zip(tmp_path / "four.zip", members)
+    members = {**cmu_members(other_dir), **bandai_members(bandai2_dir, 2), "m21_walk.bvh": other_dir / "m21_walk.bvh"}
+    archive = zip_of(tmp_path / "four.zip", members)
     assert main(["preprocess", str(archive), "-o", str(tmp_path / "t"), "-q"]) == 1
     said = capsys.readouterr()
     assert f"3 of the 5 clips of {archive} failed" in said.err
@@ -87,7 +49,9 @@ def test_when_most_clips_fail_the_command_says_so_and_exits_1_with_the_dataset_w
 def test_a_tie_keeps_the_first_clips_skeleton_by_name(bandai2_dir, other_dir, tmp_path, capsys):
     """One CMU clip and one Bandai clip: no skeleton is most, the first by name is kept (as before
     the scan); half failed, not most: status 0."""
-    archive = _zip(tmp_path / "tie.zip", {**_bandai(bandai2_dir, 1), "cmu_01_01.bvh": other_dir / "cmu_01_01.bvh"})
+    archive = zip_of(
+        tmp_path / "tie.zip", {**bandai_members(bandai2_dir, 1), "cmu_01_01.bvh": other_dir / "cmu_01_01.bvh"}
+    )
     assert main(["preprocess", str(archive), "-o", str(tmp_path / "t"), "-q"]) == 0
     ds = load_dataset(tmp_path / "t")
     assert ds.names == ["cmu_01_01"] and [f["name"] for f in ds.failures] == [f"dataset-2_{BANDAI[0]}"]
@@ -97,8 +61,8 @@ def test_a_tie_keeps_the_first_clips_skeleton_by_name(bandai2_dir, other_dir, tm
 def test_when_the_first_clip_is_of_the_majority_nothing_changes(bandai2_dir, other_dir, tmp_path):
     """Bandai clips first by name and most: the dataset's arrays are byte for byte those of the
     Bandai clips alone, the CMU clip a failure."""
-    alone = _zip(tmp_path / "alone.zip", _bandai(bandai2_dir))
-    mixed = _zip(tmp_path / "mixed.zip", {**_bandai(bandai2_dir), "zz_cmu.bvh": other_dir / "cmu_01_01.bvh"})
+    alone = zip_of(tmp_path / "alone.zip", bandai_members(bandai2_dir))
+    mixed = zip_of(tmp_path / "mixed.zip", {**bandai_members(bandai2_dir), "zz_cmu.bvh": other_dir / "cmu_01_01.bvh"})
     preprocess(alone, tmp_path / "a", progress=False)
     summary = preprocess(mixed, tmp_path / "b", progress=False)
     assert summary.clips_ok == 3 and summary.clips_failed == 1 and summary.other_skeletons == 1
@@ -131,7 +95,7 @@ def test_a_tar_stream_keeps_its_first_clips_skeleton_and_says_so(bandai2_dir, ot
     archive = tmp_path / "mixed.tar.gz"
     with tarfile.open(archive, "w:gz") as tar:
         tar.add(other_dir / "cmu_01_01.bvh", "a_cmu_01_01.bvh")  # first in the stream
-        for name, source in _bandai(bandai2_dir).items():
+        for name, source in bandai_members(bandai2_dir).items():
             tar.add(source, name)
     assert main(["preprocess", str(archive), "-o", str(tmp_path / "t"), "-q"]) == 1
     ds = load_dataset(tmp_path / "t")
