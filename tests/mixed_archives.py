@@ -1,7 +1,7 @@
 """Small archives that mix skeletons and frame rates, for the preprocess tests: short dataset-2
 clips (30 fps; Bandai-Namco-Research-Motiondataset, CC BY-NC 4.0) and the CMU clips beside the
 archives (120 fps; CMU Graphics Lab Motion Capture Database). Their fixture, ``mixed_zip``, is in
-tests/dataset/conftest.py."""
+tests/conftest.py."""
 
 from __future__ import annotations
 
