@@ -106,20 +106,35 @@ fn split_rotations<'py>(
         contiguous("scale", &scale)?,
     );
     let bones: Vec<DVec3> = trunk_bones.into_iter().map(DVec3::from_array).collect();
-    let trunk = (!trunk_joints.is_empty()).then(|| crate::decouple::Trunk {
-        joints: &trunk_joints,
-        bones: &bones,
+    let chain = (&trunk_joints[..], &bones[..], trunk_scale);
+    let (e, recovered, a) =
+        py.detach(|| smoothed_split(o, b, gain, exponent, s, (body_sigma, activity_sigma), chain))?;
+    split_arrays(py, e, recovered, a, &shape)
+}
+
+/// One clip's [`crate::decouple::split`] with its smoothing widths `(body, activity)`, the
+/// per-joint `scale` and the trunk `chain` (joints, bones, scale; no joints: none).
+fn smoothed_split(
+    original: &[f64],
+    body: &[f64],
+    gain: f64,
+    exponent: f64,
+    scale: &[f64],
+    (body_sigma, activity_sigma): (f64, f64),
+    (joints, bones, trunk_scale): (&[usize], &[DVec3], f64),
+) -> crate::error::Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    let trunk = (!joints.is_empty()).then_some(crate::decouple::Trunk {
+        joints,
+        bones,
         scale: trunk_scale,
     });
     let smoothing = crate::decouple::Smoothing {
         body_sigma,
         activity_sigma,
-        scale: s,
+        scale,
         trunk,
     };
-    let (e, recovered, a) =
-        py.detach(|| crate::decouple::split(o, b, gain, exponent, &smoothing))?;
-    split_arrays(py, e, recovered, a, &shape)
+    crate::decouple::split(original, body, gain, exponent, &smoothing)
 }
 
 /// [`split_rotations`] of many clips in one call, clips in parallel: `originals` and `bodies`
@@ -178,18 +193,8 @@ fn split_rotations_many<'py>(
         jobs.par_iter()
             .zip(body_sigmas.par_iter().zip(&activity_sigmas))
             .map(|((o, b, _), (&body_sigma, &activity_sigma))| {
-                let trunk = (!trunk_joints.is_empty()).then(|| crate::decouple::Trunk {
-                    joints: &trunk_joints,
-                    bones: &bones,
-                    scale: trunk_scale,
-                });
-                let smoothing = crate::decouple::Smoothing {
-                    body_sigma,
-                    activity_sigma,
-                    scale: s,
-                    trunk,
-                };
-                crate::decouple::split(o, b, gain, exponent, &smoothing)
+                let chain = (&trunk_joints[..], &bones[..], trunk_scale);
+                smoothed_split(o, b, gain, exponent, s, (body_sigma, activity_sigma), chain)
             })
             .collect::<Result<Vec<_>, _>>()
     })?;
