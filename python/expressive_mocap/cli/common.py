@@ -18,6 +18,7 @@ __all__ = [
     "DEMO_FILES",
     "PROG",
     "Parser",
+    "add_body_model_option",
     "add_map_option",
     "default",
     "finite",
@@ -25,6 +26,7 @@ __all__ = [
     "positive",
     "read_all",
     "read_for_model",
+    "read_motion",
     "read_on_model",
 ]
 
@@ -93,6 +95,33 @@ def add_map_option(p) -> None:
     )
 
 
+def add_body_model_option(p) -> None:
+    """--body-model: the SMPL-family body model an .npz parameter file (AMASS) is read with."""
+    p.add_argument(
+        "--body-model",
+        metavar="SMPL.npz",
+        help="the SMPL-family body model (your own .npz: v_template, shapedirs, J_regressor, kintree_table) "
+        "that SMPL/AMASS parameter files (.npz inputs) are read with",
+    )
+
+
+def read_motion(path: str, args, fps: float | None = None) -> Motion:
+    """The motion of an input file: a BVH file, or an SMPL-family parameter file (``.npz``, AMASS)
+    read with ``args.body_model`` (``fps``: the frame rate of one without ``mocap_framerate``)."""
+    from pathlib import Path
+
+    if Path(path).suffix.lower() == ".npz":
+        smpl_model = getattr(args, "body_model", None)
+        if not smpl_model:
+            raise MocapError(f"{path}: an .npz parameter file (SMPL/AMASS) needs --body-model SMPL.npz")
+        from ..skeletons.smpl import read_smpl
+
+        return read_smpl(path, smpl_model, fps=fps)
+    from ..bvh import read_bvh
+
+    return read_bvh(path)
+
+
 def joint_map(args) -> dict | None:
     """The joint map of ``--map``, if given."""
     from ..body import read_joint_map
@@ -101,24 +130,26 @@ def joint_map(args) -> dict | None:
     return read_joint_map(path) if path else None
 
 
-def read_for_model(path: str, model, fix: str, user_map: dict | None = None) -> Motion:
-    """A BVH file that the model can take, on the model's skeleton: a motion of another humanoid
-    skeleton is put on the canonical body the shipped models know (see :func:`read_on_model`
-    for the way back); a skeleton that cannot be is an error naming the file and ``fix``."""
-    return read_on_model(path, model, fix, user_map)[0]
+def read_for_model(path: str, model, fix: str, args) -> Motion:
+    """An input file (:func:`read_motion`) that the model can take, on the model's skeleton: a
+    motion of another humanoid skeleton is put on the canonical body the shipped models know
+    (see :func:`read_on_model` for the way back); a skeleton that cannot be is an error naming
+    the file and ``fix``."""
+    return read_on_model(path, model, fix, args)[0]
 
 
 def read_on_model(
-    path: str, model, fix: str, user_map: dict | None = None, motion: Motion | None = None
+    path: str, model, fix: str, args, motion: Motion | None = None
 ) -> tuple[Motion, Callable[..., Motion]]:
-    """A BVH file on the model's skeleton, and how to carry an edit of it back to the file's own
-    skeleton (the identity when the file is on the model's skeleton already; otherwise
-    :class:`~expressive_mocap.skeletons.canonical.Carried`). ``motion``: the file's motion when
-    already read, or changed (an edit that retimed it carries back onto it retimed alike)."""
-    from ..bvh import read_bvh  # here, as in every function below: building the parser reads no BVH
-    from ..skeletons.canonical import carried_for
+    """An input file (:func:`read_motion`) on the model's skeleton, and how to carry an edit of
+    it back to the file's own skeleton (the identity when the file is on the model's skeleton
+    already; otherwise :class:`~expressive_mocap.skeletons.canonical.Carried`). ``args``: the
+    command's (its ``--map`` and ``--body-model``). ``motion``: the file's motion when already
+    read, or changed (an edit that retimed it carries back onto it retimed alike)."""
+    from ..skeletons.canonical import carried_for  # here: building the parser reads no BVH
 
-    motion = read_bvh(path) if motion is None else motion
+    user_map = joint_map(args)
+    motion = read_motion(path, args) if motion is None else motion
     try:
         carried = carried_for(motion, model, user_map)
     except MocapError as error:
@@ -136,14 +167,14 @@ def read_on_model(
     return carried.body, carried.back
 
 
-def read_all(paths: list[str], what: str, quiet: bool = False) -> list[Motion]:
-    """BVH files read one after the other, with a progress bar on stderr (see progress.Progress)."""
+def read_all(paths: list[str], what: str, quiet: bool = False, args=None) -> list[Motion]:
+    """Input files (:func:`read_motion`, with ``args``' ``--body-model``) read one after the
+    other, with a progress bar on stderr (see progress.Progress)."""
     from .._utils.progress import Progress
-    from ..bvh import read_bvh
 
     with Progress(len(paths), f"reading {what}", "files", enabled=bool(paths) and not quiet) as bar:
         motions = []
         for path in paths:
-            motions.append(read_bvh(path))
+            motions.append(read_motion(path, args))
             bar.update()
     return motions

@@ -8,10 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from ..body.contacts import HEIGHT_THRESHOLD, MIN_DURATION, SPEED_THRESHOLD
-from ..bvh import read_bvh
 from ..dataset import preprocess
 from ..errors import MocapError
-from .common import PROG, default, finite, positive
+from .common import PROG, add_body_model_option, default, finite, positive, read_motion
 
 __all__ = ["add_parsers", "cmd_footsteps", "cmd_preprocess"]
 
@@ -24,7 +23,10 @@ def add_footsteps(commands) -> None:
         f"contacts and flights shorter than {MIN_DURATION:g} s are absorbed (offline) or held off (--causal). "
         "Prints each foot's contact intervals in frames and seconds, then the steps and the cadence.",
     )
-    p.add_argument("file", metavar="FILE", help="BVH file of any humanoid skeleton (see `skeleton`)")
+    p.add_argument(
+        "file", metavar="FILE", help="BVH file of any humanoid skeleton (see `skeleton`), or an SMPL/AMASS .npz"
+    )
+    add_body_model_option(p)
     p.add_argument("--map", metavar="MAP.json|MAP.toml", help="joint map for roles the names and topology do not find")
     p.add_argument("--plot", metavar="OUT.png", help="also write a gait diagram: one row per foot, a bar per contact")
     p.add_argument(
@@ -58,7 +60,7 @@ def cmd_footsteps(args) -> int:
     from ..body.conventions import upright
     from ..body.take import Take
 
-    motion = upright(read_bvh(args.file))  # contacts are read along Y: a Z-up file is turned first
+    motion = upright(read_motion(args.file, args))  # contacts are read along Y: a Z-up file is turned first
     take = Take.of(motion, _joint_map(args.map) if args.map else None)
     roles, height = take.body.roles, take.body.actor_height
     names = roles.names(motion.skeleton)
@@ -137,6 +139,7 @@ def add_preprocess(commands) -> None:
     p.add_argument(
         "--mirror", action="store_true", help="also store each clip mirrored left for right, as NAME@mirrored"
     )
+    add_body_model_option(p)
     p.add_argument(
         "--model",
         nargs="?",
@@ -202,13 +205,16 @@ def cmd_preprocess(args) -> int:
         positions=args.positions,
         fps=args.fps,
         mirror=args.mirror,
+        smpl_model=args.body_model,
     )
     print("\n".join(summary.lines()))
     if summary.finished and summary.clips_ok == 0:  # a dataset of nothing is not a success
         if summary.clips_failed:
             found = f"none of its {summary.clips_failed} clips could be read (see the failures above)"
         else:
-            found = "it holds no .bvh clips"
+            found = "it holds no .bvh clips" + (
+                " or .npz parameter files" if args.body_model else _npz_hint(args.source)
+            )
         raise MocapError(f"{args.source}: {found}; {args.output} holds no data")
     if summary.finished and summary.most_failed:  # a dataset of the few clips that worked: not what was asked
         ok = summary.clips_ok - summary.clips_mirrored
@@ -222,6 +228,14 @@ def cmd_preprocess(args) -> int:
         )
         return 1
     return 0
+
+
+def _npz_hint(source: str) -> str:
+    """For a folder of ``.npz`` files read without --body-model: what they need."""
+    folder = Path(source)
+    if folder.is_dir() and next(folder.rglob("*.npz"), None) is not None:
+        return " (its .npz files are read as SMPL/AMASS parameters with --body-model SMPL.npz)"
+    return ""
 
 
 def _joint_map(path: str | None) -> dict | None:

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 
 from .._utils.files import atomic_write_all, open_input
-from ..bvh import bvh_bytes, read_bvh, write_bvh
+from ..bvh import bvh_bytes, write_bvh
 from ..decoupling.algebra import EXPONENT, GAIN
 from ..decoupling.edits import blend, mix
 from ..decoupling.training import train_body_model
@@ -18,13 +18,14 @@ from ..errors import MocapError
 from .common import (
     DECOUPLE_SUFFIXES,
     PROG,
+    add_body_model_option,
     add_map_option,
     default,
     finite,
-    joint_map,
     positive,
     read_all,
     read_for_model,
+    read_motion,
     read_on_model,
 )
 
@@ -74,6 +75,7 @@ def add_model_options(p, calibrate: bool = True) -> None:
         "--exponent", type=positive(float), default=EXPONENT, help=f"b of the activity index (default {EXPONENT:g})"
     )
     add_map_option(p)
+    add_body_model_option(p)
 
 
 def add_feet_options(p, joints: bool = True) -> None:
@@ -121,7 +123,7 @@ def body_model(args):
                     "and a calibrated model goes to --model"
                 )
         model = model.calibrated(
-            [read_for_model(path, model, BODY_MODEL_FIX, joint_map(args)) for path in args.calibrate],
+            [read_for_model(path, model, BODY_MODEL_FIX, args) for path in args.calibrate],
             threshold=not args.no_threshold,
         )
     return model
@@ -157,7 +159,7 @@ def cmd_decouple(args) -> int:
     from ..decoupling.algebra import decompose
 
     model = body_model(args)
-    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, joint_map(args))
+    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, args)
     parts = decompose(motion, model, args.gain, args.exponent)
     prefix = str(args.output)
     if prefix.lower().endswith(".bvh"):  # -o out.bvh means the prefix out, not out.bvh_body.bvh
@@ -198,7 +200,7 @@ def cmd_modulate(args) -> int:
     from ..decoupling.edits import modulate
 
     model = body_model(args)
-    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, joint_map(args))
+    motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, args)
     edited = modulate(motion, args.scale, model, args.gain, args.exponent, plant_feet=not args.no_foot_lock)
     out = back(edited, plant_feet=not args.no_foot_lock)
     write_bvh(out, args.output)
@@ -234,10 +236,8 @@ def cmd_mix(args) -> int:
     from ..decoupling.edits import mix
 
     model = body_model(args)
-    body, back = read_on_model(args.body, model, BODY_MODEL_FIX, joint_map(args))
-    expressive = read_for_model(
-        args.expressive, model, BODY_MODEL_FIX, joint_map(args)
-    )  # any skeleton: on the model's body
+    body, back = read_on_model(args.body, model, BODY_MODEL_FIX, args)
+    expressive = read_for_model(args.expressive, model, BODY_MODEL_FIX, args)  # any skeleton: on the model's body
     out = back(
         mix(
             body,
@@ -320,12 +320,12 @@ def cmd_blend(args) -> int:
             "--joints: the naive blend takes whole poses, not joints' expression; drop --naive or --joints"
         )
     if args.naive:
-        first, second = read_bvh(args.first), read_bvh(args.second)
+        first, second = read_motion(args.first, args), read_motion(args.second, args)
         out = blend(first, second, None, args.body_window, align=args.align)
     else:
         model = body_model(args)
-        first, back = read_on_model(args.first, model, BODY_MODEL_FIX, joint_map(args))
-        second = read_for_model(args.second, model, BODY_MODEL_FIX, joint_map(args))
+        first, back = read_on_model(args.first, model, BODY_MODEL_FIX, args)
+        second = read_for_model(args.second, model, BODY_MODEL_FIX, args)
         out = back(
             blend(
                 first,
@@ -390,6 +390,7 @@ def add_train(commands) -> None:
         help="write the model even if it predicts held-out poses no better than the mean pose",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    add_body_model_option(p)
     p.set_defaults(run=cmd_train)
 
 
@@ -398,8 +399,8 @@ def cmd_train(args) -> int:
     from ..decoupling.body_model import poor_fit
     from ..decoupling.training import format_report
 
-    neutral = read_all(args.neutral, "neutral clips", args.quiet)
-    unlabelled = read_all(args.unlabelled or [], "unlabelled clips", args.quiet)
+    neutral = read_all(args.neutral, "neutral clips", args.quiet, args)
+    unlabelled = read_all(args.unlabelled or [], "unlabelled clips", args.quiet, args)
     model = train_body_model(
         neutral,
         unlabelled,
@@ -433,6 +434,7 @@ def add_calibrate(commands) -> None:
     p.add_argument("--model", metavar="MODEL.npz", help="model to calibrate (default: the shipped one)")
     add_threshold_option(p)
     add_map_option(p)
+    add_body_model_option(p)
     p.set_defaults(run=cmd_calibrate)
 
 
@@ -440,7 +442,7 @@ def cmd_calibrate(args) -> int:
     from ..decoupling.body_model import BodyModel
 
     uncalibrated = BodyModel.load(args.model)
-    neutral = [read_for_model(path, uncalibrated, BODY_MODEL_FIX, joint_map(args)) for path in args.neutral]
+    neutral = [read_for_model(path, uncalibrated, BODY_MODEL_FIX, args) for path in args.neutral]
     model = uncalibrated.calibrated(neutral, threshold=not args.no_threshold)
     model.save(args.output)
     angles = model.calibration_angles()

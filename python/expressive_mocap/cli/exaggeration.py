@@ -8,11 +8,21 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bvh import read_bvh, write_bvh
+from ..bvh import write_bvh
 from ..errors import ArgumentError, ClipError, MocapError
 from ..exaggeration import exaggerate, swap_test, train
 from ..motion import Motion
-from .common import add_map_option, default, finite, joint_map, positive, read_all, read_on_model
+from .common import (
+    add_body_model_option,
+    add_map_option,
+    default,
+    finite,
+    joint_map,
+    positive,
+    read_all,
+    read_motion,
+    read_on_model,
+)
 
 __all__ = ["EXAGGERATION_MODEL_FIX", "add_parsers", "cmd_exaggerate", "cmd_models", "cmd_rank", "cmd_validate"]
 
@@ -33,6 +43,7 @@ def _add_training_options(p, model: bool = False) -> None:
         help="an intensity K and its BVH files, one per person (person i = the i-th file of every level); "
         "repeat per intensity",
     )
+    add_body_model_option(p)
     if model:
         p.add_argument(
             "--model", metavar="MODEL.npz", help="a model saved by `rank -o MODEL.npz` instead of --level files"
@@ -111,7 +122,7 @@ def _levels(args) -> tuple[list[list[Motion]], list[float], list[list[str]]]:
         )
     n = counts.pop()
     paths = [[files[i] for _, files in levels] for i in range(n)]
-    people = read_all([path for person in paths for path in person], "clips")
+    people = read_all([path for person in paths for path in person], "clips", args=args)
     return [people[i * len(levels) : (i + 1) * len(levels)] for i in range(n)], [k for k, _ in levels], paths
 
 
@@ -251,6 +262,7 @@ def add_exaggerate(commands) -> None:
         help=f"foot locking eases in and out over this many seconds (default {blend:g})",
     )
     add_map_option(p)
+    add_body_model_option(p)
     p.set_defaults(run=cmd_exaggerate)
 
 
@@ -261,12 +273,12 @@ def cmd_exaggerate(args) -> int:
         raise ArgumentError("--baseline and --baseline-level go together: a clip of the same actor and its intensity")
     if args.model and (args.action or args.axis):
         raise ArgumentError("--action and --axis choose among the shipped models: give them without --model")
-    original = read_bvh(args.input)
+    original = read_motion(args.input, args)
     model, carried = (ExaggerationModel.load(args.model), None) if args.model else _shipped_for(args, original)
-    motion, back = carried or read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
+    motion, back = carried or read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, args, original)
     baseline = None
     if args.baseline is not None:
-        baseline, _ = read_on_model(args.baseline, model, EXAGGERATION_MODEL_FIX, joint_map(args))
+        baseline, _ = read_on_model(args.baseline, model, EXAGGERATION_MODEL_FIX, args)
     out, report = exaggerate(
         model,
         motion,
@@ -291,7 +303,7 @@ def cmd_exaggerate(args) -> int:
         from ..exaggeration.timing import retime_like
 
         original = held[0] if held is not None else retime_like(original, timing)
-        _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, joint_map(args), original)
+        _, back = read_on_model(args.input, model, EXAGGERATION_MODEL_FIX, args, original)
     written = back(out)
     if held is not None:
         written = _locked(held, written, args.blend)
@@ -312,7 +324,7 @@ def _shipped_for(args, original: Motion) -> tuple:
         raise ArgumentError("--baseline needs --model: a baseline is measured against one model")
     models = candidates(args.action, args.axis)
     # Every shipped model is of the canonical skeleton: the input is carried onto it once.
-    carried = read_on_model(args.input, models[0].load(), EXAGGERATION_MODEL_FIX, joint_map(args), original)
+    carried = read_on_model(args.input, models[0].load(), EXAGGERATION_MODEL_FIX, args, original)
     shipped, model, ranked = choose(carried[0], models, explicit=args.action is not None)
     others = ", ".join(f"{s.name} {r:.2f}" for s, r in ranked if s is not shipped)
     styles = " < ".join(f"{style} {k}" for k, style in enumerate(shipped.styles, start=1))

@@ -10,18 +10,19 @@ from pathlib import Path
 import numpy as np
 
 from .._utils.files import atomic_write, is_standard_output
-from ..bvh import read_bvh, write_bvh
+from ..bvh import write_bvh
 from ..errors import MocapError
 from ..motion import Motion
 from ..rotations.orders import ORDERS
-from .common import PROG, positive
+from .common import PROG, add_body_model_option, positive, read_motion
 
 __all__ = ["add_parsers", "cmd_convert", "cmd_info", "cmd_positions"]
 
 
 def add_info(commands) -> None:
     p = commands.add_parser("info", help="joints, frames, fps, duration, channel layout and rest height of BVH files")
-    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files")
+    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files (or SMPL/AMASS .npz files, with --body-model)")
+    add_body_model_option(p)
     p.set_defaults(run=cmd_info)
 
 
@@ -29,7 +30,7 @@ def cmd_info(args) -> int:
     failures = 0
     for path in args.files:
         try:
-            motion = read_bvh(path)
+            motion = read_motion(path, args)
         except MocapError as error:
             print(f"{PROG}: error: {error}", file=sys.stderr)
             failures += 1
@@ -46,7 +47,8 @@ def cmd_info(args) -> int:
 
 def add_positions(commands) -> None:
     p = commands.add_parser("positions", help="world positions and rotations of every joint, to an .npz file")
-    p.add_argument("file", metavar="FILE", help="BVH file")
+    p.add_argument("file", metavar="FILE", help="BVH file (or an SMPL/AMASS .npz, with --body-model)")
+    add_body_model_option(p)
     p.add_argument(
         "-o",
         "--output",
@@ -65,7 +67,7 @@ def cmd_positions(args) -> int:
             f"-o {args.output}: positions writes .npz (every array) or .csv (positions, a row per frame), "
             "by the name's extension"
         )
-    motion = read_bvh(args.file)
+    motion = read_motion(args.file, args)
     rotations, positions = motion.fk()
     if not np.isfinite(positions).all():  # offsets near 1e308 add up past float64
         frame, joint = np.argwhere(~np.isfinite(positions))[0, :2]
@@ -110,12 +112,7 @@ def add_convert(commands) -> None:
     p.add_argument(
         "-o", "--output", required=True, metavar="OUT.bvh", help="where to write (atomically; - for standard output)"
     )
-    p.add_argument(
-        "--body-model",
-        metavar="MODEL.npz",
-        help="the SMPL-family body model (your own .npz: v_template, shapedirs, J_regressor, kintree_table) "
-        "an .npz input is read with",
-    )
+    add_body_model_option(p)
     p.add_argument(
         "--fps",
         type=positive(float),
@@ -142,18 +139,11 @@ def _option(path: str, option: str, value):
 
 
 def cmd_convert(args) -> int:
-    if Path(args.input).suffix.lower() == ".npz":
-        if not args.body_model:
-            raise MocapError(f"{args.input}: an .npz parameter file (SMPL/AMASS) needs --body-model MODEL.npz")
-        from ..skeletons.smpl import read_smpl
-
-        motion = read_smpl(args.input, args.body_model, fps=args.fps)
-    elif args.body_model:
+    if args.body_model and Path(args.input).suffix.lower() != ".npz":
         raise MocapError(
             f"--body-model {args.body_model}: only for an SMPL/AMASS parameter file (.npz), not {args.input}"
         )
-    else:
-        motion = read_bvh(args.input)
+    motion = read_motion(args.input, args, fps=args.fps)
     if args.fps and abs(args.fps - motion.fps) > 1e-9 * args.fps:
         with _option(args.input, "--fps", args.fps):
             motion = motion.resample(fps=args.fps)

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..bvh import read_bvh
 from ..errors import MocapError
 from ..viz.render import render_animation, render_poses
-from .common import default, joint_map, positive, read_on_model
+from .common import default, positive, read_motion, read_on_model
 from .decoupling import BODY_MODEL_FIX, add_model_options, body_model
 
 __all__ = ["add_parsers", "cmd_render"]
@@ -41,7 +40,7 @@ def add_render(commands) -> None:
 def cmd_render(args) -> int:
     from ..viz.render import render
 
-    motions = [read_bvh(path) for path in args.files]
+    motions = [read_motion(path, args) for path in args.files]
     titles = [Path(p).stem for p in args.files]
     if args.decoupled or args.modulated:
         from ..decoupling.algebra import decompose
@@ -50,7 +49,7 @@ def cmd_render(args) -> int:
             raise MocapError("--decoupled and --modulated draw one file: give exactly one")
         model = body_model(args)
         # A file of another skeleton is decoupled on the model's body, and drawn on its own.
-        motion, back = read_on_model(args.files[0], model, BODY_MODEL_FIX, joint_map(args))
+        motion, back = read_on_model(args.files[0], model, BODY_MODEL_FIX, args)
         parts = decompose(motion, model, args.gain, args.exponent)
         if args.decoupled:
             motions = [motions[0], back(parts.body_motion()), back(parts.expressive_motion())]

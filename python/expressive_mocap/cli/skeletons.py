@@ -10,7 +10,7 @@ import sys
 from .._utils.tokens import listed
 from ..bvh import read_bvh, write_bvh
 from ..errors import MocapError
-from .common import PROG, positive
+from .common import PROG, add_body_model_option, positive, read_motion
 
 __all__ = ["add_parsers", "cmd_fit", "cmd_retarget", "cmd_skeleton"]
 
@@ -36,8 +36,9 @@ def add_skeleton(commands) -> None:
         description="What the package reads from each file: the joint playing each role (by names, the "
         "topology, or --map), the joints with no role, and the conventions, each with how sure the guess is.",
     )
-    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files")
+    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files (or SMPL/AMASS .npz files, with --body-model)")
     p.add_argument("--map", metavar="MAP.json|MAP.toml", help="roles the names and topology do not find: role -> joint")
+    add_body_model_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object per file instead of text")
     _add_convention_options(p)
     p.set_defaults(run=cmd_skeleton)
@@ -49,7 +50,7 @@ def describe(path: str, user_map: dict | None, args) -> dict:
     from ..skeletons.rig import Rig
     from ..skeletons.transfer import untrusted_twists
 
-    motion = read_bvh(path)
+    motion = read_motion(path, args)
     body = Body.of(motion.skeleton, user_map)
     jmap = body.joint_map
     conventions = read_conventions(motion, jmap).with_overrides(args.up, args.facing, args.unit)
@@ -130,7 +131,8 @@ def add_retarget(commands) -> None:
         "keep their rest rotation (extra spine joints share the spine's turn); feet stay planted through IN's "
         "contacts unless --no-plant-feet. TARGET's own motion is ignored (its frames only tell its up axis and floor).",
     )
-    p.add_argument("file", metavar="IN", help="BVH file to move")
+    p.add_argument("file", metavar="IN", help="BVH file to move (or an SMPL/AMASS .npz, with --body-model)")
+    add_body_model_option(p)
     p.add_argument("--to", required=True, metavar="TARGET.bvh", help="BVH file giving the skeleton and rest pose")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write the retargeted motion")
     p.add_argument("--map", metavar="MAP", help="joint map file (JSON or TOML) for IN")
@@ -151,7 +153,7 @@ def cmd_retarget(args) -> int:
     from ..skeletons.transfer import matched_chains, without_counterpart
 
     source_map, target_map = _map_file(args.map), _map_file(args.to_map)
-    motion = read_bvh(args.file)
+    motion = read_motion(args.file, args)
     target = read_bvh(args.to)
     source, goal = Body.of(motion.skeleton, source_map).joint_map, Body.of(target.skeleton, target_map).joint_map
     conventions = None

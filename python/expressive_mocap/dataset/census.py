@@ -121,6 +121,8 @@ def _headers(items: Iterable[Item]):
         try:
             if item.refused is not None:
                 yield None
+            elif item.smpl_model is not None:  # a parameter file: its header is the BVH it becomes
+                yield parse_header(item.smpl_bvh(), item.source)
             elif item.data is not None:
                 yield parse_header(item.data, item.source)
             else:

@@ -123,9 +123,10 @@ class RunOptions:
     """Everything a preprocessing run was asked for that its dataset depends on: the kinds kept
     (``keep``), the body ``model`` (its resolved path, ``"shipped"`` or None) and whether it runs
     in float32, the ``source``'s canonical path, the kernel ``backend``, whether clips go onto the
-    ``canonical`` body (with the user's ``joint_map``), and how the arrays are shaped
-    (``shaping``). A run resumes, and a finished dataset counts as done, only under the same
-    options; the manifest and an interrupted run's record hold them as :meth:`record`."""
+    ``canonical`` body (with the user's ``joint_map``), how the arrays are shaped
+    (``shaping``), and the SMPL-family body model parameter files are read with
+    (``smpl_model``). A run resumes, and a finished dataset counts as done, only under the
+    same options; the manifest and an interrupted run's record hold them as :meth:`record`."""
 
     keep: tuple[str, ...]
     model: str | None
@@ -135,6 +136,7 @@ class RunOptions:
     canonical: bool = False
     joint_map: dict | None = None
     shaping: Options = Options()
+    smpl_model: str | None = None
 
     @property
     def canonical_map(self) -> dict | None:
@@ -146,7 +148,9 @@ class RunOptions:
         """The options as the manifest (``options``) and ``run.json`` record them."""
         return {"keep": list(self.keep), "model": self.model, "model_float32": bool(self.model_float32),
                 "source": self.source, "backend": self.backend, "canonical": bool(self.canonical),
-                "joint_map": self.joint_map or None, **self.shaping.record()}  # fmt: skip
+                "joint_map": self.joint_map or None, **self.shaping.record(),
+                # Only when given: the options of a run from before the key still match.
+                **({"smpl_model": self.smpl_model} if self.smpl_model else {})}  # fmt: skip
 
 
 def resampled(motion: Motion, fps: float) -> Motion:

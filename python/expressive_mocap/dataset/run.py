@@ -51,6 +51,7 @@ def preprocess(
     positions: str | None = None,
     fps: float | None = None,
     mirror: bool = False,
+    smpl_model: str | os.PathLike | None = None,
 ) -> Summary:
     """Preprocess every clip of ``src`` (folder, glob, .zip or tar) into the dataset folder ``out``.
 
@@ -76,9 +77,11 @@ def preprocess(
     form of the rotations (``"quaternion"``, ``"6d"``, ``"matrix"``, ``"axis-angle"``,
     ``"euler:ZXY"``); ``positions`` their frame (``"world"``, ``"root"``, ``"heading"``,
     ``"clip"``); ``fps`` resamples every clip first; ``mirror`` stores each clip's mirror image
-    after it (``{name}@mirrored``). The kinds ``velocities``, ``accelerations``,
-    ``root_velocity`` and ``angular_velocities`` may be kept; the manifest records every float
-    kind's mean and std (``manifest["stats"]``).
+    after it (``{name}@mirrored``). ``smpl_model``: an SMPL-family body model file (the user's
+    own, see :func:`~expressive_mocap.skeletons.read_smpl`): SMPL/AMASS parameter files
+    (``*.npz``; not AMASS's ``shape.npz``) in ``src`` are clips too, each read on it. The kinds
+    ``velocities``, ``accelerations``, ``root_velocity`` and ``angular_velocities`` may be kept;
+    the manifest records every float kind's mean and std (``manifest["stats"]``).
     Returns a :class:`Summary`.
     """
     started = time.perf_counter()
@@ -93,8 +96,9 @@ def preprocess(
     body_model = load_model(model) if model is not None else None
     # The source in one canonical form (a resumed run may spell it otherwise: relative, through a link).
     source_path = os.path.realpath(src) if Path(src).exists() else os.path.abspath(src)
+    smpl_path = os.path.realpath(smpl_model) if smpl_model is not None else None
     options = RunOptions(kept, _model_label(model), bool(model_float32), source_path, get_backend(), bool(canonical),
-                         joint_map or None, shaping)  # fmt: skip
+                         joint_map or None, shaping, smpl_path)  # fmt: skip
     if joint_map and not canonical:
         raise ArgumentError("a joint map is for retargeting clips onto the canonical body: give canonical=True too")
     settings = _Settings(kept, options, body_model, model, model_float32, batch_mb, max_batches, cluster, progress,
@@ -102,7 +106,7 @@ def preprocess(
 
     FolderLock(out).refuse_if_held()  # a folder another run is writing: say so, not judge it mid-change
     finished_manifest(out)  # refuse a folder that is not ours before putting a lock file in it
-    source = open_source(src)  # a bad SRC fails before OUT is touched
+    source = open_source(src, smpl_path)  # a bad SRC (or body model) fails before OUT is touched
     try:
         settings = _with_census(settings, source, bool(canonical))
         out.mkdir(parents=True, exist_ok=True)

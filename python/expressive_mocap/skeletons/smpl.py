@@ -17,6 +17,7 @@ import io
 import os
 import zipfile
 from collections.abc import Mapping
+from typing import NamedTuple
 
 import numpy as np
 
@@ -43,10 +44,25 @@ Z_UP_TO_Y_UP = quat.about("X", -90.0)
 _MODEL_KEYS = ("v_template", "shapedirs", "J_regressor", "kintree_table")
 
 
+class SmplBody(NamedTuple):
+    """A body model's arrays that the joints need, loaded once (:func:`load_body_model`) for
+    many parameter files, and the name its errors give."""
+
+    arrays: dict[str, np.ndarray]
+    name: str
+
+
+def load_body_model(source: str | os.PathLike | Mapping[str, np.ndarray]) -> SmplBody:
+    """The arrays of an SMPL-family body model file (or a mapping of them) that :func:`read_smpl`
+    needs, for reading many parameter files with one model (a model file is tens of megabytes)."""
+    return SmplBody(*_load(source, "SMPL body model (.npz)", _MODEL_KEYS, ModelError))
+
+
 def read_smpl(
-    params: str | os.PathLike | Mapping[str, np.ndarray],
-    body_model: str | os.PathLike | Mapping[str, np.ndarray],
+    params: str | os.PathLike | bytes | Mapping[str, np.ndarray],
+    body_model: str | os.PathLike | Mapping[str, np.ndarray] | SmplBody,
     fps: float | None = None,
+    name: str | None = None,
 ) -> Motion:
     """The motion of an SMPL-family parameter file (AMASS ``.npz``) on ``body_model``'s skeleton.
 
@@ -62,13 +78,15 @@ def read_smpl(
     root's rotation and translation turned by -90 degrees about X (so ``(x, y, z)`` becomes
     ``(x, z, -y)`` for every joint position; the model's rest pose is Y up already). Lengths in
     metres. ``frame_time`` is ``1 / mocap_framerate``, or ``1 / fps`` where the file has no rate
-    (``fps`` is only used then). ``params``/``body_model``: ``.npz`` paths, or mappings of arrays.
+    (``fps`` is only used then). ``params``/``body_model``: ``.npz`` paths, or mappings of arrays;
+    ``params`` also the bytes of an ``.npz`` (an archive's member), ``name`` then naming it in
+    errors; ``body_model`` also a :class:`SmplBody` loaded once for many files.
 
     Raises :class:`ArgumentError` for a bad parameter file and :class:`ModelError` for a bad
     body model (or one whose joint count does not match the poses), naming the file.
     """
-    arrays, name = _load(params, "SMPL parameter file (AMASS .npz)", ("poses", "trans", "betas"), ArgumentError)
-    model, model_name = _load(body_model, "SMPL body model (.npz)", _MODEL_KEYS, ModelError)
+    arrays, name = _load(params, "SMPL parameter file (AMASS .npz)", ("poses", "trans", "betas"), ArgumentError, name)
+    model, model_name = body_model if isinstance(body_model, SmplBody) else load_body_model(body_model)
     poses = _numbers(arrays, "poses", name, 2, ArgumentError)
     frames = len(poses)
     if frames == 0 or poses.shape[1] % 3:
@@ -146,17 +164,23 @@ def _end_sites(parents: np.ndarray, offsets: np.ndarray) -> tuple:
     return tuple((j, tuple((0.5 * offsets[j]).tolist())) for j in leaves)
 
 
-def _load(source, what: str, keys: tuple[str, ...], error: type[Exception]) -> tuple[dict[str, np.ndarray], str]:
-    """The arrays of an ``.npz`` (or a mapping, named ``<what>``) and a name for errors. Only
-    the arrays a reader needs are loaded, pickles never (``allow_pickle=False``), their sizes
-    checked from the ``.npy`` headers first: an object array elsewhere in the file is not read."""
+def _load(
+    source, what: str, keys: tuple[str, ...], error: type[Exception], name: str | None = None
+) -> tuple[dict[str, np.ndarray], str]:
+    """The arrays of an ``.npz`` (its path or bytes, or a mapping, named ``<what>``) and a name for
+    errors (``name``, else the path). Only the arrays a reader needs are loaded, pickles never
+    (``allow_pickle=False``), their sizes checked from the ``.npy`` headers first: an object array
+    elsewhere in the file is not read."""
     if isinstance(source, Mapping):
-        return {k: np.asarray(v) for k, v in source.items()}, f"<{what}>"
-    name = str(source)
-    try:
-        data = read_input(source, MAX_MODEL_BYTES + MODEL_ZIP_SLACK)
-    except OSError as problem:
-        raise error(f"{name}: cannot read the {what}: {problem.strerror or problem}") from None
+        return {k: np.asarray(v) for k, v in source.items()}, name or f"<{what}>"
+    if isinstance(source, bytes):
+        data, name = source, name or f"<{what}>"
+    else:
+        name = name or str(source)
+        try:
+            data = read_input(source, MAX_MODEL_BYTES + MODEL_ZIP_SLACK)
+        except OSError as problem:
+            raise error(f"{name}: cannot read the {what}: {problem.strerror or problem}") from None
     wanted = keys + ("mocap_framerate", "mocap_frame_rate")
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
