@@ -120,8 +120,13 @@ def test_held_out_walks_get_the_walk_model_on_any_rig_and_waves_none(bandai2_dir
         on_cmu = retarget(walk, synthetic_walk("cmu").motion)  # as `exaggerate` carries another rig's file
         assert choose(carried_for(on_cmu, first).body, models)[0].action == "walk"
     wave = em.read_bvh(bandai2_dir / "dataset-2_wave-left-hand_normal_020.bvh")
-    with pytest.raises(em.errors.MocapError, match="no shipped model fits"):
+    with pytest.raises(em.errors.MocapError, match="no shipped model fits") as refused:
         choose(wave, models)
+    assert "name its --action" in str(refused.value)
+    # With the action named (--action walk), the walk model still refuses a wave: the hint is --model only.
+    with pytest.raises(em.errors.MocapError, match="no shipped model fits") as refused:
+        choose(wave, [m for m in models if m.action == "walk"], explicit=True)
+    assert "--action" not in str(refused.value) and "--model" in str(refused.value)
 
 
 def test_the_signature_tells_runs_from_walks_and_waves_from_raises(bandai2_dir):

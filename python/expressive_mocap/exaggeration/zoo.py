@@ -192,10 +192,11 @@ def choose(
     if not admitted or admitted[0][0] > CHOICE_FIT:
         listed = ", ".join(f"{s.name} {r:.2f}{'' if s.admits(found) else ' (not its action)'}" for s, r in ranked)
         moves = ", ".join(f"{key} {value:.2f}" for key, value in found.items())
+        # Named, the action was the user's: only a model of their own is left to suggest.
+        hint = "" if explicit else "name its --action, or "
         raise MocapError(
             f"no shipped model fits this motion ({moves}; fit residuals, about 1 for a motion like the training "
-            f"takes, above {CHOICE_FIT:g} refused: {listed}); name its --action, or pass --model with a model of "
-            "your own"
+            f"takes, above {CHOICE_FIT:g} refused: {listed}); {hint}pass --model with a model of your own"
         )
     _, shipped, model = admitted[0]
     return shipped, model, ranked
