@@ -111,16 +111,12 @@ OTHER_FILES = {  # file: whether it meets the targets with both layouts
 @pytest.mark.parametrize("layout", ["humanml3d", "h36m17"])
 @pytest.mark.parametrize("name", list(OTHER_FILES))
 def test_fit_onto_the_same_other_rig(other_dir, name, layout):
-    # The targets are 1 cm mean and 2.5 cm worst frame. Two cases miss the mean and are held to
-    # what was measured (cm on a 141 cm actor): cmu_01_01 1.21 (humanml3d) and 1.46 (h36m17), its
-    # pelvis' place between the hip joints and the spine differing from its own T-pose rest's,
-    # where the retarget measures the hips from; m21_walk with h36m17 2.02: h36m17 has no
-    # clavicles, the target's are held at rest and its shoulders miss by 4.6 cm.
-    mean_bound = 1.0
-    if not OTHER_FILES[name]:
-        mean_bound = 1.6
-    elif name == "m21_walk.bvh" and layout == "h36m17":
-        mean_bound = 2.2
+    # The targets are 1 cm mean and 2.5 cm worst frame. cmu_01_01 misses the mean and is held to
+    # what was measured (cm on a 141 cm actor): 1.21 (humanml3d) and 1.17 (h36m17), its pelvis'
+    # place between the hip joints and the spine differing from its own T-pose rest's, where the
+    # retarget measures the hips from. (m21_walk with h36m17, whose clavicles the positions do not
+    # give, missed by 2.02 with them held at rest; reaching for the shoulders it is 0.30.)
+    mean_bound = 1.0 if OTHER_FILES[name] else 1.3
     motion = em.read_bvh(other_dir / name)
     scale = Body.of(motion.skeleton).actor_height / BANDAI_HEIGHT  # file units per Bandai cm
     _, report = fit_positions(to_layout(motion, layout), layout, motion, fps=motion.fps)
@@ -128,6 +124,29 @@ def test_fit_onto_the_same_other_rig(other_dir, name, layout):
         report.mean_all / scale,
         report.worst_frame / scale,
     )
+
+
+def test_clavicles_reach_the_shoulders_on_their_rig_and_keep_the_targets_pose_on_another(bandai2_dir, other_dir):
+    """Human3.6M's joints have no clavicles: on their own rig the clavicles turn to the shoulders
+    the positions give (they were held at rest, 4.6 cm off on m21); on another, the target's
+    clavicles keep its own typical pose within MOST_MEAN degrees and a shrug's swing (reaching for
+    another body's shoulders turned them 30-40 degrees)."""
+    from expressive_mocap.skeletons.clavicles import MOST_MEAN
+
+    walk = em.read_bvh(other_dir / "m21_walk.bvh")
+    _, report = fit_positions(to_layout(walk, "h36m17"), "h36m17", walk, fps=walk.fps)
+    scale = Body.of(walk.skeleton).actor_height / BANDAI_HEIGHT
+    for side in ("left", "right"):
+        assert report.mean[f"{side}_upper_arm"] / scale < 1.0, report.mean  # measured 0.30 all joints; 4.6 at rest
+    bandai = em.read_bvh(bandai2_dir / "dataset-2_walk_normal_001.bvh")
+    for target in (walk, em.read_bvh(other_dir / "cmu_01_01.bvh")):
+        out, _ = fit_positions(to_layout(bandai, "h36m17"), "h36m17", target, fps=bandai.fps)
+        jmap = Body.of(target.skeleton).joint_map
+        typical = quat.mean_rotation(target.rotations)
+        for side in ("left", "right"):
+            j = jmap[f"{side}_clavicle"]
+            turned = np.degrees(quat.angle(quat.mul(quat.conjugate(typical[j]), out.rotations[:, j])))
+            assert np.median(turned) < MOST_MEAN + 3.0, (side, np.median(turned))  # measured 10.2-10.4
 
 
 @pytest.mark.parametrize("name", list(OTHER_FILES))

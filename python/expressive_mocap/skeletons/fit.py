@@ -22,7 +22,8 @@ from the positions, with the functions retargeting reads twists with, so the two
 - **Noise** (:mod:`.denoise`): noisy positions are smoothed over time first, the feet more
   through their contacts, and the fitted ankles put there by leg IK.
 - The hips' path is the root's positions. Then :func:`~.retargeting.retarget_rigs` carries the
-  motion onto the target (stance feet planted through the contacts it reads).
+  motion onto the target (stance feet planted through the contacts it reads); clavicles the
+  positions do not give turn towards their shoulders (:mod:`.clavicles`).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from ..errors import MocapError
 from ..motion import Motion, Skeleton, spread_frames
 from ..rotations import quat
 from . import twist
+from .clavicles import reach_shoulders
 from .denoise import DENOISE, NOISY, noise, steady_feet
 from .layouts import Layout, layout_of, read_positions
 from .rig import _frame_vectors, _orthonormal
@@ -424,6 +426,11 @@ def fit_positions(
     wanted = carried(points[:, [source.jmap[r] for r in roles]], source, goal)
     hips = roles.index("hips")
     wanted = wanted + np.median(placed[:, hips] - wanted[:, hips], axis=0)  # the lift onto the floor
+    if "left_clavicle" not in source.jmap.joints and "left_upper_arm" in roles:  # no clavicles given
+        arms = [roles.index(f"{side}_upper_arm") for side in ("left", "right")]
+        own = target.rotations if isinstance(target, Motion) else None  # the target's motion, if any
+        out = reach_shoulders(out, goal.jmap, wanted[:, arms], own)
+        placed = out.positions()[:, [goal.jmap[r] for r in roles]]
     distance = np.linalg.norm(placed - wanted, axis=-1)  # [F, R]
     names = goal.skeleton.names
     report = FitReport(
