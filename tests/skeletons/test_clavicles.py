@@ -66,3 +66,11 @@ def test_a_far_shoulder_turns_the_clavicle_no_more_than_the_bounds():
     # About 27 degrees would reach it: the constant part, the two bodies' proportions, is cut to
     # MOST_MEAN; what is left is how the wanted place moves about its mean (0.03 degrees here).
     assert abs(np.median(turned) - MOST_MEAN) < 0.1 and turned.max() < MOST_MEAN + 0.1 < MOST_SWING, turned
+
+
+def test_a_shoulder_at_the_clavicle_joint_leaves_it_unturned():
+    motion, jmap = _walk("cmu")
+    wanted = _arms(motion, jmap)
+    wanted[::2, 0] = motion.positions()[::2, jmap["left_clavicle"]]  # every other frame: no direction
+    out = reach_shoulders(motion, jmap, wanted, None)
+    assert np.isfinite(out.rotations).all()

@@ -45,7 +45,9 @@ def reach_shoulders(motion: Motion, jmap: JointMap, shoulders: np.ndarray, own: 
         above = world[:, parents[clavicle]]
         typical = world[:, clavicle] if own is None else quat.mul(above, quat.mean_rotation(own[:, clavicle]))
         bone = quat.rotate(typical, motion.translations[:, arm])  # the clavicle's, in its typical pose
-        swing = quat.between(bone, shoulders[:, s] - positions[:, clavicle])
+        with np.errstate(invalid="ignore", divide="ignore"):  # no bone, or a shoulder at the joint: no swing
+            swing = quat.between(bone, shoulders[:, s] - positions[:, clavicle])
+        swing[~np.isfinite(swing).all(axis=-1)] = _IDENTITY
         mean = quat.mean_rotation(swing)
         # The shrug about the mean, and of the mean itself what the actor's own pose may differ by.
         swing = _at_most(quat.mul(quat.mul(swing, quat.conjugate(mean)), _at_most(mean, MOST_MEAN)), MOST_SWING)
