@@ -232,8 +232,9 @@ def test_the_streaming_decoupler_takes_another_skeleton():
     stream = StreamingDecoupler(model, game.skeleton, game.frame_time)
     pushed = [stream.push(game.rotations[f], game.translations[f]) for f in range(game.n_frames)]
     body, expressive, activity = (np.array(x) for x in zip(*pushed))
-    carried = Carried(game, source=Rig.of(game[:1])._replace(untrusted=frozenset()))
-    # The stream splits each frame as it comes: the offline split without its smoothing in time.
+    carried = Carried(game, source=Rig.of(game[:1])._replace(untrusted=frozenset()), stand=False)
+    # The stream splits each frame as it comes: the offline split without its smoothing in time
+    # (and without the toes set by the clip's stance, which a stream cannot know ahead).
     on_body = carried.body
     predicted = FixedFloor(model, 0.0).predict_streamed(on_body, stream.capacity)
     offline = Decomposition(on_body, *split(on_body.rotations, predicted, trunk=model.trunk))

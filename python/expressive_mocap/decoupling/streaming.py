@@ -71,7 +71,7 @@ class StreamingDecoupler:
             # A live stream's twists are taken from its rotations: one frame cannot tell a capture
             # that twists bones arbitrarily (measured: the demo's waving arm reads so on frame 0).
             self._source = Rig.of(frame, self._joint_map)._replace(untrusted=frozenset())
-        carried = Carried(frame, target=None, source=self._source)
+        carried = Carried(frame, target=None, source=self._source, stand=False)
         body, _, activity = self._step(carried.body, 0.0)  # the canonical body stands on 0
         on_body = carried.body
         # The body mechanics of one frame, not an edit: no hinge limits (one frame tells no axes).

@@ -19,7 +19,7 @@ from ..body.conventions import Conventions
 from ..body.jointmap import JointMap
 from ..body.take import Take
 from ..errors import MocapError
-from ..motion import Motion
+from ..motion import Motion, Skeleton
 from .retargeting import retarget_clips, retarget_rigs
 from .rig import _IDENTITY, Rig
 from .transfer import _mul, _turned, with_twists
@@ -42,21 +42,38 @@ def onto_canonical(motion: Motion, user_map: dict | None = None, *, plant_feet: 
     """``motion`` retargeted onto the canonical body (at its own frame rate), and the joint map
     its skeleton was read with."""
     source = Rig.of(motion, user_map)
-    return retarget_rigs(motion, source, canonical_rig(), plant_feet=plant_feet), source.jmap
+    target = canonical_rig()
+    moved = retarget_rigs(motion, source, target, plant_feet=plant_feet)
+    return stood(moved, source.skeleton, source.jmap, target), source.jmap
 
 
 def many_onto_canonical(motions: list[Motion], user_map: dict | None = None) -> list[tuple[Motion, JointMap]]:
     """:func:`onto_canonical` of many clips at once (feet planted; see
     :func:`~expressive_mocap.skeletons.retargeting.retarget_clips`)."""
-    return retarget_clips(motions, canonical_rig(), user_map=user_map)
+    target = canonical_rig()
+    moved = retarget_clips(motions, target, user_map=user_map)
+    return [(stood(body, motion.skeleton, jmap, target), jmap) for (body, jmap), motion in zip(moved, motions)]
+
+
+def stood(body: Motion, source: Skeleton, source_map: JointMap, target: Rig) -> Motion:
+    """``body`` (retargeted from ``source``, read with ``source_map``, onto ``target``) with the
+    toes and foot roll its source does not show put as the canonical body stands on them
+    (:mod:`.unseen`); as it is on any other target."""
+    if target.skeleton.names != canonical_rig().skeleton.names:
+        return body
+    from .unseen import stand_unseen, unseen_toes
+
+    return stand_unseen(body, target.jmap, unseen_toes(source, source_map))
 
 
 class Carried:
     """A user's motion put on the canonical body for a model trained there (or on ``target``, a
     model's own body), and the way back.
 
-    ``body`` is the motion retargeted onto the canonical body (feet as carried: with nothing
-    edited, :meth:`back` gives the user's motion back exactly). :meth:`back` carries an edit of
+    ``body`` is the motion retargeted onto the canonical body (feet as carried; the toes and foot
+    roll the user's skeleton does not show as the canonical body stands on them unless ``stand``
+    is False, :func:`stood`: with nothing edited, :meth:`back` gives the user's motion back
+    exactly). :meth:`back` carries an edit of
     ``body`` onto the user's own motion as per-joint changes of world orientation: each mapped
     joint turns by what its role turned on the body; joints the body lacks keep their local
     rotations (they follow their parents), offsets stay the user's; the hips' change of place is
@@ -64,7 +81,12 @@ class Carried:
     """
 
     def __init__(
-        self, motion: Motion, user_map: dict | None = None, target: Rig | None = None, source: Rig | None = None
+        self,
+        motion: Motion,
+        user_map: dict | None = None,
+        target: Rig | None = None,
+        source: Rig | None = None,
+        stand: bool = True,
     ):
         self.original = motion
         self._take = Take(motion, Body.of(motion.skeleton, user_map))  # its positions: read once
@@ -72,6 +94,8 @@ class Carried:
         self.source = with_twists(source or Rig.of(self._take, user_map), self._take)
         self.target = target or canonical_rig()
         self.body = retarget_rigs(self._take, self.source, self.target, plant_feet=False)
+        if stand:  # a stream's frames, one at a time, cannot tell how its feet stand: as carried
+            self.body = stood(self.body, self.source.skeleton, self.source.jmap, self.target)
         self._body_take = Take(self.body)
         self._limits: Any = None  # the user's HingeLimits, once needed
         self._contacts: np.ndarray | None = None  # the user's foot contacts, once needed
