@@ -129,6 +129,48 @@ def test_the_conversions_match_the_numpy_ones_on_real_rotations(real_quats):
     )
 
 
+ORDERS = ["ZXY", "XYZ", "YZX", "ZYX", "XZY", "YXZ"]
+
+
+@pytest.mark.parametrize("order", ORDERS)
+def test_euler_angles_match_the_numpy_forms(order):
+    """Both ways against representations.encode/decode (the package's Euler kernel) in every
+    order: angles where the middle one is clear of the gimbal lock (float32 degrees: 2e-3), and
+    everywhere the rotation the angles give."""
+    q = random_quats(4000, seed=11)
+    form = f"euler:{order}"
+    expected = encode(q, "euler", order)
+    got = T.from_quat(t32(q), form).numpy().astype(np.float64)
+    clear = np.abs(expected[:, 1]) < 85.0
+    assert clear.mean() > 0.9
+    np.testing.assert_allclose(got[clear], expected[clear], atol=2e-3, rtol=0)
+    again = decode(got, "euler", order)
+    np.testing.assert_allclose(same_rotation(q, again), q, atol=1e-4, rtol=0)  # the lock's rows too
+    back = T.to_quat(t32(expected), form).numpy()
+    assert (back[:, 3] >= 0).all()
+    np.testing.assert_allclose(same_rotation(q, back), same_rotation(q, decode(expected, "euler", order)), atol=FLOAT32)
+    m = T.to_matrix(t32(expected), form).numpy()
+    np.testing.assert_allclose(m, quat.to_matrix(decode(expected, "euler", order)), atol=FLOAT32, rtol=0)
+
+
+def test_euler_angles_of_real_rotations(real_quats):
+    q = real_quats
+    np.testing.assert_allclose(T.from_quat(t64(q), "euler:ZXY").numpy(), encode(q, "euler", "ZXY"), atol=1e-8, rtol=0)
+    values = encode(q, "euler", "ZXY")
+    np.testing.assert_allclose(T.to_quat(t32(values), "euler").numpy(), decode(values, "euler"), atol=FLOAT32, rtol=0)
+
+
+def test_euler_gradients_and_bad_orders():
+    rng = np.random.default_rng(12)
+    angles = t64(rng.uniform(-170.0, 170.0, size=(20, 3)) * np.array([1.0, 0.45, 1.0]), grad=True)  # middle within 77
+    for order in ("ZXY", "XZY"):
+        _gradcheck(lambda a, o=order: T.euler_to_quat(a, o), angles)
+        q = t64(T.euler_to_quat(angles, order).detach().numpy(), grad=True)
+        _gradcheck(lambda x, o=order: T.quat_to_euler(x, o), q)
+    with pytest.raises(em.errors.ArgumentError, match=r"euler:XXY"):
+        T.to_quat(t32(np.zeros((2, 3))), "euler:XXY")
+
+
 def test_the_layouts_are_the_packages():
     """A quarter turn about z: x goes to y. The 6D form is column 0 then column 1; the matrix form
     is row after row; the quaternion is x, y, z, w."""
@@ -187,8 +229,8 @@ def test_leading_axes_of_any_number():
 def test_bad_inputs_are_value_errors_naming_the_argument():
     with pytest.raises(ValueError, match="argument `q`.*\\[\\.\\.\\., 4\\]"):
         T.quat_to_matrix(torch.zeros(3, 3))
-    with pytest.raises(ValueError, match="argument `form`.*quaternion, 6d"):
-        T.to_quat(torch.zeros(3), "euler")
+    with pytest.raises(ValueError, match="argument `form`.*quaternion, 6d.*euler:ORDER"):
+        T.to_quat(torch.zeros(3), "eulers")
     with pytest.raises(ValueError, match="argument `values`"):
         T.to_quat(torch.zeros(5, 4), "6d")
     with pytest.raises(ValueError, match="argument `d`: expected a torch.Tensor"):
@@ -271,8 +313,9 @@ def test_fk_matches_the_kernel_on_real_clips_in_every_form(motions):
         np.testing.assert_allclose(got_q.numpy(), world, atol=FLOAT32, rtol=0)
         np.testing.assert_allclose(got_p.numpy() / scale, positions / scale, atol=FLOAT32, rtol=0)
         # rest offsets and the hips' positions (the Bandai-Namco hips carry the motion)
-        for form in ("quaternion", "6d", "matrix", "axis-angle"):
-            local = t32(encode(motion.rotations, form))
+        for form in ("quaternion", "6d", "matrix", "axis-angle", "euler:ZXY"):
+            kind, _, order = form.partition(":")
+            local = t32(encode(motion.rotations, kind, order or "ZXY"))
             _, p = T.forward_kinematics(
                 local, t32(motion.skeleton.offsets), parents, t32(positions[:, 1]), root=1, form=form
             )
@@ -301,7 +344,7 @@ def test_fk_bad_inputs():
     with pytest.raises(ValueError, match="argument `offsets`"):
         T.forward_kinematics(q, torch.zeros(21, 3), BANDAI_PARENTS)
     with pytest.raises(ValueError, match="argument `form`"):
-        T.forward_kinematics(q, torch.zeros(22, 3), BANDAI_PARENTS, form="euler")
+        T.forward_kinematics(q, torch.zeros(22, 3), BANDAI_PARENTS, form="euler:XYX")
     with pytest.raises(ValueError, match="argument `root_positions`"):
         T.forward_kinematics(q, torch.zeros(22, 3), BANDAI_PARENTS, torch.zeros(4, 3))
     with pytest.raises(ValueError, match="argument `root`"):

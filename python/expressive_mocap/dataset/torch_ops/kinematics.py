@@ -16,7 +16,7 @@ import numpy as np
 import torch
 
 from ...errors import ArgumentError
-from .rotations import FORMS, matrix_to_quat, quat_to_matrix, to_quat
+from .rotations import FORMS, form_size, matrix_to_quat, quat_to_matrix, to_quat
 
 
 @lru_cache(maxsize=64)
@@ -122,13 +122,11 @@ def forward_kinematics(
     _levels(parent_list)  # checks the order
     if form is None:
         form = infer_form(rotations, joints)
-    elif form not in FORMS:
-        raise ArgumentError(f"argument `form`: expected one of {', '.join(FORMS)}, got {form!r}")
     elif form == "matrix" and tuple(rotations.shape[-3:]) == (joints, 3, 3):
         form = "matrix3x3"
-    elif tuple(rotations.shape[-2:]) != (joints, FORMS[form]):
+    elif tuple(rotations.shape[-2:]) != (joints, size := form_size(form)):
         raise ArgumentError(
-            f"argument `rotations`: a {form} is {FORMS[form]} values, expected [..., {joints}, {FORMS[form]}], "
+            f"argument `rotations`: a {form} is {size} values, expected [..., {joints}, {size}], "
             f"got {list(rotations.shape)}"
         )
     local, batch = _quaternions(rotations, form, joints)

@@ -9,7 +9,10 @@ differentiable.
   (``R[:, 0]`` then ``R[:, 1]``), turned back into a rotation by Gram-Schmidt (the first column
   keeps its direction), as ``preprocess --rotations 6d`` stores it;
 - axis-angle ``[..., 3]`` is the rotation vector: the unit axis times the angle in radians, the
-  angle in [0, pi].
+  angle in [0, pi];
+- Euler angles ``[..., 3]`` are degrees about the axes of an order (``"ZXY"``: Z, then X, then Y),
+  intrinsic, the first axis outermost, as BVH channels are written (``R = R_Z R_X R_Y``); the
+  middle angle comes back in [-90, 90]. A dataset's form is ``"euler:ORDER"``.
 
 Every conversion goes through the matrix or the quaternion. Near the identity and near a half
 turn the formulas switch to series or pick the well-conditioned branch, so values and gradients
@@ -39,10 +42,22 @@ def _shaped(name: str, x, tail: tuple[int, ...]) -> torch.Tensor:
     return x
 
 
-def _form(form: str) -> int:
+def form_size(form: str) -> int:
+    """The values a rotation of ``form`` takes: :data:`FORMS`, or 3 for ``"euler:ORDER"``
+    (``"euler"`` alone: ZXY). An :class:`~expressive_mocap.errors.ArgumentError` names a bad form."""
+    if isinstance(form, str) and form.split(":")[0] == "euler":
+        _euler_order(form)
+        return 3
     if form not in FORMS:
-        raise ArgumentError(f"argument `form`: expected one of {', '.join(FORMS)}, got {form!r}")
+        raise ArgumentError(f"argument `form`: expected one of {', '.join(FORMS)} or euler:ORDER, got {form!r}")
     return FORMS[form]
+
+
+def _euler_order(form: str) -> str:
+    order = form.partition(":")[2].upper() or "ZXY"
+    if sorted(order) != ["X", "Y", "Z"]:
+        raise ArgumentError(f"argument `form`: an Euler order is X, Y and Z once each (euler:ZXY), got {form!r}")
+    return order
 
 
 # --------------------------------------------------------------------------- quaternion algebra
@@ -212,14 +227,56 @@ def matrix_to_axis_angle(m: torch.Tensor) -> torch.Tensor:
     return quat_to_axis_angle(matrix_to_quat(m))
 
 
+# --------------------------------------------------------------------------- Euler angles
+
+
+def euler_to_quat(angles: torch.Tensor, order: str = "ZXY") -> torch.Tensor:
+    """Unit quaternions ``[..., 4]`` (``w >= 0``) of Euler angles ``[..., 3]`` in degrees about
+    the axes of ``order``, intrinsic (the first axis outermost): ``q = q_1 q_2 q_3``."""
+    _shaped("angles", angles, (3,))
+    order = _euler_order(f"euler:{order}")
+    half = torch.deg2rad(angles) / 2
+    zero = torch.zeros_like(half[..., 0])
+    q = None
+    for k, axis in enumerate(order):
+        c, s = torch.cos(half[..., k]), torch.sin(half[..., k])
+        parts = [s if "XYZ".index(axis) == i else zero for i in range(3)]
+        turn = torch.stack([*parts, c], -1)
+        q = turn if q is None else quat_mul(q, turn)
+    assert q is not None  # three axes
+    return _positive(q)
+
+
+def matrix_to_euler(m: torch.Tensor, order: str = "ZXY") -> torch.Tensor:
+    """Euler angles ``[..., 3]`` (degrees, ``order``, intrinsic) of rotation matrices: with the
+    axes i, j, k of ``order``, ``R = R_i R_j R_k``, the middle angle ``asin(+-R[i, k])`` in
+    [-90, 90] and the outer two by ``atan2`` (at 90 exactly, the gimbal lock, one of the two
+    rotations that share an axis takes it all)."""
+    _shaped("m", m, (3, 3))
+    i, j, k = ("XYZ".index(a) for a in _euler_order(f"euler:{order}"))
+    sign = 1.0 if (j - i) % 3 == 1 else -1.0  # a cyclic order (XYZ, YZX, ZXY) or not
+    middle = torch.asin(torch.clamp(sign * m[..., i, k], -1.0, 1.0))
+    first = torch.atan2(-sign * m[..., j, k], m[..., k, k])
+    last = torch.atan2(-sign * m[..., i, j], m[..., i, i])
+    return torch.rad2deg(torch.stack([first, middle, last], -1))
+
+
+def quat_to_euler(q: torch.Tensor, order: str = "ZXY") -> torch.Tensor:
+    """Euler angles ``[..., 3]`` (degrees, ``order``) of quaternions, through the matrix."""
+    return matrix_to_euler(quat_to_matrix(q), order)
+
+
 # --------------------------------------------------------------------------- a dataset's forms
 
 
 def to_matrix(values: torch.Tensor, form: str) -> torch.Tensor:
     """Rotation matrices ``[..., 3, 3]`` of rotations stored in ``form`` (``"quaternion"``,
-    ``"6d"``, ``"matrix"``: 9 entries row after row, or ``"axis-angle"``; ``[..., n]``)."""
-    n = _form(form)
+    ``"6d"``, ``"matrix"``: 9 entries row after row, ``"axis-angle"`` or ``"euler:ORDER"``;
+    ``[..., n]``)."""
+    n = form_size(form)
     _shaped("values", values, (n,))
+    if form.startswith("euler"):
+        return quat_to_matrix(euler_to_quat(values, _euler_order(form)))
     if form == "quaternion":
         return quat_to_matrix(values)
     if form == "6d":
@@ -233,24 +290,28 @@ def to_quat(values: torch.Tensor, form: str) -> torch.Tensor:
     """Unit quaternions ``[..., 4]`` (``w >= 0``) of rotations in ``form`` ``[..., n]``: the torch
     twin of :func:`expressive_mocap.dataset.representations.decode` (a ``"matrix"`` slightly off a
     rotation still decodes)."""
-    n = _form(form)
+    n = form_size(form)
     _shaped("values", values, (n,))
     if form == "quaternion":
         return _positive(values / torch.linalg.vector_norm(values, dim=-1, keepdim=True))
     if form == "axis-angle":
         return _positive(axis_angle_to_quat(values))
+    if form.startswith("euler"):
+        return euler_to_quat(values, _euler_order(form))
     return matrix_to_quat(to_matrix(values, form))
 
 
 def from_quat(q: torch.Tensor, form: str) -> torch.Tensor:
     """Unit quaternions ``[..., 4]`` as ``form`` ``[..., n]``: the torch twin of
     :func:`expressive_mocap.dataset.representations.encode` (quaternions are returned as they are)."""
-    _form(form)
+    form_size(form)
     _shaped("q", q, (4,))
     if form == "quaternion":
         return q
     if form == "axis-angle":
         return quat_to_axis_angle(q)
+    if form.startswith("euler"):
+        return quat_to_euler(q, _euler_order(form))
     if form == "6d":
         return quat_to_sixd(q)
     m = quat_to_matrix(q)
@@ -261,8 +322,11 @@ __all__ = [
     "FORMS",
     "axis_angle_to_matrix",
     "axis_angle_to_quat",
+    "euler_to_quat",
+    "form_size",
     "from_quat",
     "matrix_to_axis_angle",
+    "matrix_to_euler",
     "matrix_to_quat",
     "matrix_to_sixd",
     "quat_conjugate",
@@ -270,6 +334,7 @@ __all__ = [
     "quat_normalize",
     "quat_rotate",
     "quat_to_axis_angle",
+    "quat_to_euler",
     "quat_to_matrix",
     "quat_to_sixd",
     "sixd_to_matrix",
