@@ -8,8 +8,9 @@ the canonical body the body-mechanics model read it as expression: 0.68-0.87 of 
 neutral walk's toes, its body-mechanics file turning the actor's toes 24-35 degrees.
 
 :func:`stand_unseen` puts them where the canonical body's own captures have them while the foot
-stands: each clip's median over its stance frames taken onto the dataset-2 walks' (constants
-below), the motion about it kept (a toe bending at push-off still bends).
+stands: each clip's toes' mean rotation and its foot roll's median over its stance frames taken
+onto the dataset-2 walks' (constants below), the motion about them kept (a toe bending at
+push-off still bends).
 """
 
 from __future__ import annotations
@@ -47,8 +48,9 @@ def unseen_toes(skeleton: Skeleton, jmap: JointMap) -> list[str]:
 
 def stand_unseen(motion: Motion, jmap: JointMap, sides: list[str]) -> Motion:
     """``motion`` (on the canonical body, Y up) with, for each of ``sides``, the foot's roll about
-    the line to its toes and the toes' rotation turned by one constant each, so that their median
-    over the stance frames is :data:`STANCE_ROLL` and :data:`STANCE_TOES`; the toes keep their
+    the line to its toes and the toes' rotation turned by one constant each, so that over the
+    stance frames the roll's median is :data:`STANCE_ROLL` and the toes' mean rotation
+    :data:`STANCE_TOES`; the toes keep their
     world orientation through the foot's turn before their own. A side standing fewer than
     :data:`MIN_STANCE` frames is left as it is."""
     if not sides or motion.n_frames < MIN_STANCE:
