@@ -23,7 +23,8 @@ from the positions, with the functions retargeting reads twists with, so the two
   through their contacts, and the fitted ankles put there by leg IK.
 - The hips' path is the root's positions. Then :func:`~.retargeting.retarget_rigs` carries the
   motion onto the target (stance feet planted through the contacts it reads); clavicles the
-  positions do not give turn towards their shoulders (:mod:`.clavicles`).
+  positions do not give turn towards their shoulders (:mod:`.clavicles`); given the target's own
+  motion, its limbs are twisted about themselves as that motion twists them (:mod:`.habits`).
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from ..rotations import quat
 from . import twist
 from .clavicles import reach_shoulders
 from .denoise import DENOISE, NOISY, noise, steady_feet
+from .habits import habits, with_habits
 from .layouts import Layout, layout_of, read_positions
 from .rig import _frame_vectors, _orthonormal
 
@@ -431,6 +433,8 @@ def fit_positions(
         own = target.rotations if isinstance(target, Motion) else None  # the target's motion, if any
         out = reach_shoulders(out, goal.jmap, wanted[:, arms], own)
         placed = out.positions()[:, [goal.jmap[r] for r in roles]]
+    if isinstance(target, Motion) and target.n_frames > 1:  # its limbs twisted as its own motion twists them
+        out = with_habits(out, goal, habits(target, goal))
     distance = np.linalg.norm(placed - wanted, axis=-1)  # [F, R]
     names = goal.skeleton.names
     report = FitReport(
