@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from expressive_mocap.procedural import walk_and_wave
 from expressive_mocap.rotations import quat
-from expressive_mocap.skeletons.habits import habits, with_habits
+from expressive_mocap.skeletons.habits import habits, hips_habit, with_habits, with_hips_habit
 from expressive_mocap.skeletons.retargeting import rigs_for
+from expressive_mocap.skeletons.synthetic import synthetic_walk
 
 TWISTS = {"left_upper_arm": 30.0, "left_forearm": 30.0, "right_upper_arm": -25.0, "right_lower_leg": 12.0}
 
@@ -61,3 +63,42 @@ def test_no_habits_change_nothing(walk_and_rig):
     assert with_habits(walk, rig, {}) is walk
     same = with_habits(walk, rig, habits(walk, rig))
     assert np.allclose(np.abs(np.sum(same.rotations * walk.rotations, -1)), 1.0, atol=1e-9)  # q or -q
+
+
+@pytest.mark.parametrize("rig_name", ["procedural", "smpl", "game"])  # Y up; Z up; Z up, facing -Y
+def test_hips_turned_about_the_spine_keep_the_upper_body(walk_and_rig, rig_name):
+    """The hips given a habit 15 degrees off their own: the hips joint turns by it (on the right,
+    in its own axes), everything from the spine up keeps its place and rotation, the legs their
+    rotations (they move with the pelvis)."""
+    if rig_name == "procedural":
+        walk, rig = walk_and_rig
+    else:
+        walk = synthetic_walk(rig_name).motion
+        _, rig = rigs_for(walk, walk)
+    jmap, parents = rig.jmap, walk.skeleton.parents
+    axis = np.array([0.3, 0.5, 0.8]) / np.linalg.norm([0.3, 0.5, 0.8])  # none of the joint's own axes
+    turn = Rotation.from_rotvec(np.radians(15.0) * axis).as_quat()  # x, y, z, w: as the package's
+    wanted = quat.mul(hips_habit(walk, rig), turn)
+    given = with_hips_habit(walk, rig, wanted)
+    (w0, p0), (w1, p1) = walk.fk(), given.fk()
+    hips = jmap["hips"]
+    canonical = rig.conventions.rotation()  # the habit's axes: the turn, seen in the file's
+    native = quat.mul(quat.mul(quat.conjugate(canonical), turn), canonical)
+    assert np.allclose(np.abs(np.sum(w1[:, hips] * quat.mul(w0[:, hips], native), -1)), 1.0, atol=1e-9)
+    upper = _upper_body(parents, hips, jmap["chest"])
+    assert np.allclose(p1[:, upper], p0[:, upper], atol=1e-9)
+    legs = [jmap[f"{s}_{p}"] for s in ("left", "right") for p in ("upper_leg", "lower_leg", "foot")]
+    assert np.allclose(np.abs(np.sum(w1[:, legs] * w0[:, legs], -1)), 1.0, atol=1e-9)
+    moved = np.linalg.norm(p1[:, legs] - p0[:, legs], axis=-1)
+    assert moved.min() > 1e-3  # the legs did go with the pelvis
+    assert with_hips_habit(walk, rig, hips_habit(walk, rig)) is walk  # a habit already held: nothing
+
+
+def _upper_body(parents: np.ndarray, hips: int, chest: int) -> list[int]:
+    """The joints from the hips' spine child up to the chest, and all that hang from the chest."""
+
+    def chain(j: int) -> list[int]:
+        return [j] + chain(int(parents[j])) if j >= 0 else []
+
+    spine = chain(chest)[: chain(chest).index(hips)]
+    return [j for j in range(len(parents)) if j in spine or chest in chain(j)]

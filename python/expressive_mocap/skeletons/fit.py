@@ -40,7 +40,7 @@ from ..rotations import quat
 from . import twist
 from .clavicles import reach_shoulders
 from .denoise import DENOISE, NOISY, noise, steady_feet
-from .habits import habits, with_habits
+from .habits import habits, hips_habit, with_habits, with_hips_habit
 from .layouts import Layout, layout_of, read_positions
 from .rig import _frame_vectors, _orthonormal
 
@@ -423,6 +423,9 @@ def fit_positions(
         motion = plant(motion, source.jmap, contacts, ankles)
         source, goal = rigs_for(motion, target, user_map, target_map, conventions)
     out = retarget_rigs(motion, source, goal, plant_feet=plant_feet)
+    habitual = target if isinstance(target, Motion) and target.n_frames > 1 else None  # shows the rig's habits
+    if habitual is not None:
+        out = with_hips_habit(out, goal, hips_habit(habitual, goal))
     roles = [r for r in source.jmap.joints if r in goal.jmap.joints]
     placed = out.positions()[:, [goal.jmap[r] for r in roles]]
     wanted = carried(points[:, [source.jmap[r] for r in roles]], source, goal)
@@ -433,8 +436,8 @@ def fit_positions(
         own = target.rotations if isinstance(target, Motion) else None  # the target's motion, if any
         out = reach_shoulders(out, goal.jmap, wanted[:, arms], own)
         placed = out.positions()[:, [goal.jmap[r] for r in roles]]
-    if isinstance(target, Motion) and target.n_frames > 1:  # its limbs twisted as its own motion twists them
-        out = with_habits(out, goal, habits(target, goal))
+    if habitual is not None:
+        out = with_habits(out, goal, habits(habitual, goal))
     distance = np.linalg.norm(placed - wanted, axis=-1)  # [F, R]
     names = goal.skeleton.names
     report = FitReport(

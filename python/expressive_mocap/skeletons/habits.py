@@ -7,6 +7,9 @@ from the plane the elbow bends in, clip after clip (within 0.4-2.2 degrees over 
 A motion fitted to positions faces that plane exactly; given the target rig's own motion, its
 limbs are turned about themselves by the difference, so it twists them as its own captures do.
 Each turned joint's children keep their world rotations: no position moves.
+
+Likewise the hips (:func:`hips_habit`): a CMU skeleton's pelvis sits 16 degrees from the frame of
+its hip joints and the line up its spine, as its lower back bends; a T-pose rest does not show it.
 """
 
 from __future__ import annotations
@@ -22,17 +25,24 @@ from .rig import Rig
 HABITUAL = ("upper_arm", "forearm", "upper_leg", "lower_leg")  # the limb segments turned
 _SAMPLED = 256  # frames a habit is read from, spread over the clip
 _TELLING = 0.1  # the least share of frames that tell a limb's plane for its habit to be read
+# The least turn of the hips worth giving: the fit's line up the spine sits 0.5-2.5 degrees from
+# the capture's own where the fit already matched it (the Bandai-Namco, m21 and CMU 131 clips),
+# and turning by that much moved their joints 0.1-0.2 cm further off; a CMU 01_01 fit needs 16.
+HIPS_TURN_LEAST = np.radians(5.0)
 
 
 def habits(motion: Motion, rig: Rig) -> dict[int, float]:
     """Per joint of the :data:`HABITUAL` parts with one child, the median angle (radians, about
     its bone) from where ``motion``'s rotations put its second axis to where its positions say
     it faces, over the frames that tell (:func:`~.twist.telling`); none where too few tell."""
+    return _habits(*_sampled_fk(motion, rig), rig)
+
+
+def _sampled_fk(motion: Motion, rig: Rig) -> tuple[np.ndarray, np.ndarray]:
+    """World rotations and positions of ``motion``'s frames spread over the clip (a habit's median
+    over evenly spread frames is as good as over all)."""
     picked = spread_frames(motion.n_frames, _SAMPLED)
-    world, positions = ops.forward_kinematics(
-        motion.rotations[picked], motion.translations[picked], rig.skeleton.parents
-    )
-    return _habits(world, positions, rig)
+    return ops.forward_kinematics(motion.rotations[picked], motion.translations[picked], rig.skeleton.parents)
 
 
 def _habits(world: np.ndarray, positions: np.ndarray, rig: Rig) -> dict[int, float]:
@@ -88,4 +98,65 @@ def with_habits(motion: Motion, rig: Rig, wanted: dict[int, float]) -> Motion:
     return Motion(motion.skeleton, local, motion.translations, motion.frame_time)
 
 
-__all__ = ["HABITUAL", "habits", "with_habits"]
+def hips_habit(motion: Motion, rig: Rig) -> np.ndarray:
+    """How the hips joint of ``rig`` sits against the frame its positions show (the line across
+    the hip joints, the line up the spine to the chest): the mean rotation ``[4]`` (canonical
+    axes) from that frame, as the rig's reference pose relates them, to the joint's rotation, over
+    ``motion``'s frames. A CMU skeleton's sits 16 degrees from it: its lower back bends that much."""
+    return _hips_habit(*_sampled_fk(motion, rig), rig)
+
+
+def _hips_habit(world: np.ndarray, positions: np.ndarray, rig: Rig) -> np.ndarray:
+    from .rig import _frame_vectors, _orthonormal
+    from .transfer import _own_frames, _turned
+
+    turn = rig.conventions.rotation()
+    world, points = _turned(turn, world), quat.rotate(turn, positions)
+    joint, from_frame = next((j, f) for role, j, f in _own_frames(rig).framed if role == "hips")
+    seen = quat.mul(quat.from_matrix(_orthonormal(*_frame_vectors(points, rig.jmap, "hips", rig.jmap))), from_frame)
+    return quat.mean_rotation(quat.mul(quat.conjugate(seen), world[:, joint]))
+
+
+def with_hips_habit(motion: Motion, rig: Rig, wanted: np.ndarray) -> Motion:
+    """``motion`` (of ``rig``) with its hips joint turned so that it sits against the frame of
+    its positions as ``wanted`` (:func:`hips_habit` of the rig's own motion) says, about the
+    joint the spine leaves it from: the spine and all above it keep their places and rotations,
+    the legs (their joints' world rotations kept) move with the pelvis."""
+    parents, hips = rig.skeleton.parents, rig.jmap["hips"]
+    world, positions = motion.fk()
+    picked = spread_frames(motion.n_frames, _SAMPLED)
+    turn = rig.conventions.rotation()
+    have = _hips_habit(world[picked], positions[picked], rig)
+    # The turn on the right of the joint's rotation, from canonical axes to the file's.
+    correction = quat.mul(quat.mul(quat.conjugate(turn), quat.mul(quat.conjugate(have), wanted)), turn)
+    if quat.angle(correction) < HIPS_TURN_LEAST:
+        return motion
+    spine_child = _child_towards(parents, hips, rig.jmap["chest"])
+    pivot = positions[:, spine_child] if spine_child >= 0 else positions[:, hips]
+    new = quat.mul(world[:, hips], correction)
+    turned = quat.mul(new, quat.conjugate(world[:, hips]))  # the same turn, in world axes
+    place = pivot + quat.rotate(turned, positions[:, hips] - pivot)
+    local, translations = motion.rotations.copy(), motion.translations.copy()
+    above = world[:, parents[hips]] if hips else np.broadcast_to(np.array([0.0, 0.0, 0.0, 1.0]), new.shape)
+    local[:, hips] = quat.normalize(quat.mul(quat.conjugate(above), new))
+    translations[:, hips] += quat.rotate(quat.conjugate(above), place - positions[:, hips])
+    mapped = set(rig.jmap.joints.values()) | set(rig.jmap.spine)
+    for child in np.flatnonzero(parents == hips):
+        if child == spine_child or child in mapped:  # keeps its world rotation
+            local[:, child] = quat.normalize(quat.mul(quat.conjugate(new), world[:, child]))
+        else:  # a joint of the pelvis (CMU's hip joints' parents): turns with it, its children not
+            moved = quat.mul(new, motion.rotations[:, child])
+            for grandchild in np.flatnonzero(parents == child):
+                local[:, grandchild] = quat.normalize(quat.mul(quat.conjugate(moved), world[:, grandchild]))
+    return Motion(motion.skeleton, local, translations, motion.frame_time)
+
+
+def _child_towards(parents: np.ndarray, joint: int, descendant: int) -> int:
+    """The child of ``joint`` on the path down to ``descendant`` (-1: not below it)."""
+    j = descendant
+    while j >= 0 and parents[j] != joint:
+        j = int(parents[j])
+    return j
+
+
+__all__ = ["HABITUAL", "habits", "hips_habit", "with_habits", "with_hips_habit"]
