@@ -262,19 +262,21 @@ def test_noisy_positions_give_no_flips(bandai2_dir, layout):
     assert clean_report.denoised == 0 and report.denoised > 0  # the noise is found, and only there
     # The capture itself turns its toes up to 33 degrees between frames (toe-off): with noise, no
     # joint jumps over 20 degrees but where the capture does, nor beyond the capture's jump there
-    # (measured: 17.7-18.9 at the feet with humanml3d, 11.4-13.0 with h36m17; no flips).
+    # (measured, where the capture stays under 20: 12.1-13.2 with humanml3d, 11.0-11.7 with h36m17).
     assert (jumps(noisy) <= np.maximum(20.0, jumps(motion))).all(), jumps(noisy)
-    assert report.mean_all < 1.5  # measured: 0.96 and 0.80 from the clean positions' carried place
+    assert report.mean_all < 1.5  # measured: 1.03-1.04 and 0.71-0.78 from the clean positions' carried place
 
 
 @pytest.mark.parametrize("layout", ["humanml3d", "h36m17"])
 def test_noisy_positions_keep_stance_feet_steady(bandai2_dir, layout):
-    # The target is 1.2x the clean fit's stance-foot speed; measured 1.26-1.28x (humanml3d) and
-    # 1.38x (h36m17) over three noise seeds: missed, and held to what was measured.
+    """The target is 1.2x the clean fit's stance-foot speed; measured 0.90 (humanml3d) and 1.16
+    (h36m17) over three noise seeds (1.26-1.28 and 1.38 with Gaussians over the feet's contacts),
+    the ankles sliding 5.6 and 3.4 cm/s in mid-stance against the clean fit's 2.9. Not much
+    below 1 either: that would be a foot held down as it lifts."""
     motion, (clean, _), (noisy, _) = noisy_fits(bandai2_dir, layout)
     contacts = foot_contacts(motion)
     ratio = stance_speed(noisy, contacts) / stance_speed(clean, contacts)
-    assert ratio <= (1.35 if layout == "humanml3d" else 1.45), ratio
+    assert 0.8 <= ratio <= 1.2, ratio
 
 
 def test_layouts_follow_the_standard_orders():

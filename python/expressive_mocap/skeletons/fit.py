@@ -396,6 +396,7 @@ def fit_positions(
     points, up_name = upright(points, draft_map, up)
     if denoise is None:
         denoise = DENOISE if noise(points, fps) > NOISY * _height(points, draft_map) else 0.0
+    raw = points
     if denoise > 0:
         from scipy.ndimage import gaussian_filter1d  # here: SciPy takes a tenth of a second to import
 
@@ -415,7 +416,7 @@ def fit_positions(
         from .planting import source_contacts
 
         contacts = source_contacts([motion], source, points)
-        points = steady_feet(points, contacts, source.jmap, fps)
+        points = steady_feet(points, raw, contacts, source.jmap, fps)
         motion = fit_layout(points, given, fps, smooth=smooth)
         # The ankles' forward kinematics gathers the noise of every joint above them: leg IK puts
         # them where the steadied positions are.
