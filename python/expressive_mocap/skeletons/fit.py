@@ -248,12 +248,14 @@ def fit_skeleton(positions: np.ndarray, layout: Layout) -> tuple[Skeleton, dict[
     framed: dict[int, np.ndarray] = {}
     for j, kind in enumerate(plan.kinds):
         if kind == "frame":
+            carried = _carried_by(j, children, lengths, plan.roles)
             frames = _frame(positions, jmap, plan, j)  # [F, 3, 3]
-            lines = positions[:, children[j]] - positions[:, j, None]
+            lines = positions[:, carried] - positions[:, j, None]
             local = np.median(np.einsum("fji,fcj->fci", frames, lines), axis=0)
             if _rigid_ok(local):
                 local = np.median(quat.rotate(quat.conjugate(_rigid(local, lines))[:, None], lines), axis=0)
-            framed.update(zip(children[j], local))
+            for c, place in zip(carried, local):  # a grandchild's offset: from its parent at the joint
+                framed[c] = place - (framed[parents[c]] if parents[c] != j else 0.0)
     flat = _flat_feet(positions, jmap, plan)
     offsets = np.zeros((len(parents), 3))
     rest_dirs: dict[int, np.ndarray] = {}
@@ -268,6 +270,18 @@ def fit_skeleton(positions: np.ndarray, layout: Layout) -> tuple[Skeleton, dict[
     names = _own_names(layout)
     skeleton = Skeleton(names, parents, offsets, _channels(parents, jmap["hips"]))
     return skeleton, _full_map(jmap, names), plan
+
+
+def _carried_by(j: int, children: list[list[int]], lengths: np.ndarray, roles: dict[int, str]) -> list[int]:
+    """The joints whose median place the hips or chest ``j`` carries: its children, and past a
+    child of no role that sits at the joint (CMU's hip joints hang from such joints at the hips),
+    that child's children too."""
+    out = []
+    for c in children[j]:
+        out.append(c)
+        if c not in roles and lengths[c - 1] <= 1e-3 * np.median(lengths):
+            out.extend(children[c])
+    return out
 
 
 def _rigid_ok(rest: np.ndarray) -> bool:
