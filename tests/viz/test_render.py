@@ -84,13 +84,23 @@ def test_a_file_in_metres_draws_the_same_picture_as_in_centimetres(tmp_path, dra
     inked_cm, inked_m = (np.mean(png < 200) for png in (cm_png, m_png))
     assert inked_m == pytest.approx(inked_cm, rel=0.05)
 
-    ax_cm, ax_m = drawn([walk]).axes[0], drawn([metres]).axes[0]
-    np.testing.assert_allclose(np.array(ax_m.get_xlim()) * 100, ax_cm.get_xlim(), rtol=1e-9)
-    np.testing.assert_allclose(np.array(ax_m.get_ylim()) * 100, ax_cm.get_ylim(), rtol=1e-9)
-    np.testing.assert_allclose(lines_of(ax_m) * 100, lines_of(ax_cm), rtol=1e-9, atol=1e-9)
+    ax_cm, ax_m = drawn([walk]).axes[0], drawn([metres]).axes[0]  # both drawn in metres
+    np.testing.assert_allclose(ax_m.get_xlim(), ax_cm.get_xlim(), rtol=1e-9)
+    np.testing.assert_allclose(ax_m.get_ylim(), ax_cm.get_ylim(), rtol=1e-9)
+    np.testing.assert_allclose(lines_of(ax_m), lines_of(ax_cm), rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(
         [line.get_linewidth() for line in ax_m.lines], [line.get_linewidth() for line in ax_cm.lines], rtol=1e-9
     )
+
+
+def test_panels_in_other_units_share_one_real_scale(drawn):
+    """A clip in centimetres beside the same clip in metres: one figure, one height (file units
+    drew the metres one a hundredth as tall; a CMU file beside a Bandai-Namco one a fifth)."""
+    walk = procedural_walk(seconds=2.0)
+    cm_panel, m_panel = drawn([walk, walk.scaled(0.01)]).axes[:2]
+    np.testing.assert_allclose(lines_of(m_panel), lines_of(cm_panel), rtol=1e-9, atol=1e-9)
+    heights = np.ptp(lines_of(cm_panel)[..., 1])
+    assert 1.3 < heights < 2.0  # metres: the procedural actor stands about 1.6 m
 
 
 @pytest.mark.parametrize("fps", [120.0, 30.0])
@@ -124,7 +134,7 @@ def test_the_side_view_follows_the_walker_not_the_world(drawn):
         np.testing.assert_allclose(x, z, atol=1e-6)
     side = lines_of(drawn([along_x], view="side").axes[0])
     first, last = side[: len(side) // 8], side[-len(side) // 8 :]
-    assert last[..., 0].mean() - first[..., 0].mean() > 200  # walking to the right
+    assert last[..., 0].mean() - first[..., 0].mean() > 2.0  # walking to the right (drawn in metres)
 
 
 def test_the_legend_says_what_the_shading_means(drawn):

@@ -21,6 +21,7 @@ import numpy as np
 
 from .._utils.files import atomic_write, output_target
 from .._utils.progress import Progress
+from ..body.body import Body
 from ..body.take import Take
 from ..errors import ArgumentError, MocapError
 from ..motion import Motion
@@ -92,6 +93,19 @@ def project(motion: Motion, view: str = "side") -> tuple[np.ndarray, np.ndarray]
     return flat, positions[:, hips] @ axis
 
 
+def _drawing_scales(motions: Sequence[Motion]) -> list[float]:
+    """Per motion, what its units are drawn at so that panels share one real scale (centimetres
+    beside a CMU file's units drew that actor a fifth of the other's height): its metres per unit,
+    as read from its data (an unknown unit's stands the actor 1.70 m tall); file units for all
+    where one cannot be read."""
+    from ..body.conventions import read_conventions
+
+    try:
+        return [read_conventions(m, Body.of(m.skeleton).joint_map).metres_per_unit for m in motions]
+    except MocapError:
+        return [1.0] * len(motions)
+
+
 def _vertical_range(flat: Sequence[np.ndarray]) -> tuple[float, float]:
     """Floor (or lowest point) to the top of every drawn figure."""
     low = min(0.0, min(float(f[..., 1].min()) for f in flat))
@@ -143,7 +157,7 @@ def pose_figure(motions: Sequence[Motion], titles: Sequence[str] | None = None, 
 
     titles = _check(motions, titles, view)
     frames = [np.linspace(0, m.n_frames - 1, min(poses, m.n_frames)).round().astype(int) for m in motions]
-    drawn = [project(m, view)[0][f] for m, f in zip(motions, frames)]
+    drawn = [project(m, view)[0][f] * scale for m, f, scale in zip(motions, frames, _drawing_scales(motions))]
     low, top = _vertical_range(drawn)
     margin = MARGIN * (top - low)
     spans = [np.ptp(d[..., 0]) + 2 * margin for d in drawn]
@@ -238,10 +252,10 @@ def render_animation(
     seconds = max(m.n_frames * m.frame_time for m in motions)
     times, delays, step = gif_timing([m.fps for m in motions], seconds, speed)
     projected = []
-    for motion in motions:
+    for motion, scale in zip(motions, _drawing_scales(motions)):
         flat, centre = project(motion, view)
         index = np.minimum(np.floor(times * motion.fps + 1e-6).astype(int), motion.n_frames - 1)
-        projected.append(flat[index] - np.stack([centre[index], np.zeros(len(index))], -1)[:, None, None])
+        projected.append(scale * (flat[index] - np.stack([centre[index], np.zeros(len(index))], -1)[:, None, None]))
     low, top = _vertical_range(projected)
     margin = MARGIN * (top - low)
     extent = max(float(np.abs(p[..., 0]).max()) for p in projected) + margin
