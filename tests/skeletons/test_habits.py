@@ -1,6 +1,7 @@
-"""A rig's habitual limb twists (:mod:`expressive_mocap.skeletons.habits`), on the procedural walk
-(no data needed): a copy whose arms and legs are twisted about their bones by fixed angles, as a
-rig with other elbow and knee axes would hold them, lends those habits to the untwisted walk."""
+"""A rig's habits (:mod:`expressive_mocap.skeletons.habits`), on the procedural walk and synthetic
+rigs (no data needed): limbs twisted about their bones by fixed angles, as a rig with other elbow
+and knee axes holds them, lend those twists to the untwisted walk; hips turned keep the upper
+body; stance feet pitched keep their ankles."""
 
 from __future__ import annotations
 
@@ -10,7 +11,14 @@ from scipy.spatial.transform import Rotation
 
 from expressive_mocap.procedural import walk_and_wave
 from expressive_mocap.rotations import quat
-from expressive_mocap.skeletons.habits import habits, hips_habit, with_habits, with_hips_habit
+from expressive_mocap.skeletons.habits import (
+    habits,
+    hips_habit,
+    stance_pitch,
+    with_habits,
+    with_hips_habit,
+    with_stance_pitch,
+)
 from expressive_mocap.skeletons.retargeting import rigs_for
 from expressive_mocap.skeletons.synthetic import synthetic_walk
 
@@ -102,3 +110,20 @@ def _upper_body(parents: np.ndarray, hips: int, chest: int) -> list[int]:
 
     spine = chain(chest)[: chain(chest).index(hips)]
     return [j for j in range(len(parents)) if j in spine or chest in chain(j)]
+
+
+def test_stance_feet_are_pitched_as_the_rig_stands_them(walk_and_rig):
+    """The walk's feet given a stance pitch 6 degrees steeper than their own: their stance pitch
+    becomes it, the ankles stay, the toes move."""
+    walk, rig = walk_and_rig
+    own = stance_pitch(walk, rig)
+    wanted = {side: pitch - np.radians(6.0) for side, pitch in own.items()}
+    given = with_stance_pitch(walk, rig, wanted)
+    for side, pitch in stance_pitch(given, rig).items():
+        assert np.degrees(pitch - wanted[side]) == pytest.approx(0.0, abs=0.3), side
+    before, after = walk.positions(), given.positions()
+    ankles = [rig.jmap[f"{s}_foot"] for s in ("left", "right")]
+    toes = [rig.jmap[f"{s}_toes"] for s in ("left", "right")]
+    assert np.allclose(after[:, ankles], before[:, ankles], atol=1e-9)
+    assert np.linalg.norm(after[:, toes] - before[:, toes], axis=-1).min() > 0.5  # cm: the toes went down
+    assert with_stance_pitch(walk, rig, own) is walk

@@ -24,7 +24,7 @@ from the positions, with the functions retargeting reads twists with, so the two
 - The hips' path is the root's positions. Then :func:`~.retargeting.retarget_rigs` carries the
   motion onto the target (stance feet planted through the contacts it reads); clavicles the
   positions do not give turn towards their shoulders (:mod:`.clavicles`); given the target's own
-  motion, its limbs are twisted about themselves as that motion twists them (:mod:`.habits`).
+  motion, its hips, limbs and stance feet sit as that motion holds them (:mod:`.habits`).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ from ..rotations import quat
 from . import twist
 from .clavicles import reach_shoulders
 from .denoise import DENOISE, NOISY, noise, steady_feet
-from .habits import habits, hips_habit, with_habits, with_hips_habit
+from .habits import habits, hips_habit, stance_pitch, stand_as, with_habits, with_hips_habit, with_stance_pitch
 from .layouts import Layout, layout_of, read_positions
 from .rig import _frame_vectors, _orthonormal
 
@@ -440,7 +440,14 @@ def fit_positions(
     out = retarget_rigs(motion, source, goal, plant_feet=plant_feet)
     habitual = target if isinstance(target, Motion) and target.n_frames > 1 else None  # shows the rig's habits
     if habitual is not None:
+        planted = out.positions()[:, [goal.jmap["left_foot"], goal.jmap["right_foot"]]]
         out = with_hips_habit(out, goal, hips_habit(habitual, goal))
+        out = stand_as(with_stance_pitch(out, goal, stance_pitch(habitual, goal)), goal)
+        if plant_feet:  # the pelvis turned, the legs moved with it: the stance ankles as steady as planted
+            from ..body.contacts import foot_contacts
+            from .planting import plant_feet as plant
+
+            out = plant(out, goal.jmap, foot_contacts(out), planted)
     roles = [r for r in source.jmap.joints if r in goal.jmap.joints]
     placed = out.positions()[:, [goal.jmap[r] for r in roles]]
     wanted = carried(points[:, [source.jmap[r] for r in roles]], source, goal)

@@ -159,4 +159,65 @@ def _child_towards(parents: np.ndarray, joint: int, descendant: int) -> int:
     return j
 
 
-__all__ = ["HABITUAL", "habits", "hips_habit", "with_habits", "with_hips_habit"]
+def stance_pitch(motion: Motion, rig: Rig) -> dict[str, float]:
+    """Per side with toes, the median pitch (radians, up positive) of the line from the ankle to
+    the toe joint over the frames ``motion``'s foot stands (its contacts): how the rig's foot bone
+    sits on the floor. A CMU skeleton's stands at -15.6 degrees, its rest's at -10.5: retargeting
+    stands a foot as its rest does, so a fit onto it lifted the toes 5 degrees."""
+    from ..body.contacts import foot_contacts
+
+    points = quat.rotate(rig.conventions.rotation(), motion.positions())
+    contacts = foot_contacts(motion)
+    out = {}
+    for s, side in enumerate(("left", "right")):
+        if f"{side}_toes" not in rig.jmap or contacts[:, s].sum() < 3:
+            continue
+        line = points[contacts[:, s], rig.jmap[f"{side}_toes"]] - points[contacts[:, s], rig.jmap[f"{side}_foot"]]
+        out[side] = float(np.median(np.arctan2(line[:, 1], np.hypot(line[:, 0], line[:, 2]))))
+    return out
+
+
+def with_stance_pitch(motion: Motion, rig: Rig, wanted: dict[str, float]) -> Motion:
+    """``motion`` (of ``rig``) with each foot of ``wanted`` (:func:`stance_pitch` of the rig's own
+    motion) pitched about its ankle, in every frame, by what makes its stance pitch the wanted
+    one; the toes turn with it, the ankles stay."""
+    have = stance_pitch(motion, rig)
+    turns = {side: wanted[side] - have[side] for side in wanted if side in have}
+    turns = {side: angle for side, angle in turns.items() if abs(angle) > np.radians(0.5)}
+    if not turns:
+        return motion
+    parents = rig.skeleton.parents
+    world, positions = motion.fk()
+    up = quat.rotate(quat.conjugate(rig.conventions.rotation()), np.array([0.0, 1.0, 0.0]))  # the file's up
+    local = motion.rotations.copy()
+    for side, angle in turns.items():
+        foot, toes = rig.jmap[f"{side}_foot"], rig.jmap[f"{side}_toes"]
+        line = positions[:, toes] - positions[:, foot]
+        across = np.cross(line, up)  # pitching up is a turn about it
+        across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
+        about = np.concatenate([across * np.sin(0.5 * angle), np.full((len(line), 1), np.cos(0.5 * angle))], axis=-1)
+        turned = quat.mul(about, world[:, foot])
+        local[:, foot] = quat.normalize(quat.mul(quat.conjugate(world[:, parents[foot]]), turned))
+    return Motion(motion.skeleton, local, motion.translations, motion.frame_time)
+
+
+def stand_as(motion: Motion, rig: Rig) -> Motion:
+    """``motion`` (of ``rig``) raised or lowered so that its stance feet stand where the rig's own
+    do (as retargeting stands them: :func:`~.retargeting._stand_on_floor`), after a change of
+    their pitch moved the lowest of them."""
+    from ..body.contacts import foot_contacts
+    from .retargeting import _stand_on_floor
+
+    return _stand_on_floor(motion, motion.positions(), foot_contacts(motion), rig, [0, motion.n_frames])[0]
+
+
+__all__ = [
+    "HABITUAL",
+    "habits",
+    "hips_habit",
+    "stance_pitch",
+    "stand_as",
+    "with_habits",
+    "with_hips_habit",
+    "with_stance_pitch",
+]
