@@ -40,7 +40,7 @@ from ..rotations import quat
 from . import twist
 from .clavicles import reach_shoulders
 from .denoise import DENOISE, NOISY, noise, steady_feet
-from .habits import habits, hips_habit, stance_pitch, stand_as, with_habits, with_hips_habit, with_stance_pitch
+from .habits import habits, standing_as, with_habits
 from .layouts import Layout, layout_of, read_positions
 from .rig import _frame_vectors, _orthonormal
 
@@ -440,14 +440,7 @@ def fit_positions(
     out = retarget_rigs(motion, source, goal, plant_feet=plant_feet)
     habitual = target if isinstance(target, Motion) and target.n_frames > 1 else None  # shows the rig's habits
     if habitual is not None:
-        planted = out.positions()[:, [goal.jmap["left_foot"], goal.jmap["right_foot"]]]
-        out = with_hips_habit(out, goal, hips_habit(habitual, goal))
-        out = stand_as(with_stance_pitch(out, goal, stance_pitch(habitual, goal)), goal)
-        if plant_feet:  # the pelvis turned, the legs moved with it: the stance ankles as steady as planted
-            from ..body.contacts import foot_contacts
-            from .planting import plant_feet as plant
-
-            out = plant(out, goal.jmap, foot_contacts(out), planted)
+        out = standing_as(out, goal, habitual, plant_feet)
     roles = [r for r in source.jmap.joints if r in goal.jmap.joints]
     placed = out.positions()[:, [goal.jmap[r] for r in roles]]
     wanted = carried(points[:, [source.jmap[r] for r in roles]], source, goal)

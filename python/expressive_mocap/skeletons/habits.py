@@ -201,14 +201,21 @@ def with_stance_pitch(motion: Motion, rig: Rig, wanted: dict[str, float]) -> Mot
     return Motion(motion.skeleton, local, motion.translations, motion.frame_time)
 
 
-def stand_as(motion: Motion, rig: Rig) -> Motion:
-    """``motion`` (of ``rig``) raised or lowered so that its stance feet stand where the rig's own
-    do (as retargeting stands them: :func:`~.retargeting._stand_on_floor`), after a change of
-    their pitch moved the lowest of them."""
+def standing_as(motion: Motion, rig: Rig, own: Motion, plant: bool = True) -> Motion:
+    """``motion`` (of ``rig``, retargeted there, its feet planted if ``plant``) with the hips and
+    stance feet the rig's ``own`` motion shows (:func:`hips_habit`, :func:`stance_pitch`), stood
+    where the rig's stance feet stand (as retargeting stands them), and its stance ankles planted
+    again: the legs moved with the pelvis, and should stay as steady as they were planted."""
     from ..body.contacts import foot_contacts
+    from .planting import plant_feet
     from .retargeting import _stand_on_floor
 
-    return _stand_on_floor(motion, motion.positions(), foot_contacts(motion), rig, [0, motion.n_frames])[0]
+    ankles = [rig.jmap["left_foot"], rig.jmap["right_foot"]]
+    planted = motion.positions()[:, ankles]
+    out = with_stance_pitch(with_hips_habit(motion, rig, hips_habit(own, rig)), rig, stance_pitch(own, rig))
+    contacts = foot_contacts(out)
+    out = _stand_on_floor(out, out.positions(), contacts, rig, [0, out.n_frames])[0]
+    return plant_feet(out, rig.jmap, contacts, planted) if plant else out
 
 
 __all__ = [
@@ -216,7 +223,7 @@ __all__ = [
     "habits",
     "hips_habit",
     "stance_pitch",
-    "stand_as",
+    "standing_as",
     "with_habits",
     "with_hips_habit",
     "with_stance_pitch",
