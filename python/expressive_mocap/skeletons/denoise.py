@@ -72,4 +72,13 @@ def noise(points: np.ndarray, fps: float) -> float:
     return float(np.median(second, axis=(0, 2)).min() / (0.6745 * np.sqrt(6.0)))
 
 
-__all__ = ["ACCELERATION", "DENOISE", "NOISY", "STILL", "noise", "steady_feet"]
+def noisy(points: np.ndarray, jmap: JointMap, fps: float) -> bool:
+    """Whether positions ``[F, J, 3]`` (Y up) are noisy: :func:`noise` over :data:`NOISY` of the
+    actor's height, roughly (the median of the hips' height above the feet plus the line from the
+    hips to the head)."""
+    feet = np.minimum(points[:, jmap["left_foot"], 1], points[:, jmap["right_foot"], 1])
+    spine = np.linalg.norm(points[:, jmap["head"]] - points[:, jmap["hips"]], axis=-1)
+    return noise(points, fps) > NOISY * float(np.median(points[:, jmap["hips"], 1] - feet + spine))
+
+
+__all__ = ["ACCELERATION", "DENOISE", "NOISY", "STILL", "noise", "noisy", "steady_feet"]

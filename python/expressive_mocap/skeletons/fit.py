@@ -34,15 +34,16 @@ from typing import NamedTuple
 import numpy as np
 
 from ..body.jointmap import JointMap, find_joint_map
+from ..body.take import Take
 from ..errors import MocapError
 from ..motion import Motion, Skeleton, spread_frames
 from ..rotations import quat
 from . import twist
 from .clavicles import reach_shoulders
-from .denoise import DENOISE, NOISY, noise, steady_feet
+from .denoise import DENOISE, noisy, steady_feet
 from .habits import habits, standing_as, with_habits
-from .layouts import Layout, layout_of, read_positions
-from .rig import _frame_vectors, _orthonormal
+from .layouts import Layout, layout_of, read_positions, upright
+from .rig import Rig, _frame_vectors, _orthonormal
 
 _ROOT_CHANNELS = ("Xposition", "Yposition", "Zposition", "Zrotation", "Yrotation", "Xrotation")
 _CHANNELS = ("Zrotation", "Yrotation", "Xrotation")
@@ -68,27 +69,6 @@ class FitReport(NamedTuple):
     fps: float
     up: str
     denoised: float = 0.0
-
-
-def upright(positions: np.ndarray, jmap: JointMap, up: str | None = None) -> tuple[np.ndarray, str]:
-    """``positions [F, J, 3]`` turned so that up (``"y"``, ``"z"``, optionally signed; None: the
-    axis nearest the mean line from the hips to the head) is +Y, and that axis's name."""
-    if up is None:
-        line = np.mean(positions[:, jmap["head"]] - positions[:, jmap["hips"]], axis=0)
-        axis = int(np.argmax(np.abs(line)))
-        sign = "-" if line[axis] < 0 else "+"
-    else:
-        given = up.strip().lower()
-        sign, name = (given[0], given[1:]) if given[:1] in "+-" else ("+", given)
-        if name not in ("x", "y", "z"):
-            raise MocapError(f"up: expected y or z (optionally signed), got {up!r}")
-        axis = "xyz".index(name)
-    vector = np.zeros(3)
-    vector[axis] = -1.0 if sign == "-" else 1.0
-    name = f"{sign}{'XYZ'[axis]}"
-    if name == "+Y":
-        return positions, name
-    return quat.rotate(quat.between(vector, np.array([0.0, 1.0, 0.0])), positions), name
 
 
 def _full_map(jmap: JointMap, names: tuple[str, ...] | None = None) -> dict[str, object]:
@@ -409,14 +389,17 @@ def fit_positions(
     draft_map = find_joint_map(_draft(points, given), given.joint_map)
     points, up_name = upright(points, draft_map, up)
     if denoise is None:
-        denoise = DENOISE if noise(points, fps) > NOISY * _height(points, draft_map) else 0.0
+        denoise = DENOISE if noisy(points, draft_map, fps) else 0.0
     raw = points
     if denoise > 0:
         from scipy.ndimage import gaussian_filter1d  # here: SciPy takes a tenth of a second to import
 
         points = gaussian_filter1d(points, denoise * fps / 30.0, axis=0, mode="nearest")
-    motion = fit_layout(points, given, fps, smooth=smooth)
-    user_map = _full_map(find_joint_map(_draft(points, given), given.joint_map), motion.skeleton.names)
+    user_map = _full_map(find_joint_map(_draft(points, given), given.joint_map), _own_names(given))
+    if denoise > 0:  # noisy: the feet steadied through their contacts, then the fit
+        motion, points = _steadied_fit(points, raw, given, user_map, fps, smooth)
+    else:
+        motion = fit_layout(points, given, fps, smooth=smooth)
     from ..body.conventions import read_conventions
 
     conventions = None
@@ -424,21 +407,10 @@ def fit_positions(
         from ..body.body import Body
 
         conventions = read_conventions(motion, Body.of(motion.skeleton, user_map).joint_map).with_overrides(unit=unit)
-    source, goal = rigs_for(motion, target, user_map, target_map, conventions)
-    if denoise > 0:  # noisy: the feet steadied through their contacts, and the fit done again
-        from .planting import plant_feet as plant
-        from .planting import source_contacts
-
-        contacts = source_contacts([motion], source, points)
-        points = steady_feet(points, raw, contacts, source.jmap, fps)
-        motion = fit_layout(points, given, fps, smooth=smooth)
-        # The ankles' forward kinematics gathers the noise of every joint above them: leg IK puts
-        # them where the steadied positions are.
-        ankles = points[:, [source.jmap["left_foot"], source.jmap["right_foot"]]]
-        motion = plant(motion, source.jmap, contacts, ankles)
-        source, goal = rigs_for(motion, target, user_map, target_map, conventions)
+    # The target's motion, if any, read once: its stance (for the rig) and its habits.
+    habitual = Take.of(target) if isinstance(target, Motion) and target.n_frames > 1 else None
+    source, goal = rigs_for(motion, target if habitual is None else habitual, user_map, target_map, conventions)
     out = retarget_rigs(motion, source, goal, plant_feet=plant_feet)
-    habitual = target if isinstance(target, Motion) and target.n_frames > 1 else None  # shows the rig's habits
     if habitual is not None:
         out = standing_as(out, goal, habitual, plant_feet)
     roles = [r for r in source.jmap.joints if r in goal.jmap.joints]
@@ -469,12 +441,27 @@ def fit_positions(
     return out, report
 
 
-def _height(points: np.ndarray, jmap: JointMap) -> float:
-    """The actor's height, roughly: the median of the hips' height above the feet plus the line
-    from the hips to the head (Y up)."""
-    feet = np.minimum(points[:, jmap["left_foot"], 1], points[:, jmap["right_foot"], 1])
-    spine = np.linalg.norm(points[:, jmap["head"]] - points[:, jmap["hips"]], axis=-1)
-    return float(np.median(points[:, jmap["hips"], 1] - feet + spine))
+def _steadied_fit(
+    points: np.ndarray, raw: np.ndarray, layout: Layout, user_map: dict, fps: float, smooth: float
+) -> tuple[Motion, np.ndarray]:
+    """:func:`fit_layout` of smoothed noisy ``points`` whose feet are first steadied through their
+    contacts from the ``raw`` positions (:func:`.denoise.steady_feet`), the ankles then put there by
+    leg IK (their forward kinematics gathers the noise of every joint above them); and the
+    steadied positions. The contacts are read from the positions with the fitted skeleton's roles
+    and size: no fit is needed for them (its rest stands in for every frame)."""
+    from .planting import plant_feet, source_contacts
+    from .rig import rest_motion
+
+    rest = rest_motion(fit_skeleton(points, layout)[0])
+    rig = Rig.of(rest, user_map)
+    frames = len(points)
+    still = Motion(
+        rest.skeleton, np.repeat(rest.rotations, frames, 0), np.repeat(rest.translations, frames, 0), 1 / fps
+    )
+    contacts = source_contacts([still], rig, points)
+    steadied = steady_feet(points, raw, contacts, rig.jmap, fps)
+    ankles = steadied[:, [rig.jmap["left_foot"], rig.jmap["right_foot"]]]
+    return plant_feet(fit_layout(steadied, layout, fps, smooth=smooth), rig.jmap, contacts, ankles), steadied
 
 
 def _draft(points: np.ndarray, layout: Layout) -> Skeleton:
@@ -484,4 +471,4 @@ def _draft(points: np.ndarray, layout: Layout) -> Skeleton:
     return Skeleton(layout.names, parents, offsets, (_ROOT_CHANNELS,) * len(parents))
 
 
-__all__ = ["FitReport", "fit_layout", "fit_positions", "fit_skeleton", "upright"]
+__all__ = ["FitReport", "fit_layout", "fit_positions", "fit_skeleton"]

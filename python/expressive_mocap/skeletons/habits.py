@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import ops
+from ..body.take import Take
 from ..motion import Motion, spread_frames
 from ..rotations import quat
 from . import twist
@@ -31,18 +32,22 @@ _TELLING = 0.1  # the least share of frames that tell a limb's plane for its hab
 HIPS_TURN_LEAST = np.radians(5.0)
 
 
-def habits(motion: Motion, rig: Rig) -> dict[int, float]:
+def habits(motion: Motion | Take, rig: Rig) -> dict[int, float]:
     """Per joint of the :data:`HABITUAL` parts with one child, the median angle (radians, about
     its bone) from where ``motion``'s rotations put its second axis to where its positions say
     it faces, over the frames that tell (:func:`~.twist.telling`); none where too few tell."""
     return _habits(*_sampled_fk(motion, rig), rig)
 
 
-def _sampled_fk(motion: Motion, rig: Rig) -> tuple[np.ndarray, np.ndarray]:
+def _sampled_fk(motion: Motion | Take, rig: Rig) -> tuple[np.ndarray, np.ndarray]:
     """World rotations and positions of ``motion``'s frames spread over the clip (a habit's median
-    over evenly spread frames is as good as over all)."""
-    picked = spread_frames(motion.n_frames, _SAMPLED)
-    return ops.forward_kinematics(motion.rotations[picked], motion.translations[picked], rig.skeleton.parents)
+    over evenly spread frames is as good as over all), from its take's when already computed."""
+    take = Take.of(motion)
+    picked = spread_frames(take.motion.n_frames, _SAMPLED)
+    known = take.fk_if_computed
+    if known is not None:
+        return known[0][picked], known[1][picked]
+    return ops.forward_kinematics(take.motion.rotations[picked], take.motion.translations[picked], rig.skeleton.parents)
 
 
 def _habits(world: np.ndarray, positions: np.ndarray, rig: Rig) -> dict[int, float]:
@@ -98,7 +103,7 @@ def with_habits(motion: Motion, rig: Rig, wanted: dict[int, float]) -> Motion:
     return Motion(motion.skeleton, local, motion.translations, motion.frame_time)
 
 
-def hips_habit(motion: Motion, rig: Rig) -> np.ndarray:
+def hips_habit(motion: Motion | Take, rig: Rig) -> np.ndarray:
     """How the hips joint of ``rig`` sits against the frame its positions show (the line across
     the hip joints, the line up the spine to the chest): the mean rotation ``[4]`` (canonical
     axes) from that frame, as the rig's reference pose relates them, to the joint's rotation, over
@@ -159,15 +164,16 @@ def _child_towards(parents: np.ndarray, joint: int, descendant: int) -> int:
     return j
 
 
-def stance_pitch(motion: Motion, rig: Rig) -> dict[str, float]:
+def stance_pitch(motion: Motion | Take, rig: Rig) -> dict[str, float]:
     """Per side with toes, the median pitch (radians, up positive) of the line from the ankle to
     the toe joint over the frames ``motion``'s foot stands (its contacts): how the rig's foot bone
     sits on the floor. A CMU skeleton's stands at -15.6 degrees, its rest's at -10.5: retargeting
     stands a foot as its rest does, so a fit onto it lifted the toes 5 degrees."""
     from ..body.contacts import foot_contacts
 
-    points = quat.rotate(rig.conventions.rotation(), motion.positions())
-    contacts = foot_contacts(motion)
+    take = Take.of(motion)  # its forward kinematics and contacts kept for the next reader
+    points = quat.rotate(rig.conventions.rotation(), take.positions)
+    contacts = foot_contacts(take)
     out = {}
     for s, side in enumerate(("left", "right")):
         if f"{side}_toes" not in rig.jmap or contacts[:, s].sum() < 3:
@@ -201,7 +207,7 @@ def with_stance_pitch(motion: Motion, rig: Rig, wanted: dict[str, float]) -> Mot
     return Motion(motion.skeleton, local, motion.translations, motion.frame_time)
 
 
-def standing_as(motion: Motion, rig: Rig, own: Motion, plant: bool = True) -> Motion:
+def standing_as(motion: Motion, rig: Rig, own: Motion | Take, plant: bool = True) -> Motion:
     """``motion`` (of ``rig``, retargeted there, its feet planted if ``plant``) with the hips and
     stance feet the rig's ``own`` motion shows (:func:`hips_habit`, :func:`stance_pitch`), stood
     where the rig's stance feet stand (as retargeting stands them), and its stance ankles planted

@@ -22,7 +22,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .._utils.files import read_input
+from ..body.jointmap import JointMap
 from ..errors import MocapError
+from ..rotations import quat
 
 _SMPL = (
     ("pelvis", -1),
@@ -241,4 +243,25 @@ def as_frames(array: np.ndarray, joints: int | None, where, sample: int = 0) -> 
     return out
 
 
-__all__ = ["LAYOUTS", "NPZ_KEYS", "Layout", "as_frames", "layout_of", "read_positions"]
+def upright(positions: np.ndarray, jmap: JointMap, up: str | None = None) -> tuple[np.ndarray, str]:
+    """``positions [F, J, 3]`` turned so that up (``"y"``, ``"z"``, optionally signed; None: the
+    axis nearest the mean line from the hips to the head) is +Y, and that axis's name."""
+    if up is None:
+        line = np.mean(positions[:, jmap["head"]] - positions[:, jmap["hips"]], axis=0)
+        axis = int(np.argmax(np.abs(line)))
+        sign = "-" if line[axis] < 0 else "+"
+    else:
+        given = up.strip().lower()
+        sign, name = (given[0], given[1:]) if given[:1] in "+-" else ("+", given)
+        if name not in ("x", "y", "z"):
+            raise MocapError(f"up: expected y or z (optionally signed), got {up!r}")
+        axis = "xyz".index(name)
+    vector = np.zeros(3)
+    vector[axis] = -1.0 if sign == "-" else 1.0
+    name = f"{sign}{'XYZ'[axis]}"
+    if name == "+Y":
+        return positions, name
+    return quat.rotate(quat.between(vector, np.array([0.0, 1.0, 0.0])), positions), name
+
+
+__all__ = ["LAYOUTS", "NPZ_KEYS", "Layout", "as_frames", "layout_of", "read_positions", "upright"]

@@ -66,7 +66,7 @@ def retarget(
 
 def rigs_for(
     motion: Motion | Take,
-    target: Motion | Skeleton,
+    target: Motion | Take | Skeleton,
     source_map: dict | None = None,
     target_map: dict | None = None,
     source_conventions: Conventions | None = None,
