@@ -1,4 +1,5 @@
-"""How a rig habitually twists its limbs, read from its own motion, and a motion given those habits.
+"""How a rig habitually holds its limbs, hips and stance feet, read from its own motion, and a
+motion given those habits (:func:`~.fit.fit_positions` gives them to positions fitted onto a rig).
 
 Joint positions show where a limb bends (:func:`~.twist.facing`), not how a rig's rotations twist
 its bones about that: every rig sets its own elbow and knee axes. The CMU skeletons' elbows bend
@@ -10,6 +11,8 @@ Each turned joint's children keep their world rotations: no position moves.
 
 Likewise the hips (:func:`hips_habit`): a CMU skeleton's pelvis sits 16 degrees from the frame of
 its hip joints and the line up its spine, as its lower back bends; a T-pose rest does not show it.
+And the feet (:func:`stance_pitch`): a CMU foot stands with its ankle-to-toe line 15.6 degrees
+down, its rest's 10.5 (:func:`standing_as` gives both, and stands the body on its feet again).
 """
 
 from __future__ import annotations
