@@ -175,13 +175,15 @@ def stance_pitch(motion: Motion | Take, rig: Rig) -> dict[str, float]:
     from ..body.contacts import foot_contacts
 
     take = Take.of(motion)  # its forward kinematics and contacts kept for the next reader
-    points = quat.rotate(rig.conventions.rotation(), take.positions)
     contacts = foot_contacts(take)
     out = {}
     for s, side in enumerate(("left", "right")):
         if f"{side}_toes" not in rig.jmap or contacts[:, s].sum() < 3:
             continue
-        line = points[contacts[:, s], rig.jmap[f"{side}_toes"]] - points[contacts[:, s], rig.jmap[f"{side}_foot"]]
+        standing = take.positions[contacts[:, s]]
+        line = quat.rotate(
+            rig.conventions.rotation(), standing[:, rig.jmap[f"{side}_toes"]] - standing[:, rig.jmap[f"{side}_foot"]]
+        )
         out[side] = float(np.median(np.arctan2(line[:, 1], np.hypot(line[:, 0], line[:, 2]))))
     return out
 
@@ -190,13 +192,14 @@ def with_stance_pitch(motion: Motion, rig: Rig, wanted: dict[str, float]) -> Mot
     """``motion`` (of ``rig``) with each foot of ``wanted`` (:func:`stance_pitch` of the rig's own
     motion) pitched about its ankle, in every frame, by what makes its stance pitch the wanted
     one; the toes turn with it, the ankles stay."""
-    have = stance_pitch(motion, rig)
+    take = Take.of(motion)
+    have = stance_pitch(take, rig)
     turns = {side: wanted[side] - have[side] for side in wanted if side in have}
     turns = {side: angle for side, angle in turns.items() if abs(angle) > np.radians(0.5)}
     if not turns:
         return motion
     parents = rig.skeleton.parents
-    world, positions = motion.fk()
+    world, positions = take.fk
     up = quat.rotate(quat.conjugate(rig.conventions.rotation()), np.array([0.0, 1.0, 0.0]))  # the file's up
     local = motion.rotations.copy()
     for side, angle in turns.items():
@@ -221,9 +224,11 @@ def standing_as(motion: Motion, rig: Rig, own: Motion | Take, plant: bool = True
 
     ankles = [rig.jmap["left_foot"], rig.jmap["right_foot"]]
     planted = motion.positions()[:, ankles]
-    out = with_stance_pitch(with_hips_habit(motion, rig, hips_habit(own, rig)), rig, stance_pitch(own, rig))
-    contacts = foot_contacts(out)
-    out = _stand_on_floor(out, out.positions(), contacts, rig, [0, out.n_frames])[0]
+    pitched = Take.of(
+        with_stance_pitch(with_hips_habit(motion, rig, hips_habit(own, rig)), rig, stance_pitch(own, rig))
+    )
+    contacts = foot_contacts(pitched)
+    out = _stand_on_floor(pitched.motion, pitched.positions, contacts, rig, [0, motion.n_frames])[0]
     return plant_feet(out, rig.jmap, contacts, planted) if plant else out
 
 
