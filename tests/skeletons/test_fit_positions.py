@@ -303,6 +303,36 @@ def test_shapes_are_read_and_bad_ones_named(tmp_path):
         fit_positions(frames, "smpl99", em.read_bvh)  # type: ignore[arg-type]
 
 
+class _Runs:
+    """A pickled object that would run ``touch MARKER`` when unpickled (a hostile results.npy)."""
+
+    def __init__(self, marker):
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        import os
+
+        return (os.system, (f"touch {self.marker}",))
+
+
+def test_motion_diffusion_results_are_read_and_nothing_else_runs(tmp_path):
+    """motion-diffusion-model saves ``results.npy``: a pickled dict whose ``motion`` is [N, J, 3, F]
+    padded to the longest sample, ``lengths`` each sample's frames. It is read, the sample cut to
+    its length; a pickle holding anything but arrays, numbers and text is refused unrun."""
+    from expressive_mocap.skeletons.layouts import read_positions
+
+    rng = np.random.default_rng(0)
+    samples = rng.normal(size=(2, 22, 3, 60)).astype(np.float32)
+    np.save(tmp_path / "results.npy", {"motion": samples, "text": ["a", "b"], "lengths": np.array([40, 55])})
+    points, _, _ = read_positions(tmp_path / "results.npy", LAYOUTS["humanml3d"], sample=1)
+    assert np.array_equal(points, np.moveaxis(samples[1, ..., :55], -1, 0).astype(np.float64))
+    marker = tmp_path / "ran"
+    np.save(tmp_path / "hostile.npy", {"motion": samples, "x": _Runs(marker)}, allow_pickle=True)
+    with pytest.raises(MocapError, match=r"hostile\.npy: a \.npy of Python objects that cannot be read safely"):
+        read_positions(tmp_path / "hostile.npy", LAYOUTS["humanml3d"])
+    assert not marker.exists()
+
+
 def run_cli(*args):
     """The installed command in a subprocess, as a user runs it."""
     import subprocess

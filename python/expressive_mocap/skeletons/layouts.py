@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import io
 import json
+import pickle
 from pathlib import Path
 from typing import NamedTuple
 
@@ -187,13 +188,20 @@ def read_positions(
     data = read_input(path)
     try:
         loaded = np.load(io.BytesIO(data), allow_pickle=False)
-    except (ValueError, OSError, EOFError) as error:
+    except ValueError as error:
+        if "allow_pickle" not in str(error):
+            raise MocapError(f"{path}: not a NumPy .npy or .npz file ({error})") from None
+        loaded = _pickled_npy(data, path)
+    except (OSError, EOFError) as error:
         raise MocapError(f"{path}: not a NumPy .npy or .npz file ({error})") from None
     carried: Layout | None = None
     fps = None
-    if isinstance(loaded, np.lib.npyio.NpzFile):
-        with loaded:
-            arrays = {k: loaded[k] for k in loaded.files}
+    if isinstance(loaded, (np.lib.npyio.NpzFile, dict)):
+        if isinstance(loaded, dict):
+            arrays = {str(k): np.asarray(v) for k, v in loaded.items() if isinstance(v, np.ndarray)}
+        else:
+            with loaded:
+                arrays = {k: loaded[k] for k in loaded.files}
         numeric = {k: a for k, a in arrays.items() if a.dtype.kind in "fiu" and a.ndim >= 2}
         key = next((k for k in NPZ_KEYS if k in numeric), None)
         if key is None and len(numeric) == 1:
@@ -211,10 +219,67 @@ def read_positions(
             fps = 1.0 / float(arrays["frame_time"])
         elif "fps" in arrays and arrays["fps"].size == 1 and float(arrays["fps"]) > 0:
             fps = float(arrays["fps"])
+        array = _trimmed(array, arrays.get("lengths"), sample)
     else:
         array = loaded
     joints = len((layout or carried).names) if (layout or carried) is not None else None  # type: ignore[union-attr]
     return as_frames(np.asarray(array), joints, path, sample), carried, fps
+
+
+# What a .npy of Python objects may hold to be read: NumPy arrays, their dtypes and scalars
+# (plain numbers, strings, lists and dicts need no class). Unpickling anything else can run code.
+_PICKLED_CLASSES = {
+    (module, name)
+    for module in ("numpy.core.multiarray", "numpy._core.multiarray")
+    for name in ("_reconstruct", "scalar")
+} | {("numpy", "ndarray"), ("numpy", "dtype")}
+
+
+class _ArraysOnly(pickle.Unpickler):
+    def find_class(self, module: str, name: str):
+        if (module, name) not in _PICKLED_CLASSES:
+            raise pickle.UnpicklingError(
+                f"it holds a {module}.{name}, which is not read (only arrays, numbers and text)"
+            )
+        if module.startswith("numpy.core.") and np.lib.NumpyVersion(np.__version__) >= "2.0.0":
+            module = "numpy._core." + module.removeprefix("numpy.core.")  # NumPy 1's pickles, read by NumPy 2
+        return super().find_class(module, name)
+
+
+def _pickled_npy(data: bytes, path) -> dict:
+    """The dict a ``.npy`` of Python objects holds, as motion-diffusion-model writes its
+    ``results.npy`` (``motion`` [N, J, 3, F], ``text``, ``lengths``...): unpickled with NumPy
+    arrays, numbers, text and plain containers only (:data:`_PICKLED_CLASSES`), so that reading a
+    file cannot run code from it."""
+    stream = io.BytesIO(data)
+    try:
+        version = np.lib.format.read_magic(stream)
+        shape, _, dtype = (
+            np.lib.format.read_array_header_1_0(stream)
+            if version == (1, 0)
+            else np.lib.format.read_array_header_2_0(stream)
+        )
+        held = _ArraysOnly(stream).load() if dtype.hasobject and shape == () else None
+    except (ValueError, pickle.UnpicklingError, EOFError, AttributeError, TypeError) as error:
+        raise MocapError(f"{path}: a .npy of Python objects that cannot be read safely: {error}") from None
+    if isinstance(held, np.ndarray) and held.shape == ():
+        held = held.item()
+    if not isinstance(held, dict):
+        raise MocapError(
+            f"{path}: a .npy of Python objects, expected one dict of arrays (as motion-diffusion-model writes)"
+        )
+    return held
+
+
+def _trimmed(array: np.ndarray, lengths: np.ndarray | None, sample: int) -> np.ndarray:
+    """A batch ``[N, J, 3, F]`` cut to its samples' own frame counts where the file gives them
+    (``lengths`` [N]: the samples are padded to the longest), else as it is."""
+    if lengths is None or array.ndim != 4 or lengths.shape != (array.shape[0],) or lengths.dtype.kind not in "iu":
+        return array
+    if not -len(lengths) <= sample < len(lengths):
+        return array  # out of range: as_frames says so
+    length = int(lengths[sample])
+    return array[..., :length] if 2 <= length <= array.shape[-1] else array
 
 
 def as_frames(array: np.ndarray, joints: int | None, where, sample: int = 0) -> np.ndarray:
