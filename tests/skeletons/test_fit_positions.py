@@ -294,8 +294,11 @@ def test_shapes_are_read_and_bad_ones_named(tmp_path):
     assert np.array_equal(as_frames(frames, 22, "x"), frames)
     batch = np.stack([np.moveaxis(frames, 0, -1), np.moveaxis(frames + 1, 0, -1)])  # [N, J, 3, F]
     assert np.array_equal(as_frames(batch, 22, "x", sample=1), frames + 1)
+    assert np.array_equal(as_frames(np.stack([frames, frames + 1]), 22, "x", sample=1), frames + 1)  # [N, F, J, 3]
     assert np.array_equal(as_frames(frames.reshape(5, 66), 22, "x"), frames)
-    with pytest.raises(MocapError, match=r"bad\.npy: found an array of shape \[5, 17, 3\].*expected \[F, 22, 3\]"):
+    with pytest.raises(
+        MocapError, match=r"bad\.npy: found an array of shape \[5, 17, 3\].*expected \[F, 22, 3\], .*\[N, F, 22, 3\]"
+    ):
         as_frames(frames[:, :17], 22, "bad.npy")
     with pytest.raises(MocapError, match=r"--sample 2 is out of range"):
         as_frames(batch, 22, "x", sample=2)

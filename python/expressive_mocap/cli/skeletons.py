@@ -195,8 +195,8 @@ def add_fit(commands) -> None:
     p.add_argument(
         "file",
         metavar="POSITIONS",
-        help=".npy or .npz ([F, J, 3], [N, J, 3, F] or [F, J*3]; .npz key: positions, "
-        "joints, motion, poses, data, arr_0 or its only array)",
+        help=".npy or .npz ([F, J, 3], [N, J, 3, F], [N, F, J, 3] or [F, J*3]; key: positions, "
+        "joints, motion, poses, data, arr_0 or its only array; motion-diffusion-model's results.npy too)",
     )
     p.add_argument(
         "--layout",
@@ -207,9 +207,7 @@ def add_fit(commands) -> None:
     p.add_argument("--to", required=True, metavar="TARGET.bvh", help="BVH file giving the skeleton and rest pose")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write the fitted motion")
     p.add_argument("--to-map", metavar="MAP", help="joint map file for TARGET")
-    p.add_argument(
-        "--sample", type=int, default=0, metavar="K", help="which sample of an [N, J, 3, F] array (default 0)"
-    )
+    p.add_argument("--sample", type=int, default=0, metavar="K", help="which sample of a batch of N (default 0)")
     p.add_argument(
         "--fps",
         type=positive(float),

@@ -189,7 +189,9 @@ def read_positions(
     try:
         loaded = np.load(io.BytesIO(data), allow_pickle=False)
     except ValueError as error:
-        if "allow_pickle" not in str(error):
+        if "allow_pickle" not in str(error) or not data.startswith(
+            b"\x93NUMPY"
+        ):  # NumPy takes any other bytes for a pickle
             raise MocapError(f"{path}: not a NumPy .npy or .npz file ({error})") from None
         loaded = _pickled_npy(data, path)
     except (OSError, EOFError) as error:
@@ -283,16 +285,18 @@ def _trimmed(array: np.ndarray, lengths: np.ndarray | None, sample: int) -> np.n
 
 
 def as_frames(array: np.ndarray, joints: int | None, where, sample: int = 0) -> np.ndarray:
-    """``array`` as ``[F, J, 3]`` float64: from ``[F, J, 3]``, ``[N, J, 3, F]`` (sample ``sample``
-    of ``N``: text-to-motion models' batches) or ``[F, J*3]``; ``joints``: the layout's ``J``."""
-    expected = f"[F, {joints or 'J'}, 3], [N, {joints or 'J'}, 3, F] or [F, {joints * 3 if joints else 'J*3'}]"
+    """``array`` as ``[F, J, 3]`` float64: from ``[F, J, 3]``, ``[N, J, 3, F]`` or ``[N, F, J, 3]``
+    (sample ``sample`` of ``N``: text-to-motion models' batches, motion-diffusion-model's and
+    T2M-GPT's) or ``[F, J*3]``; ``joints``: the layout's ``J``."""
+    j = joints or "J"
+    expected = f"[F, {j}, 3], [N, {j}, 3, F], [N, F, {j}, 3] or [F, {joints * 3 if joints else 'J*3'}]"
     shape = list(array.shape)
     if array.dtype.kind not in "fiu":
         raise MocapError(f"{where}: expected numbers, found an array of {array.dtype}")
-    if array.ndim == 4 and shape[2] == 3:
+    if array.ndim == 4 and (shape[2] == 3 or shape[3] == 3):
         if not -shape[0] <= sample < shape[0]:
             raise MocapError(f"{where}: --sample {sample} is out of range: the array {shape} holds {shape[0]} samples")
-        array = np.moveaxis(array[sample], -1, 0)
+        array = np.moveaxis(array[sample], -1, 0) if shape[2] == 3 else array[sample]
     elif array.ndim == 2 and shape[1] % 3 == 0 and (joints is None or shape[1] == 3 * joints):
         array = array.reshape(shape[0], -1, 3)
     elif array.ndim != 3 or shape[2] != 3:
