@@ -27,7 +27,7 @@ from . import twist
 from .rig import Rig
 
 HABITUAL = ("upper_arm", "forearm", "upper_leg", "lower_leg")  # the limb segments turned
-_SAMPLED = 256  # frames a habit is read from, spread over the clip
+_SAMPLED = 128  # frames a habit is read from, spread over the clip (256 read the same within 0.3 degrees)
 _TELLING = 0.1  # the least share of frames that tell a limb's plane for its habit to be read
 # The least turn of the hips worth giving: the fit's line up the spine sits 0.5-2.5 degrees from
 # the capture's own where the fit already matched it (the Bandai-Namco, m21 and CMU 131 clips),
@@ -222,14 +222,16 @@ def standing_as(motion: Motion, rig: Rig, own: Motion | Take, plant: bool = True
     from .planting import plant_feet
     from .retargeting import _stand_on_floor
 
-    ankles = [rig.jmap["left_foot"], rig.jmap["right_foot"]]
-    planted = motion.positions()[:, ankles]
-    pitched = Take.of(
-        with_stance_pitch(with_hips_habit(motion, rig, hips_habit(own, rig)), rig, stance_pitch(own, rig))
-    )
+    held = with_stance_pitch(with_hips_habit(motion, rig, hips_habit(own, rig)), rig, stance_pitch(own, rig))
+    if held is motion:  # the rig's hips and feet sit so already: nothing to stand or plant again
+        return motion
+    pitched = Take.of(held)
     contacts = foot_contacts(pitched)
-    out = _stand_on_floor(pitched.motion, pitched.positions, contacts, rig, [0, motion.n_frames])[0]
-    return plant_feet(out, rig.jmap, contacts, planted) if plant else out
+    out = _stand_on_floor(held, pitched.positions, contacts, rig, [0, motion.n_frames])[0]
+    if not plant:
+        return out
+    planted = Take.of(motion).positions[:, [rig.jmap["left_foot"], rig.jmap["right_foot"]]]
+    return plant_feet(out, rig.jmap, contacts, planted)
 
 
 __all__ = [
