@@ -41,13 +41,17 @@ _BODY = [
 
 
 def _tree(joints: int, rng) -> tuple[np.ndarray, np.ndarray]:
-    """Parents and rest joint places of SMPL (24) or SMPL-H (52)."""
+    """Parents and rest joint places of SMPL (24), SMPL-H (52) or SMPL-X (55: the jaw and eyes
+    under the head before the hands)."""
     parents = [p for p, _ in _BODY]
     offsets = [np.array(o) for _, o in _BODY]
     if joints == 24:
         parents += [20, 21]
         offsets += [np.array([0.09, -0.01, 0.0]), np.array([-0.09, -0.01, 0.0])]
     else:
+        if joints == 55:
+            parents += [15, 15, 15]
+            offsets += [np.array([0.0, -0.02, 0.05]), np.array([0.03, 0.04, 0.07]), np.array([-0.03, 0.04, 0.07])]
         for wrist, side in ((20, 1.0), (21, -1.0)):
             for finger in range(5):  # index, middle, pinky, ring, thumb: three joints each
                 base = len(parents)
@@ -87,7 +91,8 @@ def body_model(joints: int, seed: int = 0, betas: int = 16) -> dict[str, np.ndar
 
 def amass_params(joints: int, frames: int = 40, seed: int = 1, betas: int = 16) -> dict[str, np.ndarray]:
     """AMASS-style parameters: random poses within 0.5 rad, the root's turned upright first (+90
-    degrees about X: the model's rest pose is Y up, AMASS's world Z up), a walk along +Y at 1.2 m/s."""
+    degrees about X: the model's rest pose is Y up, AMASS's world Z up), a walk along +Y at 1.2 m/s;
+    the frame rate spelt as AMASS's SMPL-X files spell it for 55 joints."""
     rng = np.random.default_rng(seed)
     t = np.arange(frames) / 120.0
     trans = np.stack([0.05 * np.sin(4 * t), 1.2 * t, 0.9 + 0.02 * np.sin(8 * t)], axis=1)
@@ -99,7 +104,8 @@ def amass_params(joints: int, frames: int = 40, seed: int = 1, betas: int = 16) 
         "trans": trans,
         "betas": rng.normal(0, 1.0, betas),
         "gender": np.array("female"),
-        "mocap_framerate": np.array(120.0),
+        # AMASS's SMPL-X files spell it mocap_frame_rate
+        ("mocap_frame_rate" if joints == 55 else "mocap_framerate"): np.array(120.0),
         "dmpls": np.zeros((frames, 8)),
     }
 
@@ -139,7 +145,7 @@ def save(path, arrays: dict) -> str:
     return str(path)
 
 
-@pytest.mark.parametrize("joints", [24, 52])
+@pytest.mark.parametrize("joints", [24, 52, 55])
 def test_joints_match_the_models_forward_pass(joints):
     model, params = body_model(joints), amass_params(joints)
     motion = read_smpl(params, model)
@@ -169,7 +175,7 @@ def test_betas_change_the_skeleton_and_only_the_common_ones_count():
     assert np.abs(flat.skeleton.offsets - motion.skeleton.offsets).max() > 1e-3
 
 
-@pytest.mark.parametrize("joints", [24, 52])
+@pytest.mark.parametrize("joints", [24, 52, 55])
 def test_convert_writes_a_bvh_that_reads_back(tmp_path, joints, capsys):
     model, params = body_model(joints), amass_params(joints)
     model_path, params_path = save(tmp_path / "model.npz", model), save(tmp_path / "walk_poses.npz", params)
