@@ -252,6 +252,13 @@ def cmd_fit(args) -> int:
     )
     worst = sorted(report.mean, key=report.mean.__getitem__, reverse=True)[:3]
     print("  largest: " + ", ".join(f"{report.roles[r]} {report.mean[r] * cm:.2f} cm" for r in worst))
+    if report.bones:
+        bone = max(report.bones, key=report.bones.__getitem__)
+        mean = sum(report.bones.values()) / len(report.bones)
+        print(
+            f"  bone directions: {mean:.2f} degrees from the positions' on average, {report.bones[bone]:.2f} at most "
+            f"({bone}; on another body the distances above are mostly its proportions)"
+        )
     return 0
 
 

@@ -58,7 +58,10 @@ class FitReport(NamedTuple):
     constant lift that stands the feet on the target's floor taken out), in the target's units,
     and the same over all roles: the mean, and the worst frame's mean. ``metres_per_unit``: the
     target's unit; ``fps``, ``up``: the rate and up axis the positions were read with;
-    ``denoised``: the Gaussian (frames at 30 fps) the positions were smoothed over (0: none)."""
+    ``denoised``: the Gaussian (frames at 30 fps) the positions were smoothed over (0: none);
+    ``bones``: per bone of the spine and limbs both have, the mean angle (degrees) between its
+    direction and the positions': what a fit onto another body is judged by, where the distances
+    are mostly the two bodies' proportions."""
 
     roles: dict[str, str]
     mean: dict[str, float]
@@ -69,6 +72,22 @@ class FitReport(NamedTuple):
     fps: float
     up: str
     denoised: float = 0.0
+    bones: dict[str, float] | None = None  # "role-role": mean degrees between the bone's directions
+
+
+# The bones whose directions the report compares: the spine's and the limbs' (a foot's bone to its
+# toes is carried by its flat stance, not its direction: not among them).
+_REPORTED_BONES = [("hips", "chest"), ("chest", "head")] + [
+    (f"{side}_{a}", f"{side}_{b}")
+    for side in ("left", "right")
+    for a, b in (
+        ("clavicle", "upper_arm"),
+        ("upper_arm", "forearm"),
+        ("forearm", "hand"),
+        ("upper_leg", "lower_leg"),
+        ("lower_leg", "foot"),
+    )
+]
 
 
 def _full_map(jmap: JointMap, names: tuple[str, ...] | None = None) -> dict[str, object]:
@@ -426,6 +445,14 @@ def fit_positions(
     if habitual is not None:
         out = with_habits(out, goal, habits(habitual, goal))
     distance = np.linalg.norm(placed - wanted, axis=-1)  # [F, R]
+    bones = {}
+    for a, b in _REPORTED_BONES:
+        if a in roles and b in roles:
+            ours, theirs = (p[:, roles.index(b)] - p[:, roles.index(a)] for p in (placed, wanted))
+            cosine = np.sum(ours * theirs, -1) / np.maximum(
+                np.linalg.norm(ours, axis=-1) * np.linalg.norm(theirs, axis=-1), 1e-12
+            )
+            bones[f"{a}-{b}"] = float(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))).mean())
     names = goal.skeleton.names
     report = FitReport(
         {r: names[goal.jmap[r]] for r in roles},
@@ -437,6 +464,7 @@ def fit_positions(
         fps,
         up_name,
         float(denoise),
+        bones,
     )
     return out, report
 
