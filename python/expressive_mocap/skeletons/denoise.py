@@ -7,9 +7,15 @@ stance foot moves slowly and what is left of noise is noise.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..body.jointmap import JointMap
+
+if TYPE_CHECKING:
+    from ..motion import Motion
+    from .layouts import Layout
 
 # Positions count as noisy where :func:`noise` passes this share of the actor's height (0.4 cm
 # of 141: clean captures and their runs measure 0.01-0.25 cm, 1 cm of added noise 0.7-1.0), and
@@ -81,4 +87,29 @@ def noisy(points: np.ndarray, jmap: JointMap, fps: float) -> bool:
     return noise(points, fps) > NOISY * float(np.median(points[:, jmap["hips"], 1] - feet + spine))
 
 
-__all__ = ["ACCELERATION", "DENOISE", "NOISY", "STILL", "noise", "noisy", "steady_feet"]
+def steadied_fit(
+    points: np.ndarray, raw: np.ndarray, layout: Layout, user_map: dict, fps: float, smooth: float
+) -> tuple[Motion, np.ndarray]:
+    """:func:`fit_layout` of smoothed noisy ``points`` whose feet are first steadied through their
+    contacts from the ``raw`` positions (:func:`.denoise.steady_feet`), the ankles then put there by
+    leg IK (their forward kinematics gathers the noise of every joint above them); and the
+    steadied positions. The contacts are read from the positions with the fitted skeleton's roles
+    and size: no fit is needed for them (its rest stands in for every frame)."""
+    from ..motion import Motion
+    from .fit import fit_layout, fit_skeleton  # here: the fit imports this module
+    from .planting import plant_feet, source_contacts
+    from .rig import Rig, rest_motion
+
+    rest = rest_motion(fit_skeleton(points, layout)[0])
+    rig = Rig.of(rest, user_map)
+    frames = len(points)
+    still = Motion(
+        rest.skeleton, np.repeat(rest.rotations, frames, 0), np.repeat(rest.translations, frames, 0), 1 / fps
+    )
+    contacts = source_contacts([still], rig, points)
+    steadied = steady_feet(points, raw, contacts, rig.jmap, fps)
+    ankles = steadied[:, [rig.jmap["left_foot"], rig.jmap["right_foot"]]]
+    return plant_feet(fit_layout(steadied, layout, fps, smooth=smooth), rig.jmap, contacts, ankles), steadied
+
+
+__all__ = ["ACCELERATION", "DENOISE", "NOISY", "STILL", "noise", "noisy", "steadied_fit", "steady_feet"]

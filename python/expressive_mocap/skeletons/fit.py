@@ -40,10 +40,10 @@ from ..motion import Motion, Skeleton, spread_frames
 from ..rotations import quat
 from . import twist
 from .clavicles import reach_shoulders
-from .denoise import DENOISE, noisy, steady_feet
+from .denoise import DENOISE, noisy, steadied_fit
 from .habits import habits, standing_as, with_habits
 from .layouts import Layout, layout_of, read_positions, upright
-from .rig import Rig, _frame_vectors, _orthonormal
+from .rig import _frame_vectors, _orthonormal
 
 _ROOT_CHANNELS = ("Xposition", "Yposition", "Zposition", "Zrotation", "Yrotation", "Xrotation")
 _CHANNELS = ("Zrotation", "Yrotation", "Xrotation")
@@ -416,7 +416,7 @@ def fit_positions(
         points = gaussian_filter1d(points, denoise * fps / 30.0, axis=0, mode="nearest")
     user_map = _full_map(find_joint_map(_draft(points, given), given.joint_map), _own_names(given))
     if denoise > 0:  # noisy: the feet steadied through their contacts, then the fit
-        motion, points = _steadied_fit(points, raw, given, user_map, fps, smooth)
+        motion, points = steadied_fit(points, raw, given, user_map, fps, smooth)
     else:
         motion = fit_layout(points, given, fps, smooth=smooth)
     from ..body.conventions import read_conventions
@@ -444,6 +444,11 @@ def fit_positions(
         placed = out.positions()[:, [goal.jmap[r] for r in roles]]
     if habitual is not None:
         out = with_habits(out, goal, habits(habitual, goal))
+    if "left_toes" not in source.jmap.joints:  # the positions do not orient the feet: no toes into the floor
+        from .planting import toes_above
+
+        vertical = quat.rotate(quat.conjugate(goal.conventions.rotation()), np.array([0.0, 1.0, 0.0]))
+        out = toes_above(out, goal.jmap, vertical, goal.floor if goal.stance is None else goal.stance)
     distance = np.linalg.norm(placed - wanted, axis=-1)  # [F, R]
     bones = {}
     for a, b in _REPORTED_BONES:
@@ -467,29 +472,6 @@ def fit_positions(
         bones,
     )
     return out, report
-
-
-def _steadied_fit(
-    points: np.ndarray, raw: np.ndarray, layout: Layout, user_map: dict, fps: float, smooth: float
-) -> tuple[Motion, np.ndarray]:
-    """:func:`fit_layout` of smoothed noisy ``points`` whose feet are first steadied through their
-    contacts from the ``raw`` positions (:func:`.denoise.steady_feet`), the ankles then put there by
-    leg IK (their forward kinematics gathers the noise of every joint above them); and the
-    steadied positions. The contacts are read from the positions with the fitted skeleton's roles
-    and size: no fit is needed for them (its rest stands in for every frame)."""
-    from .planting import plant_feet, source_contacts
-    from .rig import rest_motion
-
-    rest = rest_motion(fit_skeleton(points, layout)[0])
-    rig = Rig.of(rest, user_map)
-    frames = len(points)
-    still = Motion(
-        rest.skeleton, np.repeat(rest.rotations, frames, 0), np.repeat(rest.translations, frames, 0), 1 / fps
-    )
-    contacts = source_contacts([still], rig, points)
-    steadied = steady_feet(points, raw, contacts, rig.jmap, fps)
-    ankles = steadied[:, [rig.jmap["left_foot"], rig.jmap["right_foot"]]]
-    return plant_feet(fit_layout(steadied, layout, fps, smooth=smooth), rig.jmap, contacts, ankles), steadied
 
 
 def _draft(points: np.ndarray, layout: Layout) -> Skeleton:

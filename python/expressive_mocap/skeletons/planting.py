@@ -57,4 +57,36 @@ def source_contacts(clips: list[Motion], rig, upright_positions: np.ndarray, bou
     return np.concatenate([contacts for _, contacts in found] + [np.zeros((0, 2), bool)])
 
 
-__all__ = ["BLEND_FRAMES", "plant_feet", "source_contacts"]
+def toes_above(motion: Motion, jmap: JointMap, up: np.ndarray, level: float) -> Motion:
+    """``motion`` with each foot whose toe joint would go below ``level`` (along the unit ``up``,
+    file units) pitched up about its ankle just enough to stand the toe there, frame by frame;
+    the ankles stay, and where the toe is above the level nothing turns (so nothing jumps where it
+    touches it). For feet the positions did not orient (a layout without toes, Human3.6M's: the
+    foot follows the shin, and at toe-off its toes went 4 cm into the floor)."""
+    from ..rotations import quat
+
+    world, positions = motion.fk()
+    local = motion.rotations.copy()
+    parents = motion.skeleton.parents
+    for side in ("left", "right"):
+        foot, toes = jmap.joints.get(f"{side}_foot", -1), jmap.joints.get(f"{side}_toes", -1)
+        if foot < 0 or toes < 0 or parents[toes] != foot:
+            continue
+        bone = positions[:, toes] - positions[:, foot]
+        length = np.maximum(np.linalg.norm(bone, axis=-1), 1e-12)
+        height = bone @ up
+        below = positions[:, toes] @ up < level
+        if not below.any():
+            continue
+        wanted = np.clip((level - positions[:, foot] @ up) / length, -1.0, 1.0)
+        angle = np.where(below, np.arcsin(wanted) - np.arcsin(np.clip(height / length, -1.0, 1.0)), 0.0)
+        across = np.cross(bone, up)  # a turn about it takes the bone towards up
+        across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
+        about = np.concatenate([across * np.sin(0.5 * angle)[:, None], np.cos(0.5 * angle)[:, None]], axis=-1)
+        local[:, foot] = quat.normalize(
+            quat.mul(quat.conjugate(world[:, parents[foot]]), quat.mul(about, world[:, foot]))
+        )
+    return Motion(motion.skeleton, local, motion.translations, motion.frame_time)
+
+
+__all__ = ["BLEND_FRAMES", "plant_feet", "source_contacts", "toes_above"]
