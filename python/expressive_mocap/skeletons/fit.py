@@ -449,17 +449,25 @@ def fit_positions(
 
         vertical = quat.rotate(quat.conjugate(goal.conventions.rotation()), np.array([0.0, 1.0, 0.0]))
         out = toes_above(out, goal.jmap, vertical, goal.floor if goal.stance is None else goal.stance)
+    report = _report(placed, wanted, roles, goal, fps, up_name, float(denoise))
+    return out, report
+
+
+def _report(
+    placed: np.ndarray, wanted: np.ndarray, roles: list[str], goal, fps: float, up: str, denoised: float
+) -> FitReport:
+    """The :class:`FitReport` of the target's joints ``placed [F, R, 3]`` (of ``roles``) against
+    the positions ``wanted`` there (carried onto the target, stood on its floor)."""
     distance = np.linalg.norm(placed - wanted, axis=-1)  # [F, R]
     bones = {}
     for a, b in _REPORTED_BONES:
         if a in roles and b in roles:
             ours, theirs = (p[:, roles.index(b)] - p[:, roles.index(a)] for p in (placed, wanted))
-            cosine = np.sum(ours * theirs, -1) / np.maximum(
-                np.linalg.norm(ours, axis=-1) * np.linalg.norm(theirs, axis=-1), 1e-12
-            )
+            lengths = np.linalg.norm(ours, axis=-1) * np.linalg.norm(theirs, axis=-1)
+            cosine = np.sum(ours * theirs, axis=-1) / np.maximum(lengths, 1e-12)
             bones[f"{a}-{b}"] = float(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))).mean())
     names = goal.skeleton.names
-    report = FitReport(
+    return FitReport(
         {r: names[goal.jmap[r]] for r in roles},
         {r: float(d) for r, d in zip(roles, distance.mean(axis=0))},
         {r: float(d) for r, d in zip(roles, distance.max(axis=0))},
@@ -467,11 +475,10 @@ def fit_positions(
         float(distance.mean(axis=1).max()),
         goal.conventions.metres_per_unit,
         fps,
-        up_name,
-        float(denoise),
+        up,
+        denoised,
         bones,
     )
-    return out, report
 
 
 def _draft(points: np.ndarray, layout: Layout) -> Skeleton:
