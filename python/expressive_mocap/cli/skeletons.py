@@ -204,7 +204,13 @@ def add_fit(commands) -> None:
         help="the joints' order: humanml3d, smpl24, h36m17 or a JSON layout (joints, parents, map) "
         "(default: the joints and parents an .npz of `positions` carries)",
     )
-    p.add_argument("--to", required=True, metavar="TARGET.bvh", help="BVH file giving the skeleton and rest pose")
+    p.add_argument(
+        "--to",
+        required=True,
+        metavar="TARGET.bvh",
+        help="BVH file of the target rig: its skeleton and rest pose, and from its frames how the rig twists its "
+        "limbs, sits its hips and stands its feet",
+    )
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write the fitted motion")
     p.add_argument("--to-map", metavar="MAP", help="joint map file for TARGET")
     p.add_argument("--sample", type=int, default=0, metavar="K", help="which sample of a batch of N (default 0)")
