@@ -387,6 +387,45 @@ def test_cli_fits_an_npy_and_a_batch_npz(bandai2_dir, tmp_path):
         assert np.abs(fitted.positions()[:, hands] - lift - motion.positions()[:, hands]).mean() < 1.0  # cm
 
 
+def test_cli_fits_every_sample_of_a_motion_diffusion_results_file(bandai2_dir, tmp_path):
+    """``--sample all``: each sample of a batch to OUT_k.bvh, each cut to its own length."""
+    walk = bandai2_dir / "dataset-2_walk_normal_001.bvh"
+    positions = to_layout(em.read_bvh(walk), "humanml3d") / 100.0  # metres
+    frames = len(positions)
+    batch = np.stack([np.moveaxis(positions, 0, -1), np.moveaxis(positions + [0.5, 0.0, 0.0], 0, -1)])
+    np.save(tmp_path / "results.npy", {"motion": batch, "text": ["a", "b"], "lengths": np.array([frames, frames - 30])})
+    result = run_cli(
+        "fit",
+        tmp_path / "results.npy",
+        "--layout",
+        "humanml3d",
+        "--to",
+        walk,
+        "-o",
+        tmp_path / "s.bvh",
+        "--sample",
+        "all",
+        "--fps",
+        "30",
+    )
+    assert result.returncode == 0, result.stderr
+    assert [em.read_bvh(tmp_path / f"s_{k}.bvh").n_frames for k in (0, 1)] == [frames, frames - 30]
+    assert result.stdout.count("fit error: mean") == 2 and not (tmp_path / "s.bvh").exists()
+    bad = run_cli(
+        "fit",
+        tmp_path / "results.npy",
+        "--layout",
+        "humanml3d",
+        "--to",
+        walk,
+        "-o",
+        tmp_path / "t.bvh",
+        "--sample",
+        "some",
+    )
+    assert bad.returncode != 0 and "expected a sample's index or all" in bad.stderr
+
+
 @pytest.mark.parametrize("source", ["bandai", "cmu_01_01.bvh"])
 def test_cli_fits_the_npz_of_the_positions_command(bandai2_dir, other_dir, tmp_path, source):
     """The skeleton the ``.npz`` carries fitted back onto its own rig. CMU's hip joints hang from

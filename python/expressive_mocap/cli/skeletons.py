@@ -4,8 +4,10 @@ motion on a chosen skeleton)."""
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
+from pathlib import Path
 
 from .._utils.tokens import listed
 from ..bvh import read_bvh, write_bvh
@@ -213,7 +215,13 @@ def add_fit(commands) -> None:
     )
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="where to write the fitted motion")
     p.add_argument("--to-map", metavar="MAP", help="joint map file for TARGET")
-    p.add_argument("--sample", type=int, default=0, metavar="K", help="which sample of a batch of N (default 0)")
+    p.add_argument(
+        "--sample",
+        type=_sample,
+        default=0,
+        metavar="K|all",
+        help="which sample of a batch of N (default 0); all: every one, to OUT_0.bvh ... OUT_{N-1}.bvh",
+    )
     p.add_argument(
         "--fps",
         type=positive(float),
@@ -230,26 +238,49 @@ def add_fit(commands) -> None:
     p.set_defaults(run=cmd_fit)
 
 
+def _sample(text: str) -> int | str:
+    """``--sample``: a sample's index, or ``all``."""
+    if text == "all":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a sample's index or all, got {text!r}") from None
+
+
 def cmd_fit(args) -> int:
     from ..skeletons.fit import fit_positions
+    from ..skeletons.layouts import sample_count
 
     target = read_bvh(args.to)
-    out, report = fit_positions(
-        args.file,
-        args.layout,
-        target,
-        fps=args.fps,
-        up=args.up,
-        unit=args.unit,
-        sample=args.sample,
-        plant_feet=args.plant_feet,
-        target_map=_map_file(args.to_map),
-    )
-    write_bvh(out, args.output)
+    if args.sample == "all":
+        output = Path(args.output)
+        jobs = [(k, output.with_name(f"{output.stem}_{k}{output.suffix}")) for k in range(sample_count(args.file))]
+    else:
+        jobs = [(args.sample, Path(args.output))]
+    for sample, path in jobs:
+        out, report = fit_positions(
+            args.file,
+            args.layout,
+            target,
+            fps=args.fps,
+            up=args.up,
+            unit=args.unit,
+            sample=sample,
+            plant_feet=args.plant_feet,
+            target_map=_map_file(args.to_map),
+        )
+        write_bvh(out, path)
+        _print_fit(path, out, report, args, target.skeleton.n_joints)
+    return 0
+
+
+def _print_fit(path: Path, out, report, args, joints: int) -> None:
+    """What ``fit`` says of one written motion: where it went, and how closely it follows."""
     cm = 100.0 * report.metres_per_unit
     print(
-        f"{args.output}: {out.n_frames} frames at {out.fps:.6g} fps on {args.to}'s skeleton "
-        f"({target.skeleton.n_joints} joints); {len(report.roles)} roles fitted (positions read {report.up} up)"
+        f"{path}: {out.n_frames} frames at {out.fps:.6g} fps on {args.to}'s skeleton "
+        f"({joints} joints); {len(report.roles)} roles fitted (positions read {report.up} up)"
         + ("; feet planted" if args.plant_feet else "")
     )
     print(
@@ -265,7 +296,6 @@ def cmd_fit(args) -> int:
             f"  bone directions: {mean:.2f} degrees from the positions' on average, {report.bones[bone]:.2f} at most "
             f"({bone}; on another body the distances above are mostly its proportions)"
         )
-    return 0
 
 
 def add_parsers(commands) -> None:

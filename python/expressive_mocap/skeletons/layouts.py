@@ -185,47 +185,58 @@ def read_positions(
     :func:`as_frames` for the shapes), the layout an ``.npz`` of ``expressive-mocap positions``
     carries (its ``joints`` and ``parents``; None otherwise) and its frame rate (from its
     ``frame_time`` or ``fps``; None otherwise). ``layout``: the one the array must fit."""
+    array, arrays = _stored(path)
+    carried: Layout | None = None
+    fps = None
+    names, parents = arrays.get("joints"), arrays.get("parents")
+    if names is not None and parents is not None and names.dtype.kind == "U" and names.ndim == 1:
+        carried = checked(Layout(Path(path).name, tuple(map(str, names)), tuple(map(int, parents)), None), path)
+    if "frame_time" in arrays and arrays["frame_time"].size == 1 and float(arrays["frame_time"]) > 0:
+        fps = 1.0 / float(arrays["frame_time"])
+    elif "fps" in arrays and arrays["fps"].size == 1 and float(arrays["fps"]) > 0:
+        fps = float(arrays["fps"])
+    array = _trimmed(array, arrays.get("lengths"), sample)
+    joints = len((layout or carried).names) if (layout or carried) is not None else None  # type: ignore[union-attr]
+    return as_frames(np.asarray(array), joints, path, sample), carried, fps
+
+
+def sample_count(path) -> int:
+    """How many samples the positions file ``path`` holds: ``N`` of a batch (``[N, J, 3, F]`` or
+    ``[N, F, J, 3]``), else 1."""
+    array = _stored(path)[0]
+    return int(array.shape[0]) if array.ndim == 4 else 1
+
+
+def _stored(path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The positions array the file ``path`` stores (an ``.npy``'s, or an ``.npz``'s or pickled
+    dict's under :data:`NPZ_KEYS`, else its only numeric array) and the arrays beside it."""
     data = read_input(path)
     try:
         loaded = np.load(io.BytesIO(data), allow_pickle=False)
     except ValueError as error:
-        if "allow_pickle" not in str(error) or not data.startswith(
-            b"\x93NUMPY"
-        ):  # NumPy takes any other bytes for a pickle
+        # NumPy takes any bytes that are not an array for a pickle: only a .npy is unpickled
+        if "allow_pickle" not in str(error) or not data.startswith(b"\x93NUMPY"):
             raise MocapError(f"{path}: not a NumPy .npy or .npz file ({error})") from None
         loaded = _pickled_npy(data, path)
     except (OSError, EOFError) as error:
         raise MocapError(f"{path}: not a NumPy .npy or .npz file ({error})") from None
-    carried: Layout | None = None
-    fps = None
-    if isinstance(loaded, (np.lib.npyio.NpzFile, dict)):
-        if isinstance(loaded, dict):
-            arrays = {str(k): np.asarray(v) for k, v in loaded.items() if isinstance(v, np.ndarray)}
-        else:
-            with loaded:
-                arrays = {k: loaded[k] for k in loaded.files}
-        numeric = {k: a for k, a in arrays.items() if a.dtype.kind in "fiu" and a.ndim >= 2}
-        key = next((k for k in NPZ_KEYS if k in numeric), None)
-        if key is None and len(numeric) == 1:
-            key = next(iter(numeric))
-        if key is None:
-            raise MocapError(
-                f"{path}: no positions array (tried the keys {', '.join(NPZ_KEYS)}, then the only array); "
-                f"it holds {', '.join(f'{k} {list(a.shape)}' for k, a in arrays.items()) or 'nothing'}"
-            )
-        array = numeric[key]
-        names, parents = arrays.get("joints"), arrays.get("parents")
-        if names is not None and parents is not None and names.dtype.kind == "U" and names.ndim == 1:
-            carried = checked(Layout(Path(path).name, tuple(map(str, names)), tuple(map(int, parents)), None), path)
-        if "frame_time" in arrays and arrays["frame_time"].size == 1 and float(arrays["frame_time"]) > 0:
-            fps = 1.0 / float(arrays["frame_time"])
-        elif "fps" in arrays and arrays["fps"].size == 1 and float(arrays["fps"]) > 0:
-            fps = float(arrays["fps"])
-        array = _trimmed(array, arrays.get("lengths"), sample)
+    if not isinstance(loaded, (np.lib.npyio.NpzFile, dict)):
+        return loaded, {}
+    if isinstance(loaded, dict):
+        arrays = {str(k): np.asarray(v) for k, v in loaded.items() if isinstance(v, np.ndarray)}
     else:
-        array = loaded
-    joints = len((layout or carried).names) if (layout or carried) is not None else None  # type: ignore[union-attr]
-    return as_frames(np.asarray(array), joints, path, sample), carried, fps
+        with loaded:
+            arrays = {k: loaded[k] for k in loaded.files}
+    numeric = {k: a for k, a in arrays.items() if a.dtype.kind in "fiu" and a.ndim >= 2}
+    key = next((k for k in NPZ_KEYS if k in numeric), None)
+    if key is None and len(numeric) == 1:
+        key = next(iter(numeric))
+    if key is None:
+        raise MocapError(
+            f"{path}: no positions array (tried the keys {', '.join(NPZ_KEYS)}, then the only array); "
+            f"it holds {', '.join(f'{k} {list(a.shape)}' for k, a in arrays.items()) or 'nothing'}"
+        )
+    return numeric[key], arrays
 
 
 # What a .npy of Python objects may hold to be read: NumPy arrays, their dtypes and scalars
@@ -333,4 +344,4 @@ def upright(positions: np.ndarray, jmap: JointMap, up: str | None = None) -> tup
     return quat.rotate(quat.between(vector, np.array([0.0, 1.0, 0.0])), positions), name
 
 
-__all__ = ["LAYOUTS", "NPZ_KEYS", "Layout", "as_frames", "layout_of", "read_positions", "upright"]
+__all__ = ["LAYOUTS", "NPZ_KEYS", "Layout", "as_frames", "layout_of", "read_positions", "sample_count", "upright"]
