@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 import expressive_mocap as em
-from expressive_mocap.skeletons.fit import fit_layout, fit_positions
+from expressive_mocap.skeletons.fit import fit_positions
+from expressive_mocap.skeletons.layout_fit import fit_layout
 from expressive_mocap.skeletons.layouts import LAYOUTS
 from harness import check, check_equal, median, timed
 from results import RESULTS, write_section

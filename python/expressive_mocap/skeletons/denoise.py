@@ -96,7 +96,7 @@ def steadied_fit(
     steadied positions. The contacts are read from the positions with the fitted skeleton's roles
     and size: no fit is needed for them (its rest stands in for every frame)."""
     from ..motion import Motion
-    from .fit import fit_layout, fit_skeleton  # here: the fit imports this module
+    from .layout_fit import fit_layout, fit_skeleton
     from .planting import plant_feet, source_contacts
     from .rig import Rig, rest_motion
 
