@@ -22,12 +22,12 @@ from ..body.jointmap import find_joint_map
 from ..body.take import Take
 from ..errors import MocapError
 from ..motion import Motion, Skeleton
-from ..rotations import quat
 from .clavicles import reach_shoulders
 from .denoise import DENOISE, noisy, steadied_fit
 from .habits import habits, standing_as, with_habits
 from .layout_fit import draft, fit_layout, full_map, own_names
 from .layouts import Layout, layout_of, read_positions, upright
+from .rig import _axis
 
 
 class FitReport(NamedTuple):
@@ -152,7 +152,7 @@ def fit_positions(
     if "left_toes" not in source.jmap.joints:  # the positions do not orient the feet: no toes into the floor
         from .planting import toes_above
 
-        vertical = quat.rotate(quat.conjugate(goal.conventions.rotation()), np.array([0.0, 1.0, 0.0]))
+        vertical = np.array(_axis(goal.conventions.up), float)
         out = toes_above(out, goal.jmap, vertical, goal.floor if goal.stance is None else goal.stance)
     report = _report(placed, wanted, roles, goal, fps, up_name, float(denoise))
     return out, report

@@ -24,7 +24,7 @@ from ..body.take import Take
 from ..motion import Motion, spread_frames
 from ..rotations import quat
 from . import twist
-from .rig import Rig
+from .rig import Rig, _axis
 
 HABITUAL = ("upper_arm", "forearm", "upper_leg", "lower_leg")  # the limb segments turned
 _SAMPLED = 128  # frames a habit is read from, spread over the clip (256 read the same within 0.3 degrees)
@@ -84,9 +84,9 @@ def with_habits(motion: Motion, rig: Rig, wanted: dict[int, float]) -> Motion:
     """``motion`` (of ``rig``) with each joint of ``wanted`` (:func:`habits` of the rig's own
     motion) turned about its bone so that its median twist from where it faces is the wanted
     one; its children keep their world rotations, so every position stays where it was."""
-    world, positions = motion.fk()
-    picked = spread_frames(motion.n_frames, _SAMPLED)
-    have = _habits(world[picked], positions[picked], rig)
+    take = Take.of(motion)
+    world, positions = take.fk
+    have = habits(take, rig)  # from the frames just computed
     turns = {j: have[j] - wanted[j] for j in wanted if j in have}
     if not turns:
         return motion
@@ -97,8 +97,7 @@ def with_habits(motion: Motion, rig: Rig, wanted: dict[int, float]) -> Motion:
         child = int(np.flatnonzero(parents == joint)[0])
         bone = positions[:, child] - positions[:, joint]
         bone /= np.maximum(np.linalg.norm(bone, axis=-1, keepdims=True), 1e-12)
-        about = np.concatenate([bone * np.sin(0.5 * angle), np.full((len(bone), 1), np.cos(0.5 * angle))], axis=-1)
-        world[:, joint] = quat.mul(about, world[:, joint])
+        world[:, joint] = quat.mul(quat.exp(bone * angle), world[:, joint])
         touched.update((joint, child))
     local = motion.rotations.copy()
     for j in sorted(touched):  # a turned joint and its child: their rotations under their parents'
@@ -131,10 +130,10 @@ def with_hips_habit(motion: Motion, rig: Rig, wanted: np.ndarray) -> Motion:
     joint the spine leaves it from: the spine and all above it keep their places and rotations,
     the legs (their joints' world rotations kept) move with the pelvis."""
     parents, hips = rig.skeleton.parents, rig.jmap["hips"]
-    world, positions = motion.fk()
-    picked = spread_frames(motion.n_frames, _SAMPLED)
+    take = Take.of(motion)
+    world, positions = take.fk
     turn = rig.conventions.rotation()
-    have = _hips_habit(world[picked], positions[picked], rig)
+    have = hips_habit(take, rig)  # from the frames just computed
     # The turn on the right of the joint's rotation, from canonical axes to the file's.
     correction = quat.mul(quat.mul(quat.conjugate(turn), quat.mul(quat.conjugate(have), wanted)), turn)
     if quat.angle(correction) < HIPS_TURN_LEAST:
@@ -200,15 +199,14 @@ def with_stance_pitch(motion: Motion, rig: Rig, wanted: dict[str, float]) -> Mot
         return motion
     parents = rig.skeleton.parents
     world, positions = take.fk
-    up = quat.rotate(quat.conjugate(rig.conventions.rotation()), np.array([0.0, 1.0, 0.0]))  # the file's up
+    up = np.array(_axis(rig.conventions.up), float)
     local = motion.rotations.copy()
     for side, angle in turns.items():
         foot, toes = rig.jmap[f"{side}_foot"], rig.jmap[f"{side}_toes"]
         line = positions[:, toes] - positions[:, foot]
         across = np.cross(line, up)  # pitching up is a turn about it
         across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
-        about = np.concatenate([across * np.sin(0.5 * angle), np.full((len(line), 1), np.cos(0.5 * angle))], axis=-1)
-        turned = quat.mul(about, world[:, foot])
+        turned = quat.mul(quat.exp(across * angle), world[:, foot])
         local[:, foot] = quat.normalize(quat.mul(quat.conjugate(world[:, parents[foot]]), turned))
     return Motion(motion.skeleton, local, motion.translations, motion.frame_time)
 

@@ -82,10 +82,8 @@ def toes_above(motion: Motion, jmap: JointMap, up: np.ndarray, level: float) -> 
         angle = np.where(below, np.arcsin(wanted) - np.arcsin(np.clip(height / length, -1.0, 1.0)), 0.0)
         across = np.cross(bone, up)  # a turn about it takes the bone towards up
         across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
-        about = np.concatenate([across * np.sin(0.5 * angle)[:, None], np.cos(0.5 * angle)[:, None]], axis=-1)
-        local[:, foot] = quat.normalize(
-            quat.mul(quat.conjugate(world[:, parents[foot]]), quat.mul(about, world[:, foot]))
-        )
+        turned = quat.mul(quat.exp(across * angle[:, None]), world[:, foot])
+        local[:, foot] = quat.normalize(quat.mul(quat.conjugate(world[:, parents[foot]]), turned))
     return Motion(motion.skeleton, local, motion.translations, motion.frame_time)
 
 
