@@ -394,35 +394,12 @@ def test_cli_fits_every_sample_of_a_motion_diffusion_results_file(bandai2_dir, t
     frames = len(positions)
     batch = np.stack([np.moveaxis(positions, 0, -1), np.moveaxis(positions + [0.5, 0.0, 0.0], 0, -1)])
     np.save(tmp_path / "results.npy", {"motion": batch, "text": ["a", "b"], "lengths": np.array([frames, frames - 30])})
-    result = run_cli(
-        "fit",
-        tmp_path / "results.npy",
-        "--layout",
-        "humanml3d",
-        "--to",
-        walk,
-        "-o",
-        tmp_path / "s.bvh",
-        "--sample",
-        "all",
-        "--fps",
-        "30",
-    )
+    fit = ("fit", tmp_path / "results.npy", "--layout", "humanml3d", "--to", walk)
+    result = run_cli(*fit, "-o", tmp_path / "s.bvh", "--sample", "all", "--fps", "30")
     assert result.returncode == 0, result.stderr
     assert [em.read_bvh(tmp_path / f"s_{k}.bvh").n_frames for k in (0, 1)] == [frames, frames - 30]
     assert result.stdout.count("fit error: mean") == 2 and not (tmp_path / "s.bvh").exists()
-    bad = run_cli(
-        "fit",
-        tmp_path / "results.npy",
-        "--layout",
-        "humanml3d",
-        "--to",
-        walk,
-        "-o",
-        tmp_path / "t.bvh",
-        "--sample",
-        "some",
-    )
+    bad = run_cli(*fit, "-o", tmp_path / "t.bvh", "--sample", "some")
     assert bad.returncode != 0 and "expected a sample's index or all" in bad.stderr
 
 
