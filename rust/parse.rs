@@ -32,6 +32,27 @@ impl FrameSink for Values {
     }
 }
 
+/// Keeps nothing: the block is only checked.
+struct Nothing;
+
+impl FrameSink for Nothing {
+    fn widths(&self) -> (usize, usize) {
+        (0, 0)
+    }
+
+    fn emit(&self, _: &[f64], _: &mut [f64], _: &mut [f64]) {}
+}
+
+/// Check that `block` holds `frames` lines of `channels` finite numbers, as
+/// [`parse_motion_block`] reads them, without keeping any value: a summary of a file
+/// (`expressive-mocap info`) refuses what a read refuses, with no array to allocate.
+///
+/// # Errors
+/// As [`parse_frames`].
+pub fn check_motion_block(block: &[u8], frames: usize, channels: usize) -> Result<()> {
+    parse_frames(block, frames, channels, &Nothing).map(|_| ())
+}
+
 /// Parse `frames` lines of `channels` finite numbers each from `block`.
 ///
 /// Blank lines (whitespace only) are skipped, so trailing newlines and CRLF endings are fine.
@@ -406,6 +427,39 @@ mod tests {
     fn parses_crlf_tabs_exponents_and_trailing_blank_lines() {
         let v = parse_motion_block(b"1 2.5e1\t-3\r\n+4 .5 6E-1\r\n\r\n", 2, 3).unwrap();
         assert_eq!(v, vec![1.0, 25.0, -3.0, 4.0, 0.5, 0.6]);
+    }
+
+    #[test]
+    fn check_refuses_exactly_what_parse_refuses() {
+        let mut big = String::new();
+        for f in 0..100_000 {
+            let _ = writeln!(big, "{f} 1.5 -2");
+        }
+        let blocks: [(&[u8], usize, usize); 7] = [
+            (b"1 2\n3 4\n", 2, 2),
+            (b"1 2\n3 x\n", 2, 2),
+            (b"1 2\n", 2, 2),
+            (b"1 2\n3 4\n5 6\n", 2, 2),
+            (b"1 nan\n", 1, 2),
+            (b"\n\n", 2, 0),
+            (big.as_bytes(), 100_000, 3),
+        ];
+        for (block, frames, channels) in blocks {
+            let parsed = parse_motion_block(block, frames, channels).map(|_| ());
+            let checked = check_motion_block(block, frames, channels);
+            assert_eq!(format!("{parsed:?}"), format!("{checked:?}"));
+        }
+        assert!(
+            big.len() > PARALLEL_BLOCK_BYTES,
+            "the parallel path is checked too"
+        );
+        let mut bad = big.clone();
+        bad.push_str("1 2 x\n");
+        let e = check_motion_block(bad.as_bytes(), 100_001, 3).unwrap_err();
+        assert!(
+            matches!(e, KernelError::Parse { line: 100_000, .. }),
+            "{e:?}"
+        );
     }
 
     #[test]

@@ -85,6 +85,7 @@ def transfer_args(frames):
 # Name -> (arguments for F frames, names of the array arguments by position; None: not an array).
 CORE = {
     "parse_motion_block": (lambda f: (b"1 2 3\n" * f, 0, f, 3), []),
+    "check_motion_block": (lambda f: (b"1 2 3\n" * f, 0, f, 3), []),
     "format_motion_block": (lambda f: (RNG.normal(size=(f, 3)),), ["values"]),
     "decode_channels": (
         lambda f: (RNG.normal(size=(f, 12)), *layout(3)),

@@ -21,6 +21,7 @@ _Float = npt.NDArray[np.float32] | npt.NDArray[np.float64]
 
 __all__ = [
     "air_time",
+    "check_motion_block",
     "clip_gait_many",
     "clip_gradient",
     "clip_pipeline_many",
@@ -52,6 +53,9 @@ num_threads: int
 
 def parse_motion_block(data: bytes, start: int, frames: int, channels: int) -> _F64:
     """Parse ``frames`` lines of ``channels`` finite numbers from ``data[start:]`` -> ``[frames, channels]``."""
+
+def check_motion_block(data: bytes, start: int, frames: int, channels: int) -> None:
+    """Raise the ``ParseError`` that ``parse_motion_block`` would raise for this block, or return None."""
 
 def decode_channels(
     values: _F64,

@@ -17,6 +17,7 @@ import numpy as np
 
 from . import ops
 from ._utils.tokens import listed, shown
+from .bvh.tree import channel_summary, vertical_extent
 from .errors import MocapError
 from .rotations import quat
 from .rotations.orders import (
@@ -217,18 +218,11 @@ class Skeleton:
 
     def rest_height(self) -> float:
         """Vertical (Y) extent of the rest pose, End Sites included."""
-        joints, sites = self.rest_positions()
-        y = np.concatenate([joints[:, 1], sites[:, 1]])
-        return float(y.max() - y.min())
+        return vertical_extent(self.parents.tolist(), self.offsets[:, 1].tolist(), self.end_sites)
 
     def channel_layout(self) -> str:
         """A one-line summary such as ``22 joints x 6 (Xposition Yposition ... Yrotation)``."""
-        layouts: dict[tuple[str, ...], int] = {}
-        for cs in self.channels:
-            layouts[cs] = layouts.get(cs, 0) + 1
-        return "; ".join(
-            f"{n} joint{'s' if n > 1 else ''} x {len(cs)} ({' '.join(cs) or 'none'})" for cs, n in layouts.items()
-        )
+        return channel_summary(self.channels)
 
 
 def _not_finite(factor, what: str, largest: float):

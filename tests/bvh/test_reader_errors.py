@@ -5,6 +5,7 @@ import pytest
 
 import expressive_mocap as em
 from conftest import DATA
+from expressive_mocap.bvh import read_summary
 
 GOOD = (DATA / "mixed_orders.bvh").read_bytes()
 LINES = GOOD.split(b"\n")
@@ -94,6 +95,19 @@ def test_malformed_file_names_file_line_and_expectation(tmp_path, backend, case)
         assert error.line == line, str(error)
         assert f"line {line}:" in str(error)
     assert words in str(error), str(error)
+    # `info`'s reader, which checks the number block without keeping it, refuses it alike.
+    with pytest.raises(em.BVHError) as summarised:
+        read_summary(path)
+    assert str(summarised.value) == str(error)
+
+
+def test_a_summary_says_what_a_whole_read_says(backend, mixed_path):
+    header, motion = read_summary(mixed_path), em.read_bvh(mixed_path)
+    skeleton = motion.skeleton
+    assert (header.frames, header.frame_time) == (motion.n_frames, motion.frame_time)
+    assert header.skeleton.names == skeleton.names and list(header.skeleton.parents) == skeleton.parents.tolist()
+    assert header.skeleton.offsets == tuple(map(tuple, skeleton.offsets.tolist()))
+    assert header.skeleton.channels == skeleton.channels and header.skeleton.end_sites == skeleton.end_sites
 
 
 def test_missing_file(tmp_path):

@@ -7,7 +7,6 @@ import errno
 import os
 import stat
 import sys
-import tempfile
 from pathlib import Path
 
 from ..errors import MocapError
@@ -226,6 +225,8 @@ def _temporary(path: Path, target: Path, data: bytes) -> str:
         raise MocapError(
             f"cannot write {path}: the folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}"
         )
+    import tempfile  # here: commands that write nothing (`info`) start faster without it
+
     try:
         handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
     except OSError as error:

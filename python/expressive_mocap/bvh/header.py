@@ -12,12 +12,16 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 from .._utils.tokens import finite_number, shown
 from ..errors import BVHError
-from ..motion import Skeleton
-from .hierarchy import COUNT_PATTERN, read_hierarchy
+from .tree import COUNT_PATTERN, Tree, parse_tree
+
+if TYPE_CHECKING:
+    from ..motion import Skeleton
 
 __all__ = [
     "BLOCK_BYTES_PER_JOINT_FRAME",
@@ -26,6 +30,7 @@ __all__ = [
     "Header",
     "header_template",
     "parse_header",
+    "parse_tree_header",
     "repeated_header",
 ]
 
@@ -44,11 +49,15 @@ BLOCK_BYTES_PER_JOINT_FRAME = 3
 MIN_JOINT_FRAMES = 1 << 16
 
 
+# The hierarchy as read: a Skeleton (:func:`parse_header`), or its plain Tree (:func:`parse_tree_header`).
+S = TypeVar("S", "Skeleton", Tree)
+
+
 @dataclass
-class Header:
+class Header(Generic[S]):
     """What a BVH file's header says, and where its number block starts."""
 
-    skeleton: Skeleton
+    skeleton: S
     frames: int
     frame_time: float
     block_start: int  # byte offset of the number block
@@ -196,9 +205,20 @@ def header_template(data: bytes, size: int, header: Header) -> bytes | None:
     return template if found == (header.frames, header.frame_time, header.block_start) else None
 
 
-def parse_header(data: bytes, name: str, size: int | None = None) -> Header:
+def parse_header(data: bytes, name: str, size: int | None = None) -> Header[Skeleton]:
     """The header of the BVH text ``data``; ``size``: the whole file's length when ``data`` is
     only its beginning (see :func:`~expressive_mocap.bvh.reader.read_header`)."""
+    from .hierarchy import read_hierarchy  # NumPy: a summary of a file goes without (parse_tree_header)
+
+    return _parse(data, name, size, read_hierarchy)
+
+
+def parse_tree_header(data: bytes, name: str, size: int | None = None) -> Header[Tree]:
+    """:func:`parse_header`, its hierarchy as a plain :class:`~.tree.Tree` (no NumPy)."""
+    return _parse(data, name, size, lambda text, name: parse_tree(text, name)[0])
+
+
+def _parse(data: bytes, name: str, size: int | None, read: Callable[[str, str], S]) -> Header[S]:
     # The header's parts in file order, each refused with its line: one function reads best.
     text_start = _check_text(data, name)
     motion = _find_motion_line(data)
@@ -216,7 +236,7 @@ def parse_header(data: bytes, name: str, size: int | None = None) -> Header:
         raise BVHError(
             name, _line_at(data, text_start + error.start), "bytes that are not UTF-8 text: not a BVH text file"
         ) from None
-    skeleton = read_hierarchy(text, name)
+    skeleton = read(text, name)
     if motion is None:
         raise BVHError(name, text.count("\n") + 1, "missing MOTION section after the hierarchy")
 

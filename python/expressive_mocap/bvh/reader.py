@@ -1,5 +1,7 @@
 """Reading BVH files: :func:`read_bvh`, :func:`read_bvh_many` (many files, their number blocks
-parsed in parallel) and :func:`read_header` (the header alone, for readers of archives).
+parsed in parallel), :func:`read_header` (the header alone, for readers of archives) and
+:func:`read_summary` (the header of a file whose whole number block was checked, without NumPy
+when the Rust kernels are in use: what ``expressive-mocap info`` says).
 
 The header is parsed in Python (:mod:`.header`); the MOTION number block, most of a file's
 bytes, by the kernel ``read_motion_blocks`` (Rust, or its NumPy twin). Every problem is a
@@ -10,16 +12,27 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable
-from concurrent.futures import Future, ThreadPoolExecutor
-from typing import BinaryIO, Union
+from typing import TYPE_CHECKING, BinaryIO, Union
 
 from .. import ops
 from .._utils.files import read_beginning, read_input
 from ..errors import BVHError, MocapError, ParseError
-from ..motion import Motion
-from .header import Header, parse_header
+from .header import Header, parse_header, parse_tree_header
+from .tree import Tree
 
-__all__ = ["HEADER_PREFIX", "Source", "block_error", "read_bvh", "read_bvh_many", "read_error", "read_header"]
+if TYPE_CHECKING:
+    from ..motion import Motion
+
+__all__ = [
+    "HEADER_PREFIX",
+    "Source",
+    "block_error",
+    "read_bvh",
+    "read_bvh_many",
+    "read_error",
+    "read_header",
+    "read_summary",
+]
 
 Source = Union[str, os.PathLike, bytes, bytearray, memoryview, BinaryIO]
 
@@ -72,12 +85,31 @@ def read_header(path: str | os.PathLike, beginning: tuple[bytes, int] | None = N
     return parse_header(data, name), data
 
 
+def read_summary(path: str | os.PathLike) -> Header[Tree]:
+    """The header of the BVH file at ``path``, its hierarchy as a plain :class:`~.tree.Tree`,
+    once its MOTION block has been checked: what :func:`read_bvh` refuses, this refuses with the
+    same BVHError, without keeping a value (no NumPy with the Rust kernels)."""
+    name = str(path)
+    try:
+        data = read_input(path)
+    except OSError as error:
+        raise read_error(name, error) from None
+    header = parse_tree_header(data, name)
+    try:
+        ops.check_motion_block(data, header.block_start, header.frames, header.skeleton.n_channels)
+    except ParseError as error:
+        raise block_error(name, header, error) from None
+    return header
+
+
 def read_error(name: str | os.PathLike, error: OSError) -> BVHError:
     """The BVHError of a file that could not be read (Python's or the Rust kernel's OSError)."""
     return BVHError(name, None, f"cannot read the file: {error.strerror or error}")
 
 
 def block_error(name: str, header: Header, error: Exception) -> BVHError:
+    """The BVHError of a file whose MOTION block the kernels refused (their ParseError: a
+    message and the line within the block)."""
     message, line_in_block = error.args
     return BVHError(name, header.block_line + line_in_block, message)
 
@@ -106,15 +138,17 @@ def read_bvh_many(sources: Iterable[Source], errors: str = "raise", batch_bytes:
     """
     if errors not in ("raise", "return"):
         raise MocapError(f"errors must be 'raise' or 'return', got {errors!r}")
+    from concurrent.futures import ThreadPoolExecutor  # here: read_summary (`info`) has no use for it
+
     results: list = []
     with ThreadPoolExecutor(max_workers=1) as decoder:
         running = None
         for batch in _batches(sources, batch_bytes, results):
             if running is not None:
-                _collect(*running, results)
+                _collect(running[0], running[1].result(), results)
             running = (batch, decoder.submit(_decode, batch))
         if running is not None:
-            _collect(*running, results)
+            _collect(running[0], running[1].result(), results)
     if errors == "raise":
         first_error = next((r for r in results if isinstance(r, BVHError)), None)
         if first_error is not None:
@@ -148,9 +182,10 @@ def _decode(batch: list) -> list:
     return ops.read_motion_blocks([(data, h) for _, _, h, data in batch])
 
 
-def _collect(batch: list, decoded: Future | list, results: list) -> None:
-    """Put each file's Motion, or its BVHError, in its place in ``results``."""
-    done = decoded.result() if isinstance(decoded, Future) else decoded
+def _collect(batch: list, done: list, results: list) -> None:
+    """Put each file's Motion, or its BVHError (``done``: what :func:`_decode` gave), in its place in ``results``."""
+    from ..motion import Motion  # NumPy: not loaded by read_summary
+
     for (index, name, header, _), result in zip(batch, done):
         if isinstance(result, ParseError):
             results[index] = block_error(name, header, result)

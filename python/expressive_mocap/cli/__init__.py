@@ -1,7 +1,7 @@
 """The ``expressive-mocap`` command: a thin layer over the package's functions.
 
 Each group of commands is a module that adds its subparsers next to its command functions
-(:mod:`.files`, :mod:`.pictures`, :mod:`.skeletons`, :mod:`.decoupling`, :mod:`.exaggeration`,
+(:mod:`.info`, :mod:`.files`, :mod:`.pictures`, :mod:`.skeletons`, :mod:`.decoupling`, :mod:`.exaggeration`,
 :mod:`.data`, :mod:`.demo`); this one builds the parser and runs a command: outputs are checked
 before any work, and bad input ends the command with a one-line message on stderr and a non-zero
 exit, never a traceback.
@@ -28,7 +28,8 @@ __all__ = ["COMMANDS", "DEMO_FILES", "PROG", "build_parser", "main"]
 # builds only its command's group: the others import what their commands need (the methods,
 # training, pictures), a third of the CLI's start-up time, for nothing.
 COMMANDS = {
-    "files": ("info", "positions", "convert"),
+    "info": ("info",),
+    "files": ("positions", "convert"),
     "pictures": ("render",),
     "skeletons": ("skeleton", "retarget", "fit"),
     "decoupling": ("decouple", "modulate", "mix", "blend", "train", "calibrate"),

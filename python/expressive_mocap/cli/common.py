@@ -4,7 +4,6 @@ defaults of the domain functions (typed once, in the domain code)."""
 from __future__ import annotations
 
 import argparse
-import inspect
 import math
 from typing import TYPE_CHECKING, Any, Callable
 
@@ -83,6 +82,8 @@ def positive(kind: Callable[[str], Any]) -> Callable[[str], Any]:
 
 def default(function: Callable, name: str) -> Any:
     """The default of ``function``'s parameter ``name``: an option's default is the domain code's."""
+    import inspect  # here: only parsers of the methods' options ask, and `info` starts faster without it
+
     return inspect.signature(function).parameters[name].default
 
 

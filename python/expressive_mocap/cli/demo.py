@@ -13,7 +13,7 @@ from ..bvh import read_bvh, write_bvh
 from ..motion import Motion
 from ..procedural import walk_and_wave
 from .common import DEMO_FILES, default, positive
-from .files import cmd_info
+from .info import cmd_info
 
 __all__ = ["DEMO_FILES", "add_parsers", "cmd_demo"]
 

@@ -1,10 +1,9 @@
-"""Commands on BVH files: ``info``, ``positions`` and ``convert`` (``render``: :mod:`.pictures`)."""
+"""Commands on BVH files: ``positions`` and ``convert`` (``info``: :mod:`.info`; ``render``: :mod:`.pictures`)."""
 
 from __future__ import annotations
 
 import contextlib
 import io
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,35 +13,9 @@ from ..bvh import write_bvh
 from ..errors import MocapError
 from ..motion import Motion
 from ..rotations.orders import ORDERS
-from .common import PROG, add_body_model_option, positive, read_motion
+from .common import add_body_model_option, positive, read_motion
 
-__all__ = ["add_parsers", "cmd_convert", "cmd_info", "cmd_positions"]
-
-
-def add_info(commands) -> None:
-    p = commands.add_parser("info", help="joints, frames, fps, duration, channel layout and rest height of BVH files")
-    p.add_argument("files", nargs="+", metavar="FILE", help="BVH files (or SMPL/AMASS .npz files, with --body-model)")
-    add_body_model_option(p)
-    p.set_defaults(run=cmd_info)
-
-
-def cmd_info(args) -> int:
-    failures = 0
-    for path in args.files:
-        try:
-            motion = read_motion(path, args)
-        except MocapError as error:
-            print(f"{PROG}: error: {error}", file=sys.stderr)
-            failures += 1
-            continue
-        skeleton = motion.skeleton
-        print(f"{path}")
-        print(f"  joints    {skeleton.n_joints} (+{len(skeleton.end_sites)} End Sites), root {skeleton.names[0]}")
-        print(f"  frames    {motion.n_frames} at {motion.fps:.6g} fps (frame time {motion.frame_time:.7g} s)")
-        print(f"  duration  {motion.duration:.3f} s")
-        print(f"  channels  {skeleton.n_channels} a frame: {skeleton.channel_layout()}")
-        print(f"  rest pose height {skeleton.rest_height():.4g} (file units, Y extent incl. End Sites)")
-    return 1 if failures else 0
+__all__ = ["add_parsers", "cmd_convert", "cmd_positions"]
 
 
 def add_positions(commands) -> None:
@@ -159,5 +132,5 @@ def cmd_convert(args) -> int:
 
 def add_parsers(commands) -> None:
     """The subparsers of this module's commands, in the order ``--help`` lists them."""
-    for add in (add_info, add_positions, add_convert):
+    for add in (add_positions, add_convert):
         add(commands)

@@ -13,6 +13,7 @@ from .._utils.lazy import lazy_exports
 # all of them took a tenth of a command's start-up.
 _TWINS = {
     "air_time": "footsteps",
+    "check_motion_block": "motion_block",
     "clip_gait_many": "gait",
     "clip_gradient": "forms",
     "clip_pipeline_many": "clip",

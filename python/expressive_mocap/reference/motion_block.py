@@ -94,6 +94,11 @@ def read_motion_blocks(blocks: list) -> list:
     return results
 
 
+def check_motion_block(data: bytes, start: int, frames: int, channels: int) -> None:
+    """Raise what :func:`parse_motion_block` raises for this block, or return None."""
+    parse_motion_block(data, start, frames, channels)
+
+
 def _raise_first_problem(block: bytes, frames: int, channels: int) -> NoReturn:
     lines = block.split(b"\n")
     found = 0
@@ -152,6 +157,7 @@ def format_motion_block(values: np.ndarray, decimals: int | None = None) -> byte
 __all__ = [
     "decode_channels",
     "format_motion_block",
+    "check_motion_block",
     "parse_motion_block",
     "read_motion_blocks",
 ]
