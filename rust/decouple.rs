@@ -6,6 +6,7 @@
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 
+pub use crate::arms::Arms;
 use crate::error::{positive, KernelError, Result};
 use crate::rotations::PARALLEL_MIN_ITEMS;
 use crate::smooth::{gaussian_weights, smooth_frames};
@@ -73,6 +74,7 @@ pub fn decouple(
         activity_sigma: 0.0,
         scale: &[1.0],
         trunk: None,
+        arms: None,
     };
     split(original, body, gain, exponent, &per_frame)
 }
@@ -80,12 +82,13 @@ pub fn decouple(
 /// How a clip's split is smoothed in time and its activity read: the Gaussians' widths in frames
 /// (0: none) over the predicted body mechanics and over the activity, per joint the angle
 /// `E` is divided by before the activity index reads it (a calibrated model's thresholds), and
-/// optionally the trunk read as one chain.
+/// optionally the trunk read as one chain and the arms filtered in world axes.
 pub struct Smoothing<'a> {
     pub body_sigma: f64,
     pub activity_sigma: f64,
     pub scale: &'a [f64],
     pub trunk: Option<Trunk<'a>>,
+    pub arms: Option<Arms<'a>>,
 }
 
 /// The trunk read as one chain. A lean is spread over its joints, a few degrees each, which the
@@ -102,7 +105,7 @@ pub struct Trunk<'a> {
 }
 
 impl Trunk<'_> {
-    fn check(&self, joints: usize) -> Result<()> {
+    pub(crate) fn check(&self, joints: usize) -> Result<()> {
         if let Some(&j) = self.joints.iter().find(|&&j| j >= joints) {
             return Err(KernelError::argument(
                 "trunk_joints",
@@ -179,6 +182,9 @@ pub fn split(
     if let Some(trunk) = &smoothing.trunk {
         trunk.check(joints)?;
     }
+    if let Some(arms) = &smoothing.arms {
+        arms.check(joints)?;
+    }
     for (name, sigma) in [
         ("body_sigma", smoothing.body_sigma),
         ("activity_sigma", smoothing.activity_sigma),
@@ -230,7 +236,20 @@ pub fn split(
             *a = a.clamp(0.0, 1.0);
         }
     }
-    let (expressive, recovered) = filter(original, &smoothed, &activities);
+    let (mut expressive, mut recovered) = filter(original, &smoothed, &activities);
+    if let Some(arms) = &smoothing.arms {
+        let width = 4 * joints;
+        expressive
+            .par_chunks_mut(width)
+            .zip(recovered.par_chunks_mut(width))
+            .enumerate()
+            .with_min_len(64)
+            .for_each(|(f, (e, b))| {
+                let span = f * width..(f + 1) * width;
+                let a = &activities[f * joints..(f + 1) * joints];
+                arms.hang(&original[span.clone()], &smoothed[span], a, e, b);
+            });
+    }
     Ok((expressive, recovered, activities))
 }
 
@@ -355,6 +374,7 @@ mod tests {
             activity_sigma: 0.0,
             scale: &[1.0, 1.0],
             trunk: None,
+            arms: None,
         };
         let (e2, b3, a2) = split(&flat(&o), &flat(&b), 2.0, 4.0, &plain).unwrap();
         assert_eq!((e2, b3, a2), (e, b2, a));
@@ -387,6 +407,7 @@ mod tests {
                 bones: &[DVec3::ZERO, DVec3::Y],
                 scale: 0.5,
             }),
+            arms: None,
         };
         let (_, _, a) = split(&lean, &neutral, 2.0, 4.0, &trunk).unwrap();
         let own = activity(8f64.to_radians(), 2.0, 4.0);
@@ -418,6 +439,7 @@ mod tests {
             activity_sigma: 1.0,
             scale: &[1.0; 3],
             trunk: None,
+            arms: None,
         };
         assert!(split(&[0.0; 8], &[0.0; 8], 2.0, 4.0, &three).is_err());
         let bad = Smoothing {
@@ -425,6 +447,7 @@ mod tests {
             activity_sigma: 1.0,
             scale: &[1.0],
             trunk: None,
+            arms: None,
         };
         assert!(split(&[0.0; 4], &[0.0; 4], 2.0, 4.0, &bad).is_err());
         let zero = Smoothing {
@@ -432,6 +455,7 @@ mod tests {
             activity_sigma: 1.0,
             scale: &[0.0],
             trunk: None,
+            arms: None,
         };
         assert!(split(&[0.0; 4], &[0.0; 4], 2.0, 4.0, &zero).is_err());
     }

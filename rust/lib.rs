@@ -1,6 +1,7 @@
 //! Hot loops of expressive-mocap. Pure kernels on slices; `py` (feature "python") adapts
 //! them to NumPy. Every kernel has a NumPy twin in `expressive_mocap.reference`.
 
+pub mod arms;
 pub mod clip;
 pub mod decode;
 pub mod decouple;

@@ -116,6 +116,11 @@ and chest are read as one chain whose lean is at least as active as it reads aga
 of {model.trunk.scale:.3f} (`trunk_*`: the lean this network leaves on the held-out clips, at its
 95th percentile, reads as 10 degrees). Both are set by `train`.
 
+The arms: the upper arms and forearms are filtered in world axes (`arm_*`: the skeleton's parents
+and those joints), so an arm the split finds inactive hangs in the world as the actor's does
+whatever the body mechanics do to the trunk above it. Set by `train`; added to this file after
+training, the network unchanged.
+
 ## Scores
 Mean squared error per pose value (quaternion components), train and **test** (held-out clips),
 and the share of the test poses' variance explained. The paper's figures are on CMU data with

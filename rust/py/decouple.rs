@@ -74,11 +74,12 @@ fn decouple_rotations<'py>(
 /// `body` [F, J, 4], `scale` [J] (the angle's divisor per joint), the Gaussians' widths in frames
 /// (0: none), and the trunk chain read as one (`trunk_joints` from the hips up, empty: none;
 /// `trunk_bones` [n, 3] the bone each carries, the last one's to the neck; `trunk_scale` its
-/// lean's divisor).
+/// lean's divisor), and the limbs filtered in world axes (`arm_joints`, empty: none, with the
+/// skeleton's `arm_parents`).
 /// Returns E* [F, J, 4], B' [F, J, 4] and the activity [F, J].
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (original, body, gain, exponent, scale, body_sigma, activity_sigma, trunk_joints=vec![], trunk_bones=vec![], trunk_scale=1.0))]
+#[pyo3(signature = (original, body, gain, exponent, scale, body_sigma, activity_sigma, trunk_joints=vec![], trunk_bones=vec![], trunk_scale=1.0, arm_parents=vec![], arm_joints=vec![]))]
 fn split_rotations<'py>(
     py: Python<'py>,
     original: PyReadonlyArray3<'py, f64>,
@@ -91,6 +92,8 @@ fn split_rotations<'py>(
     trunk_joints: Vec<usize>,
     trunk_bones: Vec<[f64; 3]>,
     trunk_scale: f64,
+    arm_parents: Vec<i64>,
+    arm_joints: Vec<usize>,
 ) -> PyResult<Split<'py>> {
     let shape = same_quaternions(("original", &original), ("body", &body))?;
     if scale.shape() != [shape[1]] {
@@ -106,14 +109,33 @@ fn split_rotations<'py>(
         contiguous("scale", &scale)?,
     );
     let bones: Vec<DVec3> = trunk_bones.into_iter().map(DVec3::from_array).collect();
-    let chain = (&trunk_joints[..], &bones[..], trunk_scale);
-    let (e, recovered, a) =
-        py.detach(|| smoothed_split(o, b, gain, exponent, s, (body_sigma, activity_sigma), chain))?;
+    let chains = Chains {
+        trunk: (&trunk_joints[..], &bones[..], trunk_scale),
+        arms: (&arm_parents[..], &arm_joints[..]),
+    };
+    let (e, recovered, a) = py.detach(|| {
+        smoothed_split(
+            o,
+            b,
+            gain,
+            exponent,
+            s,
+            (body_sigma, activity_sigma),
+            &chains,
+        )
+    })?;
     split_arrays(py, e, recovered, a, &shape)
 }
 
+/// The chains a split reads as wholes: the trunk (joints, bones, scale; no joints: none) and the
+/// arms (the skeleton's parents, the limbs filtered in world axes; no limbs: none).
+struct Chains<'a> {
+    trunk: (&'a [usize], &'a [DVec3], f64),
+    arms: (&'a [i64], &'a [usize]),
+}
+
 /// One clip's [`crate::decouple::split`] with its smoothing widths `(body, activity)`, the
-/// per-joint `scale` and the trunk `chain` (joints, bones, scale; no joints: none).
+/// per-joint `scale` and its `chains`.
 fn smoothed_split(
     original: &[f64],
     body: &[f64],
@@ -121,18 +143,22 @@ fn smoothed_split(
     exponent: f64,
     scale: &[f64],
     (body_sigma, activity_sigma): (f64, f64),
-    (joints, bones, trunk_scale): (&[usize], &[DVec3], f64),
+    chains: &Chains,
 ) -> crate::error::Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    let (joints, bones, trunk_scale) = chains.trunk;
     let trunk = (!joints.is_empty()).then_some(crate::decouple::Trunk {
         joints,
         bones,
         scale: trunk_scale,
     });
+    let (parents, limbs) = chains.arms;
+    let arms = (!limbs.is_empty()).then_some(crate::decouple::Arms { parents, limbs });
     let smoothing = crate::decouple::Smoothing {
         body_sigma,
         activity_sigma,
         scale,
         trunk,
+        arms,
     };
     crate::decouple::split(original, body, gain, exponent, &smoothing)
 }
@@ -143,7 +169,7 @@ fn smoothed_split(
 /// clip's E*, B' and activity, in order, exactly as [`split_rotations`] gives them clip by clip.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (originals, bodies, gain, exponent, scale, body_sigmas, activity_sigmas, trunk_joints=vec![], trunk_bones=vec![], trunk_scale=1.0))]
+#[pyo3(signature = (originals, bodies, gain, exponent, scale, body_sigmas, activity_sigmas, trunk_joints=vec![], trunk_bones=vec![], trunk_scale=1.0, arm_parents=vec![], arm_joints=vec![]))]
 fn split_rotations_many<'py>(
     py: Python<'py>,
     originals: Vec<PyReadonlyArray3<'py, f64>>,
@@ -156,6 +182,8 @@ fn split_rotations_many<'py>(
     trunk_joints: Vec<usize>,
     trunk_bones: Vec<[f64; 3]>,
     trunk_scale: f64,
+    arm_parents: Vec<i64>,
+    arm_joints: Vec<usize>,
 ) -> PyResult<Vec<Split<'py>>> {
     let clips = originals.len();
     for (name, count) in [
@@ -189,12 +217,23 @@ fn split_rotations_many<'py>(
         ));
     }
     let bones: Vec<DVec3> = trunk_bones.into_iter().map(DVec3::from_array).collect();
+    let chains = Chains {
+        trunk: (&trunk_joints[..], &bones[..], trunk_scale),
+        arms: (&arm_parents[..], &arm_joints[..]),
+    };
     let results = py.detach(|| {
         jobs.par_iter()
             .zip(body_sigmas.par_iter().zip(&activity_sigmas))
             .map(|((o, b, _), (&body_sigma, &activity_sigma))| {
-                let chain = (&trunk_joints[..], &bones[..], trunk_scale);
-                smoothed_split(o, b, gain, exponent, s, (body_sigma, activity_sigma), chain)
+                smoothed_split(
+                    o,
+                    b,
+                    gain,
+                    exponent,
+                    s,
+                    (body_sigma, activity_sigma),
+                    &chains,
+                )
             })
             .collect::<Result<Vec<_>, _>>()
     })?;

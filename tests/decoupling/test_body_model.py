@@ -37,6 +37,10 @@ def test_training_reports_every_stage_and_beats_the_mean_pose(model):
     assert report.split is not None and report.split.train_groups >= 1 and report.split.test_groups >= 1
     # Root and hips come from the motion; every other joint is predicted.
     assert model.predicted.tolist() == list(range(2, 22))
+    # The upper arms and forearms are filtered in world axes, on the skeleton's own tree.
+    names = model.joint_names
+    limbs = [names.index(n) for n in ("UpperArm_L", "LowerArm_L", "UpperArm_R", "LowerArm_R")]
+    assert model.arms is not None and list(model.arms.limbs) == sorted(limbs)
 
 
 def test_a_trained_model_keeps_the_range_of_its_training_features(model, walks, tmp_path):
@@ -127,7 +131,7 @@ def test_streaming_matches_offline_decoupling_frame_by_frame(model, walks):
     (which needs the frames after)."""
     walk = walks[2][:45]
     predicted = FixedFloor(model, 0.0).predict_streamed(walk)
-    offline = Decomposition(walk, *split(walk.rotations, predicted, trunk=model.trunk))
+    offline = Decomposition(walk, *split(walk.rotations, predicted, trunk=model.trunk, arms=model.arms))
     stream = StreamingDecoupler(model, walk.skeleton, walk.frame_time, floor=0.0, history=2.0)
     for f in range(walk.n_frames):
         body, expressive, activity = stream.push(walk.rotations[f], walk.translations[f])

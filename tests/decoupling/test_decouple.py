@@ -156,7 +156,8 @@ def test_many_clips_split_in_one_call_as_clip_by_clip():
         for o in originals
     ]
     scale = rng.uniform(1.0, 2.0, 5)
-    trunk = ([1, 2], [(0.0, 1.0, 0.1), (0.3, 2.0, 0.0)], 0.4)
+    # the trunk read as a chain, and the arms filtered in world axes
+    trunk = ([1, 2], [(0.0, 1.0, 0.1), (0.3, 2.0, 0.0)], 0.4, [-1, 0, 1, 2, 3], [3, 4])
     body_sigmas, activity_sigmas = [s[0] for s in sigmas], [s[1] for s in sigmas]
     many = _core.split_rotations_many(originals, bodies, 2.0, 4.0, scale, body_sigmas, activity_sigmas, *trunk)
     twins = reference.split_rotations_many(originals, bodies, 2.0, 4.0, scale, body_sigmas, activity_sigmas, *trunk)

@@ -237,7 +237,7 @@ def test_the_streaming_decoupler_takes_another_skeleton():
     # (and without the toes set by the clip's stance, which a stream cannot know ahead).
     on_body = carried.body
     predicted = FixedFloor(model, 0.0).predict_streamed(on_body, stream.capacity)
-    offline = Decomposition(on_body, *split(on_body.rotations, predicted, trunk=model.trunk))
+    offline = Decomposition(on_body, *split(on_body.rotations, predicted, trunk=model.trunk, arms=model.arms))
     np.testing.assert_allclose(activity, offline.activity, atol=1e-9)
     assert body.shape == game.rotations.shape
     np.testing.assert_allclose(body, carried.back(offline.body_motion()).rotations, atol=1e-9)

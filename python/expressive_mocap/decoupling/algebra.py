@@ -24,7 +24,7 @@ import numpy as np
 from ..body.take import Take
 from ..errors import ModelError
 from ..motion import Motion
-from ..ops import Trunk, compose_rotations, split_rotations, split_rotations_many
+from ..ops import Arms, Trunk, compose_rotations, split_rotations, split_rotations_many
 from ..rotations import quat
 from .pelvis import mean_posture
 
@@ -61,20 +61,22 @@ def split(
     activity_scale: np.ndarray | None = None,
     fps: float | None = None,
     trunk: Trunk | None = None,
+    arms: Arms | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(expressive E*, body B', activity A)`` of ``original [F, J, 4]`` given the model's
     ``predicted [F, J, 4]`` (:class:`~expressive_mocap.errors.ModelError` if their shapes differ).
     ``activity_scale [J]``: per joint, the angle of ``E`` is divided by it before the activity
     index reads it (a calibrated model's threshold; None: 1 everywhere). ``fps``: the frames are
     one clip's at that rate, and ``B`` and ``A`` are smoothed in time (BODY_SMOOTHING,
-    ACTIVITY_SMOOTHING); None: each frame on its own (a stream's newest frame)."""
+    ACTIVITY_SMOOTHING); None: each frame on its own (a stream's newest frame). ``trunk``, ``arms``:
+    the model's chains read as wholes (:mod:`.trunk`, :mod:`.arms`)."""
     predicted = np.asarray(predicted, dtype=np.float64)
     if predicted.shape != np.shape(original):
         raise ModelError(
             f"the model predicted rotations {list(predicted.shape)} for a motion of {list(np.shape(original))}"
         )
     sigmas = (0.0, 0.0) if fps is None else (BODY_SMOOTHING * fps, ACTIVITY_SMOOTHING * fps)
-    return split_rotations(original, predicted, gain, exponent, activity_scale, *sigmas, trunk)
+    return split_rotations(original, predicted, gain, exponent, activity_scale, *sigmas, trunk, arms)
 
 
 def split_from_features(
@@ -89,7 +91,7 @@ def split_from_features(
     (``posture``: the pelvis posture the model carries the spine onto; None: ``rotations``')."""
     predicted = model.predict_from_features(rotations, features, posture)
     scale, trunk = getattr(model, "activity_scale", None), getattr(model, "trunk", None)
-    return split(rotations, predicted, gain, exponent, scale, trunk=trunk)
+    return split(rotations, predicted, gain, exponent, scale, trunk=trunk, arms=getattr(model, "arms", None))
 
 
 @dataclass(frozen=True)
@@ -135,8 +137,10 @@ def decompose(
     scale = getattr(model, "activity_scale", None)
     predict_take = getattr(model, "predict_take", None)
     predicted = predict_take(take) if predict_take is not None else model.predict(take.motion)
-    trunk = getattr(model, "trunk", None)
-    expressive, body, activity = split(take.motion.rotations, predicted, gain, exponent, scale, take.motion.fps, trunk)
+    trunk, arms = getattr(model, "trunk", None), getattr(model, "arms", None)
+    expressive, body, activity = split(
+        take.motion.rotations, predicted, gain, exponent, scale, take.motion.fps, trunk, arms
+    )
     return Decomposition(take.motion, expressive, body, activity)
 
 
@@ -180,6 +184,7 @@ def decompose_many(
         [BODY_SMOOTHING * rate for rate in fps],
         [ACTIVITY_SMOOTHING * rate for rate in fps],
         getattr(model, "trunk", None),
+        getattr(model, "arms", None),
     )
     return [{"activity": activity, "body": body, "expressive": expressive} for expressive, body, activity in parts]
 

@@ -31,7 +31,7 @@ from ..body.contacts import floor_of
 from ..body.take import Take
 from ..errors import ArgumentError, ModelError
 from ..motion import Motion, Skeleton
-from ..ops import Trunk
+from ..ops import Arms, Trunk
 from ..rotations import quat
 from .algebra import BODY_SMOOTHING
 from .features import FEATURE_NAMES, dynamic_features
@@ -64,7 +64,8 @@ class BodyModel:
     joint, the angle of the expressive component is divided by it before the activity index
     reads it (at least 1; set by calibration); ``feature_range [2, 19]`` or None:
     the lowest and highest feature values the network is trusted with (inputs are clipped into it);
-    ``trunk`` or None: the trunk chain read as one, with its threshold; ``pelvis`` or None: the
+    ``trunk`` or None: the trunk chain read as one, with its threshold; ``arms`` or None: the
+    limbs filtered in world axes (:mod:`~expressive_mocap.decoupling.arms`); ``pelvis`` or None: the
     spine is predicted for the training clips' pelvis posture and carried onto the motion's
     (:mod:`~expressive_mocap.decoupling.trunk`, :mod:`~expressive_mocap.decoupling.pelvis`).
     ``settings`` and ``report``: what training was run with and how every stage scored
@@ -84,6 +85,7 @@ class BodyModel:
     activity_scale: np.ndarray | None = None
     trunk: Trunk | None = None
     pelvis: Pelvis | None = None
+    arms: Arms | None = None
 
     def __repr__(self) -> str:
         # One line: the dataclass default prints every weight.
@@ -225,6 +227,9 @@ class BodyModel:
             arrays["trunk_joints"] = np.array(self.trunk.joints, dtype=np.int64)
             arrays["trunk_bones"] = np.array(self.trunk.bones, dtype=np.float64)
             arrays["trunk_scale"] = np.array(self.trunk.scale, dtype=np.float64)
+        if self.arms is not None:
+            arrays["arm_parents"] = np.array(self.arms.parents, dtype=np.int64)
+            arrays["arm_joints"] = np.array(self.arms.limbs, dtype=np.int64)
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **arrays)
         return buffer.getvalue()
@@ -301,6 +306,8 @@ class BodyModel:
                 "trunk_joints",
                 "trunk_bones",
                 "trunk_scale",
+                "arm_parents",
+                "arm_joints",
                 "pelvis_path",
                 "pelvis_spine",
                 "pelvis_reference",
@@ -330,6 +337,7 @@ class BodyModel:
             activity_scale=_activity_scale(arrays, name, len(joint_names)),
             trunk=_trunk(arrays, name, predicted),
             pelvis=_pelvis(arrays, name, predicted, len(joint_names)),
+            arms=_arms(arrays, name, predicted, len(joint_names)),
         )
 
 
@@ -364,6 +372,20 @@ def _trunk(arrays: dict, name: str, predicted: np.ndarray) -> Trunk | None:
         raise ModelError(f"{name}: trunk_bones must make a trunk of some length and trunk_scale be a positive number")
     carried = tuple((float(x), float(y), float(z)) for x, y, z in bones)
     return Trunk(tuple(int(j) for j in joints), carried, scale)
+
+
+def _arms(arrays: dict, name: str, predicted: np.ndarray, n_joints: int) -> Arms | None:
+    if "arm_parents" not in arrays and "arm_joints" not in arrays:
+        return None  # a model file from before the arms were filtered in world axes
+    parents = finite_array(arrays, "arm_parents", name, (n_joints,), kinds="iu").tolist()
+    limbs = finite_array(arrays, "arm_joints", name, kinds="iu")
+    if parents[0] != -1 or not all(0 <= p < j for j, p in enumerate(parents) if j):
+        raise ModelError(
+            f"{name}: arm_parents must be the skeleton's parents, the root's -1 first, each before its child"
+        )
+    if limbs.ndim != 1 or not len(limbs) or not set(limbs.tolist()) <= set(predicted.tolist()):
+        raise ModelError(f"{name}: arm_joints must be a list of predicted joints")
+    return Arms(tuple(int(p) for p in parents), tuple(int(j) for j in limbs))
 
 
 def _pelvis(arrays: dict, name: str, predicted: np.ndarray, n_joints: int) -> Pelvis | None:

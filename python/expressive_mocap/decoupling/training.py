@@ -36,6 +36,7 @@ from ..body.body import Body
 from ..errors import ArgumentError
 from ..motion import Motion
 from ..rotations import quat
+from .arms import arm_limbs
 from .body_model import BodyModel, model_features, pose_vectors
 from .features import FEATURE_NAMES
 from .lbfgs import Log, Params, fit_lbfgs, init_params
@@ -448,17 +449,8 @@ def train_body_model(
         features="causal; floor = 5th percentile of toe heights; thigh hemisphere = training mean",
         feature_range=FEATURE_RANGE,
     )
-    model = BodyModel(
-        tuple(skeleton.names),
-        predicted,
-        hemispheres,
-        thigh_reference,
-        network,
-        settings,
-        report,
-        feature_range=feature_range(X[train_rows]),
-        pelvis=pelvis,
-    )
+    parts = (tuple(skeleton.names), predicted, hemispheres, thigh_reference, network, settings, report)
+    model = BodyModel(*parts, feature_range=feature_range(X[train_rows]), pelvis=pelvis, arms=arm_limbs(skeleton))
     return with_trunk(model, skeleton, [neutral[k] for k in np.unique(groups[test_rows])])
 
 

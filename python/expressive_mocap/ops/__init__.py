@@ -24,6 +24,7 @@ from .._utils.lazy import lazy_exports
 # (`info` with the Rust kernels: its block is checked by ``check_motion_block``) should not pay for.
 _LAZY = {
     "ACTIVATIONS": "mlp",
+    "Arms": "rotations",
     "ChannelLayout": "bvh_text",
     "ClipArrays": "arrays",
     "ClipInput": "gait",
@@ -90,6 +91,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers and editors
     from .mlp import ACTIVATIONS, mlp_forward
     from .posing import TransferPlan, plant_feet, retarget_transfer, two_bone_ik
     from .rotations import (
+        Arms,
         Trunk,
         compose_rotations,
         decode_channels,
@@ -107,6 +109,7 @@ __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 __all__ = [
     "ACTIVATIONS",
+    "Arms",
     "ChannelLayout",
     "ClipArrays",
     "ClipInput",

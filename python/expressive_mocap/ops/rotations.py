@@ -106,6 +106,15 @@ class Trunk(NamedTuple):
     scale: float
 
 
+class Arms(NamedTuple):
+    """Limbs :func:`split_rotations` filters in world axes (a relaxed arm hangs in the world as
+    the actor's does, whatever the body mechanics do to the trunk above it): ``limbs`` (parents
+    before children), ``parents`` the skeleton's."""
+
+    parents: tuple[int, ...]
+    limbs: tuple[int, ...]
+
+
 def split_rotations(
     original,
     body,
@@ -115,18 +124,26 @@ def split_rotations(
     body_sigma: float = 0.0,
     activity_sigma: float = 0.0,
     trunk: Trunk | None = None,
+    arms: Arms | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One clip's :func:`decouple_rotations` (``[F, J, 4]``) with ``body`` smoothed over
     ``body_sigma`` frames and the activity, read from ``angle(E) / scale`` (``[J]``, None: 1),
     over ``activity_sigma`` frames (Gaussians, the ends held; 0: none). ``trunk``: its joints are
     at least as active as the chain's lean reads (a lean spread over several joints, a few degrees
-    each, counts as the chain's). Returns ``(E*, B', A)``."""
+    each, counts as the chain's); ``arms``: limbs filtered in world axes. Returns ``(E*, B', A)``."""
     original, body = _f64("original", original, 4), _f64("body", body, 4)
     if original.ndim != 3:
         raise ArgumentError(f"argument `original`: expected shape [F, J, 4] (one clip), got {list(original.shape)}")
     scale = np.ones(original.shape[1]) if scale is None else _array("scale", scale, np.float64)
     return kernels().split_rotations(
-        original, body, float(gain), float(exponent), scale, float(body_sigma), float(activity_sigma), **_chain(trunk)
+        original,
+        body,
+        float(gain),
+        float(exponent),
+        scale,
+        float(body_sigma),
+        float(activity_sigma),
+        **_chains(trunk, arms),
     )
 
 
@@ -139,6 +156,7 @@ def split_rotations_many(
     body_sigmas=None,
     activity_sigmas=None,
     trunk: Trunk | None = None,
+    arms: Arms | None = None,
 ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """:func:`split_rotations` of many clips (``originals``, ``bodies``: ``[F, J, 4]`` each, the
     same joints) in one kernel call, clips in parallel, each smoothed over its own
@@ -160,19 +178,21 @@ def split_rotations_many(
         scale,
         zeros if body_sigmas is None else [float(s) for s in body_sigmas],
         zeros if activity_sigmas is None else [float(s) for s in activity_sigmas],
-        **_chain(trunk),
+        **_chains(trunk, arms),
     )
 
 
-def _chain(trunk: Trunk | None) -> dict:
-    """A :class:`Trunk` as the kernels' keyword arguments (none without one)."""
-    if trunk is None:
-        return {}
-    return {
-        "trunk_joints": [int(j) for j in trunk.joints],
-        "trunk_bones": [tuple(float(v) for v in bone) for bone in trunk.bones],
-        "trunk_scale": float(trunk.scale),
-    }
+def _chains(trunk: Trunk | None, arms: Arms | None) -> dict:
+    """A :class:`Trunk` and :class:`Arms` as the kernels' keyword arguments (none for None)."""
+    chains: dict = {}
+    if trunk is not None:
+        chains["trunk_joints"] = [int(j) for j in trunk.joints]
+        chains["trunk_bones"] = [tuple(float(v) for v in bone) for bone in trunk.bones]
+        chains["trunk_scale"] = float(trunk.scale)
+    if arms is not None:
+        chains["arm_parents"] = [int(p) for p in arms.parents]
+        chains["arm_joints"] = [int(j) for j in arms.limbs]
+    return chains
 
 
 def compose_rotations(expressive, body, scale: float = 1.0) -> np.ndarray:
@@ -192,6 +212,7 @@ def matrix_columns(quats, columns: int) -> np.ndarray:
 
 
 __all__ = [
+    "Arms",
     "Trunk",
     "compose_rotations",
     "decode_channels",
