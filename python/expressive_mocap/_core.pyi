@@ -165,9 +165,12 @@ def split_rotations(
     trunk_joints: Sequence[int] = ...,
     trunk_bones: Sequence[tuple[float, float, float]] = ...,
     trunk_scale: float = ...,
+    arm_parents: Sequence[int] = ...,
+    arm_joints: Sequence[int] = ...,
 ) -> tuple[_F64, _F64, _F64]:
     """One clip's ``(E*, B', A)`` with the body mechanics and the activity smoothed over frames,
-    the trunk joints read at least as active as their chain's lean."""
+    the trunk joints read at least as active as their chain's lean, the ``arm_joints`` (with the
+    skeleton's ``arm_parents``) filtered in world axes."""
 
 def split_rotations_many(
     originals: Sequence[_F64],
@@ -180,6 +183,8 @@ def split_rotations_many(
     trunk_joints: Sequence[int] = ...,
     trunk_bones: Sequence[tuple[float, float, float]] = ...,
     trunk_scale: float = ...,
+    arm_parents: Sequence[int] = ...,
+    arm_joints: Sequence[int] = ...,
 ) -> list[tuple[_F64, _F64, _F64]]:
     """``split_rotations`` of many clips in one call, clips in parallel, each with its own
     smoothing widths."""
