@@ -160,8 +160,11 @@ pub(crate) fn write_gradient(
     }
 }
 
-/// The f64 sums of the rows of `arrays` (each `[n_i, width]` f32) and of their squares, column
-/// by column: the increments of running normalisation statistics.
+/// The f64 sums of the rows of each of `arrays` (each `[n_i, width]` f32) and of their squares,
+/// column by column: `arrays.len()` rows of `width` each, the increments of running normalisation
+/// statistics. Each array is summed row after row in its order (arrays in parallel), so an array's
+/// sums are the same whatever arrays come with it: a dataset's statistics, added clip by clip in
+/// the dataset's order, do not depend on how its clips were batched.
 ///
 /// # Errors
 /// `KernelError::Argument` naming `arrays` when one is not a multiple of `width` long.
@@ -178,28 +181,23 @@ pub fn column_totals(arrays: &[&[f32]], width: usize) -> Result<(Vec<f64>, Vec<f
             ),
         ));
     }
-    let blocks: Vec<&[f32]> = arrays
-        .iter()
-        .flat_map(|a| a.chunks(ROWS_PER_TASK * width))
-        .collect();
-    let block_totals = |block: &[f32]| {
-        let (mut sums, mut squares) = (vec![0.0; width], vec![0.0; width]);
-        for row in block.chunks_exact(width) {
-            for ((s, q), &v) in sums.iter_mut().zip(squares.iter_mut()).zip(row) {
-                let v = f64::from(v);
-                *s += v;
-                *q += v * v;
+    let (mut sums, mut squares) = (
+        vec![0.0; arrays.len() * width],
+        vec![0.0; arrays.len() * width],
+    );
+    sums.par_chunks_mut(width)
+        .zip(squares.par_chunks_mut(width))
+        .zip(arrays.par_iter())
+        .for_each(|((sums, squares), array)| {
+            for row in array.chunks_exact(width) {
+                for ((s, q), &v) in sums.iter_mut().zip(squares.iter_mut()).zip(row) {
+                    let v = f64::from(v);
+                    *s += v;
+                    *q += v * v;
+                }
             }
-        }
-        (sums, squares)
-    };
-    let add = |(mut s1, mut q1): (Vec<f64>, Vec<f64>), (s2, q2): (Vec<f64>, Vec<f64>)| {
-        s1.iter_mut().zip(&s2).for_each(|(a, b)| *a += b);
-        q1.iter_mut().zip(&q2).for_each(|(a, b)| *a += b);
-        (s1, q1)
-    };
-    let empty = || (vec![0.0; width], vec![0.0; width]);
-    Ok(blocks.into_par_iter().map(block_totals).reduce(empty, add))
+        });
+    Ok((sums, squares))
 }
 
 #[cfg(test)]
@@ -245,24 +243,25 @@ mod tests {
     }
 
     #[test]
-    fn totals_sum_rows_and_squares_across_arrays_and_blocks() {
+    fn totals_sum_each_array_row_after_row() {
         let long: Vec<f32> = (0..2 * (ROWS_PER_TASK + 3))
-            .map(|i| (i % 7) as f32)
+            .map(|i| (i % 7) as f32 * 0.1)
             .collect();
         let short = [1.0f32, -2.0];
         let (sums, squares) = column_totals(&[&long, &short], 2).unwrap();
-        let mut want = ([0.0f64; 2], [0.0f64; 2]);
-        for row in long.chunks(2).chain(short.chunks(2)) {
-            for c in 0..2 {
-                want.0[c] += f64::from(row[c]);
-                want.1[c] += f64::from(row[c]).powi(2);
+        let mut want = (vec![0.0f64; 4], vec![0.0f64; 4]);
+        for (k, array) in [&long[..], &short[..]].iter().enumerate() {
+            for row in array.chunks(2) {
+                for c in 0..2 {
+                    want.0[2 * k + c] += f64::from(row[c]);
+                    want.1[2 * k + c] += f64::from(row[c]).powi(2);
+                }
             }
         }
-        assert_eq!(
-            (sums.as_slice(), squares.as_slice()),
-            (&want.0[..], &want.1[..])
-        );
+        assert_eq!((sums, squares), want); // bit for bit: each array in its own order
+        let (alone, _) = column_totals(&[&short], 2).unwrap();
+        assert_eq!(alone, want.0[2..].to_vec()); // whatever arrays come with it
         assert!(column_totals(&[&short[..1]], 2).is_err());
-        assert_eq!(column_totals(&[], 3).unwrap(), (vec![0.0; 3], vec![0.0; 3]));
+        assert_eq!(column_totals(&[], 3).unwrap(), (vec![], vec![]));
     }
 }

@@ -222,7 +222,8 @@ def clip_gradient(values: _F64, starts: npt.NDArray[np.int64], frame_time: _F64)
     """Per-clip time derivative of rows ``values [N, C]``; clips begin at ``starts``, ``frame_time [N]``."""
 
 def column_totals(arrays: list[npt.NDArray[np.float32]], width: int) -> tuple[_F64, _F64]:
-    """Float64 sums of the rows of ``arrays`` (each ``[n, width]``) and of their squares."""
+    """Float64 sums of the rows of each of ``arrays`` (each ``[n, width]``, summed row after row) and of
+    their squares: ``([A, width], [A, width])``."""
 
 def repeated_headers(
     paths: Sequence[str | os.PathLike[str]], template: bytes, joints: int, count: int, max_bytes: int | None = None

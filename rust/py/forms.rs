@@ -1,8 +1,6 @@
 //! Bindings of `crate::forms`.
 
-use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
-};
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 use super::{array, contiguous, owned_indices, shape_error};
@@ -43,9 +41,10 @@ fn clip_gradient<'py>(
     Ok(array(out, (shape[0], shape[1]))?.into_pyarray(py))
 }
 
-type Totals<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+type Totals<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 
-/// f64 sums of the rows of `arrays` (each [n_i, C], f32) and of their squares: ([C], [C]).
+/// f64 sums of the rows of each of `arrays` (each [n_i, C], f32) and of their squares, each array
+/// summed row after row: ([A, C], [A, C]).
 #[pyfunction]
 fn column_totals<'py>(
     py: Python<'py>,
@@ -67,7 +66,11 @@ fn column_totals<'py>(
         })
         .collect::<PyResult<Vec<&[f32]>>>()?;
     let (sums, squares) = py.detach(|| crate::forms::column_totals(&slices, width))?;
-    Ok((sums.into_pyarray(py), squares.into_pyarray(py)))
+    let shape = (slices.len(), width);
+    Ok((
+        array(sums, shape)?.into_pyarray(py),
+        array(squares, shape)?.into_pyarray(py),
+    ))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

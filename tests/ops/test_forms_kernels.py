@@ -59,15 +59,20 @@ def test_clip_gradient_refuses_starts_that_do_not_fit(starts, backend):
         ops.clip_gradient(np.zeros((400, 2)), np.array([0]), np.ones(399))
 
 
-def test_column_totals_are_float64_sums_of_rows_and_squares(backend):
+def test_column_totals_are_float64_sums_of_each_arrays_rows_and_squares(backend):
     arrays = [RNG.normal(50, 10, size=(n, 5, 3)).astype(np.float32) for n in (1, 9000, 0, 37)]
     sums, squares = ops.column_totals(arrays)
-    rows = np.concatenate(arrays).astype(np.float64)
-    assert sums.shape == squares.shape == (5, 3) and sums.dtype == np.float64
-    np.testing.assert_allclose(sums, rows.sum(axis=0), rtol=1e-13)
-    np.testing.assert_allclose(squares, (rows * rows).sum(axis=0), rtol=1e-13)
+    assert sums.shape == squares.shape == (4, 5, 3) and sums.dtype == np.float64
+    for k, array in enumerate(arrays):
+        rows = array.astype(np.float64)
+        np.testing.assert_allclose(sums[k], rows.sum(axis=0), rtol=1e-13, atol=1e-300)
+        np.testing.assert_allclose(squares[k], (rows * rows).sum(axis=0), rtol=1e-13, atol=1e-300)
+    # An array's sums are the same, bit for bit, whatever arrays come with it (batch-free statistics).
+    alone = ops.column_totals(arrays[3:])
+    np.testing.assert_array_equal(alone[0][0], sums[3])
+    np.testing.assert_array_equal(alone[1][0], squares[3])
     with pytest.raises(ArgumentError, match="float32"):
-        ops.column_totals([rows])
+        ops.column_totals([np.concatenate(arrays).astype(np.float64)])
 
 
 @pytest.mark.skipif(len(BACKENDS) < 2, reason="the Rust extension is not built: nothing to compare")

@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import derive
 from .format import MIRRORED
 from .journal import JournalRecord
 from .sources import Item
@@ -26,7 +25,8 @@ class Collected:
     arrays: dict[str, list[np.ndarray]]
     rows: int
     skeleton: dict | None
-    sums: dict[str, list] = field(default_factory=dict)  # kind -> [rows, sums of rows, sums of squares]
+    # (kind, (rows, sums of rows, sums of squares)) of each stored clip and mirror image, in order
+    sums: list[tuple[str, tuple]] = field(default_factory=list)
     up: list | None = None  # the up axis of the dataset's world positions, when a clip found it
 
 
@@ -47,7 +47,7 @@ def collect(
     name). The dataset's skeleton is the first parsed clip's of the hierarchy ``majority`` (names,
     parents: the one most clips share, :meth:`.census.Census.majority`), or of any when None."""
     arrays: dict[str, list[np.ndarray]] = {k: [] for k in keep}
-    totals: dict[str, list] = {}
+    increments: list[tuple[str, tuple]] = []
     up = None
     for item, outcome in zip(batch, outcomes):
         shape, error = outcome.skeleton, outcome.error
@@ -76,20 +76,12 @@ def collect(
                 error = _skeleton_error(item, names, parents, expected)
             elif error is None:
                 error = _units_error(item, outcome.bone_length, expected)
-        # Sums go by hierarchy: a group of the dataset's adds its sums (carried by one of its clips,
-        # even one failing here), and takes out those of its clips that fail here.
-        ours = outcome.skeleton is not None and _same(outcome.skeleton, skeleton)
-        if ours:
-            _add_sums(totals, outcome.sums)
         if error is not None:
             record.failures.append({"name": item.name, "source": item.source, "error": error})
             if other is not None:
                 record.failures[-1]["skeleton"] = other
-            if ours and outcome.error is None and outcome.values:  # its rows were in its group's sums
-                for values in (outcome.values, outcome.mirrored or {}):
-                    own = {k: derive.totals([v]) for k, v in values.items() if k in keep and v.dtype.kind == "f"}
-                    _add_sums(totals, own, -1)
             continue
+        increments += outcome.sums  # the statistics' sums, clip by clip in the dataset's order
         up = up or outcome.up
         if outcome.mirrored is not None:
             taken.add(image)
@@ -108,19 +100,12 @@ def collect(
             if outcome.source_skeleton is not None:
                 record.clips[-1]["source_skeleton"] = outcome.source_skeleton
             rows += outcome.frames
-    return Collected(arrays, rows, skeleton, totals, None if up is None else list(up))
+    return Collected(arrays, rows, skeleton, increments, None if up is None else list(up))
 
 
 def _same(shape: tuple, skeleton: dict | None) -> bool:
     """Whether joint names and parents ``shape`` are the dataset's ``skeleton``'s."""
     return skeleton is not None and list(shape[0]) == skeleton["names"] and list(shape[1]) == skeleton["parents"]
-
-
-def _add_sums(totals: dict, sums: dict, sign: int = 1) -> None:
-    """``sums`` (kind -> ``(rows, sums, squares)``) added into ``totals`` (or taken out, ``sign=-1``)."""
-    for kind, (n, first, second) in sums.items():
-        total = totals.setdefault(kind, [0, 0.0, 0.0])
-        total[0], total[1], total[2] = total[0] + sign * n, total[1] + sign * first, total[2] + sign * second
 
 
 def _skeleton_error(item: Item, names: list, parents: list, skeleton: dict) -> str:

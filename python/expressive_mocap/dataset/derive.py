@@ -252,11 +252,12 @@ def unwrap_by_clip(angles: np.ndarray, starts: np.ndarray) -> np.ndarray:
     return out
 
 
-def totals(arrays: list[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
-    """``(rows, sums, squares)``: the row count of ``arrays`` (``[n_i, ...]`` float32, one row shape)
-    and the float64 sums of their rows and of their rows' squares ``[...]``, the increments of
-    the running normalisation statistics (:mod:`.stats`)."""
-    return sum(len(a) for a in arrays), *ops.column_totals(arrays)
+def totals(arrays: list[np.ndarray]) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """``(rows, sums, squares)`` of each of ``arrays`` (``[n_i, ...]`` float32, one row shape): its
+    row count and the float64 sums of its rows and of their squares ``[...]``, the increments of the
+    running normalisation statistics (:mod:`.stats`), each the same whatever arrays come with it."""
+    sums, squares = ops.column_totals(arrays)
+    return [(len(a), s1, s2) for a, s1, s2 in zip(arrays, sums, squares)]
 
 
 __all__ = [

@@ -122,16 +122,21 @@ def chunks(items: list, frames, key=None) -> list[list]:
 
 
 def add_sums(finished: list, keep: tuple[str, ...]) -> None:
-    """The float64 sums of rows and squares (:func:`.derive.totals`) per float kind kept over each
-    hierarchy's clips and mirror images that succeeded, ``finished`` ``(outcome, [values])``,
-    into that outcome's ``sums``: one reduction a kind over a group, not one a clip."""
-    for carrier, done in finished:
-        if carrier.error is not None:  # the group failed after its kernel (no heading frame)
-            continue
-        for kind in keep:
-            arrays = [values[kind] for values in done if kind in values and values[kind].dtype.kind == "f"]
-            if arrays:
-                carrier.sums[kind] = totals(arrays)
+    """The float64 sums of rows and squares (:func:`.derive.totals`) per float kind kept of each
+    clip and mirror image that succeeded, ``finished`` ``(outcome, values)`` in the batch's order,
+    into its outcome's ``sums`` (the clip's, then its mirror image's): one kernel call a kind for
+    the batch. Added clip by clip in the dataset's order (:mod:`.collect`), they make statistics
+    that do not depend on how the clips were batched."""
+    for outcome, _ in finished:
+        outcome.sums = []
+    for kind in keep:
+        by_shape: dict[tuple, list] = {}  # one call per row shape (a batch may hold several skeletons)
+        for outcome, values in finished:
+            if kind in values and values[kind].dtype.kind == "f":
+                by_shape.setdefault(values[kind].shape[1:], []).append((outcome, values[kind]))
+        for images in by_shape.values():
+            for (outcome, _), increment in zip(images, totals([v for _, v in images])):
+                outcome.sums.append((kind, increment))
 
 
 __all__ = ["CHUNK_FRAMES", "add_sums", "chunks", "derive_group", "heading_frames", "mirror_values"]

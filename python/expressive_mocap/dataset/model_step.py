@@ -22,8 +22,8 @@ if TYPE_CHECKING:
 class Ran:
     """A batch after its clips' kernels (:func:`.work.run_clips`): the ``outcomes``; ``kept``, of
     each clip and mirror image the model reads, (values to update, local rotations, model
-    features, fps); ``finished``, of each hierarchy, (the outcome carrying its sums, its clips'
-    values); the seconds :func:`.work.prepare` took and those the kernels took."""
+    features, fps); ``finished``, of each clip and mirror image that succeeded, (its outcome,
+    its values); the seconds :func:`.work.prepare` took and those the kernels took."""
 
     outcomes: list[Outcome]
     kept: list

@@ -1,7 +1,9 @@
 """Normalisation statistics of a dataset's float kinds: per channel mean and std over all rows.
 
 Written: gathered while a run's batches are written, per kind the row count and the float64 sums
-of the rows and of their squares (each clip's summed in the kernel thread, :func:`.derive.sums`),
+of the rows and of their squares (each clip's summed in the kernel thread, row after row,
+:func:`.derive.totals`, then added clip by clip in the dataset's order: the same whatever the
+batches, bit for bit),
 carried from batch to batch in the journal (so a resumed run goes on from them), turned into
 ``manifest["stats"][kind] = {"mean", "std", "frames"}`` at the end (:func:`statistics`: nested
 lists shaped like one row, the population std). Sums of squares lose precision when a channel's
@@ -34,10 +36,15 @@ MIN_RELATIVE_STD = 1e-5
 CHUNK_ROWS = 65536
 
 
-def merged(total: dict, batch: dict) -> dict:
-    """``total`` (kind -> ``[rows, sums, squares]``, as JSON lists or arrays) with a batch's added."""
-    out = {kind: [n, np.asarray(s1), np.asarray(s2)] for kind, (n, s1, s2) in total.items()}
-    for kind, (n, s1, s2) in batch.items():
+def merged(total: dict, increments: list) -> dict:
+    """``total`` (kind -> ``[rows, sums, squares]``, as JSON lists or arrays) with ``increments``
+    (``(kind, (rows, sums, squares))`` of each clip, in the dataset's order) added one by one: the
+    same float64 additions in the same order whatever the batches, so the same sums bit for bit."""
+    out = {
+        kind: [n, np.asarray(s1, dtype=np.float64), np.asarray(s2, dtype=np.float64)]
+        for kind, (n, s1, s2) in total.items()
+    }
+    for kind, (n, s1, s2) in increments:
         if kind in out:
             out[kind] = [out[kind][0] + n, out[kind][1] + s1, out[kind][2] + s2]
         else:

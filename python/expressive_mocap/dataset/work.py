@@ -47,8 +47,8 @@ class Outcome:
     source_skeleton: dict | None = None  # with canonical: the clip's own skeleton and map, if retargeted
     source_fps: float | None = None  # with a resampling fps: the clip's own
     mirrored: dict[str, np.ndarray] | None = None  # with mirror: the mirror image's values
-    # kind -> (rows, sums, squares) in float64 of its group of the batch (carried by one clip; see .collect)
-    sums: dict[str, tuple] = field(default_factory=dict)
+    # (kind, (rows, sums, squares)) in float64 of the clip, then of its mirror image (see .collect)
+    sums: list[tuple[str, tuple]] = field(default_factory=list)
     up: tuple | None = None  # the skeleton's up axis as found in its world positions (None: not found)
 
 
@@ -394,7 +394,7 @@ def run_clips(batch: list[Item], prepared: Prepared, keep: tuple[str, ...], mode
     plain = options.plain(keep) and not (use_model and options.rotation_columns)
     requests = ([(0.0, None)] if "features" in keep else []) + ([(None, model.thigh_reference)] if use_model else [])
     kept = []  # (values to update, local rotations, model features, fps) of each clip for the model
-    finished = []  # (an outcome of the group, [values]) of each group, for the sums
+    finished = []  # (outcome, values) of each clip and mirror image that succeeded, for the sums
     for group in prepared.groups:
         outputs = ops.PipelineOutputs(
             positions=options.positions_needed(keep) or options.heading(keep),
@@ -434,10 +434,7 @@ def run_clips(batch: list[Item], prepared: Prepared, keep: tuple[str, ...], mode
                 for (values, result, frame_time), f in zip(done, frames)
                 if f is not False
             ]
-        survivors = [values for (values, _, _), owner in zip(done, owners) if owner.error is None]
-        if survivors:
-            carrier = next(owner for owner in owners if owner.error is None)
-            finished.append((carrier, survivors))
+        finished += [(owner, values) for (values, _, _), owner in zip(done, owners) if owner.error is None]
     return Ran(outcomes, kept, finished, prepared.seconds, time.perf_counter() - start)
 
 

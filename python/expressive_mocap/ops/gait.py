@@ -59,8 +59,9 @@ def clip_gradient(values, starts, frame_time) -> np.ndarray:
 
 
 def column_totals(arrays: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """The float64 sums of the rows of ``arrays`` (each ``[n_i, ...]``, one row shape) and of their
-    squares, each shaped like one row: the increments of running normalisation statistics."""
+    """The float64 sums of the rows of each of ``arrays`` (each ``[n_i, ...]``, one row shape) and
+    of their squares, ``[len(arrays), ...]`` each: the increments of running normalisation
+    statistics. Each array is summed on its own, so its sums do not depend on the arrays beside it."""
     if not arrays:
         raise ArgumentError("argument `arrays`: expected at least one array")
     shape = arrays[0].shape[1:]
@@ -69,7 +70,7 @@ def column_totals(arrays: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]
     width = int(np.prod(shape, dtype=np.int64))
     flat = [np.ascontiguousarray(a).reshape(len(a), width) for a in arrays]
     sums, squares = kernels().column_totals(flat, width)
-    return sums.reshape(shape), squares.reshape(shape)
+    return sums.reshape(len(arrays), *shape), squares.reshape(len(arrays), *shape)
 
 
 def dynamic_features(

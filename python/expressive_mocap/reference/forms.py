@@ -75,15 +75,13 @@ def clip_gradient(values: np.ndarray, starts: np.ndarray, frame_time: np.ndarray
 
 
 def column_totals(arrays: list[np.ndarray], width: int) -> tuple[np.ndarray, np.ndarray]:
-    """The float64 sums of the rows of ``arrays`` (each ``[n_i, width]``) and of their squares,
-    ``([width], [width])``, without a float64 copy of the rows."""
-    sums, squares = np.zeros(width), np.zeros(width)
+    """The float64 sums of the rows of each of ``arrays`` (each ``[n_i, width]``) and of their
+    squares, ``([A, width], [A, width])``, each array on its own (so its sums are the same whatever
+    arrays come with it)."""
+    sums, squares = np.zeros((len(arrays), width)), np.zeros((len(arrays), width))
     for k, array in enumerate(arrays):
         if array.ndim != 2 or array.shape[1] != width:
             raise ArgumentError(f"argument `arrays`: expected shape [n, {width}] (array {k}), got {list(array.shape)}")
-    for start in range(0, len(arrays), 64):  # a few MB at a time (see dataset.forms.CHUNK_FRAMES)
-        part = arrays[start : start + 64]
-        flat = np.concatenate(part) if len(part) > 1 else part[0]
-        sums += flat.sum(axis=0, dtype=np.float64)
-        squares += np.einsum("ij,ij->j", flat, flat, dtype=np.float64)
+        sums[k] = array.sum(axis=0, dtype=np.float64)
+        squares[k] = np.einsum("ij,ij->j", array, array, dtype=np.float64)
     return sums, squares
