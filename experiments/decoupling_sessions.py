@@ -322,13 +322,16 @@ def session_two(data2: Path, model: BodyModel) -> tuple[list[str], dict]:
 IDLE_FIGURE = ("wave-right-hand_masculine_001", "wave-left-hand_active_006")  # largest idle hands of two styles
 
 
-def idle_figure(data2: Path, model: BodyModel) -> str:
-    """Two one-hand gestures whose idle hand moves most, each with its body mechanics."""
+def idle_figure(data2: Path, models: dict[str, BodyModel]) -> str:
+    """Two one-hand gestures whose idle hand moves most, each with its body mechanics by each model."""
     motions, titles = [], []
     for stem in IDLE_FIGURE:
         motion = em.read_bvh(data2 / f"dataset-2_{stem}.bvh")
-        motions += [motion, decompose(motion, model).recompose(0.0)]
-        titles += [stem.replace("_", " ") + ": original", "body mechanics"]
+        motions.append(motion)
+        titles.append(stem.replace("_", " "))
+        for label, model in models.items():
+            motions.append(decompose(motion, model).recompose(0.0))
+            titles.append(f"body mechanics, {label}")
     path = HERE / "figures" / "idle_arm_styles.png"
     render(motions, path, titles, view="front", poses=4)
     return f"![idle arms: {', '.join(IDLE_FIGURE)}, original and body mechanics](figures/{path.name})"
@@ -382,10 +385,9 @@ def main() -> None:
         "hand on the hip) and the style's own motion of that arm, and, before, partly the network's: filtered joint "
         "by joint, the idle arm kept the actor's local rotations on the trunk the network predicted, and swung with "
         "every difference between the two trunks (the hips move with each wave). Filtered in world axes, it hangs as "
-        "the actor's does. The two clips whose idle hand moves most, drawn with the body mechanics of the package "
-        "now:",
+        "the actor's does. The two clips whose idle hand moves most, drawn with their body mechanics before and now:",
         "",
-        idle_figure(data2, shipped),
+        idle_figure(data2, {"before": variants["before: every joint filtered on its own"], "now": shipped}),
         "",
         f"(took {time.time() - started:.0f} s)",
     ]
