@@ -15,6 +15,7 @@ network's, is filtered joint by joint as before). The hand keeps the joint-by-jo
 from __future__ import annotations
 
 from ..body.body import Body
+from ..errors import MocapError
 from ..motion import Skeleton
 from ..ops import Arms
 
@@ -26,7 +27,7 @@ def arm_limbs(skeleton: Skeleton) -> Arms | None:
     filters in world axes, parents first; None for a skeleton whose arms are not found."""
     try:
         found = Body.of(skeleton).joint_map.joints
-    except Exception:  # noqa: BLE001 - a skeleton the joint map cannot read has no arms to hang
+    except MocapError:  # a skeleton the joint map cannot read has no arms to hang
         return None
     limbs = sorted(found[role] for role in LIMB_ROLES if role in found)
     return Arms(tuple(int(p) for p in skeleton.parents), tuple(int(j) for j in limbs)) if limbs else None
