@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from expressive_mocap.decoupling.pelvis import Pelvis, carried, mean_posture, postures
+from expressive_mocap.decoupling.pelvis import Pelvis, carried, mean_posture, mean_postures, postures
 from expressive_mocap.rotations import quat
 
 
@@ -49,3 +49,18 @@ def test_carrying_the_spine_onto_a_posture_and_back_is_exact_and_levels_the_trun
         quat.angle(quat.mul(quat.mean_rotation(on_reference), quat.conjugate(quat.mean_rotation(mean_world))))
     )
     assert angle == pytest.approx(0.0, abs=0.5)
+
+
+def test_a_batch_of_clips_gets_each_clips_own_mean_posture():
+    # One clip's mean posture is its frames' postures on the first one's hemisphere, averaged:
+    # the batched form must give each clip exactly that, whatever clips lie beside it (a clip
+    # without frames included), never mixing frames of neighbours.
+    clips = [_clip(frames, seed) for frames, seed in ((40, 0), (0, 1), (1, 2), (173, 3))]
+    clips[3][::2] *= -1  # the same rotations, every other frame on the other hemisphere
+    means = mean_postures(np.concatenate(clips), [len(c) for c in clips], (0, 1))
+    np.testing.assert_array_equal(means[1], [0.0, 0.0, 0.0, 1.0])
+    for clip, mean in zip(clips, means):
+        if len(clip):
+            np.testing.assert_allclose(mean, quat.mean_rotation(postures(clip, (0, 1))), atol=1e-14)
+            np.testing.assert_array_equal(mean, mean_posture(clip, (0, 1)))
+    assert np.degrees(quat.angle(quat.mul(means[0], quat.conjugate(means[3])))) > 0.1  # they differ

@@ -26,7 +26,7 @@ from ..errors import ModelError
 from ..motion import Motion
 from ..ops import Arms, Trunk, compose_rotations, split_rotations, split_rotations_many
 from ..rotations import quat
-from .pelvis import mean_posture
+from .pelvis import mean_postures
 
 GAIN = 2.0  # g of the activity index A = clip((tanh(a) g)^b, 0, 1)
 EXPONENT = 4.0  # b
@@ -161,18 +161,13 @@ def decompose_many(
     within 2e-5, body rotations within 3e-6 of the float64 result)."""
     if not rotations:
         return []
-    inputs = np.concatenate(features)
+    inputs, every = np.concatenate(features), np.concatenate(rotations)
+    lengths = [len(r) for r in rotations]
     # Each clip's spine carried onto its own pelvis posture, whatever clips share the call.
     pelvis = getattr(model, "pelvis", None)
-    posture = (
-        None
-        if pelvis is None
-        else np.concatenate([np.tile(mean_posture(r, pelvis.path), (len(r), 1)) for r in rotations])
-    )
-    predicted = model.predict_from_features(
-        np.concatenate(rotations), inputs.astype(np.float32) if float32 else inputs, posture
-    )
-    cuts = np.cumsum([len(r) for r in rotations])[:-1]
+    posture = None if pelvis is None else np.repeat(mean_postures(every, lengths, pelvis.path), lengths, axis=0)
+    predicted = model.predict_from_features(every, inputs.astype(np.float32) if float32 else inputs, posture)
+    cuts = np.cumsum(lengths)[:-1]
     # Every clip split in one kernel call, clips in parallel (clip by clip, the splits were a
     # fifth of a --model run's time on one core whatever the cores).
     parts = split_rotations_many(

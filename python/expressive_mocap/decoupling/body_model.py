@@ -142,7 +142,7 @@ class BodyModel:
             features = np.clip(features, low, high)
         out = self.network.forward(features).reshape(len(features), len(self.predicted), 4)
         body = np.array(rotations, dtype=np.float64, copy=True)
-        body[:, self.predicted] = quat.normalize(out)
+        body[:, _as_slice(self.predicted)] = quat.normalize(out)
         if self.pelvis is not None:
             held = mean_posture(rotations, self.pelvis.path) if posture is None else np.asarray(posture)
             c = upright(held, self.pelvis)
@@ -438,6 +438,14 @@ def model_features(motion: Motion | Take, thigh_reference: np.ndarray, floor: fl
     return dynamic_features(
         take, floor=floor_of(take) if floor is None else floor, thigh_reference=thigh_reference, causal=True
     )
+
+
+def _as_slice(indices: np.ndarray) -> slice | np.ndarray:
+    """``indices`` as a slice where they run in steps of one (the shipped model's do): writing
+    through a slice is ten times faster than through an index array, on a whole batch of frames."""
+    if len(indices) and np.array_equal(indices, np.arange(indices[0], indices[0] + len(indices))):
+        return slice(int(indices[0]), int(indices[0]) + len(indices))
+    return indices
 
 
 __all__ = [

@@ -77,7 +77,28 @@ def postures(rotations: np.ndarray, path: Sequence[int]) -> np.ndarray:
 
 def mean_posture(rotations: np.ndarray, path: Sequence[int]) -> np.ndarray:
     """The mean over frames of :func:`postures` ``[4]``."""
-    return quat.mean_rotation(postures(rotations, path))
+    return mean_postures(rotations, [len(rotations)], path)[0]
+
+
+def mean_postures(rotations: np.ndarray, lengths: Sequence[int], path: Sequence[int]) -> np.ndarray:
+    """:func:`mean_posture` ``[C, 4]`` of each of the clips whose local rotations follow each other
+    in ``rotations [sum(lengths), J, 4]``, in a few NumPy calls for them all (a clip's mean as
+    :func:`~expressive_mocap.rotations.quat.mean_rotation` takes it: each frame on the clip's first
+    frame's hemisphere, summed, normalised). Clip by clip, the small calls held the GIL most of the
+    time, and the model's thread of a ``preprocess --model`` run spent a sixth of it here."""
+    lengths = np.asarray(lengths, dtype=np.int64)
+    means = np.tile([0.0, 0.0, 0.0, 1.0], (len(lengths), 1))  # a clip without frames: none
+    used = lengths > 0
+    if not used.any():
+        return means
+    each = postures(rotations, path)
+    starts = (np.cumsum(lengths) - lengths)[used]
+    first = np.repeat(each[starts], lengths[used], axis=0)
+    aligned = np.where(np.sum(each * first, axis=-1, keepdims=True) < 0, -each, each)
+    total = np.add.reduceat(aligned, starts, axis=0)
+    norm = np.linalg.norm(total, axis=-1, keepdims=True)
+    means[used] = np.where(norm > 1e-12, total / np.where(norm > 1e-12, norm, 1.0), each[starts])
+    return means
 
 
 def upright(posture: np.ndarray, pelvis: Pelvis) -> np.ndarray:
@@ -86,4 +107,4 @@ def upright(posture: np.ndarray, pelvis: Pelvis) -> np.ndarray:
     return quat.mul(quat.conjugate(posture), np.broadcast_to(pelvis.reference, np.shape(posture)))
 
 
-__all__ = ["Pelvis", "carried", "find_pelvis", "mean_posture", "pelvis_path", "postures", "upright"]
+__all__ = ["Pelvis", "carried", "find_pelvis", "mean_posture", "mean_postures", "pelvis_path", "postures", "upright"]
