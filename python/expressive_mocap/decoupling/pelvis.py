@@ -86,14 +86,14 @@ def mean_postures(rotations: np.ndarray, lengths: Sequence[int], path: Sequence[
     :func:`~expressive_mocap.rotations.quat.mean_rotation` takes it: each frame on the clip's first
     frame's hemisphere, summed, normalised). Clip by clip, the small calls held the GIL most of the
     time, and the model's thread of a ``preprocess --model`` run spent a sixth of it here."""
-    lengths = np.asarray(lengths, dtype=np.int64)
-    means = np.tile([0.0, 0.0, 0.0, 1.0], (len(lengths), 1))  # a clip without frames: none
-    used = lengths > 0
+    counts = np.asarray(lengths, dtype=np.int64)
+    means = np.tile([0.0, 0.0, 0.0, 1.0], (len(counts), 1))  # a clip without frames: none
+    used = counts > 0
     if not used.any():
         return means
     each = postures(rotations, path)
-    starts = (np.cumsum(lengths) - lengths)[used]
-    first = np.repeat(each[starts], lengths[used], axis=0)
+    starts = (np.cumsum(counts) - counts)[used]
+    first = np.repeat(each[starts], counts[used], axis=0)
     aligned = np.where(np.sum(each * first, axis=-1, keepdims=True) < 0, -each, each)
     total = np.add.reduceat(aligned, starts, axis=0)
     norm = np.linalg.norm(total, axis=-1, keepdims=True)
