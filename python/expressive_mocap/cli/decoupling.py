@@ -181,6 +181,13 @@ def cmd_decouple(args) -> int:
     print("mean activity per joint (0 = body mechanics only, 1 = fully expressive):")
     for name, value in zip(names, parts.activity.mean(axis=0)):
         print(f"  {name:<16} {value:6.3f} {'#' * int(round(value * 40))}")
+    held = parts.held_joints()
+    if held and model.calibration is None:
+        print(
+            f"note: {', '.join(held)} stay active through most of the clip: a held posture, of the style or "
+            "of this actor's own habit, which a model not calibrated to the actor cannot tell apart (to tell: "
+            "--calibrate with a few neutral clips of this actor, or `expressive-mocap calibrate`)"
+        )
     return 0
 
 

@@ -38,6 +38,12 @@ EXPONENT = 4.0  # b
 # that every frame rate gets the same), the hand's peak is 1.2x the source's.
 BODY_SMOOTHING = 0.05  # s, sigma of the Gaussian on the predicted body mechanics B
 ACTIVITY_SMOOTHING = 0.1  # s, sigma of the Gaussian on the activity A
+# A joint active (activity above HELD_ACTIVITY) in at least HELD_SHARE of a clip's frames holds a
+# posture the model reads as expressive: a held style (a feminine walk's arms), or the actor's own
+# habit where the model is not calibrated to them (the shared folder's 21-joint neutral walks:
+# trunk and right upper arm; none of dataset-2's neutral walks has one).
+HELD_ACTIVITY = 0.5
+HELD_SHARE = 0.75
 
 
 class BodyMechanicsModel(Protocol):
@@ -122,6 +128,13 @@ class Decomposition:
             return self._with_rotations(self.original.rotations.copy())
         return self._with_rotations(compose_rotations(self.expressive, self.body, scale))
 
+    def held_joints(self) -> list[str]:
+        """The joints active through most of the clip (:data:`HELD_ACTIVITY`, :data:`HELD_SHARE`):
+        postures held throughout, which a model not calibrated to the actor cannot tell from
+        the actor's habit."""
+        share = np.mean(self.activity > HELD_ACTIVITY, axis=0)
+        return [name for name, held in zip(self.original.skeleton.names, share >= HELD_SHARE) if held]
+
     def _with_rotations(self, rotations: np.ndarray) -> Motion:
         o = self.original
         return Motion(o.skeleton, rotations, o.translations, o.frame_time)
@@ -187,6 +200,8 @@ def decompose_many(
 __all__ = [
     "EXPONENT",
     "GAIN",
+    "HELD_ACTIVITY",
+    "HELD_SHARE",
     "BodyMechanicsModel",
     "Decomposition",
     "FeatureModel",
