@@ -5,11 +5,15 @@ own neutral walk reads active learns why and what to do."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import expressive_mocap as em
 from expressive_mocap.cli import main
+from expressive_mocap.decoupling import BodyModel, decompose, modulate
 from expressive_mocap.decoupling.algebra import HELD_ACTIVITY, HELD_SHARE, Decomposition
-from expressive_mocap.procedural import bandai_like_skeleton
+from expressive_mocap.errors import ArgumentError
+from expressive_mocap.procedural import bandai_like_skeleton, walk_and_wave
+from expressive_mocap.skeletons.canonical import carried_for
 
 
 def test_a_joint_is_held_when_active_in_most_frames():
@@ -41,3 +45,18 @@ def test_decouple_names_the_held_postures_of_an_uncalibrated_actor(other_dir, ba
     # Calibrated to the actor, the model reads the habit as body mechanics: nothing to say.
     assert main(["decouple", str(walk), "--calibrate", str(walk), "-o", str(tmp_path / "c")]) == 0
     assert "note:" not in capsys.readouterr().out
+
+
+def test_modulate_names_them_too_and_edits_as_before(other_dir, tmp_path, capsys):
+    # modulate decomposes once for the edit and the note: the same file as the library's modulate.
+    walk = other_dir / "m21_walk.bvh"
+    assert main(["modulate", str(walk), "--scale", "0", "-o", str(tmp_path / "m.bvh")]) == 0
+    assert "note: Spine" in capsys.readouterr().out
+    model = BodyModel.load()
+    carried = carried_for(em.read_bvh(walk), model, None)
+    expected = carried.back(modulate(carried.body, 0.0, model), plant_feet=True)
+    em.write_bvh(expected, tmp_path / "expected.bvh")
+    assert (tmp_path / "m.bvh").read_bytes() == (tmp_path / "expected.bvh").read_bytes()
+    # A decomposition of another motion is refused, not recomposed onto this one.
+    with pytest.raises(ArgumentError, match="parts"):
+        modulate(carried.body, 0.0, model, parts=decompose(walk_and_wave()[0], model))

@@ -181,14 +181,19 @@ def cmd_decouple(args) -> int:
     print("mean activity per joint (0 = body mechanics only, 1 = fully expressive):")
     for name, value in zip(names, parts.activity.mean(axis=0)):
         print(f"  {name:<16} {value:6.3f} {'#' * int(round(value * 40))}")
+    _note_held(parts, model)
+    return 0
+
+
+def _note_held(parts, model) -> None:
+    """Name the joints held active through the clip when the model is not calibrated to its actor."""
     held = parts.held_joints()
     if held and model.calibration is None:
         print(
-            f"note: {', '.join(held)} stay active through most of the clip: a held posture, of the style or "
-            "of this actor's own habit, which a model not calibrated to the actor cannot tell apart (to tell: "
-            "--calibrate with a few neutral clips of this actor, or `expressive-mocap calibrate`)"
+            f"note: {', '.join(held)} are active through most of the clip; if that is this actor's habitual "
+            "posture rather than the motion's style, calibrate to the actor to read it as body mechanics "
+            "(--calibrate with a few of their neutral clips, or `expressive-mocap calibrate`)"
         )
-    return 0
 
 
 def add_modulate(commands) -> None:
@@ -204,14 +209,19 @@ def add_modulate(commands) -> None:
 
 
 def cmd_modulate(args) -> int:
+    from ..body.take import Take
+    from ..decoupling.algebra import decompose
     from ..decoupling.edits import modulate
 
     model = body_model(args)
     motion, back = read_on_model(args.input, model, BODY_MODEL_FIX, args)
-    edited = modulate(motion, args.scale, model, args.gain, args.exponent, plant_feet=not args.no_foot_lock)
+    take = Take.of(motion)
+    parts = decompose(take, model, args.gain, args.exponent)
+    edited = modulate(take, args.scale, model, plant_feet=not args.no_foot_lock, parts=parts)
     out = back(edited, plant_feet=not args.no_foot_lock)
     write_bvh(out, args.output)
     print(f"wrote {args.output}: expressiveness x {args.scale:g}")
+    _note_held(parts, model)
     return 0
 
 

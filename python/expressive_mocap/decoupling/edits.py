@@ -16,7 +16,7 @@ from ..errors import ArgumentError
 from ..motion import Motion
 from ..ops import compose_rotations, forward_kinematics
 from ..rotations import quat
-from .algebra import EXPONENT, GAIN, BodyMechanicsModel, decompose
+from .algebra import EXPONENT, GAIN, BodyMechanicsModel, Decomposition, decompose
 from .feet import chosen_joints, planted
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
@@ -30,14 +30,18 @@ def modulate(
     exponent: float = EXPONENT,
     plant_feet: bool = True,
     hinges: bool = True,
+    parts: Decomposition | None = None,
 ) -> Motion:
     """The motion with its expressiveness scaled: ``O_s = E*^s B'`` (1 = unchanged, 0 = body
     mechanics only); elbows and knees kept within their limits (``hinges``, see :func:`_limited`).
     ``plant_feet``: the stance feet kept where ``motion`` has them during its contacts
-    (:func:`~expressive_mocap.decoupling.feet.planted`)."""
+    (:func:`~expressive_mocap.decoupling.feet.planted`). ``parts``: the motion's decomposition
+    by ``model``, when the caller has made it already (its ``original`` must be ``motion``)."""
     take = Take.of(motion)
     motion = take.motion
-    out = decompose(take, model, gain, exponent).recompose(scale)
+    if parts is not None and parts.original is not motion:
+        raise ArgumentError("argument `parts`: a decomposition of another motion than `motion`")
+    out = (parts if parts is not None else decompose(take, model, gain, exponent)).recompose(scale)
     out = _limited(out, [motion], [motion.rotations], hinges)
     return planted(take, out)[0] if plant_feet else out
 
