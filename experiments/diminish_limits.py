@@ -8,10 +8,11 @@ features: here summed per group and averaged over the test takes, for the unedit
 normal takes and the normal takes diminished to 1 by the shipped model (default settings). The
 groups: head and neck (a zero-length End Site at the head gives both almost no weight, so the
 method never edits them); the other joints the model edits (any key DOF); the joints it leaves as
-they were (no key DOF); the gait. Then two variants: the classifier without head and neck
+they were (no key DOF); the gait. Then variants: the classifier without head and neck
 features; and models trained with a head bone of an eighth of the actor's height (the classical
 proportion) at several key shares, which make head and neck key: their key DOFs of 67, swap test
-(union; DOFs / positions), and how the same classifier reads their edits.
+(union; DOFs / positions), and how the same classifier reads their edits; and the shipped model's
+edits with the current intensity stated as 2 (not estimated), and diminished to 0.5.
 
 Data: Bandai-Namco-Research-Motiondataset-2 (CC BY-NC 4.0).
 """
@@ -58,13 +59,14 @@ def margins(classifier: sc.Classifier, paths: list[Path]) -> np.ndarray:
     return np.mean(parts, axis=0)
 
 
-def edited(model, paths: list[Path], to: float, work: Path) -> list[Path]:
-    """``paths`` taken to intensity ``to`` by ``model`` (default settings), written under ``work``."""
+def edited(model, paths: list[Path], to: float, work: Path, current: float | None = None) -> list[Path]:
+    """``paths`` taken to intensity ``to`` by ``model`` (default settings; the current intensity
+    estimated unless ``current`` is given), written under ``work``."""
     out = []
     for path in paths:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            motion, _ = exaggerate(model, em.read_bvh(path), to)
+            motion, _ = exaggerate(model, em.read_bvh(path), to, current=current)
         out.append(work / f"{path.stem}_{to:g}.bvh")
         em.write_bvh(motion, out[-1])
     return out
@@ -118,6 +120,14 @@ def variant_rows(shipped, classifier, train, test, dimmed: list[Path], dataset: 
     rows = [
         f"| {shipped.name} | shipped; classifier without head and neck | {keys} | - | {read.count(0)}/{len(read)} | - |"
     ]
+    for label, to, current in (
+        ("shipped; current intensity stated as 2", 1.0, 2.0),
+        ("shipped; diminished to 0.5", 0.5, None),
+    ):
+        read = [
+            classifier.style(sc.clip_features(p)) for p in edited(shipped.load(), test[styles[1]], to, work, current)
+        ]
+        rows.append(f"| {shipped.name} | {label} | {keys} | - | {read.count(0)}/{len(read)} | - |")
     clips = training_clips(dataset, shipped.action, shipped.axis)
     original = training.subtree_weights
     for share in SHARES:
