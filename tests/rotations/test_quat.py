@@ -45,6 +45,22 @@ def test_mean_rotation_ignores_the_sign_of_each_quaternion():
     assert per_joint.shape == (2, 4)
 
 
+def test_mean_rotations_of_runs_laid_end_to_end_are_each_runs_own_mean():
+    # Each run on its own first quaternion's hemisphere, never mixing frames of its neighbours,
+    # whatever the signs; a run of none is the identity.
+    rng = np.random.default_rng(2)
+    runs = []
+    for k, frames in enumerate((7, 0, 1, 90)):
+        turned = quat.mul(quat.about("X", 20.0 * k)[None, None], quat.exp(rng.normal(scale=0.1, size=(frames, 2, 3))))
+        runs.append(turned * np.where(rng.random((frames, 1, 1)) < 0.5, -1.0, 1.0))
+    means = quat.mean_rotations(np.concatenate(runs), [len(r) for r in runs])
+    assert means.shape == (4, 2, 4)
+    np.testing.assert_array_equal(means[1], [[0.0, 0.0, 0.0, 1.0]] * 2)
+    for run, mean in zip(runs, means):
+        if len(run):
+            np.testing.assert_allclose(mean, quat.mean_rotation(run), atol=1e-14)
+
+
 def test_rotation_helpers_agree_with_scipy():
     rng = np.random.default_rng(3)
     rotations = Rotation.random(200, random_state=4)

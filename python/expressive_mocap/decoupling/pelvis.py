@@ -82,23 +82,9 @@ def mean_posture(rotations: np.ndarray, path: Sequence[int]) -> np.ndarray:
 
 def mean_postures(rotations: np.ndarray, lengths: Sequence[int], path: Sequence[int]) -> np.ndarray:
     """:func:`mean_posture` ``[C, 4]`` of each of the clips whose local rotations follow each other
-    in ``rotations [sum(lengths), J, 4]``, in a few NumPy calls for them all (a clip's mean as
-    :func:`~expressive_mocap.rotations.quat.mean_rotation` takes it: each frame on the clip's first
-    frame's hemisphere, summed, normalised). Clip by clip, the small calls held the GIL most of the
-    time, and the model's thread of a ``preprocess --model`` run spent a sixth of it here."""
-    counts = np.asarray(lengths, dtype=np.int64)
-    means = np.tile([0.0, 0.0, 0.0, 1.0], (len(counts), 1))  # a clip without frames: none
-    used = counts > 0
-    if not used.any():
-        return means
-    each = postures(rotations, path)
-    starts = (np.cumsum(counts) - counts)[used]
-    first = np.repeat(each[starts], counts[used], axis=0)
-    aligned = np.where(np.sum(each * first, axis=-1, keepdims=True) < 0, -each, each)
-    total = np.add.reduceat(aligned, starts, axis=0)
-    norm = np.linalg.norm(total, axis=-1, keepdims=True)
-    means[used] = np.where(norm > 1e-12, total / np.where(norm > 1e-12, norm, 1.0), each[starts])
-    return means
+    in ``rotations [sum(lengths), J, 4]`` (a clip without frames: the identity), for them all at
+    once (:func:`~expressive_mocap.rotations.quat.mean_rotations`)."""
+    return quat.mean_rotations(postures(rotations, path), lengths)
 
 
 def upright(posture: np.ndarray, pelvis: Pelvis) -> np.ndarray:
