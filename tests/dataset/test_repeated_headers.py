@@ -40,6 +40,10 @@ def folder(tmp_path_factory):
         "nul": head + b"Frames: %d\nFrame Time: 0.0333333\n\0" % frames + block,
         "lower_case": head + b"frames: %d\nframe time: 0.0333333\n" % frames + block,
         "other_hierarchy": text.replace(b"OFFSET", b"OFFSET ", 1),
+        # another actor's header again (matched to the one above, not parsed again)
+        "other_repeated": head.replace(b"OFFSET", b"OFFSET ", 1)
+        + b"Frames: %d\nFrame Time: 0.04\n" % (frames - 5)
+        + b"\n".join(rows[5:]),
         "short": head + b"Frames: 1\nFrame Time: 0.0333333\n" + rows[0] + b"\n",
         "truncated": text[: len(text) // 2],
     }
@@ -69,7 +73,7 @@ def test_a_repeated_header_is_the_full_readers_and_anything_else_is_read_by_it(f
     known = work_module.headers_ahead(batch)
     fast = {batch[k].name for k, v in known.items() if isinstance(v, Header)}
     # The repeats were read ahead (else this test would compare the full reader with itself) ...
-    assert fast == {"same", "fewer_frames", "blanks", "truncated"}
+    assert fast == {"same", "fewer_frames", "blanks", "truncated", "other_repeated"}
     for k, item in enumerate(batch):
         # ... and every file, read ahead or not, is what the full reader makes of it.
         assert _read(item, known.get(k)) == full_reader(item), item.name
