@@ -37,8 +37,6 @@ Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc.
 from __future__ import annotations
 
 import argparse
-import compileall
-import importlib.util
 import json
 import os
 import platform
@@ -53,7 +51,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import expressive_mocap as em
-from harness import Stopwatch, check, check_equal, commit, cpu_name, memory_gib, rotated
+from harness import Stopwatch, byte_compile, check, check_equal, commit, cpu_name, memory_gib, rotated
 
 DATA = Path.home() / ".cache" / "motion-data" / "dataset" / "Bandai-Namco-Research-Motiondataset-2" / "data"
 RESULTS = Path(__file__).parent / "RESULTS.md"
@@ -182,18 +180,6 @@ print(json.dumps({"call": done - imported, "imports": imported - started, "peak"
 """
 
 
-def byte_compile(*packages) -> dict[str, int]:
-    """Each package's modules compiled to bytecode where it lacks it (as pip does when it installs
-    a wheel), so neither child process compiles source at start; how many were compiled now."""
-    compiled = {}
-    for package in packages:
-        folder = Path(package.__file__).parent
-        stale = [p for p in folder.rglob("*.py") if not Path(importlib.util.cache_from_source(str(p))).exists()]
-        compileall.compile_dir(folder, quiet=1)
-        compiled[package.__name__] = len(stale)
-    return compiled
-
-
 def our_options() -> tuple[list[str], str]:
     """The options of our run that match pybvh-ml's, or the closest this checkout has."""
     help_text = subprocess.run(
@@ -299,7 +285,7 @@ def main() -> None:
 
     ours_options, ours_note = our_options()
     print(f"ours: {' '.join(ours_options)} ({ours_note})")
-    compiled = byte_compile(pybvh_ml, pybvh, em)
+    compiled = byte_compile(*(Path(m.__file__).parent for m in (pybvh_ml, pybvh, em)))
     print(f"modules byte-compiled now (the rest had bytecode): {compiled}")
     times: dict[str, list[dict]] = {"pybvh-ml": [], "ours": []}
     outputs = {"pybvh-ml": args.work / "pybvh_ml.npz", "ours": args.work / "ours"}

@@ -6,11 +6,12 @@
 Each run is the command line itself (``python -m expressive_mocap.cli preprocess DATA -o OUT``,
 start-up, imports and exit included), in a fresh process pinned to the first N cores with
 ``sched_setaffinity`` before it starts (Rust's thread pool sizes itself from that set, and the
-Python threads share it), with and without ``--model``. The core counts are alternated round
-after round (their order rotated), and each configuration's median is compared with the 1-core
-median of the same run: the speed-up ``t(1) / t(N)``, and the parallel efficiency
-``speed-up / N``. Before the figures are written, every run is checked to have written every clip
-with no failure and the same frames. ``--cores`` defaults to 1, 2, 4, ... up to this machine's.
+Python threads share it), with and without ``--model``; the package byte-compiled first, as pip
+leaves it installed. The core counts are alternated round after round (their order rotated), and
+each configuration's median is compared with the 1-core median of the same run: the speed-up
+``t(1) / t(N)``, and the parallel efficiency ``speed-up / N``. Before the figures are written,
+every run is checked to have written every clip with no failure and the same frames. ``--cores``
+defaults to 1, 2, 4, ... up to this machine's.
 
 Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 The repository never contains it.
@@ -28,7 +29,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from harness import check, check_equal, clock, commit, cpu_name, log, median, memory_gib, rotated
+from harness import byte_compile, check, check_equal, clock, commit, cpu_name, log, median, memory_gib, rotated
 from results import write_section
 
 REPO = Path(__file__).resolve().parents[1]
@@ -46,6 +47,7 @@ def run(data: Path, out: Path, cores: int, model: bool) -> dict:
     command += ["--model"] if model else []
     environment = {**os.environ, "PYTHONPATH": str(REPO / "python")}
     environment.pop("EXPRESSIVE_MOCAP_BACKEND", None)
+    environment.pop("PYTHONDONTWRITEBYTECODE", None)
     started = clock()
     done = subprocess.run(
         command,
@@ -94,6 +96,7 @@ def main() -> None:
     check(bool(clips), f"no .bvh files in {args.data}")
     for path in clips:  # warm the page cache: every run reads from memory
         path.read_bytes()
+    byte_compile(REPO / "python" / "expressive_mocap")
     load, when, t0 = os.getloadavg(), datetime.datetime.now(), clock()
     models = [False] if args.no_model else [False, True]
     configs = [(cores, model) for model in models for cores in counts]

@@ -13,14 +13,13 @@ suite's small file (no data needed); the target is 0.1 s for each command line.
 from __future__ import annotations
 
 import argparse
-import compileall
 import datetime
 import os
 import subprocess
 import sys
 from pathlib import Path
 
-from harness import check, clock, commit, cpu_name, log, median, rotated
+from harness import byte_compile, check, clock, commit, cpu_name, log, median, rotated
 from results import write_section
 
 REPO = Path(__file__).resolve().parents[1]
@@ -44,8 +43,7 @@ def main() -> None:
     parser.add_argument("--write-results", action="store_true", help="rewrite this section of benches/RESULTS.md")
     args = parser.parse_args()
 
-    package = REPO / "python" / "expressive_mocap"
-    compileall.compile_dir(package, quiet=1)  # as an installed package: no module compiled at each start
+    byte_compile(REPO / "python" / "expressive_mocap")
     env = {**os.environ, "PYTHONPATH": str(REPO / "python")}
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     cli = [sys.executable, "-m", "expressive_mocap.cli"]
