@@ -9,7 +9,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TypeVar
+from typing import TypeVar, cast
 
 import numpy as np
 
@@ -29,7 +29,8 @@ from .model_step import Ran, run_model
 from .sources import Item
 
 PLAIN = Options()  # the stored forms of a run without model-ready options
-T, V = TypeVar("T"), TypeVar("V")
+T = TypeVar("T")
+V = TypeVar("V")
 
 
 @dataclass
@@ -86,6 +87,11 @@ def load_model(model):
     return BodyModel.load(None if model == "" else model)
 
 
+def _described(skeleton: Skeleton) -> tuple[tuple, float]:
+    """A clip's hierarchy as the dataset compares them (joint names, parents), and its bone length."""
+    return (tuple(skeleton.names), tuple(skeleton.parents.tolist())), bone_length(skeleton)
+
+
 def bone_length(skeleton) -> float:
     """The summed lengths of a skeleton's bones (offsets, End Sites included), in file units:
     what tells a skeleton in metres from the same one in centimetres, whatever its axes."""
@@ -135,7 +141,7 @@ def prepare(
     outcomes = [Outcome() for _ in batch]
     by_hierarchy: dict[tuple, list] = {}  # (names, parents) -> [(index, header, text for the kernel)]
     known = headers_ahead(batch)
-    described = by_identity(lambda s: ((tuple(s.names), tuple(s.parents.tolist())), bone_length(s)))
+    described = by_identity(_described)
     for k, item in enumerate(batch):
         try:
             header, text = item.header(outcomes[k], known.get(k))
@@ -220,16 +226,13 @@ def _others(batch: list[Item], known: dict[int, object], unmatched: list[int]) -
     (18 us each, holding the GIL against the pipeline's other threads)."""
     templates: list[tuple[bytes, Header]] = []  # the other headers met so far
     for k in unmatched:
-        data, size = known[k]  # type: ignore[misc]
+        data, size = cast(tuple[bytes, int], known[k])
         whole = len(data) < HEADER_PREFIX
-        for template, header in templates:
-            timing = repeated_header(data, size, whole, template, header.skeleton.n_joints)
-            if timing is not None:
-                known[k] = _repeating(header, timing)
-                break
-        else:
-            if whole:
-                continue  # read with the whole file, as any file that short
+        timings = (repeated_header(data, size, whole, t, h.skeleton.n_joints) for t, h in templates)
+        match = next(((h, timing) for (_, h), timing in zip(templates, timings) if timing is not None), None)
+        if match is not None:
+            known[k] = _repeating(*match)
+        elif not whole:  # (a file that short is read whole, as any)
             try:
                 header = parse_header(data, batch[k].source, size)
             except BVHError:
