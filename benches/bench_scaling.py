@@ -7,11 +7,13 @@ Each run is the command line itself (``python -m expressive_mocap.cli preprocess
 start-up, imports and exit included), in a fresh process pinned to the first N cores with
 ``sched_setaffinity`` before it starts (Rust's thread pool sizes itself from that set, and the
 Python threads share it), with and without ``--model``; the package byte-compiled first, as pip
-leaves it installed. The core counts are alternated round after round (their order rotated), and
-each configuration's median is compared with the 1-core median of the same run: the speed-up
-``t(1) / t(N)``, and the parallel efficiency ``speed-up / N``. Before the figures are written,
-every run is checked to have written every clip with no failure and the same frames. ``--cores``
-defaults to 1, 2, 4, ... up to this machine's.
+leaves it installed. Beside them, the Rust kernels alone (``read_bvh_many`` and
+``forward_kinematics_many`` of every clip, timed inside a process pinned the same way): how far
+this machine's cores take the parallel part at best. The core counts are alternated round after
+round (their order rotated), and each configuration's median is compared with the 1-core median
+of the same run: the speed-up ``t(1) / t(N)``, and the parallel efficiency ``speed-up / N``.
+Before the figures are written, every run is checked to have written every clip with no failure
+and the same frames. ``--cores`` defaults to 1, 2, 4, ... up to this machine's.
 
 Data: Bandai-Namco-Research-Motiondataset, dataset-2 (Bandai Namco Research Inc., 2022), CC BY-NC 4.0.
 The repository never contains it.
@@ -38,13 +40,25 @@ TITLE = "Scaling with cores: `benches/bench_scaling.py`"
 TARGET_2_CORES = 1.85  # the whole process on 2 cores against 1
 
 
-def run(data: Path, out: Path, cores: int, model: bool) -> dict:
-    """One preprocess command line pinned to ``cores`` cores: its wall seconds (measured here,
-    around the whole process) and the dataset it wrote, checked."""
-    shutil.rmtree(out, ignore_errors=True)
+# The Rust kernels alone, in a process pinned as the runs are, timed inside it (imports and
+# start-up not counted): what this machine's cores give the parallel part at best.
+KERNELS = """
+import sys, time
+from pathlib import Path
+import expressive_mocap as em
+paths = sorted(Path(sys.argv[1]).glob("*.bvh"))
+started = time.perf_counter()
+motions = em.read_bvh_many(paths)
+em.forward_kinematics_many(motions)
+print(time.perf_counter() - started, len(motions), sum(m.n_frames for m in motions))
+"""
+KERNELS_RUN = "kernels alone"
+
+
+def pinned(command: list[str], cores: int) -> tuple[float, str]:
+    """``command`` in a fresh process pinned to the first ``cores`` cores (the package's bytecode
+    read, its Rust backend): its wall seconds, measured here, and its output."""
     allowed = sorted(os.sched_getaffinity(0))[:cores]
-    command = [sys.executable, "-m", "expressive_mocap.cli", "preprocess", str(data), "-o", str(out)]
-    command += ["--model"] if model else []
     environment = {**os.environ, "PYTHONPATH": str(REPO / "python")}
     environment.pop("EXPRESSIVE_MOCAP_BACKEND", None)
     environment.pop("PYTHONDONTWRITEBYTECODE", None)
@@ -58,7 +72,24 @@ def run(data: Path, out: Path, cores: int, model: bool) -> dict:
     )
     seconds = clock() - started
     if done.returncode != 0:
-        raise SystemExit(f"{' '.join(command)} on {cores} cores failed:\n{done.stderr}")
+        raise SystemExit(f"{' '.join(command[:4])} ... on {cores} cores failed:\n{done.stderr}")
+    return seconds, done.stdout
+
+
+def kernels(data: Path, cores: int) -> dict:
+    """The Rust kernels alone on ``cores`` cores: ``read_bvh_many`` and ``forward_kinematics_many``
+    of every clip, timed inside the process."""
+    _, output = pinned([sys.executable, "-c", KERNELS, str(data)], cores)
+    seconds, clips, frames = output.split()
+    return {"seconds": float(seconds), "clips": int(clips), "failed": 0, "frames": int(frames)}
+
+
+def run(data: Path, out: Path, cores: int, model: bool) -> dict:
+    """One preprocess command line pinned to ``cores`` cores: its wall seconds (measured here,
+    around the whole process) and the dataset it wrote, checked."""
+    shutil.rmtree(out, ignore_errors=True)
+    command = [sys.executable, "-m", "expressive_mocap.cli", "preprocess", str(data), "-o", str(out)]
+    seconds, _ = pinned(command + (["--model"] if model else []), cores)
     manifest = json.loads((out / "manifest.json").read_text())
     figures = {
         "seconds": seconds,
@@ -98,16 +129,19 @@ def main() -> None:
         path.read_bytes()
     byte_compile(REPO / "python" / "expressive_mocap")
     load, when, t0 = os.getloadavg(), datetime.datetime.now(), clock()
-    models = [False] if args.no_model else [False, True]
-    configs = [(cores, model) for model in models for cores in counts]
+    names = ["default"] + ([] if args.no_model else ["--model"]) + [KERNELS_RUN]
+    configs = [(cores, name) for name in names for cores in counts]
     runs: dict[tuple, list[dict]] = {config: [] for config in configs}
     work = Path(tempfile.mkdtemp(prefix="bench-scaling-"))
     try:
         for r in range(args.rounds):
-            for cores, model in rotated(configs, r):
-                figures = run(args.data, work / "out", cores, model)
-                log(f"round {r + 1}: {cores} cores{' --model' if model else ''}: {figures['seconds']:.2f} s")
-                runs[(cores, model)].append(figures)
+            for cores, name in rotated(configs, r):
+                if name == KERNELS_RUN:
+                    figures = kernels(args.data, cores)
+                else:
+                    figures = run(args.data, work / "out", cores, name == "--model")
+                log(f"round {r + 1}: {cores} cores, {name}: {figures['seconds']:.2f} s")
+                runs[(cores, name)].append(figures)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     for config, figures in runs.items():
@@ -122,7 +156,9 @@ def main() -> None:
         f"{load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}",
         f"- command: `python benches/bench_scaling.py --rounds {args.rounds}"
         f"{f' --cores {args.cores}' if args.cores else ''}`: `python -m expressive_mocap.cli preprocess DATA -o OUT"
-        " [--model]`, whole processes pinned to the first N cores, medians",
+        " [--model]`, whole processes pinned to the first N cores, medians; the kernels alone:"
+        " `read_bvh_many` + `forward_kinematics_many` of every clip in a process pinned the same way,"
+        " timed inside it (start-up and imports not counted)",
         f"- data: {len(clips)} clips, {sum(p.stat().st_size for p in clips) / 1e6:.1f} MB "
         "(Bandai-Namco-Research-Motiondataset, CC BY-NC 4.0)",
         "",
@@ -130,17 +166,16 @@ def main() -> None:
         "|---|---|---|---|---|---|",
     ]
     verdicts = []
-    for model in models:
-        one = median(f["seconds"] for f in runs[(counts[0], model)]) if counts[0] == 1 else None
+    for name in names:
+        one = median(f["seconds"] for f in runs[(counts[0], name)]) if counts[0] == 1 else None
         for cores in counts:
-            seconds = median(f["seconds"] for f in runs[(cores, model)])
+            seconds = median(f["seconds"] for f in runs[(cores, name)])
             speedup = one / seconds if one else float("nan")
-            name = "--model" if model else "default"
             lines.append(
-                f"| {name} | {cores} | {seconds:.2f} | {len(runs[(cores, model)])} | {speedup:.2f}x | "
+                f"| {name} | {cores} | {seconds:.2f} | {len(runs[(cores, name)])} | {speedup:.2f}x | "
                 f"{speedup / cores:.0%} |"
             )
-            if cores == 2 and one:
+            if cores == 2 and one and name != KERNELS_RUN:
                 verdict = "pass" if speedup >= TARGET_2_CORES else "FAIL"
                 verdicts.append(f"{name}: 2 cores {speedup:.2f}x 1 core (target {TARGET_2_CORES}x): **{verdict}**")
     text = "\n".join([*lines, "", *(f"- {v}" for v in verdicts)]) + "\n"
