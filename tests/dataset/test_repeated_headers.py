@@ -1,4 +1,4 @@
-"""Headers read ahead for a batch (``work.headers_ahead``, the ``repeated_headers`` kernel): a
+"""Headers read ahead for a batch (``heads.headers_ahead``, the ``repeated_headers`` kernel): a
 file that repeats another's header gets the header the full reader gives it, field for field;
 anything else, the full reader's own result or error. Both backends, and whole preprocess runs
 with and without reading ahead."""
@@ -10,7 +10,7 @@ import pytest
 
 import expressive_mocap as em
 from expressive_mocap.bvh.header import Header
-from expressive_mocap.dataset import load_dataset, preprocess
+from expressive_mocap.dataset import heads, load_dataset, preprocess
 from expressive_mocap.dataset import work as work_module
 from expressive_mocap.dataset.sources import open_source
 from expressive_mocap.errors import BVHError
@@ -70,7 +70,7 @@ def _read(item, known):
 
 def test_a_repeated_header_is_the_full_readers_and_anything_else_is_read_by_it(folder, backend):
     batch = open_source(folder).items
-    known = work_module.headers_ahead(batch)
+    known = heads.headers_ahead(batch)
     fast = {batch[k].name for k, v in known.items() if isinstance(v, Header)}
     # The repeats were read ahead (else this test would compare the full reader with itself) ...
     assert fast == {"same", "fewer_frames", "blanks", "truncated", "other_repeated"}
@@ -82,7 +82,7 @@ def test_a_repeated_header_is_the_full_readers_and_anything_else_is_read_by_it(f
 def test_a_batch_whose_first_header_is_not_plain_reads_every_file_in_full(folder, tmp_path):
     (tmp_path / "a.bvh").write_bytes((folder / "blank_line.bvh").read_bytes())
     (tmp_path / "b.bvh").write_bytes((folder / "same.bvh").read_bytes())
-    assert work_module.headers_ahead(open_source(tmp_path).items) == {}
+    assert heads.headers_ahead(open_source(tmp_path).items) == {}
 
 
 def test_a_preprocess_run_is_the_same_with_and_without_reading_ahead(folder, tmp_path, monkeypatch, backend):

@@ -15,8 +15,8 @@ from ..bvh.header import Header
 from ..bvh.reader import HEADER_PREFIX
 from ..errors import BVHError
 from .derive import RATE_TOLERANCE, Options
+from .heads import headers_ahead
 from .sources import Item, Source, member_beginning
-from .work import headers_ahead
 
 # Files whose headers are read in one kernel call: their first bytes are held until parsed
 # (16 KB each: 4 MB), so an archive of any size is scanned in bounded memory.

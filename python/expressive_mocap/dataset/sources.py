@@ -68,7 +68,7 @@ class Item:
         came from the file's beginning (the kernel reads the rest), else the bytes. Sets
         ``outcome.bytes`` to the bytes read so far, also when the header then fails. ``known``
         (a file's): its header, its first bytes and size, or the error reading them, as read
-        ahead for a batch (:func:`~expressive_mocap.dataset.work.headers_ahead`)."""
+        ahead for a batch (:func:`~expressive_mocap.dataset.heads.headers_ahead`)."""
         outcome.bytes = 0
         if self.refused is not None:
             raise BVHError(self.source, None, f"cannot read the archive member: {self.refused}")
